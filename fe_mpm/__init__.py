@@ -1,0 +1,39 @@
+"""fe-mpm: an implicit Material Point Method on FEniCSx.
+
+The material points are the quadrature points of UFL weak forms on a background
+simplex grid that is reset after every step (Iaconeta 2019).
+
+Typical use::
+
+    import fe_mpm
+    from fe_mpm import meshes
+    from fe_mpm.materials import NeoHookean
+
+    scene = meshes.cook_membrane(n=32)
+    points = fe_mpm.seed(scene.mesh, per_cell=1)
+    sim = fe_mpm.Simulation(scene.mesh, points, NeoHookean(E=70.0, nu=0.33),
+                            facet_tags=scene.facet_tags, ...)
+"""
+
+# dolfinx must be imported through fe_mpm._dolfinx first: the PyPI wheel needs
+# `import dolfinx_solver` before dolfinx, petsc4py and mpi4py.
+from fe_mpm import _dolfinx  # noqa: F401, I001
+from fe_mpm.boundary import Dirichlet, Traction
+from fe_mpm.errors import ConvergenceError, PointsOutsideError
+from fe_mpm.materials import NeoHookean
+from fe_mpm.particles import MaterialPoints, seed
+from fe_mpm.simulation import Simulation, StepReport
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "ConvergenceError",
+    "Dirichlet",
+    "MaterialPoints",
+    "NeoHookean",
+    "PointsOutsideError",
+    "Simulation",
+    "StepReport",
+    "Traction",
+    "seed",
+]

@@ -1,0 +1,84 @@
+"""Boundary conditions and loads on the background grid.
+
+Both act on grid facets, chosen by a facet tag (an integer from the mesh's facet
+tags, e.g. a gmsh physical group) or by a marker ``x -> bool`` on the facet
+vertices' coordinates (shape ``(3, n)``), as in ``dolfinx.mesh.locate_entities_boundary``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from fe_mpm._dolfinx import dolfinx
+
+Where = int | Callable[[np.ndarray], np.ndarray]
+Value = float | Sequence[float] | Callable[[float], float | Sequence[float]]
+
+
+@dataclass(frozen=True)
+class Dirichlet:
+    """Prescribed displacement on grid nodes.
+
+    Args:
+        where: Facet tag or boundary marker.
+        value: Total prescribed displacement (m) as a function of time ``t``, or
+            a constant. The grid is reset every step, so the step from ``t_n`` to
+            ``t_{n+1}`` imposes ``value(t_{n+1}) − value(t_n)`` on the grid nodes
+            (a constant therefore fixes the nodes). A vector for all components,
+            a scalar with ``component``.
+        component: Constrain only this component (0, 1 or 2), e.g. a roller.
+    """
+
+    where: Where
+    value: Value = 0.0
+    component: int | None = None
+
+    def at(self, t: float) -> np.ndarray:
+        """Prescribed displacement at time ``t`` as an array."""
+        v = self.value(t) if callable(self.value) else self.value
+        return np.asarray(v, dtype=np.float64)
+
+
+@dataclass(frozen=True)
+class Traction:
+    """Surface traction on grid facets, per unit area of the grid (Pa).
+
+    Args:
+        where: Facet tag or boundary marker.
+        value: Traction vector (Pa), length g.
+        scale: Load factor as a function of time, ``t -> float``; constant 1 if None.
+            For static load stepping use e.g. ``scale=lambda t: t`` with ``t_end=1``.
+    """
+
+    where: Where
+    value: Sequence[float]
+    scale: Callable[[float], float] | None = None
+
+    def at(self, t: float) -> np.ndarray:
+        """Traction vector at time ``t`` (Pa)."""
+        factor = 1.0 if self.scale is None else float(self.scale(t))
+        return factor * np.asarray(self.value, dtype=np.float64)
+
+
+def boundary_facets(
+    mesh: dolfinx.mesh.Mesh, where: Where, facet_tags: dolfinx.mesh.MeshTags | None
+) -> np.ndarray:
+    """Local indices of the exterior facets selected by ``where``."""
+    fdim = mesh.topology.dim - 1
+    if callable(where):
+        facets = dolfinx.mesh.locate_entities_boundary(mesh, fdim, where)
+    else:
+        if facet_tags is None:
+            raise ValueError(f"boundary tag {where} given but the mesh has no facet tags")
+        facets = facet_tags.find(int(where))
+        if facets.size == 0:
+            raise ValueError(
+                f"boundary tag {where} selects no facets; tags present: "
+                f"{sorted(set(facet_tags.values.tolist()))}"
+            )
+    if facets.size == 0:
+        raise ValueError("boundary marker selects no exterior facets")
+    return np.asarray(facets, dtype=np.int32)

@@ -1,0 +1,79 @@
+"""Results that ParaView opens.
+
+DOLFINx's VTX/XDMF writers cannot write quadrature data, and meshio's XDMF time
+series writes the points only once, so the moving material points go out as one
+``.vtu`` per output step (VTK vertex cells), indexed by a ``.pvd`` collection
+that carries the times. The ``.pvd`` is rewritten after every step, so a run
+that stops early still leaves a readable series up to its last good step.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from xml.sax.saxutils import quoteattr
+
+import meshio
+import numpy as np
+
+from fe_mpm.particles import MaterialPoints
+
+
+class ParticleWriter:
+    """Writes material points as ``<folder>/<name>_NNNNNN.vtu`` plus ``<folder>/<name>.pvd``.
+
+    Args:
+        folder: Output folder (created).
+        name: File stem.
+    """
+
+    def __init__(self, folder: str | Path, name: str = "particles"):
+        self.folder = Path(folder)
+        self.folder.mkdir(parents=True, exist_ok=True)
+        self.name = name
+        self._entries: list[tuple[float, str]] = []
+
+    @property
+    def pvd(self) -> Path:
+        """Path of the collection file."""
+        return self.folder / f"{self.name}.pvd"
+
+    def write(self, t: float, points: MaterialPoints, **fields: np.ndarray) -> Path:
+        """Write one step: positions, displacement, volume, mass, F, stress, pressure, extras.
+
+        Args:
+            t: Time (s), or pseudo-time in static runs.
+            points: The material points.
+            fields: More per-point arrays of leading dimension n.
+        """
+        n, g = points.x.shape
+        xyz = np.zeros((n, 3))
+        xyz[:, :g] = points.x
+        disp = np.zeros((n, 3))
+        disp[:, :g] = points.x - points.x0
+        F3 = np.tile(np.eye(3), (n, 1, 1))
+        F3[:, :g, :g] = points.F
+        data = {
+            "displacement": disp,
+            "volume": points.volume,
+            "mass": points.mass,
+            "deformation_gradient": F3.reshape(n, 9),
+            "stress": points.stress.reshape(n, 9),
+            "pressure": -np.trace(points.stress, axis1=1, axis2=2) / 3.0,
+            "cell": points.cell.astype(np.float64),
+        }
+        data.update({k: np.asarray(v).reshape(n, -1) for k, v in fields.items()})
+        cells = [("vertex", np.arange(n, dtype=np.int64).reshape(-1, 1))]
+        fname = f"{self.name}_{len(self._entries):06d}.vtu"
+        meshio.write(self.folder / fname, meshio.Mesh(xyz, cells, point_data=data))
+        self._entries.append((t, fname))
+        self._write_pvd()
+        return self.folder / fname
+
+    def _write_pvd(self) -> None:
+        lines = ['<?xml version="1.0"?>',
+                 '<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">',
+                 "  <Collection>"]
+        lines += [f'    <DataSet timestep="{t:.10g}" part="0" file={quoteattr(f)}/>'
+                  for t, f in self._entries]
+        lines += ["  </Collection>", "</VTKFile>", ""]
+        self.pvd.write_text("\n".join(lines))

@@ -1,0 +1,59 @@
+"""Constitutive laws, written in UFL so that residual and tangent share one expression.
+
+Every law maps the total deformation gradient ``F`` (``gdim x gdim``; plane
+strain in 2D, with ``F_33 = 1``) to the Kirchhoff stress ``τ = J σ`` (Pa, same
+shape). Consistent tangents come from ``ufl.derivative`` of the weak form.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import ufl
+
+from fe_mpm.checks import check_range
+
+
+@dataclass(frozen=True)
+class NeoHookean:
+    """Compressible Neo-Hookean solid (Iaconeta 2019, Eqs. 3.17 and 3.25).
+
+    Energy ``Ψ = λ/2 (ln J)² − μ ln J + μ/2 (tr C − 3)`` and Kirchhoff stress
+    ``τ = λ ln J I + μ (b − I)``. In plane strain ``tr C`` counts ``C_33 = 1``,
+    so the in-plane part of ``τ`` keeps the same form with the 2x2 identity.
+
+    Args:
+        E: Young's modulus (Pa), > 0.
+        nu: Poisson's ratio, in (-1, 0.5).
+        density: Reference mass density (kg/m³), > 0. Used for body forces and inertia.
+    """
+
+    E: float
+    nu: float
+    density: float = 1.0
+
+    def __post_init__(self) -> None:
+        check_range("NeoHookean", "E", self.E, lo=0.0, lo_open=True)
+        check_range("NeoHookean", "nu", self.nu, lo=-1.0, hi=0.5, lo_open=True, hi_open=True)
+        check_range("NeoHookean", "density", self.density, lo=0.0, lo_open=True)
+
+    @property
+    def mu(self) -> float:
+        """Shear modulus μ (Pa)."""
+        return self.E / (2.0 * (1.0 + self.nu))
+
+    @property
+    def lmbda(self) -> float:
+        """First Lamé parameter λ (Pa)."""
+        return self.E * self.nu / ((1.0 + self.nu) * (1.0 - 2.0 * self.nu))
+
+    @property
+    def bulk_modulus(self) -> float:
+        """Bulk modulus K (Pa) of the 3D law."""
+        return self.E / (3.0 * (1.0 - 2.0 * self.nu))
+
+    def kirchhoff(self, F: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
+        """Kirchhoff stress τ(F) (Pa), shape of ``F``."""
+        I = ufl.Identity(ufl.shape(F)[0])
+        J = ufl.det(F)
+        return self.lmbda * ufl.ln(J) * I + self.mu * (F * F.T - I)

@@ -1,0 +1,128 @@
+"""Newton's method through PETSc SNES, with forms that change from step to step.
+
+DOLFINx's ``NonlinearProblem`` fixes its forms at construction. An MPM step
+integrates a different set of cells every step, so this solver keeps one SNES,
+one matrix (built once on the sparsity of all cells, a superset of every step's)
+and one residual vector, and takes the step's forms and boundary conditions in
+:meth:`NewtonSolver.solve`.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from mpi4py import MPI
+from petsc4py import PETSc
+
+import dolfinx.fem.petsc as fem_petsc
+
+from fe_mpm._dolfinx import dolfinx
+
+#: Full Newton (no line search) with MUMPS LU; quadratic convergence is checked, not hoped for.
+DEFAULT_PETSC_OPTIONS = {
+    "snes_type": "newtonls",
+    "snes_linesearch_type": "basic",
+    "snes_rtol": 1e-10,
+    "snes_atol": 1e-12,
+    "snes_stol": 1e-12,
+    "snes_max_it": 25,
+    "ksp_type": "preonly",
+    "pc_type": "lu",
+    "pc_factor_mat_solver_type": "mumps",
+}
+
+_REASONS = {v: k for k, v in vars(PETSc.SNES.ConvergedReason).items() if isinstance(v, int)}
+
+
+@dataclass
+class NewtonResult:
+    """Outcome of one Newton solve."""
+
+    converged: bool
+    iterations: int
+    reason: str
+    residual_norms: list[float]
+
+
+class NewtonSolver:
+    """SNES Newton for ``R(u) = 0`` with a tangent from the same UFL form.
+
+    Args:
+        u: The unknown; its vector is the SNES solution.
+        sparsity_form: A bilinear form over all cells, to build the matrix once.
+        prefix: PETSc options prefix, e.g. ``"fe_mpm_u_"``; ``-fe_mpm_u_snes_monitor`` works.
+        petsc_options: Overrides of :data:`DEFAULT_PETSC_OPTIONS`.
+        timings: Dict to which assembly and total solve seconds are added.
+    """
+
+    def __init__(
+        self,
+        u: dolfinx.fem.Function,
+        sparsity_form: dolfinx.fem.Form,
+        prefix: str,
+        petsc_options: dict | None = None,
+        timings: dict | None = None,
+    ):
+        self.u = u
+        self.A = fem_petsc.create_matrix(sparsity_form)
+        self.b = fem_petsc.create_vector(u.function_space)
+        self.x = fem_petsc.create_vector(u.function_space)
+        self.timings = timings if timings is not None else {}
+        self.snes = PETSc.SNES().create(MPI.COMM_WORLD)
+        self.snes.setFunction(self._residual, self.b)
+        self.snes.setJacobian(self._jacobian, self.A)
+        self.snes.setOptionsPrefix(prefix)
+        self.A.setOptionsPrefix(f"{prefix}A_")
+        opts = PETSc.Options()
+        opts.prefixPush(prefix)
+        options = {**DEFAULT_PETSC_OPTIONS, **(petsc_options or {})}
+        for k, v in options.items():
+            opts[k] = v
+        self.snes.setFromOptions()
+        for k in options:
+            del opts[k]
+        opts.prefixPop()
+        self.norms: list[float] = []
+        self.snes.setMonitor(lambda _snes, _it, norm: self.norms.append(norm))
+        self._F = self._J = None
+        self._bcs: Sequence = ()
+
+    def _add_time(self, key: str, t0: float) -> None:
+        self.timings[key] = self.timings.get(key, 0.0) + time.perf_counter() - t0
+
+    def _residual(self, snes, x, b) -> None:
+        t0 = time.perf_counter()
+        fem_petsc.assemble_residual(snes, x, b, self.u, self._F, self._J, self._bcs)
+        self._add_time("assembly", t0)
+
+    def _jacobian(self, snes, x, A, P) -> None:
+        t0 = time.perf_counter()
+        fem_petsc.assemble_jacobian(snes, x, A, P, self.u, self._J, None, self._bcs)
+        self._add_time("assembly", t0)
+
+    def solve(
+        self, F: dolfinx.fem.Form, J: dolfinx.fem.Form, bcs: Sequence[dolfinx.fem.DirichletBC]
+    ) -> NewtonResult:
+        """Solve from the current value of ``u``; on return ``u`` holds the last iterate."""
+        self._F, self._J, self._bcs = F, J, bcs
+        self.norms = []
+        dolfinx.fem.petsc.assign(self.u, self.x)
+        t0 = time.perf_counter()
+        self.snes.solve(None, self.x)
+        self._add_time("newton", t0)
+        dolfinx.fem.petsc.assign(self.x, self.u)
+        self.u.x.scatter_forward()
+        reason = self.snes.getConvergedReason()
+        return NewtonResult(
+            converged=reason > 0,
+            iterations=self.snes.getIterationNumber(),
+            reason=_REASONS.get(reason, str(reason)),
+            residual_norms=list(self.norms),
+        )
+
+    def destroy(self) -> None:
+        """Free the PETSc objects."""
+        for obj in (self.snes, self.A, self.b, self.x):
+            obj.destroy()

@@ -1,0 +1,134 @@
+"""Locate points in the background grid: a vectorised barycentric walk.
+
+The grid is reset after every step, so it never moves: the inverse affine maps
+and the facet neighbours of all cells are computed once. Each step starts every
+point in the cell it was in before and walks across the facet with the most
+negative barycentric coordinate until all coordinates are non-negative. Points
+the walk does not settle (it left the grid, or took too many steps) go to a
+bounding-box tree search. Everything is numpy over all points at once.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from fe_mpm._dolfinx import dolfinx
+
+#: Barycentric coordinates down to ``-BARY_TOL`` count as inside: points on
+#: facets and vertices belong to any cell that touches them.
+BARY_TOL = 1e-12
+
+
+class Tracker:
+    """Finds the cell of each point of a fixed affine simplex mesh (serial).
+
+    Args:
+        mesh: Triangle or tetrahedron mesh with affine geometry.
+        max_walk: Walk steps before a point is handed to the tree search.
+    """
+
+    def __init__(self, mesh: dolfinx.mesh.Mesh, max_walk: int = 32):
+        self.mesh = mesh
+        self.max_walk = max_walk
+        tdim = mesh.topology.dim
+        gdim = mesh.geometry.dim
+        self.num_cells = mesh.topology.index_map(tdim).size_local
+        nodes_of = mesh.geometry.dofmaps[0][: self.num_cells]
+        X = mesh.geometry.x[:, :gdim]
+        nodes = X[nodes_of]  # (nc, t+1, g)
+        self._x0 = nodes[:, 0, :].copy()
+        jac = nodes[:, 1:, :] - self._x0[:, None, :]
+        # x = x0 + ξ @ jac with jac rows = edge vectors, so ξ = (x - x0) @ inv(jac).
+        self._jac_inv = np.linalg.inv(jac)
+        #: Physical centroid of every cell, shape (nc, g).
+        self.centroids = nodes.mean(axis=1)
+        #: Volume (area in 2D) of every cell, shape (nc,).
+        self.volumes = np.abs(np.linalg.det(jac)) / math.factorial(tdim)
+        self.neighbours = _facet_neighbours(nodes_of)
+        self._tree = None  # built on first need
+
+    def barycentric(self, x: np.ndarray, cells: np.ndarray) -> np.ndarray:
+        """Barycentric coordinates of points ``x`` (n, g) in ``cells`` (n,), shape (n, t+1).
+
+        Column ``i`` belongs to local vertex ``i`` of the cell (geometry order),
+        which is also the local dof order of P1 spaces.
+        """
+        xi = np.einsum("ng,ngk->nk", x - self._x0[cells], self._jac_inv[cells])
+        return np.concatenate([1.0 - xi.sum(axis=1, keepdims=True), xi], axis=1)
+
+    def locate(self, x: np.ndarray, guess: np.ndarray | None = None) -> np.ndarray:
+        """Return the cell of each point in ``x`` (n, g), or -1 for points outside the grid.
+
+        Args:
+            x: Point coordinates, shape ``(n, g)``.
+            guess: Start cells for the walk, shape ``(n,)``; entries < 0 (or no
+                guess) go straight to the tree search.
+        """
+        n = x.shape[0]
+        cells = np.full(n, -1, dtype=np.int32)
+        if guess is None:
+            todo = np.arange(n)
+        else:
+            guess = np.asarray(guess, dtype=np.int32)
+            walking = np.flatnonzero(guess >= 0)
+            cells[walking] = guess[walking]
+            lost = self._walk(x, cells, walking)
+            todo = np.concatenate([np.flatnonzero(guess < 0), lost])
+        if todo.size:
+            cells[todo] = self._tree_search(x[todo])
+        return cells
+
+    def _walk(self, x: np.ndarray, cells: np.ndarray, active: np.ndarray) -> np.ndarray:
+        """Walk the points ``active`` from ``cells`` in place; return those not settled."""
+        lost = []
+        for _ in range(self.max_walk):
+            if active.size == 0:
+                break
+            lam = self.barycentric(x[active], cells[active])
+            worst = np.argmin(lam, axis=1)
+            outside = lam[np.arange(active.size), worst] < -BARY_TOL
+            active, worst = active[outside], worst[outside]
+            nxt = self.neighbours[cells[active], worst]
+            # Across a boundary facet the point may still be inside a concave
+            # grid: the tree search decides.
+            lost.append(active[nxt < 0])
+            active = active[nxt >= 0]
+            cells[active] = nxt[nxt >= 0]
+        lost.append(active)
+        lost = np.concatenate(lost)
+        cells[lost] = -1
+        return lost
+
+    def _tree_search(self, x: np.ndarray) -> np.ndarray:
+        if self._tree is None:
+            self._tree = dolfinx.geometry.bb_tree(self.mesh, self.mesh.topology.dim)
+        pts = np.zeros((x.shape[0], 3))
+        pts[:, : x.shape[1]] = x
+        candidates = dolfinx.geometry.compute_collisions_points(self._tree, pts)
+        colliding = dolfinx.geometry.compute_colliding_cells(self.mesh, candidates, pts)
+        offsets = colliding.offsets
+        found = offsets[1:] > offsets[:-1]
+        cells = np.full(x.shape[0], -1, dtype=np.int32)
+        cells[found] = colliding.array[offsets[:-1][found]]
+        cells[cells >= self.num_cells] = -1  # ghost cells belong to another rank
+        return cells
+
+
+def _facet_neighbours(nodes_of: np.ndarray) -> np.ndarray:
+    """Cell across the facet opposite each local vertex, shape (nc, t+1); -1 on the boundary."""
+    nc, nv = nodes_of.shape
+    # Facet i of a simplex is the one that omits local vertex i.
+    keep = np.array([[j for j in range(nv) if j != i] for i in range(nv)])
+    facets = np.sort(nodes_of[:, keep], axis=2).reshape(nc * nv, nv - 1)
+    _, fid = np.unique(facets, axis=0, return_inverse=True)
+    fid = fid.reshape(-1)
+    order = np.argsort(fid, kind="stable")
+    sorted_fid = fid[order]
+    pair = np.flatnonzero(sorted_fid[1:] == sorted_fid[:-1])
+    a, b = order[pair], order[pair + 1]  # flat (cell*nv + local) indices sharing a facet
+    neighbours = np.full(nc * nv, -1, dtype=np.int32)
+    neighbours[a] = b // nv
+    neighbours[b] = a // nv
+    return neighbours.reshape(nc, nv)
