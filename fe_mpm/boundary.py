@@ -16,6 +16,7 @@ from fe_mpm._dolfinx import dolfinx
 
 Where = int | Callable[[np.ndarray], np.ndarray]
 Value = float | Sequence[float] | Callable[[float], float | Sequence[float]]
+Profile = Callable[[np.ndarray, float], np.ndarray]
 
 
 @dataclass(frozen=True)
@@ -30,11 +31,16 @@ class Dirichlet:
             (a constant therefore fixes the nodes). A vector for all components,
             a scalar with ``component``.
         component: Constrain only this component (0, 1 or 2), e.g. a roller.
+        profile: Space- and time-dependent prescribed displacement ``(x, t) ->
+            u`` with ``x`` of shape ``(3, n)`` and ``u`` of shape ``(g, n)`` (or
+            ``(n,)`` with ``component``). Replaces ``value`` when given; the step
+            again imposes ``profile(x, t_{n+1}) − profile(x, t_n)``.
     """
 
     where: Where
     value: Value = 0.0
     component: int | None = None
+    profile: Profile | None = None
 
     def at(self, t: float) -> np.ndarray:
         """Prescribed displacement at time ``t`` as an array."""

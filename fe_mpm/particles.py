@@ -161,6 +161,6 @@ def _basix_cell(mesh: dolfinx.mesh.Mesh) -> basix.CellType:
             f"fe-mpm needs geometric dimension = topological dimension, got "
             f"gdim={mesh.geometry.dim}, tdim={mesh.topology.dim}"
         )
-    if mesh.geometry.cmap.degree != 1:
+    if mesh.geometry.cmaps[0].degree != 1:
         raise ValueError("fe-mpm needs an affine (degree-1) mesh geometry")
     return basix.CellType[name]

@@ -140,11 +140,22 @@ class MaterialPointQuadrature:
         """Index of each point's slot in ``f.x.array.reshape(-1, bs)``, shape ``(n,)``."""
         return f.function_space.dofmap.list[layout.cell, layout.slot]
 
-    def pack(self, f: dolfinx.fem.Function, layout: SlotLayout, values: np.ndarray) -> None:
-        """Write per-point ``values`` (n, *value_shape) into ``f``; empty slots get zero."""
+    def pack(
+        self,
+        f: dolfinx.fem.Function,
+        layout: SlotLayout,
+        values: np.ndarray,
+        empty: float | np.ndarray = 0.0,
+    ) -> None:
+        """Write per-point ``values`` (n, *value_shape) into ``f``.
+
+        Empty slots carry zero weight but are still evaluated, so they get the
+        harmless value ``empty`` (e.g. the identity for a deformation gradient,
+        where zero would give ``ln det F = nan`` and ``nan * 0 = nan``).
+        """
         bs = f.function_space.dofmap.bs
         arr = f.x.array.reshape(-1, bs)
-        arr[:] = 0.0
+        arr[:] = np.reshape(empty, (-1,))
         arr[self.slot_dofs(f, layout)] = values.reshape(values.shape[0], bs)
 
     def pack_geometry(

@@ -178,19 +178,29 @@ class Simulation:
         fdim = tdim - 1
         mesh.topology.create_connectivity(fdim, tdim)
 
-        self._dirichlet = []  # (spec, Constant, DirichletBC)
+        self._dirichlet = []  # (spec, Constant or Function, DirichletBC)
         for spec in dirichlet:
             facets = boundary_facets(mesh, spec.where, facet_tags)
             if spec.component is None:
-                value = dolfinx.fem.Constant(mesh, np.zeros(g))
-                dofs = dolfinx.fem.locate_dofs_topological(self.V, fdim, facets)
-                bc = dolfinx.fem.dirichletbc(value, dofs, self.V)
+                space = self.V
+                shape = (g,)
             else:
                 check_range("Dirichlet", "component", spec.component, lo=0, hi=g - 1)
-                sub = self.V.sub(spec.component)
-                value = dolfinx.fem.Constant(mesh, 0.0)
-                dofs = dolfinx.fem.locate_dofs_topological(sub, fdim, facets)
-                bc = dolfinx.fem.dirichletbc(value, dofs, sub)
+                space = self.V.sub(spec.component)
+                shape = ()
+            if spec.profile is None:
+                value = dolfinx.fem.Constant(mesh, np.zeros(shape))
+                dofs = dolfinx.fem.locate_dofs_topological(space, fdim, facets)
+                bc = dolfinx.fem.dirichletbc(value, dofs, space)
+            elif spec.component is None:
+                value = dolfinx.fem.Function(space)
+                dofs = dolfinx.fem.locate_dofs_topological(space, fdim, facets)
+                bc = dolfinx.fem.dirichletbc(value, dofs)
+            else:
+                collapsed, _ = space.collapse()
+                value = dolfinx.fem.Function(collapsed)
+                dofs = dolfinx.fem.locate_dofs_topological((space, collapsed), fdim, facets)
+                bc = dolfinx.fem.dirichletbc(value, dofs, space)
             self._dirichlet.append((spec, value, bc))
 
         self._tractions = []  # (spec, Constant)
@@ -213,10 +223,11 @@ class Simulation:
 
         self._forms: dict[int, _SlotForms] = {}
         self._newton: NewtonSolver | None = None
-        self._markers: dict[str, tuple[np.ndarray, np.ndarray]] = {}  # name -> (x, cell)
+        self._markers: dict[str, tuple[np.ndarray, int]] = {}  # name -> (x, host point)
         self._add_time("setup", t0)
 
         self._particle_writer = self._grid_writer = None
+        self._written_step = -1
         self.output_every = int(output_every)
         if output_dir is not None:
             self.output_dir = Path(output_dir)
@@ -233,19 +244,22 @@ class Simulation:
     def add_marker(self, name: str, x: Sequence[float]) -> None:
         """Follow a point that moves with the body but carries no volume or mass.
 
-        Its position is advanced by the grid increment Δu interpolated at it,
-        exactly as a material point's. Read it from ``history[k].markers[name]``
-        or :meth:`marker`.
+        The marker is attached to the material point nearest to it and moves
+        with that point's affine motion, ``x_m += Δu_p + (ΔF_p − I)(x_m − x_p)``:
+        the grid increment of the host's cell, extended linearly to the marker.
+        A marker on a vertex of its host's cell therefore moves exactly with
+        that grid node in a step, and never reads an empty cell. Read it from
+        ``history[k].markers[name]`` or :meth:`marker`.
         """
-        xm = np.asarray(x, dtype=np.float64).reshape(1, self.gdim)
-        cell = self.tracker.locate(xm)
-        if cell[0] < 0:
-            raise PointsOutsideError(f"marker {name!r} at {xm[0]} is outside the grid")
-        self._markers[name] = (xm, cell)
+        xm = np.asarray(x, dtype=np.float64).reshape(self.gdim)
+        if self.tracker.locate(xm[None, :])[0] < 0:
+            raise PointsOutsideError(f"marker {name!r} at {xm} is outside the grid")
+        host = int(np.argmin(np.linalg.norm(self.points.x - xm, axis=1)))
+        self._markers[name] = (xm, host)
 
     def marker(self, name: str) -> np.ndarray:
         """Current position of a marker, shape (g,)."""
-        return self._markers[name][0][0].copy()
+        return self._markers[name][0].copy()
 
     def run(
         self, t_end: float = 1.0, n_steps: int = 1, *, progress: bool = True
@@ -282,23 +296,7 @@ class Simulation:
         if not t_new > self.t:
             raise ValueError(f"Simulation.step: t_new must exceed the current time {self.t}")
         k = self.step_number + 1
-        layout = self._track(step=k, t=t_new)
-
-        t0 = time.perf_counter()
-        nslot = bucket(layout.max_count)
-        forms = self._forms.get(nslot) or self._compile(nslot)
-        self._add_time("compile", t0)
-
-        t0 = time.perf_counter()
-        q, pts = forms.q, self.points
-        q.pack_geometry(pts, layout, self.tracker.centroids, self.tracker.volumes)
-        q.pack(forms.F_n, layout, pts.F)
-        q.pack(forms.density, layout, pts.density)
-        R = forms.residual.bind(layout.occupied)
-        J = forms.jacobian.bind(layout.occupied)
-        bcs = self._boundary_conditions(layout, self.t, t_new)
-        self._add_time("packing", t0)
-
+        forms, layout, R, J, bcs = self.prepare_step(t_new)
         self.du.x.array[:] = 0.0
         result = self._newton_solver(forms).solve(R, J, bcs)
         if not result.converged or not np.all(np.isfinite(self.du.x.array)):
@@ -318,12 +316,38 @@ class Simulation:
         report = StepReport(
             step=k, t=t_new, newton_iterations=result.iterations,
             residual_norms=result.residual_norms,
-            markers={name: xm[0].copy() for name, (xm, _) in self._markers.items()},
-            nslot=nslot, occupied_cells=layout.occupied.size,
+            markers={name: xm.copy() for name, (xm, _) in self._markers.items()},
+            nslot=forms.q.nslot, occupied_cells=layout.occupied.size,
         )
         self.history.append(report)
         self._write_output()
         return report
+
+    def prepare_step(self, t_new: float):
+        """Track, pack and bind the forms of the step to ``t_new`` without solving.
+
+        Returns:
+            ``(forms, layout, R, J, bcs)``: the slot forms, the slot layout, the
+            residual and Jacobian DOLFINx forms and the boundary conditions. The
+            Taylor tests use this to check every residual/Jacobian pair.
+        """
+        layout = self._track(step=self.step_number + 1, t=t_new)
+
+        t0 = time.perf_counter()
+        nslot = bucket(layout.max_count)
+        forms = self._forms.get(nslot) or self._compile(nslot)
+        self._add_time("compile", t0)
+
+        t0 = time.perf_counter()
+        q, pts = forms.q, self.points
+        q.pack_geometry(pts, layout, self.tracker.centroids, self.tracker.volumes)
+        q.pack(forms.F_n, layout, pts.F, empty=np.eye(self.gdim))
+        q.pack(forms.density, layout, pts.density)
+        R = forms.residual.bind(layout.occupied)
+        J = forms.jacobian.bind(layout.occupied)
+        bcs = self._boundary_conditions(layout, self.t, t_new)
+        self._add_time("packing", t0)
+        return forms, layout, R, J, bcs
 
     # -- the phases of a step --------------------------------------------------
 
@@ -341,6 +365,11 @@ class Simulation:
                 raise PointsOutsideError(msg + ". Pass points_leaving='drop' to remove them.")
             warnings.warn(msg + "; dropped.", stacklevel=3)
             keep = cells >= 0
+            new_index = np.cumsum(keep) - 1
+            for name, (xm, host) in self._markers.items():
+                if not keep[host]:
+                    raise PointsOutsideError(f"the host point of marker {name!r} left the grid")
+                self._markers[name] = (xm, int(new_index[host]))
             pts.keep(keep)
             cells = cells[keep]
             self.dropped += outside.size
@@ -366,7 +395,10 @@ class Simulation:
 
     def _boundary_conditions(self, layout: SlotLayout, t_old: float, t_new: float) -> list:
         for spec, value, _ in self._dirichlet:
-            value.value = spec.at(t_new) - spec.at(t_old)
+            if spec.profile is None:
+                value.value = spec.at(t_new) - spec.at(t_old)
+            else:
+                value.interpolate(lambda x: spec.profile(x, t_new) - spec.profile(x, t_old))
         for spec, value in self._tractions:
             value.value = spec.at(t_new)
         # Grid nodes no material point reaches get no equation: pin them.
@@ -398,26 +430,19 @@ class Simulation:
                 f"(t = {t:g}): the step inverts material; take smaller steps."
             )
         pts = self.points
+        for xm, host in self._markers.values():
+            xm += du_p[host] + (dF[host] - np.eye(g)) @ (xm - pts.x[host])
         pts.x += du_p
         pts.F = dF @ pts.F
         pts.volume *= det_dF
         pts.stress = sigma
-        for name, (xm, cell) in self._markers.items():
-            cell[:] = self.tracker.locate(xm, cell)
-            if cell[0] < 0:
-                raise PointsOutsideError(f"marker {name!r} at {xm[0]} is outside the grid")
-            pad = np.zeros((1, 3))
-            pad[:, :g] = xm
-            xm += self.du.eval(pad, cell)
 
     def _write_output(self, force: bool = False) -> None:
-        if self._particle_writer is None or self.step_number == 0:
-            return
-        last = self._particle_writer._entries
-        if last and last[-1][0] == self.t:
+        if self._particle_writer is None or self.step_number in (0, self._written_step):
             return
         if not force and self.step_number % self.output_every:
             return
+        self._written_step = self.step_number
         t0 = time.perf_counter()
         self._particle_writer.write(self.t, self.points)
         self._grid_writer.write(self.t)

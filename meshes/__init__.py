@@ -4,11 +4,23 @@ Each builder returns :class:`dolfinx.io.gmsh.MeshData` with ``.mesh``,
 ``.cell_tags`` and ``.facet_tags`` (the gmsh physical groups).
 """
 
-from fe_mpm.meshes.cook import COOK_CLAMPED, COOK_FREE, COOK_LOADED, COOK_POINT_A, cook_membrane
+from fe_mpm.meshes.cook import (
+    COOK_BODY,
+    COOK_CLAMPED,
+    COOK_FREE,
+    COOK_LOADED,
+    COOK_MARGIN,
+    COOK_POINT_A,
+    body_cells,
+    cook_membrane,
+)
 from fe_mpm.meshes.gmsh_session import gmsh_session
 from fe_mpm.meshes.rectangle import rectangle_mesh
 
 __all__ = [
+    "COOK_BODY",
+    "COOK_MARGIN",
+    "body_cells",
     "COOK_CLAMPED",
     "COOK_FREE",
     "COOK_LOADED",

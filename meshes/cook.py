@@ -3,25 +3,38 @@
 Trapezoid (0,0), (48,44), (48,60), (0,44) in plane strain. The left edge is
 clamped and the right edge carries a vertical shear load; point A is the
 top-right corner (48, 60).
+
+With several load steps the body moves out of a grid that fits it exactly
+(the top-right corner rises by about 0.3), so the grid can carry ``margin``
+extra rows of empty cells above the top edge and below the bottom edge. They
+extend the same bilinear map, so the cells of the body are unchanged.
 """
 
 from __future__ import annotations
 
+import numpy as np
 from mpi4py import MPI
 
 from fe_mpm.checks import check_range
 from fe_mpm.meshes.gmsh_session import gmsh_session, to_dolfinx
 
-#: Facet tag of the clamped left edge x = 0.
+#: Facet tag of the clamped left edge x = 0 (the grid's whole left side).
 COOK_CLAMPED = 1
-#: Facet tag of the loaded right edge x = 48.
+#: Facet tag of the loaded right edge x = 48, 44 <= y <= 60.
 COOK_LOADED = 2
-#: Facet tag of the free top and bottom edges.
+#: Facet tag of the other boundary facets.
 COOK_FREE = 3
+#: Cell tag of the membrane (where material points are seeded).
+COOK_BODY = 1
+#: Cell tag of the empty margin cells.
+COOK_MARGIN = 2
 #: Point A, the top-right corner, where the deflection is measured.
 COOK_POINT_A = (48.0, 60.0)
 
-_CORNERS = [(0.0, 0.0), (48.0, 44.0), (48.0, 60.0), (0.0, 44.0)]
+
+def _bilinear(xi: float, eta: float) -> tuple[float, float]:
+    """Map of the unit square onto the trapezoid (extends beyond eta in [0, 1])."""
+    return 48.0 * xi, 44.0 * eta + xi * (44.0 - 28.0 * eta)
 
 
 def cook_membrane(
@@ -29,6 +42,7 @@ def cook_membrane(
     *,
     structured: bool = True,
     h: float | None = None,
+    margin: int = 0,
     comm: MPI.Comm = MPI.COMM_WORLD,
 ):
     """Background grid of Cook's membrane.
@@ -39,37 +53,60 @@ def cook_membrane(
             the trapezoid (the meshes of the thesis's Table 5.1 and Kratos's tests).
         structured: If False, an unstructured Delaunay mesh of size ``h``.
         h: Element size of the unstructured mesh (default ``44 / n``).
+        margin: Rows of empty cells (of height 1/n in the map) above and below the body.
         comm: MPI communicator.
 
     Returns:
-        ``dolfinx.io.gmsh.MeshData`` with ``mesh`` and ``facet_tags``
-        (:data:`COOK_CLAMPED`, :data:`COOK_LOADED`, :data:`COOK_FREE`).
+        ``dolfinx.io.gmsh.MeshData`` with ``mesh``, ``cell_tags`` (:data:`COOK_BODY`,
+        :data:`COOK_MARGIN`) and ``facet_tags`` (:data:`COOK_CLAMPED`,
+        :data:`COOK_LOADED`, :data:`COOK_FREE`).
     """
     n = int(check_range("cook_membrane", "n", n, lo=1))
+    margin = int(check_range("cook_membrane", "margin", margin, lo=0))
     if h is None:
         h = 44.0 / n
     check_range("cook_membrane", "h", h, lo=0.0, lo_open=True)
+    m = margin / n
     with gmsh_session("cook_membrane") as model:
         if comm.rank == 0:
             geo = model.geo
-            p = [geo.addPoint(x, y, 0.0, h) for x, y in _CORNERS]
-            bottom = geo.addLine(p[0], p[1])
-            right = geo.addLine(p[1], p[2])
-            top = geo.addLine(p[2], p[3])
-            left = geo.addLine(p[3], p[0])
-            loop = geo.addCurveLoop([bottom, right, top, left])
-            surface = geo.addPlaneSurface([loop])
+            # Strips in eta: [-m, 0] (margin), [0, 1] (body), [1, 1 + m] (margin).
+            etas = [0.0, 1.0] if margin == 0 else [-m, 0.0, 1.0, 1.0 + m]
+            left = [geo.addPoint(*_bilinear(0.0, e), 0.0, h) for e in etas]
+            right = [geo.addPoint(*_bilinear(1.0, e), 0.0, h) for e in etas]
+            across = [geo.addLine(a, b) for a, b in zip(left, right)]
+            up_left = [geo.addLine(left[i], left[i + 1]) for i in range(len(etas) - 1)]
+            up_right = [geo.addLine(right[i], right[i + 1]) for i in range(len(etas) - 1)]
+            surfaces = []
+            for i in range(len(etas) - 1):
+                loop = geo.addCurveLoop([across[i], up_right[i], -across[i + 1], -up_left[i]])
+                surfaces.append(geo.addPlaneSurface([loop]))
+                if structured:
+                    rows = n if etas[i + 1] - etas[i] == 1.0 else margin
+                    for line in (up_left[i], up_right[i]):
+                        geo.mesh.setTransfiniteCurve(line, rows + 1)
+                    # gmsh's "Right" splits each quad from its lower-left to its
+                    # upper-right corner when the corners run counter-clockwise
+                    # from the lower-left one (checked in tests/test_meshes.py).
+                    corners = [left[i], right[i], right[i + 1], left[i + 1]]
+                    geo.mesh.setTransfiniteSurface(surfaces[-1], "Right", corners)
             if structured:
-                for line in (bottom, right, top, left):
+                for line in across:
                     geo.mesh.setTransfiniteCurve(line, n + 1)
-                # gmsh's "Right" splits each quad from its lower-left to its
-                # upper-right corner when the corners start at (0, 0) and run
-                # counter-clockwise (checked in tests/test_meshes.py).
-                geo.mesh.setTransfiniteSurface(surface, "Right", p)
             geo.synchronize()
-            model.addPhysicalGroup(1, [left], COOK_CLAMPED, name="clamped")
-            model.addPhysicalGroup(1, [right], COOK_LOADED, name="loaded")
-            model.addPhysicalGroup(1, [top, bottom], COOK_FREE, name="free")
-            model.addPhysicalGroup(2, [surface], 1, name="membrane")
+            body = etas.index(0.0)
+            model.addPhysicalGroup(1, up_left, COOK_CLAMPED, name="clamped")
+            model.addPhysicalGroup(1, [up_right[body]], COOK_LOADED, name="loaded")
+            free = [across[0], across[-1]] + [c for i, c in enumerate(up_right) if i != body]
+            model.addPhysicalGroup(1, free, COOK_FREE, name="free")
+            model.addPhysicalGroup(2, [surfaces[body]], COOK_BODY, name="membrane")
+            if margin:
+                margins = [s for i, s in enumerate(surfaces) if i != body]
+                model.addPhysicalGroup(2, margins, COOK_MARGIN, name="margin")
             model.mesh.generate(2)
         return to_dolfinx(model, gdim=2, comm=comm)
+
+
+def body_cells(scene) -> np.ndarray:
+    """Cells of the membrane itself (local indices), for seeding material points."""
+    return scene.cell_tags.find(COOK_BODY)

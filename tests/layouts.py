@@ -1,0 +1,31 @@
+"""Random material-point layouts for the verification tests."""
+
+import numpy as np
+
+from fe_mpm.particles import MaterialPoints
+from fe_mpm.tracker import Tracker
+
+
+def random_points(mesh, rng, counts, fill=True, F_spread=0.0):
+    """Points at random positions inside cells, ``counts[c]`` in cell c.
+
+    With ``fill`` the volumes of each cell's points are a random partition of
+    the cell volume; otherwise they are random. ``F_spread`` perturbs F_n
+    randomly around the identity (a deformed history).
+    """
+    tracker = Tracker(mesh)
+    tdim = mesh.topology.dim
+    gdim = mesh.geometry.dim
+    cells = np.repeat(np.arange(counts.size, dtype=np.int32), counts)
+    bary = rng.dirichlet(np.ones(tdim + 1), size=cells.size)
+    nodes = mesh.geometry.x[mesh.geometry.dofmaps[0][cells], :gdim]
+    x = np.einsum("pv,pvg->pg", bary, nodes)
+    share = rng.uniform(0.2, 1.0, size=cells.size)
+    if fill:
+        total = np.bincount(cells, weights=share, minlength=counts.size)
+        volume = tracker.volumes[cells] * share / total[cells]
+    else:
+        volume = tracker.volumes[cells] * share
+    F = np.eye(gdim) + F_spread * rng.uniform(-1, 1, size=(cells.size, gdim, gdim))
+    pts = MaterialPoints(x=x, volume=volume, mass=volume * rng.uniform(0.5, 2.0, cells.size), F=F)
+    return pts, cells
