@@ -51,7 +51,8 @@ class NewtonSolver:
 
     Args:
         u: The unknown; its vector is the SNES solution.
-        sparsity_form: A bilinear form over all cells, to build the matrix once.
+        sparsity_form: A bilinear form over all cells, to build the matrix once; its
+            coefficients must hold finite values (they only fill the pattern).
         prefix: PETSc options prefix, e.g. ``"fe_mpm_u_"``; ``-fe_mpm_u_snes_monitor`` works.
         petsc_options: Overrides of :data:`DEFAULT_PETSC_OPTIONS`.
         timings: Dict to which assembly and total solve seconds are added.
@@ -67,6 +68,13 @@ class NewtonSolver:
     ):
         self.u = u
         self.A = fem_petsc.create_matrix(sparsity_form)
+        # PETSc squeezes out preallocated entries never set before the first final
+        # assembly, and later steps occupy cells that were empty in the first. So
+        # set every entry of the pattern once (empty slots give explicit zeros),
+        # and make any entry outside the pattern an error instead of a silent drop.
+        fem_petsc.assemble_matrix(self.A, sparsity_form)
+        self.A.assemble()
+        self.A.setOption(PETSc.Mat.Option.NEW_NONZERO_LOCATION_ERR, True)
         self.b = fem_petsc.create_vector(u.function_space)
         self.x = fem_petsc.create_vector(u.function_space)
         self.timings = timings if timings is not None else {}

@@ -304,6 +304,7 @@ class Simulation:
             raise ConvergenceError(
                 f"Newton failed in step {k} (t = {self.t:g} -> {t_new:g}) after "
                 f"{result.iterations} iterations: {result.reason}; ‖R‖ history: [{norms}]. "
+                f"{self._hinge_diagnosis(layout)}"
                 "Points were not updated and nothing was written for this step."
             )
 
@@ -378,6 +379,28 @@ class Simulation:
         pts.cell = cells
         self._add_time("tracking", t0)
         return SlotLayout.from_cells(cells)
+
+    def _hinge_diagnosis(self, layout: SlotLayout) -> str:
+        """Explain a singular tangent by occupied cells hinged to the rest at one node.
+
+        A P1 simplex has a constant strain whatever number of points it holds, so
+        an occupied cell that shares at most one node with the other occupied
+        cells can rotate freely about it: a mechanism of quasi-static MPM that
+        appears when points cross into empty cells.
+        """
+        nodes = self.V.dofmap.list[layout.occupied]
+        uses = np.bincount(nodes.ravel(), minlength=self.du.x.array.size // self.gdim)
+        shared = (uses[nodes] > 1).sum(axis=1)
+        hinged = layout.occupied[shared <= 1]
+        if hinged.size == 0:
+            return ""
+        where = self.tracker.centroids[hinged[0]]
+        return (
+            f"{hinged.size} occupied cell(s) share at most one node with the rest of the "
+            f"material (first near x = {where}), so the static tangent is singular there: "
+            "points crossed into otherwise empty cells. Smaller load steps do not help; a "
+            "coarser grid or a dynamic analysis does. "
+        )
 
     def _compile(self, nslot: int) -> _SlotForms:
         forms = _SlotForms(self, nslot)
