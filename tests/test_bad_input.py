@@ -1,0 +1,84 @@
+"""Bad input fails early with a message that names the field and the valid range."""
+
+import numpy as np
+import pytest
+from mpi4py import MPI
+
+import basix.ufl
+import fe_mpm
+from fe_mpm._dolfinx import dolfinx
+from fe_mpm.meshes import cook_membrane, rectangle_mesh
+
+
+@pytest.mark.parametrize("nu", [0.5, 0.6, -1.0, float("nan")])
+def test_poisson_ratio_out_of_range(nu):
+    with pytest.raises(ValueError, match=r"NeoHookean: nu must lie in \(-1, 0.5\)"):
+        fe_mpm.NeoHookean(E=1.0, nu=nu)
+
+
+@pytest.mark.parametrize("E", [0.0, -70.0])
+def test_young_modulus_not_positive(E):
+    with pytest.raises(ValueError, match=r"NeoHookean: E must lie in \(0, inf\]"):
+        fe_mpm.NeoHookean(E=E, nu=0.3)
+
+
+def _scene():
+    mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (2, 2))
+    return mesh, fe_mpm.seed(mesh)
+
+
+def test_unknown_formulation():
+    mesh, points = _scene()
+    with pytest.raises(ValueError, match=r"unknown formulation 'uu'; choose one of u"):
+        fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1.0, 0.3), formulation="uu")
+
+
+def test_planned_formulation_says_it_is_not_built():
+    mesh, points = _scene()
+    with pytest.raises(NotImplementedError, match="'up' is not implemented yet"):
+        fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1.0, 0.3), formulation="up")
+
+
+def test_empty_mesh():
+    element = basix.ufl.element("Lagrange", "triangle", 1, shape=(2,))
+    empty = dolfinx.mesh.create_mesh(
+        MPI.COMM_WORLD, np.zeros((0, 3), dtype=np.int64), element, np.zeros((0, 2)))
+    with pytest.raises(ValueError, match="seed: the mesh has no cells"):
+        fe_mpm.seed(empty)
+    _, points = _scene()
+    with pytest.raises(ValueError, match="Simulation: the mesh is empty"):
+        fe_mpm.Simulation(empty, points, fe_mpm.NeoHookean(1.0, 0.3))
+
+
+def test_other_bad_values():
+    mesh, points = _scene()
+    with pytest.raises(ValueError, match=r"seed: per_cell must be one of \[1, 3, 6, 7, 12"):
+        fe_mpm.seed(mesh, per_cell=2)
+    with pytest.raises(ValueError, match=r"seed: density must lie in \(0, inf\]"):
+        fe_mpm.seed(mesh, density=-1.0)
+    with pytest.raises(ValueError, match=r"cook_membrane: n must lie in \[1, inf\]"):
+        cook_membrane(n=0)
+    sim = fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1.0, 0.3))
+    with pytest.raises(ValueError, match=r"Simulation.run: n_steps must lie in \[1, inf\]"):
+        sim.run(n_steps=0)
+    with pytest.raises(ValueError, match="boundary tag 7 given but the mesh has no facet tags"):
+        fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1.0, 0.3),
+                          dirichlet=[fe_mpm.Dirichlet(7)])
+    with pytest.raises(fe_mpm.PointsOutsideError, match="left the grid at set-up"):
+        outside = fe_mpm.MaterialPoints(x=[[2.0, 2.0]], volume=[1.0], mass=[1.0])
+        fe_mpm.Simulation(mesh, outside, fe_mpm.NeoHookean(1.0, 0.3))
+
+
+def test_divergence_stops_with_step_and_reason():
+    """An impossible load: Newton fails, the message says where and when, nothing moves."""
+    mesh, points = _scene()
+    x_before = points.x.copy()
+    sim = fe_mpm.Simulation(
+        mesh, points, fe_mpm.NeoHookean(1.0, 0.3),
+        dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0))],
+        tractions=[fe_mpm.Traction(lambda x: np.isclose(x[0], 1.0), (1e6, 0.0))],
+        petsc_options={"snes_max_it": 8},
+    )
+    with pytest.raises(fe_mpm.ConvergenceError, match=r"Newton failed in step 1 \(t = 0 -> 1\)"):
+        sim.step(1.0)
+    assert np.array_equal(points.x, x_before) and sim.step_number == 0

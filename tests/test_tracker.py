@@ -1,0 +1,85 @@
+"""Tracker: points crossing cells, points on facets and vertices, points leaving the grid."""
+
+import numpy as np
+import pytest
+
+import fe_mpm
+from fe_mpm._dolfinx import dolfinx
+from fe_mpm.meshes import rectangle_mesh
+from fe_mpm.tracker import BARY_TOL, Tracker
+
+
+def _inside(tracker, x, cells):
+    return tracker.barycentric(x, cells).min(axis=1) >= -BARY_TOL
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_walk_from_far_cells_finds_the_containing_cell(dim):
+    rng = np.random.default_rng(0)
+    mesh = rectangle_mesh(np.zeros(dim), np.ones(dim), (12,) * dim if dim == 2 else (5, 5, 5))
+    tracker = Tracker(mesh)
+    x = rng.uniform(0.0, 1.0, size=(2000, dim))
+    start = rng.integers(0, tracker.num_cells, size=x.shape[0]).astype(np.int32)
+    cells = tracker.locate(x, start)
+    assert np.all(cells >= 0)
+    assert np.all(_inside(tracker, x, cells))
+    # With enough steps to cross the grid, the walk alone finds every point from
+    # any start (the tree search is only the fallback).
+    walker = Tracker(mesh, max_walk=100)
+    walked = start.copy()
+    assert walker._walk(x, walked, np.arange(x.shape[0])).size == 0
+    assert np.array_equal(walked, cells) or np.all(_inside(tracker, x, walked))
+
+
+def test_points_on_vertices_and_facets_are_located():
+    mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (4, 4))
+    tracker = Tracker(mesh)
+    vertices = mesh.geometry.x[:, :2]
+    nodes = mesh.geometry.dofmaps[0]
+    midpoints = 0.5 * (vertices[nodes[:, 0]] + vertices[nodes[:, 1]])
+    x = np.vstack([vertices, midpoints])
+    for guess in (None, np.zeros(x.shape[0], dtype=np.int32)):
+        cells = tracker.locate(x, guess)
+        assert np.all(cells >= 0)
+        assert np.all(_inside(tracker, x, cells))
+
+
+def test_points_outside_are_reported_and_concave_grids_use_the_tree():
+    square = rectangle_mesh((0.0, 0.0), (2.0, 2.0), (8, 8))
+    centroids = square.geometry.x[square.geometry.dofmaps[0], :2].mean(axis=1)
+    keep = np.flatnonzero(~((centroids[:, 0] > 1.0) & (centroids[:, 1] > 1.0)))
+    l_shape = dolfinx.mesh.create_submesh(square, 2, keep)[0]  # an L: concave
+    tracker = Tracker(l_shape)
+    x = np.array([[0.5, 1.75], [1.75, 0.5], [1.5, 1.5], [2.5, 0.5]])
+    # Start the walk on the far side of the notch: the straight walk must leave the grid.
+    start = tracker.locate(np.array([[1.75, 0.5], [0.5, 1.75], [0.5, 0.5], [0.5, 0.5]]))
+    cells = tracker.locate(x, start)
+    assert cells[:2].min() >= 0 and np.all(_inside(tracker, x[:2], cells[:2]))
+    assert cells[2] == -1 and cells[3] == -1
+
+
+def _translating_block(points_leaving):
+    mesh = rectangle_mesh((0.0, 0.0), (2.0, 1.0), (8, 4))
+    centroid_x = mesh.geometry.x[mesh.geometry.dofmaps[0], 0].mean(axis=1)
+    points = fe_mpm.seed(mesh, per_cell=1, cells=np.flatnonzero(centroid_x > 1.0))
+    move = fe_mpm.Dirichlet(lambda x: np.ones(x.shape[1], dtype=bool), value=lambda t: (0.6 * t, 0.0))
+    sim = fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(E=1.0, nu=0.3),
+                            dirichlet=[move], points_leaving=points_leaving)
+    return sim, points
+
+
+def test_point_leaving_the_grid_raises_with_step_and_position():
+    sim, points = _translating_block("raise")
+    sim.step(1.0)  # moves the block 0.6 to the right: its right part leaves the grid
+    with pytest.raises(fe_mpm.PointsOutsideError, match=r"left the grid at step 2 \(t = 2\).*point \d+ at x = "):
+        sim.step(2.0)
+
+
+def test_points_leaving_the_grid_can_be_dropped_with_a_count():
+    sim, points = _translating_block("drop")
+    n0 = len(points)
+    sim.step(1.0)
+    with pytest.warns(UserWarning, match="left the grid"):
+        sim.step(2.0)
+    assert sim.dropped > 0 and len(points) == n0 - sim.dropped
+    assert np.all(points.x[:, 0] <= 2.0 + 0.6 + 1e-12)
