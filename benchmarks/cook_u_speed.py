@@ -26,6 +26,7 @@ DEMO = Path(__file__).resolve().parents[1] / "demos" / "cook_membrane.py"
 
 
 def solve_once(n: int, nu: float) -> dict:
+    """Mesh, seed, set up and solve one load step in this process; return the timings."""
     t0 = time.perf_counter()
     scene = meshes.cook_membrane(n=n)
     t_mesh = time.perf_counter() - t0
@@ -55,6 +56,7 @@ def solve_once(n: int, nu: float) -> dict:
 
 
 def whole_process(n: int, nu: float) -> float:
+    """Wall time of the demo as a fresh process (imports included)."""
     t0 = time.perf_counter()
     out = subprocess.run([sys.executable, str(DEMO), "--n", str(n), "--nu", str(nu),
                           "--no-output", "--json"], capture_output=True, text=True, check=True)
@@ -64,6 +66,7 @@ def whole_process(n: int, nu: float) -> float:
 
 
 def main() -> None:
+    """Run the sweep and print the table."""
     p = argparse.ArgumentParser()
     p.add_argument("--n", type=int, nargs="+", default=[32, 64, 128])
     p.add_argument("--nu", type=float, default=0.499)

@@ -38,7 +38,8 @@ class StepForm:
         self.mesh = mesh
         self.ufl_form = form
         self.compiled = dolfinx.fem.compile_form(mesh.comm, form, jit_options=jit_options)
-        self.spaces = [a.ufl_function_space() for a in sorted(form.arguments(), key=lambda a: a.number())]
+        arguments = sorted(form.arguments(), key=lambda a: a.number())
+        self.spaces = [a.ufl_function_space() for a in arguments]
         self.coefficients = {c: c for c in form.coefficients()}
         self.constants = {c: c for c in ufl.algorithms.analysis.extract_constants(form)}
         tdim = mesh.topology.dim

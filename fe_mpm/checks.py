@@ -21,8 +21,10 @@ def check_range(
         owner: What the field belongs to, e.g. ``"NeoHookean"``.
         field: The field name, e.g. ``"nu"``.
         value: The value given.
-        lo, hi: Bounds of the valid interval.
-        lo_open, hi_open: Whether the bounds are excluded.
+        lo: Lower bound of the valid interval.
+        hi: Upper bound of the valid interval.
+        lo_open: Whether the lower bound is excluded.
+        hi_open: Whether the upper bound is excluded.
     """
     try:
         v = float(value)

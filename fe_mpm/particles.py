@@ -42,7 +42,9 @@ class MaterialPoints:
     def __post_init__(self) -> None:
         self.x = np.ascontiguousarray(self.x, dtype=np.float64)
         if self.x.ndim != 2 or self.x.shape[1] not in (2, 3):
-            raise ValueError(f"MaterialPoints: x must have shape (n, 2) or (n, 3), got {self.x.shape}")
+            raise ValueError(
+                f"MaterialPoints: x must have shape (n, 2) or (n, 3), got {self.x.shape}"
+            )
         n, g = self.x.shape
         self.volume = np.asarray(self.volume, dtype=np.float64).reshape(n)
         self.mass = np.asarray(self.mass, dtype=np.float64).reshape(n)

@@ -10,8 +10,8 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-import numpy as np
 import dolfinx.fem.petsc as fem_petsc
+import numpy as np
 
 from fe_mpm._dolfinx import dolfinx
 
@@ -32,7 +32,8 @@ def taylor_remainders(
     """Zeroth- and first-order Taylor remainders of ``R`` about the current ``u``.
 
     Args:
-        R, J: Residual and Jacobian forms, both depending on ``u``.
+        R: Residual form, depending on ``u``.
+        J: Its Jacobian form.
         u: The unknown; restored on return.
         direction: Perturbation direction, same length as ``u.x.array``.
         eps: Perturbation sizes.

@@ -12,8 +12,9 @@ extend the same bilinear map, so the cells of the body are unchanged.
 
 from __future__ import annotations
 
-import numpy as np
 from mpi4py import MPI
+
+import numpy as np
 
 from fe_mpm.checks import check_range
 from fe_mpm.meshes.gmsh_session import gmsh_session, to_dolfinx

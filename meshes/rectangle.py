@@ -18,8 +18,10 @@ def rectangle_mesh(
     """Structured triangle (2D) or tetrahedron (3D) grid of the box ``[lower, upper]``.
 
     Args:
-        lower, upper: Opposite corners (m), length 2 or 3.
+        lower: Lower corner (m), length 2 or 3.
+        upper: Upper corner (m), length 2 or 3.
         n: Cells per direction, length 2 or 3.
+        comm: MPI communicator.
     """
     lower, upper = np.asarray(lower, float), np.asarray(upper, float)
     if lower.size == 2:

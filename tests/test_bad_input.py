@@ -1,10 +1,11 @@
 """Bad input fails early with a message that names the field and the valid range."""
 
-import numpy as np
-import pytest
 from mpi4py import MPI
 
 import basix.ufl
+import numpy as np
+import pytest
+
 import fe_mpm
 from fe_mpm._dolfinx import dolfinx
 from fe_mpm.meshes import cook_membrane, rectangle_mesh

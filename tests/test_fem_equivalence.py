@@ -6,14 +6,14 @@ Gauss weights, the particle sums are that rule's quadrature, so one static step
 from the undeformed state must give the FEM answer to solver precision.
 """
 
+import dolfinx.fem.petsc
 import numpy as np
 import pytest
 import ufl
 
-import dolfinx.fem.petsc
 import fe_mpm
-from fe_mpm._dolfinx import dolfinx as dfx
 from fe_mpm import meshes
+from fe_mpm._dolfinx import dolfinx as dfx
 
 TIGHT = {"snes_rtol": 1e-12, "snes_atol": 1e-15, "snes_stol": 1e-14}
 RTOL = 1e-10

@@ -5,12 +5,12 @@ cells are empty and the slot count is not a bucket size), and a nonlinear
 integrand. The slot rule (design note) must reproduce Σ_p V_p f(x_p) to round-off.
 """
 
+import dolfinx.fem.petsc  # noqa: F401
 import numpy as np
 import pytest
 import ufl
 from layouts import random_points
 
-import dolfinx.fem.petsc  # noqa: F401
 from fe_mpm._dolfinx import dolfinx
 from fe_mpm.assembly import StepForm
 from fe_mpm.forms import displacement
@@ -42,7 +42,7 @@ def _setup(dim, seed=1, F_spread=0.0):
 
 
 def _p1_basis(V, cell, x):
-    """Values (v,) and gradients (v, g) of the P1 basis of ``cell`` at ``x``, from dof coordinates."""
+    """Values (v,) and gradients (v, g) of the P1 basis of ``cell`` at ``x`` (from dof coords)."""
     gdim = x.size
     dofs = V.dofmap.list[cell]
     X = V.tabulate_dof_coordinates()[dofs, :gdim]

@@ -62,7 +62,8 @@ def _translating_block(points_leaving):
     mesh = rectangle_mesh((0.0, 0.0), (2.0, 1.0), (8, 4))
     centroid_x = mesh.geometry.x[mesh.geometry.dofmaps[0], 0].mean(axis=1)
     points = fe_mpm.seed(mesh, per_cell=1, cells=np.flatnonzero(centroid_x > 1.0))
-    move = fe_mpm.Dirichlet(lambda x: np.ones(x.shape[1], dtype=bool), value=lambda t: (0.6 * t, 0.0))
+    everywhere = lambda x: np.ones(x.shape[1], dtype=bool)  # noqa: E731
+    move = fe_mpm.Dirichlet(everywhere, value=lambda t: (0.6 * t, 0.0))
     sim = fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(E=1.0, nu=0.3),
                             dirichlet=[move], points_leaving=points_leaving)
     return sim, points
@@ -71,7 +72,8 @@ def _translating_block(points_leaving):
 def test_point_leaving_the_grid_raises_with_step_and_position():
     sim, points = _translating_block("raise")
     sim.step(1.0)  # moves the block 0.6 to the right: its right part leaves the grid
-    with pytest.raises(fe_mpm.PointsOutsideError, match=r"left the grid at step 2 \(t = 2\).*point \d+ at x = "):
+    message = r"left the grid at step 2 \(t = 2\).*point \d+ at x = "
+    with pytest.raises(fe_mpm.PointsOutsideError, match=message):
         sim.step(2.0)
 
 
