@@ -128,7 +128,7 @@ def seed(
     num_cells = mesh.topology.index_map(tdim).size_local
     if num_cells == 0:
         raise ValueError("seed: the mesh has no cells")
-    cell_type = _basix_cell(mesh)
+    cell_type = simplex_cell_type(mesh)
     ref_pts, ref_wts = _rule_with_count(cell_type, per_cell)
     cells = np.arange(num_cells, dtype=np.int32) if cells is None else np.asarray(cells, np.int32)
     if cells.size == 0:
@@ -154,7 +154,8 @@ def seed(
     )
 
 
-def _basix_cell(mesh: dolfinx.mesh.Mesh) -> basix.CellType:
+def simplex_cell_type(mesh: dolfinx.mesh.Mesh) -> basix.CellType:
+    """The basix cell type of an affine simplex mesh; a clear error for anything else."""
     name = mesh.topology.cell_name()
     if name not in ("triangle", "tetrahedron"):
         raise ValueError(f"fe-mpm needs a triangle or tetrahedron mesh, got {name} cells")

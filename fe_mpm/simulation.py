@@ -31,7 +31,7 @@ from fe_mpm.errors import ConvergenceError, PointsOutsideError
 from fe_mpm.forms import displacement
 from fe_mpm.io import ParticleWriter
 from fe_mpm.newton import NewtonSolver
-from fe_mpm.particles import MaterialPoints, _basix_cell
+from fe_mpm.particles import MaterialPoints, simplex_cell_type
 from fe_mpm.quadrature import MaterialPointQuadrature, SlotLayout, bucket
 from fe_mpm.tracker import Tracker
 
@@ -96,11 +96,11 @@ class Simulation:
 
     Example::
 
-        mesh, facet_tags = meshes.cook_membrane(n=16)
-        points = fe_mpm.seed(mesh, per_cell=1)
+        scene = meshes.cook_membrane(n=16)
+        points = fe_mpm.seed(scene.mesh, per_cell=1)
         sim = fe_mpm.Simulation(
-            mesh, points, NeoHookean(E=70.0, nu=0.33), formulation="u",
-            facet_tags=facet_tags,
+            scene.mesh, points, NeoHookean(E=70.0, nu=0.33), formulation="u",
+            facet_tags=scene.facet_tags,
             dirichlet=[Dirichlet(meshes.COOK_CLAMPED)],
             tractions=[Traction(meshes.COOK_LOADED, (0.0, 1 / 16))],
         )
@@ -151,7 +151,7 @@ class Simulation:
         tdim = mesh.topology.dim
         if mesh.topology.index_map(tdim).size_global == 0:
             raise ValueError("Simulation: the mesh is empty (it has no cells)")
-        _basix_cell(mesh)
+        simplex_cell_type(mesh)
         if len(points) == 0:
             raise ValueError("Simulation: there are no material points")
         if points.gdim != mesh.geometry.dim:
@@ -397,9 +397,9 @@ class Simulation:
         where = self.tracker.centroids[hinged[0]]
         return (
             f"{hinged.size} occupied cell(s) share at most one node with the rest of the "
-            f"material (first near x = {where}), so the static tangent is singular there: "
-            "points crossed into otherwise empty cells. Smaller load steps do not help; a "
-            "coarser grid or a dynamic analysis does. "
+            f"material (first near x = {where}); such a cell can swing about that node, so "
+            "the static tangent is singular there. This typically follows points crossing "
+            "into otherwise empty cells; a coarser grid or a dynamic analysis avoids it. "
         )
 
     def _compile(self, nslot: int) -> _SlotForms:

@@ -83,3 +83,24 @@ def test_divergence_stops_with_step_and_reason():
     with pytest.raises(fe_mpm.ConvergenceError, match=r"Newton failed in step 1 \(t = 0 -> 1\)"):
         sim.step(1.0)
     assert np.array_equal(points.x, x_before) and sim.step_number == 0
+
+
+def test_singular_tangent_names_the_hinged_cells():
+    """Two occupied cells meeting at one node, the first clamped, under gravity: the
+    second can only swing about the shared node (no static equilibrium)."""
+    mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (4, 4))
+    nodes = mesh.geometry.dofmaps[0]
+    x = mesh.geometry.x[:, :2]
+    on_left = np.isclose(x[nodes][:, :, 0], 0.0).any(axis=1)
+    clamped_cell = np.flatnonzero(on_left)[0]
+    shared = np.array([np.intersect1d(nodes[clamped_cell], row).size for row in nodes])
+    away = ~(np.isclose(x[nodes][:, :, 0], 0.0).any(axis=1))
+    hinged_cell = np.flatnonzero((shared == 1) & away)[0]
+    points = fe_mpm.seed(mesh, per_cell=1, cells=[clamped_cell, hinged_cell])
+    sim = fe_mpm.Simulation(
+        mesh, points, fe_mpm.NeoHookean(1.0, 0.3), body_force=(0.0, -1.0),
+        dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0))],
+    )
+    hinge = r"\d+ occupied cell.* share at most one node"
+    with pytest.raises(fe_mpm.ConvergenceError, match=hinge):
+        sim.step(1.0)
