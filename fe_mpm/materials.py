@@ -57,3 +57,23 @@ class NeoHookean:
         I = ufl.Identity(ufl.shape(F)[0])
         J = ufl.det(F)
         return self.lmbda * ufl.ln(J) * I + self.mu * (F * F.T - I)
+
+    def kirchhoff_deviatoric(self, F: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
+        """Isochoric Kirchhoff stress ``μ dev(b̄)`` (Pa) of the split law (thesis Eq. 3.44).
+
+        ``b̄ = J^{-2/3} F Fᵀ`` and ``dev`` are taken in 3D (``F_33 = 1`` in plane
+        strain); the result has the shape of ``F`` (the in-plane block in 2D).
+        The volumetric part is the mixed form's pressure field.
+        """
+        g = ufl.shape(F)[0]
+        F3 = embed_3d(F)
+        b_bar = ufl.det(F3) ** (-2.0 / 3.0) * F3 * F3.T
+        s = self.mu * ufl.dev(b_bar)
+        return s if g == 3 else ufl.as_matrix([[s[i, j] for j in range(g)] for i in range(g)])
+
+
+def embed_3d(F: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
+    """The 3x3 deformation gradient of a 2D plane-strain F (F_33 = 1); 3D F unchanged."""
+    if ufl.shape(F)[0] == 3:
+        return F
+    return ufl.as_matrix([[F[0, 0], F[0, 1], 0], [F[1, 0], F[1, 1], 0], [0, 0, 1]])

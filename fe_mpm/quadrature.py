@@ -126,12 +126,26 @@ class MaterialPointQuadrature:
         """The form ``Σ_p V_p integrand(x_p)`` over the occupied cells."""
         return integrand * self.scale * self.dx
 
-    def at_points(self, u: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
-        """Value of a P1 field at the material points: ``u + ∇u · d`` (exact)."""
-        return u + ufl.dot(ufl.grad(u), self.offset)
+    def at_points(self, u: ufl.core.expr.Expr, degree: int = 1) -> ufl.core.expr.Expr:
+        """Value at the material points of a field of polynomial degree 1 or 2.
 
-    def grad_at_points(self, u: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
-        """Gradient of a P1 field at the material points (constant per cell)."""
+        On an affine cell the Taylor series about the slot point ends at the
+        degree: ``u + ∇u·d`` for P1, ``+ ½ d·H·d`` (H = ∇∇u, constant) for P2. Exact.
+        """
+        d = self.offset
+        value = u + ufl.dot(ufl.grad(u), d)
+        if degree == 2:
+            value += 0.5 * ufl.dot(ufl.dot(ufl.grad(ufl.grad(u)), d), d)
+        elif degree != 1:
+            raise ValueError(f"at_points: degree must be 1 or 2, got {degree}")
+        return value
+
+    def grad_at_points(self, u: ufl.core.expr.Expr, degree: int = 1) -> ufl.core.expr.Expr:
+        """Gradient at the material points: ``∇u`` for P1, ``∇u + H d`` for P2 (exact)."""
+        if degree == 2:
+            return ufl.grad(u) + ufl.dot(ufl.grad(ufl.grad(u)), self.offset)
+        if degree != 1:
+            raise ValueError(f"grad_at_points: degree must be 1 or 2, got {degree}")
         return ufl.grad(u)
 
     # -- packing -------------------------------------------------------------

@@ -28,17 +28,13 @@ from fe_mpm.assembly import StepForm
 from fe_mpm.boundary import Dirichlet, Traction, boundary_facets
 from fe_mpm.checks import check_choice, check_range
 from fe_mpm.errors import ConvergenceError, PointsOutsideError
-from fe_mpm.forms import displacement
+from fe_mpm.formulations import FORMULATIONS, GridFields, collapse, constrained_space
+from fe_mpm.forms import displacement, mixed_up
 from fe_mpm.io import ParticleWriter
 from fe_mpm.newton import NewtonSolver
 from fe_mpm.particles import MaterialPoints, simplex_cell_type
-from fe_mpm.quadrature import MaterialPointQuadrature, SlotLayout, bucket
+from fe_mpm.quadrature import OCCUPIED, MaterialPointQuadrature, SlotLayout, bucket
 from fe_mpm.tracker import Tracker
-
-#: Formulations that run today.
-FORMULATIONS = ("u",)
-#: Formulations that are planned but not built yet.
-PLANNED_FORMULATIONS = ("up", "up-nostab")
 
 
 @dataclass
@@ -69,22 +65,35 @@ class _SlotForms:
 
     def __init__(self, sim: Simulation, nslot: int):
         mesh, g = sim.mesh, sim.gdim
+        spec, fields, material = sim.spec, sim.fields, sim.material
+        deg = spec.u_degree
         self.q = q = MaterialPointQuadrature(mesh, nslot)
         self.F_n = q.function((g, g), "F_n")
         self.density = q.function((), "density")
-        w = ufl.TestFunction(sim.V)
-        du = sim.du
-        kirchhoff = sim.material.kirchhoff
-        R = displacement.residual(
-            du, w, q, self.F_n, self.density, kirchhoff, sim._body_force, sim._traction_terms
-        )
-        J = ufl.derivative(R, du, ufl.TrialFunction(sim.V))
+        du, p = fields.du, fields.p
+        if spec.pressure:
+            w, q_test = ufl.TestFunctions(fields.W)
+            R = mixed_up.residual(
+                du, p, w, q_test, q, self.F_n, self.density, material, sim._ppp,
+                sim._body_force, sim._traction_terms, u_degree=deg,
+            )
+        else:
+            w = ufl.TestFunction(fields.W)
+            R = displacement.residual(
+                du, w, q, self.F_n, self.density, material.kirchhoff, sim._body_force,
+                sim._traction_terms,
+            )
+        J = ufl.derivative(R, fields.w, ufl.TrialFunction(fields.W))
         self.residual = StepForm(R, mesh, sim._traction_facets)
         self.jacobian = StepForm(J, mesh, sim._traction_facets)
         # Per-point values after convergence: Δu_p, ΔF_p and the 3x3 Cauchy stress.
-        dF = displacement.deformation_increment(q, du)
-        sigma = displacement.cauchy_stress_3d(kirchhoff, dF * self.F_n)
-        du_p = q.at_points(du)
+        dF = ufl.Identity(g) + q.grad_at_points(du, deg)
+        F = dF * self.F_n
+        if spec.pressure:
+            sigma = mixed_up.cauchy_stress_3d(material, F, q.at_points(p))
+        else:
+            sigma = displacement.cauchy_stress_3d(material.kirchhoff, F)
+        du_p = q.at_points(du, deg)
         values = [du_p[i] for i in range(g)]
         values += [dF[i, j] for i in range(g) for j in range(g)]
         values += [sigma[i, j] for i in range(3) for j in range(3)]
@@ -111,7 +120,9 @@ class Simulation:
         mesh: Background grid: affine triangles (plane strain) or tetrahedra.
         points: The material points (moved and updated in place).
         material: Constitutive law with ``kirchhoff(F)``.
-        formulation: ``"u"`` (irreducible). ``"up"``/``"up-nostab"`` are planned.
+        formulation: ``"u"`` (irreducible), ``"up"`` (mixed P1/P1 with PPP),
+            ``"up-nostab"`` (mixed P1/P1) or ``"up-p2p1"`` (mixed Taylor–Hood);
+            see :mod:`fe_mpm.formulations`.
         dirichlet: Prescribed grid displacements.
         tractions: Surface tractions on grid facets.
         body_force: Body force per unit mass (m/s², length g), e.g. gravity.
@@ -122,6 +133,8 @@ class Simulation:
         output_dir: Folder for ParaView output (``particles.pvd`` and ``grid.bp``);
             nothing is written if None.
         output_every: Write every this many steps (the last step is always written).
+        ppp_alpha: PPP coefficient α of the thesis (``up`` only), ≥ 0. The form uses
+            α times Kratos's factor (8 in 2D, 10 in 3D); α = 1 reproduces the thesis.
     """
 
     def __init__(
@@ -139,13 +152,10 @@ class Simulation:
         points_leaving: str = "raise",
         output_dir: str | Path | None = None,
         output_every: int = 1,
+        ppp_alpha: float = 1.0,
     ):
-        if formulation in PLANNED_FORMULATIONS:
-            raise NotImplementedError(
-                f"Simulation: formulation {formulation!r} is not implemented yet; "
-                f"available: {', '.join(FORMULATIONS)}"
-            )
-        check_choice("Simulation", "formulation", formulation, FORMULATIONS)
+        check_choice("Simulation", "formulation", formulation, tuple(FORMULATIONS))
+        check_range("Simulation", "ppp_alpha", ppp_alpha, lo=0.0)
         check_choice("Simulation", "points_leaving", points_leaving, ("raise", "drop"))
         check_range("Simulation", "output_every", output_every, lo=1)
         tdim = mesh.topology.dim
@@ -162,6 +172,12 @@ class Simulation:
         self.points = points
         self.material = material
         self.formulation = formulation
+        self.spec = FORMULATIONS[formulation]
+        if self.spec.pressure and not hasattr(material, "kirchhoff_deviatoric"):
+            raise ValueError(
+                f"Simulation: formulation {formulation!r} needs a material with a "
+                "deviatoric response (kirchhoff_deviatoric) and a bulk_modulus"
+            )
         self.gdim = g = mesh.geometry.dim
         self.points_leaving = points_leaving
         self.petsc_options = petsc_options
@@ -173,39 +189,30 @@ class Simulation:
 
         t0 = time.perf_counter()
         self.tracker = Tracker(mesh)
-        self.V = dolfinx.fem.functionspace(mesh, ("Lagrange", 1, (g,)))
-        self.du = dolfinx.fem.Function(self.V, name="du")
+        self.fields = GridFields(mesh, self.spec)
         fdim = tdim - 1
         mesh.topology.create_connectivity(fdim, tdim)
 
-        self._dirichlet = []  # (spec, Constant or Function, DirichletBC)
+        self._dirichlet = []  # (spec, value Function, DirichletBC)
         for spec in dirichlet:
             facets = boundary_facets(mesh, spec.where, facet_tags)
-            if spec.component is None:
-                space = self.V
-                shape = (g,)
-            else:
+            if spec.component is not None:
                 check_range("Dirichlet", "component", spec.component, lo=0, hi=g - 1)
-                space = self.V.sub(spec.component)
-                shape = ()
-            if spec.profile is None:
-                value = dolfinx.fem.Constant(mesh, np.zeros(shape))
-                dofs = dolfinx.fem.locate_dofs_topological(space, fdim, facets)
-                bc = dolfinx.fem.dirichletbc(value, dofs, space)
-            elif spec.component is None:
-                value = dolfinx.fem.Function(space)
-                dofs = dolfinx.fem.locate_dofs_topological(space, fdim, facets)
-                bc = dolfinx.fem.dirichletbc(value, dofs)
-            else:
-                collapsed, _ = space.collapse()
+            target, is_sub = constrained_space(self.fields.U, spec.component)
+            if is_sub:
+                collapsed, _ = target.collapse()
                 value = dolfinx.fem.Function(collapsed)
-                dofs = dolfinx.fem.locate_dofs_topological((space, collapsed), fdim, facets)
-                bc = dolfinx.fem.dirichletbc(value, dofs, space)
+                dofs = dolfinx.fem.locate_dofs_topological((target, collapsed), fdim, facets)
+                bc = dolfinx.fem.dirichletbc(value, dofs, target)
+            else:
+                value = dolfinx.fem.Function(target)
+                dofs = dolfinx.fem.locate_dofs_topological(target, fdim, facets)
+                bc = dolfinx.fem.dirichletbc(value, dofs)
             self._dirichlet.append((spec, value, bc))
 
         self._tractions = []  # (spec, Constant)
         self._traction_facets: dict[int, np.ndarray] = {}
-        self._traction_terms = []
+        self._traction_terms = []  # (Constant, ds(i)); the test function comes later
         ds = ufl.Measure("ds", domain=mesh)
         for i, spec in enumerate(tractions, start=1):
             if len(spec.value) != g:
@@ -214,6 +221,19 @@ class Simulation:
             self._traction_facets[i] = boundary_facets(mesh, spec.where, facet_tags)
             self._traction_terms.append((value, ds(i)))
             self._tractions.append((spec, value))
+
+        self._ppp = None
+        if self.spec.ppp:
+            dg0 = dolfinx.fem.functionspace(mesh, ("DG", 0))
+            dg0_vec = dolfinx.fem.functionspace(mesh, ("DG", 0, (g,)))
+            centroid = dolfinx.fem.Function(dg0_vec, name="centroid")
+            cells = np.arange(self.tracker.num_cells)
+            centroid.x.array.reshape(-1, g)[dg0_vec.dofmap.list[cells, 0]] = self.tracker.centroids
+            fill = dolfinx.fem.Function(dg0, name="fill")
+            dx2 = ufl.Measure("dx", domain=mesh, subdomain_id=OCCUPIED,
+                              metadata={"quadrature_degree": 2})
+            alpha = mixed_up.effective_alpha(ppp_alpha, g)
+            self._ppp = mixed_up.PPPData(alpha, centroid, fill, dx2)
 
         self._body_force = None
         if body_force is not None:
@@ -226,15 +246,21 @@ class Simulation:
         self._markers: dict[str, tuple[np.ndarray, int]] = {}  # name -> (x, host point)
         self._add_time("setup", t0)
 
-        self._particle_writer = self._grid_writer = None
+        self._particle_writer = self._grid_writer = self._pressure_writer = None
         self._written_step = -1
         self.output_every = int(output_every)
         if output_dir is not None:
             self.output_dir = Path(output_dir)
             self._particle_writer = ParticleWriter(self.output_dir)
+            self._grid_out = self._grid_output_functions()
             self._grid_writer = dolfinx.io.VTXWriter(
-                mesh.comm, self.output_dir / "grid.bp", [self.du], engine="BP4"
+                mesh.comm, self.output_dir / "grid.bp", self._grid_out[:1], engine="BP4"
             )
+            if len(self._grid_out) > 1:
+                self._pressure_writer = dolfinx.io.VTXWriter(
+                    mesh.comm, self.output_dir / "grid_pressure.bp", self._grid_out[1:],
+                    engine="BP4",
+                )
 
         # Locate the points once now, so a bad initial layout fails at set-up.
         self._track()
@@ -297,9 +323,9 @@ class Simulation:
             raise ValueError(f"Simulation.step: t_new must exceed the current time {self.t}")
         k = self.step_number + 1
         forms, layout, R, J, bcs = self.prepare_step(t_new)
-        self.du.x.array[:] = 0.0
+        self._initial_guess(layout)
         result = self._newton_solver(forms).solve(R, J, bcs)
-        if not result.converged or not np.all(np.isfinite(self.du.x.array)):
+        if not result.converged or not np.all(np.isfinite(self.w.x.array)):
             norms = ", ".join(f"{r:.3e}" for r in result.residual_norms)
             raise ConvergenceError(
                 f"Newton failed in step {k} (t = {self.t:g} -> {t_new:g}) after "
@@ -333,6 +359,7 @@ class Simulation:
             Taylor tests use this to check every residual/Jacobian pair.
         """
         layout = self._track(step=self.step_number + 1, t=t_new)
+        self._check_points_per_cell(layout)
 
         t0 = time.perf_counter()
         nslot = bucket(layout.max_count)
@@ -344,6 +371,10 @@ class Simulation:
         q.pack_geometry(pts, layout, self.tracker.centroids, self.tracker.volumes)
         q.pack(forms.F_n, layout, pts.F, empty=np.eye(self.gdim))
         q.pack(forms.density, layout, pts.density)
+        if self._ppp is not None:
+            fill = self._ppp.fill
+            volume = np.bincount(layout.cell, weights=pts.volume, minlength=self.tracker.num_cells)
+            fill.x.array[fill.function_space.dofmap.list[:, 0]] = volume / self.tracker.volumes
         R = forms.residual.bind(layout.occupied)
         J = forms.jacobian.bind(layout.occupied)
         bcs = self._boundary_conditions(layout, self.t, t_new)
@@ -388,8 +419,8 @@ class Simulation:
         cells can rotate freely about it: a mechanism of quasi-static MPM that
         appears when points cross into empty cells.
         """
-        nodes = self.V.dofmap.list[layout.occupied]
-        uses = np.bincount(nodes.ravel(), minlength=self.du.x.array.size // self.gdim)
+        nodes = self.mesh.geometry.dofmaps[0][layout.occupied]
+        uses = np.bincount(nodes.ravel())
         shared = (uses[nodes] > 1).sum(axis=1)
         hinged = layout.occupied[shared <= 1]
         if hinged.size == 0:
@@ -411,27 +442,58 @@ class Simulation:
         if self._newton is None:
             all_cells = np.arange(self.tracker.num_cells, dtype=np.int32)
             self._newton = NewtonSolver(
-                self.du, forms.jacobian.bind(all_cells), prefix=f"fe_mpm_{self.formulation}_",
+                self.w, forms.jacobian.bind(all_cells),
+                prefix=f"fe_mpm_{self.formulation.replace('-', '_')}_",
                 petsc_options=self.petsc_options, timings=self.timings,
             )
         return self._newton
 
     def _boundary_conditions(self, layout: SlotLayout, t_old: float, t_new: float) -> list:
         for spec, value, _ in self._dirichlet:
-            if spec.profile is None:
-                value.value = spec.at(t_new) - spec.at(t_old)
-            else:
+            if spec.profile is not None:
                 value.interpolate(lambda x: spec.profile(x, t_new) - spec.profile(x, t_old))
+            else:
+                increment = spec.at(t_new) - spec.at(t_old)
+                bs = value.function_space.dofmap.bs
+                value.x.array.reshape(-1, bs)[:] = increment.reshape(-1)[:bs]
         for spec, value in self._tractions:
             value.value = spec.at(t_new)
-        # Grid nodes no material point reaches get no equation: pin them.
-        dofmap = self.V.dofmap
-        n_nodes = dofmap.index_map.size_local + dofmap.index_map.num_ghosts
-        supported = np.zeros(n_nodes, dtype=bool)
-        supported[dofmap.list[layout.occupied].ravel()] = True
-        free = np.flatnonzero(~supported).astype(np.int32)
-        pin = dolfinx.fem.dirichletbc(np.zeros(self.gdim), free, self.V)
-        return [bc for _, _, bc in self._dirichlet] + [pin]
+        # Grid dofs no material point reaches get no equation: pin them.
+        pins = self.fields.pin_unsupported(layout.occupied)
+        return [bc for _, _, bc in self._dirichlet] + pins
+
+    def _initial_guess(self, layout: SlotLayout) -> None:
+        """Δu = 0, and the pressure projected from the points (thesis Eq. 5.20).
+
+        ``p_I = Σ_p N_I(x_p) m_p p_p / Σ_p N_I(x_p) m_p``, mass weighted, with the
+        particle pressure ``p_p = −tr(σ_p)/3`` of the last step.
+        """
+        self.w.x.array[:] = 0.0
+        if not self.spec.pressure:
+            return
+        pts = self.points
+        Q = self.fields.Q[0]
+        dofs = Q.dofmap.list[layout.cell]  # P1: local dofs follow the cell's vertices
+        weights = self.tracker.barycentric(pts.x, layout.cell) * pts.mass[:, None]
+        p_p = -np.trace(pts.stress, axis1=1, axis2=2) / 3.0
+        n = Q.dofmap.index_map.size_local + Q.dofmap.index_map.num_ghosts
+        mass = np.bincount(dofs.ravel(), weights=weights.ravel(), minlength=n)
+        moment = np.bincount(dofs.ravel(), weights=(weights * p_p[:, None]).ravel(), minlength=n)
+        self.fields.set_pressure(np.divide(moment, mass, out=np.zeros(n), where=mass > 0))
+
+    def _check_points_per_cell(self, layout: SlotLayout) -> None:
+        need = self.spec.min_points_per_cell
+        if need <= 1:
+            return
+        counts = np.bincount(layout.cell)[layout.occupied]
+        if counts.min() < need:
+            worst = layout.occupied[np.argmin(counts)]
+            raise ValueError(
+                f"Simulation: formulation {self.formulation!r} needs at least {need} material "
+                f"points in every occupied cell (the quadratic displacement has more strain "
+                f"modes than fewer points can see); cell {worst} near x = "
+                f"{self.tracker.centroids[worst]} holds {counts.min()}. Seed more points per cell."
+            )
 
     def _convect(self, forms: _SlotForms, layout: SlotLayout, step: int, t: float) -> None:
         g = self.gdim
@@ -468,17 +530,38 @@ class Simulation:
         self._written_step = self.step_number
         t0 = time.perf_counter()
         self._particle_writer.write(self.t, self.points)
+        for out, sub_index in zip(self._grid_out, self._grid_maps):
+            out.x.array[:] = self.w.x.array[sub_index]
         self._grid_writer.write(self.t)
+        if self._pressure_writer is not None:
+            self._pressure_writer.write(self.t)
         self._add_time("output", t0)
+
+    def _grid_output_functions(self) -> list[dolfinx.fem.Function]:
+        """Collapsed copies of Δu (and p) for VTX output, with their dofs in ``w``."""
+        W = self.fields.W
+        if not self.spec.pressure:
+            self._grid_maps = [slice(None)]
+            return [dolfinx.fem.Function(W, name="du")]
+        U, u_map = collapse(W.sub(0))
+        Q, p_map = self.fields.Q
+        self._grid_maps = [u_map, p_map]
+        return [dolfinx.fem.Function(U, name="du"), dolfinx.fem.Function(Q, name="p")]
+
+    @property
+    def w(self) -> dolfinx.fem.Function:
+        """The grid unknown of the last step: Δu, or (Δu, p) for the mixed forms."""
+        return self.fields.w
 
     def _add_time(self, key: str, t0: float) -> None:
         self.timings[key] = self.timings.get(key, 0.0) + time.perf_counter() - t0
 
     def close(self) -> None:
         """Close output files and free PETSc objects."""
-        if self._grid_writer is not None:
-            self._grid_writer.close()
-            self._grid_writer = None
+        for writer in (self._grid_writer, self._pressure_writer):
+            if writer is not None:
+                writer.close()
+        self._grid_writer = self._pressure_writer = None
         if self._newton is not None:
             self._newton.destroy()
             self._newton = None

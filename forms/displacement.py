@@ -31,6 +31,7 @@ from collections.abc import Sequence
 
 import ufl
 
+from fe_mpm.materials import embed_3d
 from fe_mpm.quadrature import MaterialPointQuadrature
 
 
@@ -71,13 +72,6 @@ def residual(
     for t, ds in tractions:
         R -= ufl.dot(t, w) * ds
     return R
-
-
-def embed_3d(F: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
-    """The 3x3 deformation gradient of a 2D plane-strain F (F_33 = 1); 3D F unchanged."""
-    if ufl.shape(F)[0] == 3:
-        return F
-    return ufl.as_matrix([[F[0, 0], F[0, 1], 0], [F[1, 0], F[1, 1], 0], [0, 0, 1]])
 
 
 def cauchy_stress_3d(kirchhoff, F: ufl.core.expr.Expr) -> ufl.core.expr.Expr:

@@ -34,10 +34,11 @@ def test_unknown_formulation():
         fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1.0, 0.3), formulation="uu")
 
 
-def test_planned_formulation_says_it_is_not_built():
-    mesh, points = _scene()
-    with pytest.raises(NotImplementedError, match="'up' is not implemented yet"):
-        fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1.0, 0.3), formulation="up")
+def test_taylor_hood_needs_enough_points_per_cell():
+    mesh, points = _scene()  # one point per cell
+    sim = fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1.0, 0.3), formulation="up-p2p1")
+    with pytest.raises(ValueError, match="'up-p2p1' needs at least 3 material points in every"):
+        sim.step(1.0)
 
 
 def test_empty_mesh():

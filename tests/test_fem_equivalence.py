@@ -50,7 +50,7 @@ def _mpm_solve(mesh, facet_tags, loaded, clamped, material, density, b, t, per_c
         body_force=b, petsc_options=TIGHT,
     )
     sim.run(n_steps=1, progress=False)
-    return sim.du.x.array.copy(), points
+    return sim.w.x.array.copy(), points
 
 
 def _box_3d():

@@ -1,0 +1,110 @@
+"""The grid unknowns of each formulation, and what the time loop needs from them.
+
+| name        | unknowns                 | stabilisation        |
+|-------------|--------------------------|----------------------|
+| ``u``       | Δu (P1)                  | none                 |
+| ``up``      | Δu (P1), p (P1)          | PPP (Dohrmann–Bochev)|
+| ``up-nostab``| Δu (P1), p (P1)         | none                 |
+| ``up-p2p1`` | Δu (P2), p (P1)          | none (Taylor–Hood)   |
+
+The weak forms themselves live in :mod:`fe_mpm.forms`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import basix.ufl
+import numpy as np
+import ufl
+
+from fe_mpm._dolfinx import dolfinx
+
+
+@dataclass(frozen=True)
+class FormulationSpec:
+    """What distinguishes the formulations."""
+
+    name: str
+    u_degree: int
+    pressure: bool
+    ppp: bool
+    #: Fewest material points an occupied cell may hold (rank of the P2 strain).
+    min_points_per_cell: int = 1
+
+
+FORMULATIONS = {
+    "u": FormulationSpec("u", 1, pressure=False, ppp=False),
+    "up": FormulationSpec("up", 1, pressure=True, ppp=True),
+    "up-nostab": FormulationSpec("up-nostab", 1, pressure=True, ppp=False),
+    "up-p2p1": FormulationSpec("up-p2p1", 2, pressure=True, ppp=False, min_points_per_cell=3),
+}
+
+
+class GridFields:
+    """The unknown function of a step and its subspaces.
+
+    Attributes:
+        W: Space of the unknown (P1/P2 vector, or mixed displacement–pressure).
+        w: The unknown: Δu, or (Δu, p).
+        du: UFL displacement increment (a view of ``w``).
+        p: UFL pressure (a view of ``w``), or None.
+        U: The displacement (sub)space, where Dirichlet conditions act.
+        Q: The collapsed pressure space and its dofs in ``W``, or None.
+    """
+
+    def __init__(self, mesh: dolfinx.mesh.Mesh, spec: FormulationSpec):
+        self.spec = spec
+        g = mesh.geometry.dim
+        cell = mesh.topology.cell_name()
+        u_el = basix.ufl.element("Lagrange", cell, spec.u_degree, shape=(g,))
+        if spec.pressure:
+            p_el = basix.ufl.element("Lagrange", cell, 1)
+            self.W = dolfinx.fem.functionspace(mesh, basix.ufl.mixed_element([u_el, p_el]))
+            self.U = self.W.sub(0)
+            self.Q = collapse(self.W.sub(1))
+        else:
+            self.W = dolfinx.fem.functionspace(mesh, u_el)
+            self.U = self.W
+            self.Q = None
+        self.w = dolfinx.fem.Function(self.W, name="unknown")
+        if spec.pressure:
+            self.du, self.p = ufl.split(self.w)
+        else:
+            self.du, self.p = self.w, None
+        # Scalar subspaces, each collapsed once, to pin the dofs no point reaches.
+        scalar = [self.U.sub(c) for c in range(g)] + ([self.W.sub(1)] if spec.pressure else [])
+        self._pinnable = []
+        for sub in scalar:
+            collapsed, to_parent = collapse(sub)
+            zero = dolfinx.fem.Constant(mesh, 0.0)
+            self._pinnable.append((sub, collapsed, to_parent, zero))
+
+    def pin_unsupported(self, occupied: np.ndarray) -> list[dolfinx.fem.DirichletBC]:
+        """Zero conditions on every dof outside the occupied cells (they have no equation)."""
+        bcs = []
+        for sub, collapsed, to_parent, zero in self._pinnable:
+            supported = np.zeros(to_parent.size, dtype=bool)
+            supported[collapsed.dofmap.list[occupied].ravel()] = True
+            bcs.append(dolfinx.fem.dirichletbc(zero, to_parent[~supported], sub))
+        return bcs
+
+    def set_pressure(self, values: np.ndarray) -> None:
+        """Write nodal pressures (P1 dof order of :attr:`Q`) into ``w``."""
+        self.w.x.array[self.Q[1]] = values
+
+    def pressure_values(self) -> np.ndarray:
+        """Nodal pressures of ``w`` in the P1 dof order of :attr:`Q`."""
+        return self.w.x.array[self.Q[1]].copy()
+
+
+def collapse(sub: dolfinx.fem.FunctionSpace) -> tuple[dolfinx.fem.FunctionSpace, np.ndarray]:
+    """A subspace as a space of its own, and the parent dof of each of its dofs."""
+    space, maps = sub.collapse()
+    return space, np.asarray(maps[0] if isinstance(maps, list) else maps, dtype=np.int32)
+
+
+def constrained_space(U: dolfinx.fem.FunctionSpace, component: int | None):
+    """The (sub)space a Dirichlet condition acts on, and whether it is a subspace."""
+    target = U if component is None else U.sub(component)
+    return target, len(target.component()) > 0

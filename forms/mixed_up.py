@@ -1,0 +1,142 @@
+r"""Mixed displacement–pressure (u-p) form with Polynomial Pressure Projection (PPP).
+
+Iaconeta (2019) Ch. 5. The unknowns of a step are the grid displacement
+increment :math:`\Delta u` and the grid pressure :math:`p` at :math:`t_{n+1}`
+(positive in compression). The stress splits as (thesis Eq. 3.44)
+
+.. math::  \tau = -J p\, I + \mu\, \mathrm{dev}(\bar b), \qquad \bar b = J^{-2/3} F F^T,
+
+with the volumetric law :math:`U(J) = \tfrac12 (J-1)^2`, i.e. :math:`p = -K (J-1)`.
+The step is written against the grid at :math:`t_n` as in
+:mod:`fe_mpm.forms.displacement`:
+
+.. math::
+
+    R_u &= \sum_p V_p^n \frac{\tau \Delta F^{-T}}{J_n} : \nabla w - (\text{loads}), \\
+    R_p &= -\sum_p V_p^{n+1}\, q \Big[(J - 1) + \frac{p}{K}\Big]
+           - \frac{\alpha}{\mu} \sum_K \phi_K \int_K (q - \Pi_0 q)(p - \Pi_0 p)\, dx .
+
+**Units.** The volumetric equation is written in strain units, i.e. divided by
+the bulk modulus K, as Kratos does. Thesis Eq. 5.16 instead adds
+:math:`(\alpha/G)(q p - \tilde q \tilde p)` to the stress-unit term
+:math:`q(\sigma_m - p)`; as printed the two do not match, and PPP then comes out
+about K/G times too weak. Here both terms are dimensionless.
+
+**PPP.** Dohrmann–Bochev project the pressure onto cell-wise constants. For P1 on
+an affine cell, :math:`(q - \Pi_0 q)(x) = \nabla q \cdot (x - x_c)` with
+:math:`x_c` the centroid, so the term is the single exact integral
+:math:`\int_K (\nabla q \cdot (x-x_c))(\nabla p \cdot (x-x_c))\,dx` (degree-2 rule). It is
+deliberately *not* written as ``c*q*p*dx(degree=2) - c*q*p*dx(degree=1)``. With
+``p`` from a split mixed function, that difference assembled to zero in the
+residual while the Jacobian kept it (the form compiler merges identical
+integrands), and Newton converged linearly to the unstabilised answer. The
+Taylor tests guard against this. :math:`\phi_K` is the fraction of the cell
+filled by material points (their volume at :math:`t_n` over :math:`|K|`), so
+partly filled cells are stabilised in proportion.
+
+**α.** The thesis states α = 1. Kratos MPM, the thesis group's code, multiplies
+it by a default factor of 8 in 2D and 10 in 3D. With that effective value and
+the strain-unit scaling, a P1/P1 prototype reproduced the Kratos UP+PPP column
+of Cook's membrane to four digits. So :func:`effective_alpha` returns
+``alpha * (8 in 2D, 10 in 3D)``, and ``alpha = 1`` is what reproduces the thesis.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import ufl
+
+from fe_mpm.materials import embed_3d
+from fe_mpm.quadrature import MaterialPointQuadrature
+
+#: Kratos MPM's factor on the PPP α, by geometric dimension.
+KRATOS_PPP_FACTOR = {2: 8.0, 3: 10.0}
+
+
+def effective_alpha(alpha: float, gdim: int) -> float:
+    """The PPP coefficient used in the form: thesis α times Kratos's factor."""
+    return alpha * KRATOS_PPP_FACTOR[gdim]
+
+
+@dataclass
+class PPPData:
+    """Per-cell data of the PPP term.
+
+    Attributes:
+        alpha_eff: Effective α (dimensionless), see :func:`effective_alpha`.
+        centroid: DG0 vector field of cell centroids x_c (m).
+        fill: DG0 field φ_K, volume of the cell's points over the cell volume.
+        dx: Cell measure with a degree-2 rule over the occupied cells.
+    """
+
+    alpha_eff: float
+    centroid: ufl.Coefficient
+    fill: ufl.Coefficient
+    dx: ufl.Measure
+
+
+def stress_parts(material, F: ufl.core.expr.Expr, p: ufl.core.expr.Expr):
+    """Kirchhoff stress τ = −J p I + μ dev(b̄) of shape g x g, and J = det F."""
+    J = ufl.det(embed_3d(F))
+    g = ufl.shape(F)[0]
+    return -J * p * ufl.Identity(g) + material.kirchhoff_deviatoric(F), J
+
+
+def residual(
+    du: ufl.core.expr.Expr,
+    p: ufl.core.expr.Expr,
+    w: ufl.core.expr.Expr,
+    q_test: ufl.core.expr.Expr,
+    mpq: MaterialPointQuadrature,
+    F_n: ufl.Coefficient,
+    density: ufl.Coefficient,
+    material,
+    ppp: PPPData | None,
+    body_force: ufl.core.expr.Expr | None = None,
+    tractions: Sequence[tuple[ufl.core.expr.Expr, ufl.Measure]] = (),
+    u_degree: int = 1,
+) -> ufl.Form:
+    """Residual of one static u-p step.
+
+    Args:
+        du: Grid displacement increment Δu (m), degree ``u_degree``.
+        p: Grid pressure at t_{n+1} (Pa, compression positive), P1.
+        w: Displacement test function.
+        q_test: Pressure test function.
+        mpq: Material-point quadrature of this step.
+        F_n: Deformation gradient of the points at t_n (slot field).
+        density: Mass density of the points (kg/m³, slot field).
+        material: A law with ``kirchhoff_deviatoric(F)`` and ``bulk_modulus`` (Pa).
+        ppp: PPP data, or None for the unstabilised form.
+        body_force: Body force per unit mass (m/s²), or None.
+        tractions: Pairs (t̄, ds) of traction (Pa) and facet measure.
+        u_degree: Polynomial degree of the displacement (1, or 2 for Taylor–Hood).
+    """
+    g = ufl.shape(du)[0]
+    dF = ufl.Identity(g) + mpq.grad_at_points(du, u_degree)
+    F = dF * F_n
+    p_p = mpq.at_points(p)
+    tau, J = stress_parts(material, F, p_p)
+    K = material.bulk_modulus
+    R = mpq.sum(ufl.inner(tau * ufl.inv(dF).T / ufl.det(F_n), mpq.grad_at_points(w, u_degree)))
+    R -= mpq.sum(ufl.det(dF) * mpq.at_points(q_test) * ((J - 1.0) + p_p / K))
+    if ppp is not None:
+        x = ufl.SpatialCoordinate(mpq.mesh)
+        r = x - ppp.centroid
+        R -= (ppp.alpha_eff / material.mu) * ppp.fill * (
+            ufl.dot(ufl.grad(q_test), r) * ufl.dot(ufl.grad(p), r)
+        ) * ppp.dx
+    if body_force is not None:
+        R -= mpq.sum(density * ufl.dot(body_force, mpq.at_points(w, u_degree)))
+    for t, ds in tractions:
+        R -= ufl.dot(t, w) * ds
+    return R
+
+
+def cauchy_stress_3d(material, F: ufl.core.expr.Expr, p: ufl.core.expr.Expr):
+    """Full 3x3 Cauchy stress σ = −p I + μ dev(b̄)/J (Pa), σ_33 included in plane strain."""
+    F3 = embed_3d(F)
+    J = ufl.det(F3)
+    return -p * ufl.Identity(3) + material.kirchhoff_deviatoric(F3) / J
