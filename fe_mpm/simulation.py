@@ -28,8 +28,8 @@ from fe_mpm.assembly import StepForm
 from fe_mpm.boundary import Dirichlet, Traction, boundary_facets
 from fe_mpm.checks import check_choice, check_range
 from fe_mpm.errors import ConvergenceError, PointsOutsideError
-from fe_mpm.formulations import FORMULATIONS, GridFields, collapse, constrained_space
 from fe_mpm.forms import displacement, mixed_up
+from fe_mpm.formulations import FORMULATIONS, GridFields, collapse, constrained_space
 from fe_mpm.io import ParticleWriter
 from fe_mpm.newton import NewtonSolver
 from fe_mpm.particles import MaterialPoints, simplex_cell_type
