@@ -31,6 +31,8 @@ class ParticleWriter:
         self.folder.mkdir(parents=True, exist_ok=True)
         self.name = name
         self._entries: list[tuple[float, str]] = []
+        for stale in self.folder.glob(f"{name}_[0-9][0-9][0-9][0-9][0-9][0-9].vtu"):
+            stale.unlink()  # from an earlier run into the same folder
 
     @property
     def pvd(self) -> Path:

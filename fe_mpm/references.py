@@ -19,11 +19,31 @@ COOK_KRATOS_UP_PPP = {
     0.499: {2: 0.1270, 4: 0.1921, 8: 0.2412, 16: 0.2638, 32: 0.2719, 64: 0.2748, 128: 0.2758},
 }
 
+#: Iaconeta (2019) Table 5.1, mixed UP without stabilisation: {nu: {n: u_A_y}}. The
+#: quasi-incompressible column is listed under 0.499 as in the table; like the thesis's
+#: U column it does not match ν = 0.499 exactly (it lies closer to ν ≈ 0.4999).
+COOK_THESIS_UP_NOSTAB = {
+    0.33: {2: 0.1013, 4: 0.1718, 8: 0.2511, 16: 0.2952, 32: 0.3119, 64: 0.3176},
+    0.499: {2: 0.0788, 4: 0.1157, 8: 0.1821, 16: 0.2356, 32: 0.2606, 64: 0.2702},
+}
+
 #: Converged reference values quoted by the thesis (compressible, quasi-incompressible).
 COOK_CONVERGED = {0.33: 0.323, 0.499: 0.275}
 
+#: Small-strain Taylor-Hood FEM on n = 128 and its extrapolated limit, ν = 0.499
+#: (shared/notes/benchmark_refs.md): 0.2775 at n = 128, ~0.278 in the limit.
+COOK_FINE_FEM_0499 = 0.2775
 
-def cook_reference(formulation: str, nu: float, n: int) -> float | None:
-    """The Kratos value for this Cook case, or None if there is none."""
-    table = COOK_KRATOS_U if formulation == "u" else COOK_KRATOS_UP_PPP
-    return table.get(nu, {}).get(n)
+
+def cook_reference(formulation: str, nu: float, n: int) -> tuple[str, float] | None:
+    """The published value for this Cook case, as (source, u_A_y), or None."""
+    tables = {
+        "u": ("Kratos MPM U", COOK_KRATOS_U),
+        "up": ("Kratos MPM UP+PPP", COOK_KRATOS_UP_PPP),
+        "up-nostab": ("thesis UP no stab", COOK_THESIS_UP_NOSTAB),
+    }
+    if formulation not in tables:
+        return None
+    source, table = tables[formulation]
+    value = table.get(nu, {}).get(n)
+    return None if value is None else (source, value)
