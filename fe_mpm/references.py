@@ -35,6 +35,12 @@ COOK_CONVERGED = {0.33: 0.323, 0.499: 0.275}
 COOK_FINE_FEM_0499 = 0.2775
 
 
+#: Finite-strain limit of u_A,y for the Neo-Hookean Cook problem, extrapolated (geometric
+#: Richardson, last three meshes) from fe-mpm's UP+PPP (n = 32, 64, 128) and P2/P1
+#: (n = 16, 32, 64) runs, which agree to 1.6e-4 (benchmarks/cook_formulations.py).
+COOK_FINITE_STRAIN_LIMIT = {0.33: 0.3215, 0.499: 0.2764}
+
+
 def cook_reference(formulation: str, nu: float, n: int) -> tuple[str, float] | None:
     """The published value for this Cook case, as (source, u_A_y), or None."""
     tables = {

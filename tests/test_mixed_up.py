@@ -9,7 +9,12 @@ import pytest
 import fe_mpm
 from fe_mpm import meshes
 from fe_mpm.diagnostics import pressure_oscillation
-from fe_mpm.references import COOK_FINE_FEM_0499, COOK_KRATOS_UP_PPP, COOK_THESIS_UP_NOSTAB
+from fe_mpm.references import (
+    COOK_FINE_FEM_0499,
+    COOK_FINITE_STRAIN_LIMIT,
+    COOK_KRATOS_UP_PPP,
+    COOK_THESIS_UP_NOSTAB,
+)
 
 TOL = 0.005
 #: ν = 0.4999 limit of the small-strain Taylor–Hood FEM (0.2768 at n = 64, still rising).
@@ -112,3 +117,19 @@ def test_pressure_projection_and_interpolation():
         assert np.allclose(sim.fields.pressure_values(), 7.5, rtol=1e-13)
     finally:
         pts.stress = saved
+
+
+@pytest.mark.parametrize("nu", [0.33, 0.499])
+def test_taylor_hood_needs_no_stabilisation_and_beats_p1p1(nu):
+    """P2/P1 with 3 points per triangle: a smooth pressure without PPP (the same bound as
+    for PPP, and the jumps shrink with h), and on an 8 x 8 grid it is closer to the limit
+    than P1/P1+PPP on 16 x 16 (similar wall time, 0.03 s each; see
+    benchmarks/cook_formulations.py)."""
+    sim, tip_p2p1, report = cook(8, nu, "up-p2p1", per_cell=3)
+    _, tip_p1p1, _ = cook(16, nu, "up")
+    limit = COOK_FINITE_STRAIN_LIMIT[nu]
+    smooth = pressure_oscillation(cook(16, nu, "up-p2p1", per_cell=3)[0])
+    assert smooth < 0.1  # measured 0.06; the checkerboard gives 0.67
+    assert pressure_oscillation(cook(32, nu, "up-p2p1", per_cell=3)[0]) < 0.6 * smooth
+    assert abs(tip_p2p1 - limit) < 0.6 * abs(tip_p1p1 - limit)  # measured ratio 0.24 / 0.54
+    assert report.newton_iterations <= 4 and quadratic(report.residual_norms)
