@@ -100,7 +100,7 @@ def main() -> None:
         writer.writeheader()
         writer.writerows(rows)
     plot(rows, args.output / "cook_formulations.png")
-    print(f"\nwrote {args.output / 'cook_formulations.csv'} and {args.output / 'cook_formulations.png'}")
+    print(f"\nwrote {args.output}/cook_formulations.csv and .png")
 
 
 def plot(rows: list[dict], path: Path) -> None:
@@ -113,7 +113,8 @@ def plot(rows: list[dict], path: Path) -> None:
     fig, axes = plt.subplots(1, 2, figsize=(10, 4), sharey=True)
     for ax, nu in zip(axes, (0.33, 0.499)):
         for label, *_ in METHODS:
-            pts = [(r["time_s"], r["error"]) for r in rows if r["nu"] == nu and r["method"] == label]
+            mine = [r for r in rows if r["nu"] == nu and r["method"] == label]
+            pts = [(r["time_s"], r["error"]) for r in mine]
             ax.loglog(*zip(*pts), "o-", label=label)
         ax.set_title(f"Cook's membrane, ν = {nu}")
         ax.set_xlabel("wall time after JIT (s)")
