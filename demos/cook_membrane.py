@@ -61,7 +61,8 @@ def parse_args(argv=None):
                         "up-p2p1: mixed Taylor-Hood")
     p.add_argument("--ppp-alpha", type=float, default=1.0,
                    help="PPP α of the thesis (times 8 in 2D, as in Kratos)")
-    p.add_argument("--mp-per-cell", type=int, default=1, help="material points per triangle")
+    p.add_argument("--mp-per-cell", type=int, default=None,
+                   help="material points per triangle (default 1; 3 for up-p2p1)")
     mesh = p.add_mutually_exclusive_group()
     mesh.add_argument("--structured", dest="structured", action="store_true", default=True)
     mesh.add_argument("--unstructured", dest="structured", action="store_false")
@@ -75,6 +76,8 @@ def parse_args(argv=None):
 
 
 args = parse_args()
+if args.mp_per_cell is None:
+    args.mp_per_cell = 3 if args.formulation == "up-p2p1" else 1
 # -
 
 # ## The scene
@@ -120,8 +123,12 @@ try:
 except (ValueError, NotImplementedError) as err:
     sys.exit(f"cook_membrane.py: {err}")
 sim.add_marker("A", meshes.COOK_POINT_A)
-reports = sim.run(t_end=1.0, n_steps=args.steps, progress=not (args.quiet or args.json))
-sim.close()
+try:
+    reports = sim.run(t_end=1.0, n_steps=args.steps, progress=not (args.quiet or args.json))
+except (ValueError, fe_mpm.ConvergenceError, fe_mpm.PointsOutsideError) as err:
+    sys.exit(f"cook_membrane.py: {err}")
+finally:
+    sim.close()
 # -
 
 # ## Results

@@ -486,14 +486,20 @@ class Simulation:
         if need <= 1:
             return
         counts = np.bincount(layout.cell)[layout.occupied]
-        if counts.min() < need:
-            worst = layout.occupied[np.argmin(counts)]
-            raise ValueError(
-                f"Simulation: formulation {self.formulation!r} needs at least {need} material "
-                f"points in every occupied cell (the quadratic displacement has more strain "
-                f"modes than fewer points can see); cell {worst} near x = "
-                f"{self.tracker.centroids[worst]} holds {counts.min()}. Seed more points per cell."
-            )
+        if counts.min() >= need:
+            return
+        few = int(np.sum(counts < need))
+        worst = layout.occupied[np.argmin(counts)]
+        message = (
+            f"formulation {self.formulation!r} needs at least {need} material points in "
+            f"every occupied cell, but {few} cell(s) hold fewer (e.g. cell {worst} near x = "
+            f"{self.tracker.centroids[worst]} holds {counts.min()}): the quadratic "
+            "displacement then has strain modes no point sees."
+        )
+        if self.step_number == 0:  # the seeded layout: a set-up error
+            raise ValueError(f"Simulation: {message} Seed more points per cell.")
+        # Points moved there: neighbouring cells may still constrain those modes.
+        warnings.warn(f"{message} The tangent may be singular.", stacklevel=3)
 
     def _convect(self, forms: _SlotForms, layout: SlotLayout, step: int, t: float) -> None:
         g = self.gdim

@@ -105,3 +105,16 @@ def test_singular_tangent_names_the_hinged_cells():
     hinge = r"\d+ occupied cell.* share at most one node"
     with pytest.raises(fe_mpm.ConvergenceError, match=hinge):
         sim.step(1.0)
+
+
+def test_taylor_hood_warns_when_points_move_into_too_few_per_cell():
+    mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (2, 2))
+    points = fe_mpm.seed(mesh, per_cell=3)
+    sim = fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1.0, 0.3), formulation="up-p2p1",
+                            dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))])
+    sim.step(1.0)
+    first = np.flatnonzero(points.cell == points.cell[0])[0]
+    other = np.flatnonzero(points.cell != points.cell[0])[0]
+    points.x[first] = points.x[other]  # one cell now holds 2 points
+    with pytest.warns(UserWarning, match="needs at least 3 material points .* may be singular"):
+        sim.step(2.0)
