@@ -24,8 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-import fe_mpm
-from fe_mpm import meshes
+from fe_mpm import scenes
 from fe_mpm.references import cook_reference
 
 METHODS = [  # (label, formulation, points per cell, mesh sizes)
@@ -38,17 +37,10 @@ METHODS = [  # (label, formulation, points per cell, mesh sizes)
 
 def run(n: int, nu: float, formulation: str, per_cell: int) -> tuple[float, int]:
     """One Cook solve; returns (u_A,y, Newton iterations)."""
-    scene = meshes.cook_membrane(n=n)
-    points = fe_mpm.seed(scene.mesh, per_cell=per_cell)
-    sim = fe_mpm.Simulation(
-        scene.mesh, points, fe_mpm.NeoHookean(E=70.0, nu=nu), formulation,
-        facet_tags=scene.facet_tags, dirichlet=[fe_mpm.Dirichlet(meshes.COOK_CLAMPED)],
-        tractions=[fe_mpm.Traction(meshes.COOK_LOADED, (0.0, 1 / 16))],
-    )
-    sim.add_marker("A", meshes.COOK_POINT_A)
+    sim = scenes.cook_membrane(n, nu, formulation, per_cell=per_cell)
     (report,) = sim.run(progress=False)
     sim.close()
-    return float(sim.marker("A")[1] - meshes.COOK_POINT_A[1]), report.newton_iterations
+    return scenes.tip_deflection(sim), report.newton_iterations
 
 
 def richardson(values: list[float]) -> float:

@@ -7,24 +7,16 @@ one static load step; tolerance 0.5 % (issue: foundation, check 5).
 import numpy as np
 import pytest
 
-import fe_mpm
-from fe_mpm import meshes
+from fe_mpm import scenes
 from fe_mpm.references import COOK_KRATOS_U
 
 TOL = 0.005
 
 
 def cook_tip(n, nu, steps=1, margin=0):
-    scene = meshes.cook_membrane(n=n, margin=margin)
-    points = fe_mpm.seed(scene.mesh, per_cell=1, cells=meshes.body_cells(scene))
-    sim = fe_mpm.Simulation(
-        scene.mesh, points, fe_mpm.NeoHookean(E=70.0, nu=nu), facet_tags=scene.facet_tags,
-        dirichlet=[fe_mpm.Dirichlet(meshes.COOK_CLAMPED)],
-        tractions=[fe_mpm.Traction(meshes.COOK_LOADED, (0.0, 1 / 16), scale=lambda t: t)],
-    )
-    sim.add_marker("A", meshes.COOK_POINT_A)
+    sim = scenes.cook_membrane(n, nu, margin=margin)
     reports = sim.run(n_steps=steps, progress=False)
-    return sim.marker("A")[1] - meshes.COOK_POINT_A[1], reports
+    return scenes.tip_deflection(sim), reports
 
 
 @pytest.mark.parametrize("nu", [0.33, 0.499])

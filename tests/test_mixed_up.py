@@ -6,8 +6,7 @@ from functools import cache
 import numpy as np
 import pytest
 
-import fe_mpm
-from fe_mpm import meshes
+from fe_mpm import scenes
 from fe_mpm.diagnostics import pressure_oscillation
 from fe_mpm.references import (
     COOK_FINE_FEM_0499,
@@ -23,16 +22,9 @@ COOK_LIMIT_04999 = 0.277
 
 @cache
 def cook(n, nu, formulation, structured=True, h=None, per_cell=1):
-    scene = meshes.cook_membrane(n=n, structured=structured, h=h)
-    points = fe_mpm.seed(scene.mesh, per_cell=per_cell)
-    sim = fe_mpm.Simulation(
-        scene.mesh, points, fe_mpm.NeoHookean(E=70.0, nu=nu), formulation,
-        facet_tags=scene.facet_tags, dirichlet=[fe_mpm.Dirichlet(meshes.COOK_CLAMPED)],
-        tractions=[fe_mpm.Traction(meshes.COOK_LOADED, (0.0, 1 / 16))],
-    )
-    sim.add_marker("A", meshes.COOK_POINT_A)
+    sim = scenes.cook_membrane(n, nu, formulation, structured=structured, h=h, per_cell=per_cell)
     (report,) = sim.run(progress=False)
-    return sim, sim.marker("A")[1] - meshes.COOK_POINT_A[1], report
+    return sim, scenes.tip_deflection(sim), report
 
 
 def quadratic(norms):
