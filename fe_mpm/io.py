@@ -56,6 +56,7 @@ class ParticleWriter:
         F3[:, :g, :g] = points.F
         data = {
             "displacement": disp,
+            "velocity": np.pad(points.velocity, ((0, 0), (0, 3 - g))),
             "volume": points.volume,
             "mass": points.mass,
             "deformation_gradient": F3.reshape(n, 9),

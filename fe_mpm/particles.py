@@ -29,6 +29,8 @@ class MaterialPoints:
             includes σ_33), written after each step.
         cell: Background cell holding each point, shape ``(n,)``; ``-1`` before tracking.
         x0: Initial positions, shape ``(n, g)`` (m), for displacement output.
+        velocity: Velocities ``v_p``, shape ``(n, g)`` (m/s); used by dynamic runs.
+        acceleration: Accelerations ``a_p``, shape ``(n, g)`` (m/s²); used by dynamic runs.
     """
 
     x: np.ndarray
@@ -38,6 +40,8 @@ class MaterialPoints:
     stress: np.ndarray = field(default=None)  # type: ignore[assignment]
     cell: np.ndarray = field(default=None)  # type: ignore[assignment]
     x0: np.ndarray = field(default=None)  # type: ignore[assignment]
+    velocity: np.ndarray = field(default=None)  # type: ignore[assignment]
+    acceleration: np.ndarray = field(default=None)  # type: ignore[assignment]
 
     def __post_init__(self) -> None:
         self.x = np.ascontiguousarray(self.x, dtype=np.float64)
@@ -60,6 +64,12 @@ class MaterialPoints:
             self.cell = np.full(n, -1, dtype=np.int32)
         if self.x0 is None:
             self.x0 = self.x.copy()
+        for name in ("velocity", "acceleration"):
+            value = getattr(self, name)
+            value = np.zeros((n, g)) if value is None else np.array(value, dtype=np.float64)
+            if value.shape != (n, g):
+                raise ValueError(f"MaterialPoints: {name} must have shape {(n, g)}, got {value.shape}")
+            setattr(self, name, value)
 
     def __len__(self) -> int:
         return self.x.shape[0]
@@ -74,9 +84,17 @@ class MaterialPoints:
         """Current mass density ``m_p / V_p`` (kg/m³), shape ``(n,)``."""
         return self.mass / self.volume
 
+    def momentum(self) -> np.ndarray:
+        """Total linear momentum ``Σ m_p v_p`` (kg m/s), shape ``(g,)``."""
+        return self.mass @ self.velocity
+
+    def kinetic_energy(self) -> float:
+        """Total kinetic energy ``Σ ½ m_p |v_p|²`` (J per unit thickness in 2D)."""
+        return 0.5 * float(self.mass @ np.sum(self.velocity**2, axis=1))
+
     def keep(self, mask: np.ndarray) -> None:
         """Keep only the points where ``mask`` is true (used when dropping points)."""
-        for name in ("x", "volume", "mass", "F", "stress", "cell", "x0"):
+        for name in ("x", "volume", "mass", "F", "stress", "cell", "x0", "velocity", "acceleration"):
             setattr(self, name, getattr(self, name)[mask])
 
 

@@ -16,10 +16,13 @@ from __future__ import annotations
 
 import time
 import warnings
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from petsc4py import PETSc
+
+import dolfinx.fem.petsc
 import numpy as np
 import ufl
 
@@ -28,7 +31,7 @@ from fe_mpm.assembly import StepForm
 from fe_mpm.boundary import Dirichlet, Traction, boundary_facets
 from fe_mpm.checks import check_choice, check_range
 from fe_mpm.errors import ConvergenceError, PointsOutsideError
-from fe_mpm.forms import displacement, mixed_up
+from fe_mpm.forms import displacement, inertia, mixed_up
 from fe_mpm.formulations import FORMULATIONS, GridFields, collapse, constrained_space
 from fe_mpm.io import ParticleWriter
 from fe_mpm.newton import NewtonSolver
@@ -49,6 +52,9 @@ class StepReport:
         markers: Position of every marker at ``t``, name -> array (g,).
         nslot: Slots per cell used in the step.
         occupied_cells: Number of cells holding points.
+        dt: Length of the step (s).
+        reactions: Force each requested boundary exerts on the body, name -> (g,)
+            (N, per unit thickness in 2D).
     """
 
     step: int
@@ -58,6 +64,8 @@ class StepReport:
     markers: dict[str, np.ndarray] = field(default_factory=dict)
     nslot: int = 0
     occupied_cells: int = 0
+    dt: float = 0.0
+    reactions: dict[str, np.ndarray] = field(default_factory=dict)
 
 
 class _SlotForms:
@@ -83,6 +91,13 @@ class _SlotForms:
                 du, w, q, self.F_n, self.density, material.kirchhoff, sim._body_force,
                 sim._traction_terms,
             )
+        if sim._newmark is not None:
+            R += inertia.inertia(du, w, q, self.density, sim._newmark)
+            V1 = sim._newmark.a_n.function_space
+            a, v = ufl.TrialFunction(V1), ufl.TestFunction(V1)
+            self.mass = StepForm(
+                q.sum(self.density * ufl.dot(q.at_points(a), q.at_points(v))), mesh
+            )
         J = ufl.derivative(R, fields.w, ufl.TrialFunction(fields.W))
         self.residual = StepForm(R, mesh, sim._traction_facets)
         self.jacobian = StepForm(J, mesh, sim._traction_facets)
@@ -97,6 +112,9 @@ class _SlotForms:
         values = [du_p[i] for i in range(g)]
         values += [dF[i, j] for i in range(g) for j in range(g)]
         values += [sigma[i, j] for i in range(3) for j in range(3)]
+        if sim._newmark is not None:
+            a_p = q.at_points(inertia.acceleration(du, sim._newmark))
+            values += [a_p[i] for i in range(g)]
         self.update = dolfinx.fem.Expression(ufl.as_vector(values), q.points)
 
 
@@ -135,6 +153,14 @@ class Simulation:
         output_every: Write every this many steps (the last step is always written).
         ppp_alpha: PPP coefficient α of the thesis (``up`` only), ≥ 0. The form uses
             α times Kratos's factor (8 in 2D, 10 in 3D); α = 1 reproduces the thesis.
+        dynamic: Implicit Newmark dynamics (β = 1/4, γ = 1/2) with the consistent mass
+            of the points; False (default) is a static analysis with no inertia at all.
+        damping: Mass-proportional Rayleigh damping α_R (1/s), dynamic only; off (0)
+            by default. The thesis uses 1.5 for the granular collapse.
+        reactions: Boundaries whose reaction force is computed after every step,
+            name -> facet tag or marker (see ``StepReport.reactions``).
+        min_step: Smallest step :meth:`run` may cut to after Newton failures (s);
+            default 1/1024 of the nominal step.
     """
 
     def __init__(
@@ -153,9 +179,14 @@ class Simulation:
         output_dir: str | Path | None = None,
         output_every: int = 1,
         ppp_alpha: float = 1.0,
+        dynamic: bool = False,
+        damping: float = 0.0,
+        reactions: dict[str, int | Callable] | None = None,
+        min_step: float | None = None,
     ):
         check_choice("Simulation", "formulation", formulation, tuple(FORMULATIONS))
         check_range("Simulation", "ppp_alpha", ppp_alpha, lo=0.0)
+        check_range("Simulation", "damping", damping, lo=0.0)
         check_choice("Simulation", "points_leaving", points_leaving, ("raise", "drop"))
         check_range("Simulation", "output_every", output_every, lo=1)
         tdim = mesh.topology.dim
@@ -190,10 +221,34 @@ class Simulation:
         t0 = time.perf_counter()
         self.tracker = Tracker(mesh)
         self.fields = GridFields(mesh, self.spec)
+        self.dynamic = bool(dynamic)
+        self.min_step = min_step
+        self._newmark = None
+        if self.dynamic:
+            if self.spec.u_degree != 1:
+                raise ValueError(
+                    f"Simulation: dynamic analysis needs a P1 displacement; formulation "
+                    f"{formulation!r} is P{self.spec.u_degree}"
+                )
+            # The grid velocity/acceleration live on the displacement space itself.
+            if self.spec.pressure:
+                V1, self._u_dofs = collapse(self.fields.W.sub(0))
+            else:
+                V1, self._u_dofs = self.fields.W, np.arange(self.fields.w.x.array.size)
+            self._newmark = inertia.NewmarkData(
+                v_n=dolfinx.fem.Function(V1, name="v_n"),
+                a_n=dolfinx.fem.Function(V1, name="a_n"),
+                c_a=dolfinx.fem.Constant(mesh, 0.0),
+                c_v=dolfinx.fem.Constant(mesh, 0.0),
+                damping=dolfinx.fem.Constant(mesh, float(damping)),
+            )
+        elif damping:
+            raise ValueError("Simulation: damping needs dynamic=True")
         fdim = tdim - 1
         mesh.topology.create_connectivity(fdim, tdim)
 
         self._dirichlet = []  # (spec, value Function, DirichletBC)
+        self._dirichlet_facets = []
         for spec in dirichlet:
             facets = boundary_facets(mesh, spec.where, facet_tags)
             if spec.component is not None:
@@ -209,6 +264,7 @@ class Simulation:
                 dofs = dolfinx.fem.locate_dofs_topological(target, fdim, facets)
                 bc = dolfinx.fem.dirichletbc(value, dofs)
             self._dirichlet.append((spec, value, bc))
+            self._dirichlet_facets.append(facets)
 
         self._tractions = []  # (spec, Constant)
         self._traction_facets: dict[int, np.ndarray] = {}
@@ -221,6 +277,17 @@ class Simulation:
             self._traction_facets[i] = boundary_facets(mesh, spec.where, facet_tags)
             self._traction_terms.append((value, ds(i)))
             self._tractions.append((spec, value))
+
+        self._reactions = {}  # name -> W dofs of each displacement component
+        for name, where in (reactions or {}).items():
+            facets = boundary_facets(mesh, where, facet_tags)
+            comps = []
+            for c in range(g):
+                sub_c = self.fields.U.sub(c)
+                collapsed, _ = sub_c.collapse()
+                dofs = dolfinx.fem.locate_dofs_topological((sub_c, collapsed), fdim, facets)
+                comps.append(np.asarray(dofs[0], dtype=np.int32))
+            self._reactions[name] = comps
 
         self._ppp = None
         if self.spec.ppp:
@@ -293,24 +360,44 @@ class Simulation:
         """Advance from the current time to ``t_end`` in ``n_steps`` equal steps.
 
         In a static analysis ``t`` is a pseudo-time that only drives the loads
-        and the prescribed displacements.
+        and the prescribed displacements. When Newton fails, the step is halved
+        and retried, and grown back (doubling, up to the nominal step) after two
+        successes. Below ``min_step`` the run stops with the last failure's message.
         """
         check_range("Simulation.run", "n_steps", n_steps, lo=1)
         check_range("Simulation.run", "t_end", t_end, lo=self.t, lo_open=True)
-        times = np.linspace(self.t, t_end, int(n_steps) + 1)[1:]
+        nominal = (t_end - self.t) / int(n_steps)
+        floor = self.min_step if self.min_step is not None else nominal / 1024
+        dt, successes = nominal, 0
         bar = None
         if progress:
             from tqdm.auto import tqdm
 
-            bar = tqdm(total=len(times), desc="fe-mpm", unit="step", leave=False)
+            bar = tqdm(total=int(n_steps), desc="fe-mpm", unit="step", leave=False)
         reports = []
         try:
-            for t_new in times:
-                report = self.step(float(t_new))
+            while t_end - self.t > 1e-12 * nominal:
+                t_new = min(self.t + dt, t_end)
+                if t_end - t_new < 1e-9 * nominal:
+                    t_new = t_end
+                try:
+                    report = self.step(t_new)
+                except ConvergenceError as err:
+                    dt /= 2
+                    successes = 0
+                    if dt < floor:
+                        raise ConvergenceError(
+                            f"{err} The step was cut to {2 * dt:.3g} without success, and the "
+                            f"floor is min_step = {floor:.3g}."
+                        ) from None
+                    continue
                 reports.append(report)
+                successes += 1
+                if dt < nominal and successes >= 2:
+                    dt, successes = min(2 * dt, nominal), 0
                 if bar is not None:
                     bar.set_postfix(t=f"{report.t:.4g}", newton=report.newton_iterations)
-                    bar.update()
+                    bar.update(report.dt / nominal)
         finally:
             if bar is not None:
                 bar.close()
@@ -323,6 +410,8 @@ class Simulation:
             raise ValueError(f"Simulation.step: t_new must exceed the current time {self.t}")
         k = self.step_number + 1
         forms, layout, R, J, bcs = self.prepare_step(t_new)
+        if self._newmark is not None and self.step_number == 0:
+            self._consistent_initial_acceleration(forms, layout, R)
         self._initial_guess(layout)
         result = self._newton_solver(forms).solve(R, J, bcs)
         if not result.converged or not np.all(np.isfinite(self.w.x.array)):
@@ -334,9 +423,11 @@ class Simulation:
                 "Points were not updated and nothing was written for this step."
             )
 
+        reactions = self._reaction_forces(R)
         t0 = time.perf_counter()
-        self._convect(forms, layout, step=k, t=t_new)
+        self._convect(forms, layout, step=k, t=t_new, dt=t_new - self.t)
         self._add_time("update", t0)
+        dt = t_new - self.t
 
         self.t = t_new
         self.step_number = k
@@ -344,7 +435,8 @@ class Simulation:
             step=k, t=t_new, newton_iterations=result.iterations,
             residual_norms=result.residual_norms,
             markers={name: xm.copy() for name, (xm, _) in self._markers.items()},
-            nslot=forms.q.nslot, occupied_cells=layout.occupied.size,
+            nslot=forms.q.nslot, occupied_cells=layout.occupied.size, dt=dt,
+            reactions=reactions,
         )
         self.history.append(report)
         self._write_output()
@@ -378,6 +470,8 @@ class Simulation:
         R = forms.residual.bind(layout.occupied)
         J = forms.jacobian.bind(layout.occupied)
         bcs = self._boundary_conditions(layout, self.t, t_new)
+        if self._newmark is not None:
+            self._project_to_grid(layout, t_new - self.t)
         self._add_time("packing", t0)
         return forms, layout, R, J, bcs
 
@@ -462,6 +556,94 @@ class Simulation:
         pins = self.fields.pin_unsupported(layout.occupied)
         return [bc for _, _, bc in self._dirichlet] + pins
 
+    def _project_to_grid(self, layout: SlotLayout, dt: float) -> None:
+        """Nodal ṽ and ã from the particles, mass weighted (Eqs. 2.6–2.9), and Newmark's
+        coefficients for a step of length ``dt``.
+        """
+        nm, pts = self._newmark, self.points
+        V1 = nm.v_n.function_space
+        nodes = V1.dofmap.list[layout.cell]  # P1 blocks follow the cell's vertices
+        weights = self.tracker.barycentric(pts.x, layout.cell) * pts.mass[:, None]
+        n = V1.dofmap.index_map.size_local + V1.dofmap.index_map.num_ghosts
+        mass = np.bincount(nodes.ravel(), weights=weights.ravel(), minlength=n)
+        for field, values in ((nm.v_n, pts.velocity), (nm.a_n, pts.acceleration)):
+            moment = np.stack([
+                np.bincount(nodes.ravel(), weights=(weights * values[:, [c]]).ravel(), minlength=n)
+                for c in range(self.gdim)
+            ], axis=1)
+            field.x.array.reshape(-1, self.gdim)[:] = np.divide(
+                moment, mass[:, None], out=np.zeros_like(moment), where=mass[:, None] > 0
+            )
+        nm.c_a.value = 4.0 / dt**2
+        nm.c_v.value = 2.0 / dt
+        self.t_step = dt
+        self.grid_mass = mass
+
+    def _consistent_initial_acceleration(
+        self, forms: _SlotForms, layout: SlotLayout, R: dolfinx.fem.Form
+    ) -> None:
+        """Particle accelerations in equilibrium at the start: ``M a₀ = f_ext − f_int``.
+
+        Starting Newmark's trapezoidal rule from a₀ = 0 instead leaves the velocity
+        lagging by ``Δt/2`` times the true acceleration for the whole run (a
+        first-order error in Δt). Constrained and unsupported nodes get a₀ = 0.
+        """
+        nm = self._newmark
+        saved = (nm.c_a.value.copy(), nm.c_v.value.copy(), nm.damping.value.copy())
+        nm.c_a.value, nm.c_v.value, nm.damping.value = 0.0, 0.0, 0.0
+        self._initial_guess(layout)  # Δu = 0 (and the projected pressure)
+        b = dolfinx.fem.assemble_vector(R)
+        b.scatter_reverse(dolfinx.la.InsertMode.add)
+        nm.c_a.value, nm.c_v.value, nm.damping.value = saved
+        V1 = nm.a_n.function_space
+        g, fdim = self.gdim, self.mesh.topology.dim - 1
+        rhs = dolfinx.fem.Function(V1)
+        rhs.x.array[:] = -b.array[self._u_dofs]
+        fixed = np.zeros(rhs.x.array.size, dtype=bool)
+        supported = np.zeros(rhs.x.array.size // g, dtype=bool)
+        supported[V1.dofmap.list[layout.occupied].ravel()] = True
+        fixed.reshape(-1, g)[~supported] = True
+        for (spec, _, _), facets in zip(self._dirichlet, self._dirichlet_facets):
+            blocks = dolfinx.fem.locate_dofs_topological(V1, fdim, facets)
+            comps = range(g) if spec.component is None else [spec.component]
+            for c in comps:
+                fixed.reshape(-1, g)[blocks, c] = True
+        # Over all cells: empty ones add explicit zeros, which keeps every diagonal
+        # entry in the pattern for the constraint rows below.
+        all_cells = np.arange(self.tracker.num_cells, dtype=np.int32)
+        M = dolfinx.fem.petsc.assemble_matrix(forms.mass.bind(all_cells))
+        M.assemble()
+        rows = np.flatnonzero(fixed).astype(np.int32)
+        rhs.x.array[rows] = 0.0
+        M.zeroRowsColumns(rows, 1.0)
+        a0 = dolfinx.fem.Function(V1)
+        ksp = PETSc.KSP().create(self.mesh.comm)
+        ksp.setOperators(M)
+        ksp.setType("preonly")
+        ksp.getPC().setType("lu")
+        ksp.getPC().setFactorSolverType("mumps")
+        ksp.solve(rhs.x.petsc_vec, a0.x.petsc_vec)
+        a0.x.scatter_forward()
+        ksp.destroy()
+        M.destroy()
+        nodes = V1.dofmap.list[layout.cell]
+        bary = self.tracker.barycentric(self.points.x, layout.cell)
+        self.points.acceleration = np.einsum(
+            "pv,pvg->pg", bary, a0.x.array.reshape(-1, g)[nodes]
+        )
+        self._project_to_grid(layout, self.t_step)
+
+    def _reaction_forces(self, R: dolfinx.fem.Form) -> dict[str, np.ndarray]:
+        """Σ of the residual (internal − external + inertial forces) over each boundary's
+        dofs: the force the boundary exerts on the body.
+        """
+        if not self._reactions:
+            return {}
+        b = dolfinx.fem.assemble_vector(R)
+        b.scatter_reverse(dolfinx.la.InsertMode.add)
+        return {name: np.array([b.array[dofs].sum() for dofs in comps])
+                for name, comps in self._reactions.items()}
+
     def _initial_guess(self, layout: SlotLayout) -> None:
         """Δu = 0, and the pressure projected from the points (thesis Eq. 5.20).
 
@@ -501,7 +683,9 @@ class Simulation:
         # Points moved there: neighbouring cells may still constrain those modes.
         warnings.warn(f"{message} The tangent may be singular.", stacklevel=3)
 
-    def _convect(self, forms: _SlotForms, layout: SlotLayout, step: int, t: float) -> None:
+    def _convect(
+        self, forms: _SlotForms, layout: SlotLayout, step: int, t: float, dt: float
+    ) -> None:
         g = self.gdim
         values = forms.q.evaluate(forms.update, layout)
         if not np.all(np.isfinite(values)):
@@ -512,7 +696,7 @@ class Simulation:
             )
         du_p = values[:, :g]
         dF = values[:, g : g + g * g].reshape(-1, g, g)
-        sigma = values[:, g + g * g :].reshape(-1, 3, 3)
+        sigma = values[:, g + g * g : g + g * g + 9].reshape(-1, 3, 3)
         det_dF = np.linalg.det(dF)
         if np.any(det_dF <= 0):
             bad = np.flatnonzero(det_dF <= 0)[0]
@@ -527,6 +711,10 @@ class Simulation:
         pts.F = dF @ pts.F
         pts.volume *= det_dF
         pts.stress = sigma
+        if self._newmark is not None:
+            a_new = values[:, g + g * g + 9 :]
+            pts.velocity += 0.5 * dt * (pts.acceleration + a_new)  # Eq. 2.16
+            pts.acceleration = a_new
 
     def _write_output(self, force: bool = False) -> None:
         if self._particle_writer is None or self.step_number in (0, self._written_step):
