@@ -15,6 +15,9 @@ import numpy.typing as npt
 from fe_mpm._dolfinx import dolfinx
 from fe_mpm.checks import check_choice, check_range
 
+#: The per-point arrays of :class:`MaterialPoints` (all indexed by point first).
+PER_POINT_FIELDS = ("x", "volume", "mass", "F", "stress", "cell", "x0", "velocity", "acceleration")
+
 
 @dataclass
 class MaterialPoints:
@@ -68,7 +71,9 @@ class MaterialPoints:
             value = getattr(self, name)
             value = np.zeros((n, g)) if value is None else np.array(value, dtype=np.float64)
             if value.shape != (n, g):
-                raise ValueError(f"MaterialPoints: {name} must have shape {(n, g)}, got {value.shape}")
+                raise ValueError(
+                    f"MaterialPoints: {name} must have shape {(n, g)}, got {value.shape}"
+                )
             setattr(self, name, value)
 
     def __len__(self) -> int:
@@ -94,7 +99,7 @@ class MaterialPoints:
 
     def keep(self, mask: np.ndarray) -> None:
         """Keep only the points where ``mask`` is true (used when dropping points)."""
-        for name in ("x", "volume", "mass", "F", "stress", "cell", "x0", "velocity", "acceleration"):
+        for name in PER_POINT_FIELDS:
             setattr(self, name, getattr(self, name)[mask])
 
 

@@ -557,8 +557,10 @@ class Simulation:
         return [bc for _, _, bc in self._dirichlet] + pins
 
     def _project_to_grid(self, layout: SlotLayout, dt: float) -> None:
-        """Nodal ṽ and ã from the particles, mass weighted (Eqs. 2.6–2.9), and Newmark's
-        coefficients for a step of length ``dt``.
+        """Project the particles' velocity and acceleration to the nodes (Eqs. 2.6–2.9).
+
+        Mass weighted: ``ṽ_I = Σ_p N_I m_p v_p / Σ_p N_I m_p``, likewise ã; and set
+        Newmark's coefficients for a step of length ``dt``.
         """
         nm, pts = self._newmark, self.points
         V1 = nm.v_n.function_space
@@ -566,12 +568,12 @@ class Simulation:
         weights = self.tracker.barycentric(pts.x, layout.cell) * pts.mass[:, None]
         n = V1.dofmap.index_map.size_local + V1.dofmap.index_map.num_ghosts
         mass = np.bincount(nodes.ravel(), weights=weights.ravel(), minlength=n)
-        for field, values in ((nm.v_n, pts.velocity), (nm.a_n, pts.acceleration)):
+        for nodal, values in ((nm.v_n, pts.velocity), (nm.a_n, pts.acceleration)):
             moment = np.stack([
                 np.bincount(nodes.ravel(), weights=(weights * values[:, [c]]).ravel(), minlength=n)
                 for c in range(self.gdim)
             ], axis=1)
-            field.x.array.reshape(-1, self.gdim)[:] = np.divide(
+            nodal.x.array.reshape(-1, self.gdim)[:] = np.divide(
                 moment, mass[:, None], out=np.zeros_like(moment), where=mass[:, None] > 0
             )
         nm.c_a.value = 4.0 / dt**2
@@ -634,8 +636,10 @@ class Simulation:
         self._project_to_grid(layout, self.t_step)
 
     def _reaction_forces(self, R: dolfinx.fem.Form) -> dict[str, np.ndarray]:
-        """Σ of the residual (internal − external + inertial forces) over each boundary's
-        dofs: the force the boundary exerts on the body.
+        """The force each requested boundary exerts on the body.
+
+        It is the sum of the residual (internal − external + inertial forces) over
+        the boundary's dofs.
         """
         if not self._reactions:
             return {}
