@@ -144,6 +144,9 @@ class Simulation:
         dirichlet: Prescribed grid displacements.
         tractions: Surface tractions on grid facets.
         body_force: Body force per unit mass (m/s², length g), e.g. gravity.
+        body_force_scale: Load factor of the body force as a function of time,
+            ``t -> float``; constant 1 if None (e.g. ``lambda t: t`` to ramp
+            self-weight over static load steps).
         facet_tags: Facet tags for ``Dirichlet``/``Traction`` given by tag.
         petsc_options: Overrides of :data:`fe_mpm.newton.DEFAULT_PETSC_OPTIONS`.
         points_leaving: ``"raise"`` (default) stops when points leave the grid;
@@ -173,6 +176,7 @@ class Simulation:
         dirichlet: Sequence[Dirichlet] = (),
         tractions: Sequence[Traction] = (),
         body_force: Sequence[float] | None = None,
+        body_force_scale: Callable[[float], float] | None = None,
         facet_tags: dolfinx.mesh.MeshTags | None = None,
         petsc_options: dict | None = None,
         points_leaving: str = "raise",
@@ -307,6 +311,8 @@ class Simulation:
             if len(body_force) != g:
                 raise ValueError(f"Simulation: body_force must have {g} components")
             self._body_force = dolfinx.fem.Constant(mesh, np.asarray(body_force, dtype=float))
+            self._body_force_value = np.asarray(body_force, dtype=float)
+        self._body_force_scale = body_force_scale
 
         self._forms: dict[int, _SlotForms] = {}
         self._newton: NewtonSolver | None = None
@@ -552,6 +558,8 @@ class Simulation:
                 value.x.array.reshape(-1, bs)[:] = increment.reshape(-1)[:bs]
         for spec, value in self._tractions:
             value.value = spec.at(t_new)
+        if self._body_force is not None and self._body_force_scale is not None:
+            self._body_force.value = self._body_force_value * float(self._body_force_scale(t_new))
         # Grid dofs no material point reaches get no equation: pin them.
         pins = self.fields.pin_unsupported(layout.occupied)
         return [bc for _, _, bc in self._dirichlet] + pins

@@ -4,6 +4,15 @@ Each builder returns :class:`dolfinx.io.gmsh.MeshData` with ``.mesh``,
 ``.cell_tags`` and ``.facet_tags`` (the gmsh physical groups).
 """
 
+from fe_mpm.meshes.column import (
+    COLUMN_BASE,
+    COLUMN_BODY,
+    COLUMN_MARGIN,
+    COLUMN_SIDES,
+    COLUMN_TOP,
+    column,
+    column_cells,
+)
 from fe_mpm.meshes.cook import (
     COOK_BODY,
     COOK_CLAMPED,
@@ -14,10 +23,18 @@ from fe_mpm.meshes.cook import (
     body_cells,
     cook_membrane,
 )
+from fe_mpm.meshes.disk import disk
 from fe_mpm.meshes.gmsh_session import gmsh_session
 from fe_mpm.meshes.rectangle import rectangle_mesh
 
 __all__ = [
+    "COLUMN_BASE",
+    "COLUMN_BODY",
+    "COLUMN_MARGIN",
+    "COLUMN_SIDES",
+    "COLUMN_TOP",
+    "column",
+    "column_cells",
     "COOK_BODY",
     "COOK_MARGIN",
     "body_cells",
@@ -26,6 +43,7 @@ __all__ = [
     "COOK_LOADED",
     "COOK_POINT_A",
     "cook_membrane",
+    "disk",
     "gmsh_session",
     "rectangle_mesh",
 ]
