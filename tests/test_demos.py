@@ -48,3 +48,25 @@ def test_cook_membrane_writes_paraview_series(tmp_path):
     curve = np.loadtxt(out / "load_deflection.csv", delimiter=",", skiprows=1)
     assert curve.shape == (4, 2) and np.all(np.diff(curve[:, 1]) > 0)
     assert (out / "load_deflection.png").stat().st_size > 1000
+
+
+def _last_json(stdout):
+    return json.loads(stdout.strip().splitlines()[-1])
+
+
+def test_elastic_column_json_contract(tmp_path):
+    static = _last_json(run_demo("elastic_column.py", "--ny", "16", "--json", cwd=tmp_path))
+    for key in ("error", "wall_time_s", "steps", "n_particles"):
+        assert key in static
+    assert abs(static["error"] - 1.035e-2) < 1e-4  # first order in h: 2.07e-2 at ny = 8
+    dynamic = _last_json(run_demo("elastic_column.py", "--ny", "16", "--dynamic",
+                                  "--steps", "80", "--json", cwd=tmp_path))
+    assert dynamic["steps"] == 80 and dynamic["error"] < 0.15
+
+
+def test_sliding_block_json_contract(tmp_path):
+    out = _last_json(run_demo("sliding_block.py", "--dt", "0.02", "--t-end", "0.4", "--json",
+                              cwd=tmp_path))
+    for key in ("error", "wall_time_s", "steps", "n_particles"):
+        assert key in out
+    assert out["steps"] == 20 and out["error"] < 1e-10
