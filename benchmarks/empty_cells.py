@@ -15,10 +15,10 @@ import time
 import numpy as np
 
 import fe_mpm
+from fe_mpm.meshes import rectangle_mesh
 
 #: PETSc options for the runs (None: fe-mpm defaults).
 OPTS = None
-from fe_mpm.meshes import rectangle_mesh
 
 
 def one_step(n: int, factor: int) -> dict:
