@@ -416,8 +416,9 @@ class Simulation:
             raise ValueError(f"Simulation.step: t_new must exceed the current time {self.t}")
         k = self.step_number + 1
         forms, layout, R, J, bcs = self.prepare_step(t_new)
+        dt = t_new - self.t
         if self._newmark is not None and self.step_number == 0:
-            self._consistent_initial_acceleration(forms, layout, R)
+            self._consistent_initial_acceleration(forms, layout, R, dt)
         self._initial_guess(layout)
         result = self._newton_solver(forms).solve(R, J, bcs)
         if not result.converged or not np.all(np.isfinite(self.w.x.array)):
@@ -431,9 +432,8 @@ class Simulation:
 
         reactions = self._reaction_forces(R)
         t0 = time.perf_counter()
-        self._convect(forms, layout, step=k, t=t_new, dt=t_new - self.t)
+        self._convect(forms, layout, step=k, t=t_new, dt=dt)
         self._add_time("update", t0)
-        dt = t_new - self.t
 
         self.t = t_new
         self.step_number = k
@@ -571,26 +571,43 @@ class Simulation:
         Newmark's coefficients for a step of length ``dt``.
         """
         nm, pts = self._newmark, self.points
-        V1 = nm.v_n.function_space
-        nodes = V1.dofmap.list[layout.cell]  # P1 blocks follow the cell's vertices
-        weights = self.tracker.barycentric(pts.x, layout.cell) * pts.mass[:, None]
-        n = V1.dofmap.index_map.size_local + V1.dofmap.index_map.num_ghosts
-        mass = np.bincount(nodes.ravel(), weights=weights.ravel(), minlength=n)
-        for nodal, values in ((nm.v_n, pts.velocity), (nm.a_n, pts.acceleration)):
-            moment = np.stack([
-                np.bincount(nodes.ravel(), weights=(weights * values[:, [c]]).ravel(), minlength=n)
-                for c in range(self.gdim)
-            ], axis=1)
-            nodal.x.array.reshape(-1, self.gdim)[:] = np.divide(
-                moment, mass[:, None], out=np.zeros_like(moment), where=mass[:, None] > 0
-            )
+        both = np.hstack([pts.velocity, pts.acceleration])
+        nodal, self.grid_mass = self._mass_weighted_projection(nm.v_n.function_space, layout, both)
+        g = self.gdim
+        nm.v_n.x.array.reshape(-1, g)[:] = nodal[:, :g]
+        nm.a_n.x.array.reshape(-1, g)[:] = nodal[:, g:]
         nm.c_a.value = 4.0 / dt**2
         nm.c_v.value = 2.0 / dt
-        self.t_step = dt
-        self.grid_mass = mass
+
+    def _mass_weighted_projection(
+        self, space: dolfinx.fem.FunctionSpace, layout: SlotLayout, values: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """``Σ_p N_I(x_p) m_p v_p / Σ_p N_I(x_p) m_p`` on the nodes of a P1 space.
+
+        Args:
+            space: A P1 space (its local dofs follow the cell's vertices, like the
+                barycentric coordinates).
+            layout: The points' cells.
+            values: Per-point values, shape ``(n, k)``.
+
+        Returns:
+            Nodal values ``(nodes, k)`` (zero where no point reaches) and the nodal
+            masses ``Σ_p N_I m_p`` ``(nodes,)``.
+        """
+        pts = self.points
+        nodes = space.dofmap.list[layout.cell].ravel()
+        weights = (self.tracker.barycentric(pts.x, layout.cell) * pts.mass[:, None]).ravel()
+        n = space.dofmap.index_map.size_local + space.dofmap.index_map.num_ghosts
+        mass = np.bincount(nodes, weights=weights, minlength=n)
+        repeated = np.repeat(values, space.dofmap.list.shape[1], axis=0)
+        moment = np.stack([np.bincount(nodes, weights=weights * repeated[:, c], minlength=n)
+                           for c in range(values.shape[1])], axis=1)
+        nodal = np.divide(moment, mass[:, None], out=np.zeros_like(moment),
+                          where=mass[:, None] > 0)
+        return nodal, mass
 
     def _consistent_initial_acceleration(
-        self, forms: _SlotForms, layout: SlotLayout, R: dolfinx.fem.Form
+        self, forms: _SlotForms, layout: SlotLayout, R: dolfinx.fem.Form, dt: float
     ) -> None:
         """Particle accelerations in equilibrium at the start: ``M a₀ = f_ext − f_int``.
 
@@ -641,7 +658,7 @@ class Simulation:
         self.points.acceleration = np.einsum(
             "pv,pvg->pg", bary, a0.x.array.reshape(-1, g)[nodes]
         )
-        self._project_to_grid(layout, self.t_step)
+        self._project_to_grid(layout, dt)
 
     def _reaction_forces(self, R: dolfinx.fem.Form) -> dict[str, np.ndarray]:
         """The force each requested boundary exerts on the body.
@@ -665,15 +682,9 @@ class Simulation:
         self.w.x.array[:] = 0.0
         if not self.spec.pressure:
             return
-        pts = self.points
-        Q = self.fields.Q[0]
-        dofs = Q.dofmap.list[layout.cell]  # P1: local dofs follow the cell's vertices
-        weights = self.tracker.barycentric(pts.x, layout.cell) * pts.mass[:, None]
-        p_p = -np.trace(pts.stress, axis1=1, axis2=2) / 3.0
-        n = Q.dofmap.index_map.size_local + Q.dofmap.index_map.num_ghosts
-        mass = np.bincount(dofs.ravel(), weights=weights.ravel(), minlength=n)
-        moment = np.bincount(dofs.ravel(), weights=(weights * p_p[:, None]).ravel(), minlength=n)
-        self.fields.set_pressure(np.divide(moment, mass, out=np.zeros(n), where=mass > 0))
+        p_p = -np.trace(self.points.stress, axis1=1, axis2=2) / 3.0
+        nodal, _ = self._mass_weighted_projection(self.fields.Q[0], layout, p_p[:, None])
+        self.fields.set_pressure(nodal[:, 0])
 
     def _check_points_per_cell(self, layout: SlotLayout) -> None:
         need = self.spec.min_points_per_cell
