@@ -57,6 +57,10 @@ def parse_args(argv=None):
     p.add_argument("--gravity", type=float, default=None, help="m/s²: 10 static, 9.81 dynamic")
     p.add_argument("--dynamic", action="store_true", help="sudden self-weight, Newmark")
     p.add_argument("--periods", type=float, default=2.0, help="dynamic: first-mode periods")
+    p.add_argument("--mass", choices=("consistent", "lumped"), default="consistent",
+                   help="dynamic: mass matrix of the points")
+    p.add_argument("--damping", type=float, default=0.0,
+                   help="dynamic: mass-proportional Rayleigh damping α (1/s)")
     p.add_argument("--mp-per-cell", type=int, default=1)
     p.add_argument("--json", action="store_true", help="print a JSON summary as the last line")
     return p.parse_args(argv)
@@ -81,6 +85,7 @@ try:
         body_force=(0.0, -g),
         body_force_scale=None if args.dynamic else (lambda t: t),
         dynamic=args.dynamic,
+        **({"mass": args.mass, "damping": args.damping} if args.dynamic else {}),
         reactions={"base": meshes.COLUMN_BASE},
     )
 except ValueError as err:

@@ -91,12 +91,13 @@ class _SlotForms:
                 du, w, q, self.F_n, self.density, material.kirchhoff, sim._body_force,
                 sim._traction_terms,
             )
+        self.lumping = q.function((g, g), "second_moment") if sim.mass == "lumped" else None
         if sim._newmark is not None:
-            R += inertia.inertia(du, w, q, self.density, sim._newmark)
+            R += inertia.inertia(du, w, q, self.density, sim._newmark, self.lumping)
             V1 = sim._newmark.a_n.function_space
             a, v = ufl.TrialFunction(V1), ufl.TestFunction(V1)
             self.mass = StepForm(
-                q.sum(self.density * ufl.dot(q.at_points(a), q.at_points(v))), mesh
+                inertia.mass_product(a, v, q, self.density, self.lumping), mesh
             )
         J = ufl.derivative(R, fields.w, ufl.TrialFunction(fields.W))
         self.residual = StepForm(R, mesh, sim._traction_facets)
@@ -156,8 +157,10 @@ class Simulation:
         output_every: Write every this many steps (the last step is always written).
         ppp_alpha: PPP coefficient α of the thesis (``up`` only), ≥ 0. The form uses
             α times Kratos's factor (8 in 2D, 10 in 3D); α = 1 reproduces the thesis.
-        dynamic: Implicit Newmark dynamics (β = 1/4, γ = 1/2) with the consistent mass
-            of the points; False (default) is a static analysis with no inertia at all.
+        dynamic: Implicit Newmark dynamics (β = 1/4, γ = 1/2); False (default) is a
+            static analysis with no inertia at all.
+        mass: ``"consistent"`` (default, as in the thesis) or ``"lumped"`` (row-sum)
+            mass matrix of the points, dynamic only.
         damping: Mass-proportional Rayleigh damping α_R (1/s), dynamic only; off (0)
             by default. The thesis uses 1.5 for the granular collapse.
         reactions: Boundaries whose reaction force is computed after every step,
@@ -185,12 +188,14 @@ class Simulation:
         ppp_alpha: float = 1.0,
         dynamic: bool = False,
         damping: float = 0.0,
+        mass: str = "consistent",
         reactions: dict[str, int | Callable] | None = None,
         min_step: float | None = None,
     ):
         check_choice("Simulation", "formulation", formulation, tuple(FORMULATIONS))
         check_range("Simulation", "ppp_alpha", ppp_alpha, lo=0.0)
         check_range("Simulation", "damping", damping, lo=0.0)
+        check_choice("Simulation", "mass", mass, ("consistent", "lumped"))
         check_choice("Simulation", "points_leaving", points_leaving, ("raise", "drop"))
         check_range("Simulation", "output_every", output_every, lo=1)
         tdim = mesh.topology.dim
@@ -248,6 +253,9 @@ class Simulation:
             )
         elif damping:
             raise ValueError("Simulation: damping needs dynamic=True")
+        elif mass != "consistent":
+            raise ValueError("Simulation: mass='lumped' needs dynamic=True")
+        self.mass = mass
         fdim = tdim - 1
         mesh.topology.create_connectivity(fdim, tdim)
 
@@ -469,6 +477,8 @@ class Simulation:
         q.pack_geometry(pts, layout, self.tracker.centroids, self.tracker.volumes)
         q.pack(forms.F_n, layout, pts.F, empty=np.eye(self.gdim))
         q.pack(forms.density, layout, pts.density)
+        if forms.lumping is not None:
+            q.pack(forms.lumping, layout, self._second_moments(layout))
         if self._ppp is not None:
             fill = self._ppp.fill
             volume = np.bincount(layout.cell, weights=pts.volume, minlength=self.tracker.num_cells)
@@ -579,6 +589,14 @@ class Simulation:
         nm.c_a.value = 4.0 / dt**2
         nm.c_v.value = 2.0 / dt
 
+    def _second_moments(self, layout: SlotLayout) -> np.ndarray:
+        """``C_p = Σ_I N_I(x_p) (x_I − x_p)⊗(x_I − x_p)`` of every point, (n, g, g) in m²."""
+        g, pts = self.gdim, self.points
+        vertices = self.mesh.geometry.x[self.mesh.geometry.dofmaps[0][layout.cell], :g]
+        r = vertices - pts.x[:, None, :]
+        bary = self.tracker.barycentric(pts.x, layout.cell)
+        return np.einsum("pv,pvi,pvj->pij", bary, r, r)
+
     def _mass_weighted_projection(
         self, space: dolfinx.fem.FunctionSpace, layout: SlotLayout, values: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray]:
@@ -609,15 +627,18 @@ class Simulation:
     def _consistent_initial_acceleration(
         self, forms: _SlotForms, layout: SlotLayout, R: dolfinx.fem.Form, dt: float
     ) -> None:
-        """Particle accelerations in equilibrium at the start: ``M a₀ = f_ext − f_int``.
+        """Particle accelerations in equilibrium at the start: ``M a₀ = f_ext − f_int − α_R M v₀``.
 
         Starting Newmark's trapezoidal rule from a₀ = 0 instead leaves the velocity
         lagging by ``Δt/2`` times the true acceleration for the whole run (a
         first-order error in Δt). Constrained and unsupported nodes get a₀ = 0.
         """
         nm = self._newmark
+        # With Δu = 0 and c_a = c_v = 0 the Newmark velocity is −ṽ and the acceleration
+        # −ã; so ã = 0 and the damping coefficient negated leave f_int − f_ext + α_R M ṽ.
         saved = (nm.c_a.value.copy(), nm.c_v.value.copy(), nm.damping.value.copy())
-        nm.c_a.value, nm.c_v.value, nm.damping.value = 0.0, 0.0, 0.0
+        nm.c_a.value, nm.c_v.value, nm.damping.value = 0.0, 0.0, -saved[2]
+        nm.a_n.x.array[:] = 0.0
         self._initial_guess(layout)  # Δu = 0 (and the projected pressure)
         b = dolfinx.fem.assemble_vector(R)
         b.scatter_reverse(dolfinx.la.InsertMode.add)

@@ -18,6 +18,20 @@ the residual as the particle sum
 i.e. with the consistent mass matrix :math:`M_{IJ} = \sum_p m_p N_I(x_p) N_J(x_p)`,
 which is what the thesis uses (Eqs. 4.31, 4.36). Its tangent,
 :math:`(4/\Delta t^2 + 2\alpha_R/\Delta t) M`, comes from ``ufl.derivative``.
+
+**Lumped mass.** The row-sum mass :math:`M^L_{II} = \sum_p m_p N_I(x_p)` gives the
+term :math:`\sum_p m_p \sum_I N_I(x_p)\, a_I \cdot w_I`. For a P1 field the nodal
+values are :math:`a_I = a(x_p) + \nabla a\, r_I` with :math:`r_I = x_I - x_p`, and
+:math:`\sum_I N_I(x_p) r_I = 0`, so the lumped term is the consistent one plus a
+gradient correction, exactly:
+
+.. math::
+
+    \sum_p m_p \Big( a(x_p)\cdot w(x_p) + \nabla a : \nabla w\, C_p \Big), \qquad
+    C_p = \sum_I N_I(x_p)\, r_I \otimes r_I \quad (\text{m}^2),
+
+with the per-point second moment :math:`C_p` packed like any other particle datum.
+The form stays a particle sum and its tangent is the diagonal lumped matrix.
 """
 
 from __future__ import annotations
@@ -58,13 +72,32 @@ def velocity(du: ufl.core.expr.Expr, nm: NewmarkData) -> ufl.core.expr.Expr:
     return nm.c_v * du - nm.v_n
 
 
+def mass_product(
+    a: ufl.core.expr.Expr,
+    w: ufl.core.expr.Expr,
+    mpq: MaterialPointQuadrature,
+    density: ufl.Coefficient,
+    lumping: ufl.Coefficient | None,
+) -> ufl.Form:
+    """``w·M a`` as a particle sum: consistent, or lumped if ``lumping`` (C_p) is given."""
+    integrand = ufl.dot(mpq.at_points(a), mpq.at_points(w))
+    if lumping is not None:
+        integrand += ufl.inner(ufl.grad(a) * lumping, ufl.grad(w))
+    return mpq.sum(density * integrand)
+
+
 def inertia(
     du: ufl.core.expr.Expr,
     w: ufl.core.expr.Expr,
     mpq: MaterialPointQuadrature,
     density: ufl.Coefficient,
     nm: NewmarkData,
+    lumping: ufl.Coefficient | None = None,
 ) -> ufl.Form:
-    """The inertia and damping terms ``Σ_p m_p (a + α_R v)(x_p)·w(x_p)`` of the residual."""
+    """The inertia and damping terms ``w·M (a + α_R v)`` of the residual.
+
+    ``lumping`` is the per-point second moment C_p (m², a g×g slot field) for the
+    lumped mass; None gives the consistent mass.
+    """
     a = acceleration(du, nm) + nm.damping * velocity(du, nm)
-    return mpq.sum(density * ufl.dot(mpq.at_points(a), mpq.at_points(w)))
+    return mass_product(a, w, mpq, density, lumping)

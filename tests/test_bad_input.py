@@ -66,6 +66,13 @@ def test_other_bad_values():
     with pytest.raises(ValueError, match="boundary tag 7 given but the mesh has no facet tags"):
         fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1.0, 0.3),
                           dirichlet=[fe_mpm.Dirichlet(7)])
+    material = fe_mpm.NeoHookean(1.0, 0.3)
+    with pytest.raises(ValueError, match="Simulation: unknown mass 'diagonal'; choose one of consistent, lumped"):
+        fe_mpm.Simulation(mesh, points, material, dynamic=True, mass="diagonal")
+    with pytest.raises(ValueError, match=r"Simulation: damping must lie in \[0"):
+        fe_mpm.Simulation(mesh, points, material, dynamic=True, damping=-1.0)
+    with pytest.raises(ValueError, match="mass='lumped' needs dynamic=True"):
+        fe_mpm.Simulation(mesh, points, material, mass="lumped")
     with pytest.raises(fe_mpm.PointsOutsideError, match="left the grid at set-up"):
         outside = fe_mpm.MaterialPoints(x=[[2.0, 2.0]], volume=[1.0], mass=[1.0])
         fe_mpm.Simulation(mesh, outside, fe_mpm.NeoHookean(1.0, 0.3))
