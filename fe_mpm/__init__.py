@@ -20,7 +20,7 @@ Typical use::
 from fe_mpm import _dolfinx  # noqa: F401, I001
 from fe_mpm.boundary import Dirichlet, Traction
 from fe_mpm.errors import ConvergenceError, PointsOutsideError
-from fe_mpm.materials import NeoHookean
+from fe_mpm.materials import J2Plasticity, NeoHookean
 from fe_mpm.particles import MaterialPoints, seed
 from fe_mpm.simulation import Simulation, StepReport
 
@@ -29,6 +29,7 @@ __version__ = "0.1.0"
 __all__ = [
     "ConvergenceError",
     "Dirichlet",
+    "J2Plasticity",
     "MaterialPoints",
     "NeoHookean",
     "PointsOutsideError",

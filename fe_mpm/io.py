@@ -40,7 +40,8 @@ class ParticleWriter:
         return self.folder / f"{self.name}.pvd"
 
     def write(self, t: float, points: MaterialPoints, **fields: np.ndarray) -> Path:
-        """Write one step: positions, displacement, volume, mass, F, stress, pressure, extras.
+        """Write one step: positions, displacement, volume, mass, F, stress, pressure,
+        the material's history (e.g. ``plastic_strain``) and extras.
 
         Args:
             t: Time (s), or pseudo-time in static runs.
@@ -64,6 +65,7 @@ class ParticleWriter:
             "pressure": -np.trace(points.stress, axis1=1, axis2=2) / 3.0,
             "cell": points.cell.astype(np.float64),
         }
+        data.update({k: v.reshape(n, -1) if v.ndim > 1 else v for k, v in points.history.items()})
         data.update({k: np.asarray(v).reshape(n, -1) for k, v in fields.items()})
         cells = [("vertex", np.arange(n, dtype=np.int64).reshape(-1, 1))]
         fname = f"{self.name}_{len(self._entries):06d}.vtu"

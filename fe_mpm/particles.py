@@ -34,6 +34,8 @@ class MaterialPoints:
         x0: Initial positions, shape ``(n, g)`` (m), for displacement output.
         velocity: Velocities ``v_p``, shape ``(n, g)`` (m/s); used by dynamic runs.
         acceleration: Accelerations ``a_p``, shape ``(n, g)`` (m/s²); used by dynamic runs.
+        history: The material's internal variables by name, each ``(n, *shape)``
+            (e.g. ``plastic_strain`` for J2); filled in by the simulation.
     """
 
     x: np.ndarray
@@ -45,6 +47,7 @@ class MaterialPoints:
     x0: np.ndarray = field(default=None)  # type: ignore[assignment]
     velocity: np.ndarray = field(default=None)  # type: ignore[assignment]
     acceleration: np.ndarray = field(default=None)  # type: ignore[assignment]
+    history: dict[str, np.ndarray] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         self.x = np.ascontiguousarray(self.x, dtype=np.float64)
@@ -101,6 +104,7 @@ class MaterialPoints:
         """Keep only the points where ``mask`` is true (used when dropping points)."""
         for name in PER_POINT_FIELDS:
             setattr(self, name, getattr(self, name)[mask])
+        self.history = {name: values[mask] for name, values in self.history.items()}
 
 
 def _rule_with_count(cell: basix.CellType, per_cell: int) -> tuple[np.ndarray, np.ndarray]:

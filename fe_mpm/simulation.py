@@ -34,6 +34,7 @@ from fe_mpm.errors import ConvergenceError, PointsOutsideError
 from fe_mpm.forms import displacement, inertia, mixed_up
 from fe_mpm.formulations import FORMULATIONS, GridFields, collapse, constrained_space
 from fe_mpm.io import ParticleWriter
+from fe_mpm.materials import PointState
 from fe_mpm.newton import NewtonSolver
 from fe_mpm.particles import MaterialPoints, simplex_cell_type
 from fe_mpm.quadrature import OCCUPIED, MaterialPointQuadrature, SlotLayout, bucket
@@ -79,17 +80,20 @@ class _SlotForms:
         self.F_n = q.function((g, g), "F_n")
         self.density = q.function((), "density")
         du, p = fields.du, fields.p
+        dF = ufl.Identity(g) + q.grad_at_points(du, deg)
+        self.history = {name: q.function(h.shape, name) for name, h in material.history.items()}
+        state = PointState(dF, self.history)
         if spec.pressure:
             w, q_test = ufl.TestFunctions(fields.W)
             R = mixed_up.residual(
                 du, p, w, q_test, q, self.F_n, self.density, material, sim._ppp,
-                sim._body_force, sim._traction_terms, u_degree=deg,
+                sim._body_force, sim._traction_terms, u_degree=deg, state=state,
             )
         else:
             w = ufl.TestFunction(fields.W)
             R = displacement.residual(
-                du, w, q, self.F_n, self.density, material.kirchhoff, sim._body_force,
-                sim._traction_terms,
+                du, w, q, self.F_n, self.density, lambda F: material.kirchhoff(F, state),
+                sim._body_force, sim._traction_terms,
             )
         self.lumping = q.function((g, g), "second_moment") if sim.mass == "lumped" else None
         if sim._newmark is not None:
@@ -102,13 +106,13 @@ class _SlotForms:
         J = ufl.derivative(R, fields.w, ufl.TrialFunction(fields.W))
         self.residual = StepForm(R, mesh, sim._traction_facets)
         self.jacobian = StepForm(J, mesh, sim._traction_facets)
-        # Per-point values after convergence: Δu_p, ΔF_p and the 3x3 Cauchy stress.
-        dF = ufl.Identity(g) + q.grad_at_points(du, deg)
+        # Per-point values after convergence: Δu_p, ΔF_p, the 3x3 Cauchy stress,
+        # the acceleration (dynamics) and the material's history at t_{n+1}.
         F = dF * self.F_n
         if spec.pressure:
-            sigma = mixed_up.cauchy_stress_3d(material, F, q.at_points(p))
+            sigma = mixed_up.cauchy_stress_3d(material, F, q.at_points(p), state)
         else:
-            sigma = displacement.cauchy_stress_3d(material.kirchhoff, F)
+            sigma = displacement.cauchy_stress_3d(lambda F3: material.kirchhoff(F3, state), F)
         du_p = q.at_points(du, deg)
         values = [du_p[i] for i in range(g)]
         values += [dF[i, j] for i in range(g) for j in range(g)]
@@ -116,6 +120,12 @@ class _SlotForms:
         if sim._newmark is not None:
             a_p = q.at_points(inertia.acceleration(du, sim._newmark))
             values += [a_p[i] for i in range(g)]
+        self.history_columns = {}
+        for name, value in material.updated_history(F, state).items():
+            start = len(values)
+            shape = ufl.shape(value)
+            values += [value[idx] for idx in np.ndindex(*shape)] if shape else [value]
+            self.history_columns[name] = slice(start, len(values))
         self.update = dolfinx.fem.Expression(ufl.as_vector(values), q.points)
 
 
@@ -138,7 +148,8 @@ class Simulation:
     Args:
         mesh: Background grid: affine triangles (plane strain) or tetrahedra.
         points: The material points (moved and updated in place).
-        material: Constitutive law with ``kirchhoff(F)``.
+        material: Constitutive law (see :mod:`fe_mpm.materials`); its internal
+            variables are added to ``points.history`` if missing.
         formulation: ``"u"`` (irreducible), ``"up"`` (mixed P1/P1 with PPP),
             ``"up-nostab"`` (mixed P1/P1) or ``"up-p2p1"`` (mixed Taylor–Hood);
             see :mod:`fe_mpm.formulations`.
@@ -219,6 +230,9 @@ class Simulation:
                 "deviatoric response (kirchhoff_deviatoric) and a bulk_modulus"
             )
         self.gdim = g = mesh.geometry.dim
+        for name, h in material.history.items():
+            if name not in points.history:
+                points.history[name] = h.initial_values(len(points))
         self.points_leaving = points_leaving
         self.petsc_options = petsc_options
         self.timings: dict[str, float] = {}
@@ -477,6 +491,8 @@ class Simulation:
         q.pack_geometry(pts, layout, self.tracker.centroids, self.tracker.volumes)
         q.pack(forms.F_n, layout, pts.F, empty=np.eye(self.gdim))
         q.pack(forms.density, layout, pts.density)
+        for name, h in self.material.history.items():
+            q.pack(forms.history[name], layout, pts.history[name], empty=h.initial)
         if forms.lumping is not None:
             q.pack(forms.lumping, layout, self._second_moments(layout))
         if self._ppp is not None:
@@ -756,9 +772,11 @@ class Simulation:
         pts.volume *= det_dF
         pts.stress = sigma
         if self._newmark is not None:
-            a_new = values[:, g + g * g + 9 :]
+            a_new = values[:, g + g * g + 9 : 2 * g + g * g + 9]
             pts.velocity += 0.5 * dt * (pts.acceleration + a_new)  # Eq. 2.16
             pts.acceleration = a_new
+        for name, columns in forms.history_columns.items():
+            pts.history[name] = values[:, columns].reshape(pts.history[name].shape)
 
     def _write_output(self, force: bool = False) -> None:
         if self._particle_writer is None or self.step_number in (0, self._written_step):

@@ -77,11 +77,11 @@ class PPPData:
     dx: ufl.Measure
 
 
-def stress_parts(material, F: ufl.core.expr.Expr, p: ufl.core.expr.Expr):
-    """Kirchhoff stress τ = −J p I + μ dev(b̄) of shape g x g, and J = det F."""
+def stress_parts(material, F: ufl.core.expr.Expr, p: ufl.core.expr.Expr, state=None):
+    """Kirchhoff stress τ = −J p I + dev τ (the material's) of shape g x g, and J = det F."""
     J = ufl.det(embed_3d(F))
     g = ufl.shape(F)[0]
-    return -J * p * ufl.Identity(g) + material.kirchhoff_deviatoric(F), J
+    return -J * p * ufl.Identity(g) + material.kirchhoff_deviatoric(F, state), J
 
 
 def residual(
@@ -97,6 +97,7 @@ def residual(
     body_force: ufl.core.expr.Expr | None = None,
     tractions: Sequence[tuple[ufl.core.expr.Expr, ufl.Measure]] = (),
     u_degree: int = 1,
+    state=None,
 ) -> ufl.Form:
     """Residual of one static u-p step.
 
@@ -113,12 +114,14 @@ def residual(
         body_force: Body force per unit mass (m/s²), or None.
         tractions: Pairs (t̄, ds) of traction (Pa) and facet measure.
         u_degree: Polynomial degree of the displacement (1, or 2 for Taylor–Hood).
+        state: The points' :class:`~fe_mpm.materials.PointState` (ΔF and history),
+            for laws with internal variables.
     """
     g = ufl.shape(du)[0]
     dF = ufl.Identity(g) + mpq.grad_at_points(du, u_degree)
     F = dF * F_n
     p_p = mpq.at_points(p)
-    tau, J = stress_parts(material, F, p_p)
+    tau, J = stress_parts(material, F, p_p, state)
     K = material.bulk_modulus
     R = mpq.sum(ufl.inner(tau * ufl.inv(dF).T / ufl.det(F_n), mpq.grad_at_points(w, u_degree)))
     R -= mpq.sum(ufl.det(dF) * mpq.at_points(q_test) * ((J - 1.0) + p_p / K))
@@ -135,8 +138,8 @@ def residual(
     return R
 
 
-def cauchy_stress_3d(material, F: ufl.core.expr.Expr, p: ufl.core.expr.Expr):
-    """Full 3x3 Cauchy stress σ = −p I + μ dev(b̄)/J (Pa), σ_33 included in plane strain."""
+def cauchy_stress_3d(material, F: ufl.core.expr.Expr, p: ufl.core.expr.Expr, state=None):
+    """Full 3x3 Cauchy stress σ = −p I + dev τ/J (Pa), σ_33 included in plane strain."""
     F3 = embed_3d(F)
     J = ufl.det(F3)
-    return -p * ufl.Identity(3) + material.kirchhoff_deviatoric(F3) / J
+    return -p * ufl.Identity(3) + material.kirchhoff_deviatoric(F3, state) / J

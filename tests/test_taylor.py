@@ -19,7 +19,7 @@ from fe_mpm.verification import rates, taylor_remainders
 EPS = (1e-3, 5e-4, 2.5e-4, 1.25e-4)
 
 
-def _simulation(dim, formulation, seed=3):
+def _simulation(dim, formulation, seed=3, material=None):
     rng = np.random.default_rng(seed)
     if dim == 2:
         mesh = rectangle_mesh((0.0, 0.0), (2.0, 1.0), (6, 3))
@@ -32,7 +32,7 @@ def _simulation(dim, formulation, seed=3):
     traction = np.zeros(dim)
     traction[1] = 0.3
     sim = fe_mpm.Simulation(
-        mesh, pts, fe_mpm.NeoHookean(E=10.0, nu=0.3), formulation,
+        mesh, pts, material or fe_mpm.NeoHookean(E=10.0, nu=0.3), formulation,
         dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0))],
         tractions=[fe_mpm.Traction(lambda x: np.isclose(x[0], 2.0), traction)],
         body_force=-np.ones(dim),

@@ -1,9 +1,4 @@
-"""Constitutive laws, written in UFL so that residual and tangent share one expression.
-
-Every law maps the total deformation gradient ``F`` (``gdim x gdim``; plane
-strain in 2D, with ``F_33 = 1``) to the Kirchhoff stress ``τ = J σ`` (Pa, same
-shape). Consistent tangents come from ``ufl.derivative`` of the weak form.
-"""
+"""Hyperelastic laws: the Neo-Hookean solid, and helpers for plane strain."""
 
 from __future__ import annotations
 
@@ -12,6 +7,7 @@ from dataclasses import dataclass
 import ufl
 
 from fe_mpm.checks import check_range
+from fe_mpm.materials.state import HistoryField, PointState
 
 
 @dataclass(frozen=True)
@@ -38,6 +34,11 @@ class NeoHookean:
         check_range("NeoHookean", "density", self.density, lo=0.0, lo_open=True)
 
     @property
+    def history(self) -> dict[str, HistoryField]:
+        """A hyperelastic law has no internal variables."""
+        return {}
+
+    @property
     def mu(self) -> float:
         """Shear modulus μ (Pa)."""
         return self.E / (2.0 * (1.0 + self.nu))
@@ -52,13 +53,17 @@ class NeoHookean:
         """Bulk modulus K (Pa) of the 3D law."""
         return self.E / (3.0 * (1.0 - 2.0 * self.nu))
 
-    def kirchhoff(self, F: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
-        """Kirchhoff stress τ(F) (Pa), shape of ``F``."""
+    def kirchhoff(
+        self, F: ufl.core.expr.Expr, state: PointState | None = None
+    ) -> ufl.core.expr.Expr:
+        """Kirchhoff stress τ(F) (Pa), shape of ``F``; the state is not needed."""
         I = ufl.Identity(ufl.shape(F)[0])
         J = ufl.det(F)
         return self.lmbda * ufl.ln(J) * I + self.mu * (F * F.T - I)
 
-    def kirchhoff_deviatoric(self, F: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
+    def kirchhoff_deviatoric(
+        self, F: ufl.core.expr.Expr, state: PointState | None = None
+    ) -> ufl.core.expr.Expr:
         """Isochoric Kirchhoff stress ``μ dev(b̄)`` (Pa) of the split law (thesis Eq. 3.44).
 
         ``b̄ = J^{-2/3} F Fᵀ`` and ``dev`` are taken in 3D (``F_33 = 1`` in plane
@@ -68,8 +73,18 @@ class NeoHookean:
         g = ufl.shape(F)[0]
         F3 = embed_3d(F)
         b_bar = ufl.det(F3) ** (-2.0 / 3.0) * F3 * F3.T
-        s = self.mu * ufl.dev(b_bar)
-        return s if g == 3 else ufl.as_matrix([[s[i, j] for j in range(g)] for i in range(g)])
+        return in_plane(self.mu * ufl.dev(b_bar), g)
+
+    def updated_history(self, F: ufl.core.expr.Expr, state: PointState) -> dict:
+        """No internal variables."""
+        return {}
+
+
+def in_plane(A: ufl.core.expr.Expr, g: int) -> ufl.core.expr.Expr:
+    """The leading ``g x g`` block of a 3x3 tensor (the in-plane part in plane strain)."""
+    if g == 3:
+        return A
+    return ufl.as_matrix([[A[i, j] for j in range(g)] for i in range(g)])
 
 
 def embed_3d(F: ufl.core.expr.Expr) -> ufl.core.expr.Expr:

@@ -1,0 +1,113 @@
+"""Drive a constitutive law through prescribed deformation paths, with no grid or particles.
+
+The law is the same UFL code the simulation assembles. It is evaluated at ``n``
+independent states at once: the states are the quadrature points of a single
+reference cell, which only hosts the evaluation (nothing is integrated). Use it
+to check a law against closed forms: yield onset, hardening, return to the
+yield surface, and the algorithmic tangent ``∂τ/∂ΔF``.
+
+Example::
+
+    driver = MaterialDriver(J2Plasticity(E=1e3, nu=0.3, yield_stress=1.0), n=5)
+    for gamma in np.linspace(0, 0.01, 11)[1:]:
+        tau = driver.step(F_total)   # (n, 3, 3) Kirchhoff stress
+    driver.history["plastic_strain"]
+"""
+
+from __future__ import annotations
+
+from mpi4py import MPI
+
+import basix
+import basix.ufl
+import numpy as np
+import ufl
+
+from fe_mpm._dolfinx import dolfinx
+from fe_mpm.materials import PointState
+
+
+class MaterialDriver:
+    """Strain-driven single-point driver for ``n`` independent material points.
+
+    Args:
+        material: A law of :mod:`fe_mpm.materials`.
+        n: Number of independent points driven at once.
+        gdim: 2 (plane strain, F is 2x2) or 3.
+    """
+
+    def __init__(self, material, n: int = 1, gdim: int = 3):
+        self.material, self.n, self.gdim = material, n, gdim
+        cell = "triangle" if gdim == 2 else "tetrahedron"
+        self.mesh = dolfinx.mesh.create_unit_square(MPI.COMM_SELF, 1, 1) if gdim == 2 else \
+            dolfinx.mesh.create_unit_cube(MPI.COMM_SELF, 1, 1, 1)
+        centroid = basix.geometry(basix.CellType[cell]).mean(axis=0)
+        points = np.tile(centroid, (n, 1))
+        weights = np.full(n, 1.0 / n)
+        self._points = points
+
+        def function(shape, name):
+            element = basix.ufl.quadrature_element(
+                cell, value_shape=shape, scheme="custom", points=points, weights=weights)
+            return dolfinx.fem.Function(dolfinx.fem.functionspace(self.mesh, element), name=name)
+
+        g = gdim
+        self._dF = function((g, g), "dF")
+        self._F_n = function((g, g), "F_n")
+        self._hist = {name: function(h.shape, name) for name, h in material.history.items()}
+        self.F = np.tile(np.eye(g), (n, 1, 1))
+        self.history = {name: h.initial_values(n) for name, h in material.history.items()}
+
+        dF = ufl.variable(self._dF)
+        state = PointState(dF, self._hist)
+        F = dF * self._F_n
+        tau = material.kirchhoff(F, state)
+        tangent = ufl.diff(tau, dF)
+        updated = material.updated_history(F, state)
+        self._shapes = {name: ufl.shape(v) for name, v in updated.items()}
+        values = [tau[i, j] for i in range(g) for j in range(g)]
+        values += [tangent[idx] for idx in np.ndindex(g, g, g, g)]
+        for value in updated.values():
+            shape = ufl.shape(value)
+            values += [value[idx] for idx in np.ndindex(*shape)] if shape else [value]
+        tau3 = material.kirchhoff(ufl.as_matrix([[F[i, j] if i < g and j < g else float(i == j)
+                                                  for j in range(3)] for i in range(3)]), state)
+        values += [tau3[i, j] for i in range(3) for j in range(3)]
+        self._expression = dolfinx.fem.Expression(ufl.as_vector(values), points)
+        self._cell = np.zeros(1, dtype=np.int32)
+
+    def _pack(self, f: dolfinx.fem.Function, values: np.ndarray) -> None:
+        f.x.array[: values.size] = values.reshape(-1)
+
+    def evaluate(self, F: np.ndarray) -> dict[str, np.ndarray]:
+        """The law at total deformation gradients ``F`` (n, g, g), from the committed state.
+
+        Returns:
+            ``tau`` (n, 3, 3) Kirchhoff stress (Pa, σ_33 included in plane strain),
+            ``tangent`` (n, g, g, g, g) = ∂τ_ij/∂ΔF_kl of the in-plane block,
+            and the updated history by name.
+        """
+        F = np.asarray(F, dtype=np.float64).reshape(self.n, self.gdim, self.gdim)
+        self._pack(self._dF, F @ np.linalg.inv(self.F))
+        self._pack(self._F_n, self.F)
+        for name, f in self._hist.items():
+            self._pack(f, self.history[name])
+        values = self._expression.eval(self.mesh, self._cell).reshape(self.n, -1)
+        g = self.gdim
+        out, k = {}, g * g
+        k += g**4
+        out["tangent"] = values[:, g * g : k].reshape(self.n, g, g, g, g)
+        for name, shape in self._shapes.items():
+            size = int(np.prod(shape)) if shape else 1
+            out[name] = values[:, k : k + size].reshape(self.n, *shape)
+            k += size
+        out["tau"] = values[:, k : k + 9].reshape(self.n, 3, 3)
+        return out
+
+    def step(self, F: np.ndarray) -> np.ndarray:
+        """Go to total deformation gradients ``F`` (n, g, g) and commit; returns τ (n, 3, 3)."""
+        result = self.evaluate(F)
+        self.F = np.asarray(F, dtype=np.float64).reshape(self.n, self.gdim, self.gdim).copy()
+        for name in self.history:
+            self.history[name] = result[name]
+        return result["tau"]

@@ -1,0 +1,126 @@
+r"""Finite-strain J2 plasticity of Simo (1988, 1992): Iaconeta (2019) §3.2, Algorithm 3.
+
+Multiplicative split :math:`F = F^e F^p` with isochoric plastic flow. The stored
+energy is :math:`U(J) + \tfrac12\mu(\operatorname{tr}\bar C^e - 3)` with
+:math:`U = \tfrac12 K (J-1)^2`, the volumetric law of the mixed form, so the
+Kirchhoff stress is
+
+.. math::  \tau = K J (J - 1)\, I + \mu \operatorname{dev} \bar b^e .
+
+The yield function is :math:`f = \|\operatorname{dev}\tau\| - \sqrt{2/3}\,(\sigma_Y + H\alpha)`
+with linear isotropic hardening H (H = 0: perfect plasticity).
+
+**Return map (radial, closed form).** With the step's :math:`\Delta F`:
+:math:`\bar b^{e,tr} = \bar f \bar b^e_n \bar f^T`, :math:`\bar f = (\det \Delta F)^{-1/3}\Delta F`;
+:math:`s^{tr} = \mu \operatorname{dev}\bar b^{e,tr}`; if :math:`f^{tr} > 0`,
+:math:`\bar\mu = \mu \operatorname{tr}\bar b^{e,tr}/3`,
+:math:`\Delta\gamma = f^{tr} / (2\bar\mu(1 + H/3\bar\mu))` and
+:math:`s = s^{tr} - 2\bar\mu\Delta\gamma\, s^{tr}/\|s^{tr}\|`. Then
+:math:`\alpha_{n+1} = \alpha_n + \sqrt{2/3}\Delta\gamma` and
+:math:`\bar b^e_{n+1} = s/\mu + \tfrac13 \operatorname{tr}\bar b^{e,tr} I`.
+
+The map is written in UFL with a conditional on :math:`f^{tr} > 0`, so
+``ufl.derivative`` of the residual is the exact derivative of this closed-form
+return: Simo's algorithmic tangent (thesis Eqs. 3.93–3.97), generated instead of
+hand-coded, and Newton stays quadratic. Everything is computed in 3D (plane
+strain keeps :math:`\bar b^e_{33}`); the residual takes the in-plane block.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import ufl
+
+from fe_mpm.checks import check_range
+from fe_mpm.materials.elastic import embed_3d, in_plane
+from fe_mpm.materials.state import HistoryField, PointState
+
+_SQRT_2_3 = float(np.sqrt(2.0 / 3.0))
+
+
+@dataclass(frozen=True)
+class J2Plasticity:
+    """Hyperelastic–plastic von Mises solid with linear isotropic hardening.
+
+    Args:
+        E: Young's modulus (Pa), > 0.
+        nu: Poisson's ratio, in (-1, 0.5).
+        yield_stress: Uniaxial flow stress σ_Y (Pa), > 0.
+        hardening: Linear isotropic hardening modulus H (Pa), ≥ 0; 0 is perfectly plastic.
+        density: Reference mass density (kg/m³), > 0.
+    """
+
+    E: float
+    nu: float
+    yield_stress: float
+    hardening: float = 0.0
+    density: float = 1.0
+
+    def __post_init__(self) -> None:
+        check_range("J2Plasticity", "E", self.E, lo=0.0, lo_open=True)
+        check_range("J2Plasticity", "nu", self.nu, lo=-1.0, hi=0.5, lo_open=True, hi_open=True)
+        check_range("J2Plasticity", "yield_stress", self.yield_stress, lo=0.0, lo_open=True)
+        check_range("J2Plasticity", "hardening", self.hardening, lo=0.0)
+        check_range("J2Plasticity", "density", self.density, lo=0.0, lo_open=True)
+
+    @property
+    def mu(self) -> float:
+        """Shear modulus μ (Pa)."""
+        return self.E / (2.0 * (1.0 + self.nu))
+
+    @property
+    def bulk_modulus(self) -> float:
+        """Bulk modulus K (Pa)."""
+        return self.E / (3.0 * (1.0 - 2.0 * self.nu))
+
+    @property
+    def history(self) -> dict[str, HistoryField]:
+        """Elastic isochoric left Cauchy–Green tensor and equivalent plastic strain."""
+        return {
+            "be_bar": HistoryField((3, 3), np.eye(3), "isochoric elastic left Cauchy-Green b̄ᵉ"),
+            "plastic_strain": HistoryField((), 0.0, "equivalent plastic strain α"),
+        }
+
+    def _return_map(self, state: PointState):
+        """Deviatoric Kirchhoff stress s (3x3, Pa), trial b̄ᵉ and Δγ of the step."""
+        f = embed_3d(state.dF)
+        f_bar = ufl.det(f) ** (-1.0 / 3.0) * f
+        b_trial = f_bar * state.history["be_bar"] * f_bar.T
+        s_trial = self.mu * ufl.dev(b_trial)
+        norm = ufl.sqrt(ufl.inner(s_trial, s_trial))
+        radius = _SQRT_2_3 * (self.yield_stress + self.hardening * state.history["plastic_strain"])
+        f_trial = norm - radius
+        mu_bar = self.mu * ufl.tr(b_trial) / 3.0
+        plastic = ufl.gt(f_trial, 0.0)
+        # Both branches are compiled; ‖s_tr‖ only divides where it exceeds the radius > 0.
+        dgamma = ufl.conditional(plastic, f_trial / (2.0 * mu_bar + 2.0 * self.hardening / 3.0), 0.0)
+        scale = ufl.conditional(plastic, 1.0 - 2.0 * mu_bar * dgamma / norm, 1.0)
+        return scale * s_trial, b_trial, dgamma
+
+    def kirchhoff_deviatoric(self, F: ufl.core.expr.Expr, state: PointState) -> ufl.core.expr.Expr:
+        """Returned deviatoric Kirchhoff stress (Pa), shape of ``F``."""
+        s, _, _ = self._return_map(state)
+        return in_plane(s, ufl.shape(F)[0])
+
+    def kirchhoff(self, F: ufl.core.expr.Expr, state: PointState) -> ufl.core.expr.Expr:
+        """Kirchhoff stress ``K J (J−1) I + s`` (Pa), shape of ``F``."""
+        g = ufl.shape(F)[0]
+        J = ufl.det(embed_3d(F))
+        s, _, _ = self._return_map(state)
+        return in_plane(self.bulk_modulus * J * (J - 1.0) * ufl.Identity(3) + s, g)
+
+    def updated_history(self, F: ufl.core.expr.Expr, state: PointState) -> dict:
+        """b̄ᵉ and α at t_{n+1} (Algorithm 3, steps 3 and 5)."""
+        s, b_trial, dgamma = self._return_map(state)
+        return {
+            "be_bar": s / self.mu + ufl.tr(b_trial) / 3.0 * ufl.Identity(3),
+            "plastic_strain": state.history["plastic_strain"] + _SQRT_2_3 * dgamma,
+        }
+
+    def yield_function(self, tau: np.ndarray, plastic_strain: np.ndarray) -> np.ndarray:
+        """f(τ, α) = ‖dev τ‖ − √(2/3)(σ_Y + Hα) (Pa) of Kirchhoff stresses (n, 3, 3)."""
+        dev = tau - np.trace(tau, axis1=1, axis2=2)[:, None, None] / 3.0 * np.eye(3)
+        norm = np.sqrt(np.einsum("nij,nij->n", dev, dev))
+        return norm - _SQRT_2_3 * (self.yield_stress + self.hardening * plastic_strain)

@@ -1,0 +1,43 @@
+"""What a constitutive law sees at the material points in one step."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import ufl
+
+
+@dataclass(frozen=True)
+class HistoryField:
+    """One internal variable carried by every material point.
+
+    Attributes:
+        shape: Value shape per point, e.g. ``()`` or ``(3, 3)``.
+        initial: Value of a virgin point (broadcast to ``shape``).
+        description: What it is, with units; it names the output field too.
+    """
+
+    shape: tuple[int, ...]
+    initial: float | np.ndarray
+    description: str = ""
+
+    def initial_values(self, n: int) -> np.ndarray:
+        """Initial values for ``n`` points, shape ``(n, *shape)``."""
+        return np.broadcast_to(np.asarray(self.initial, dtype=np.float64),
+                               (n, *self.shape)).copy()
+
+
+@dataclass
+class PointState:
+    """The state of the points in a step, as UFL expressions at the points.
+
+    Attributes:
+        dF: Deformation gradient increment ΔF of the step (g x g), so that
+            ``F = ΔF F_n``.
+        history: The material's internal variables at t_n, one slot field per
+            :class:`HistoryField` of the material, by name.
+    """
+
+    dF: ufl.core.expr.Expr
+    history: dict[str, ufl.Coefficient] = field(default_factory=dict)

@@ -1,0 +1,132 @@
+"""J2 plasticity (Simo's finite-strain radial return) at single points and in the forms.
+
+The single-point drivers use closed forms of the b̄ᵉ model: in simple shear
+F = I + γ e₁⊗e₂, ‖dev b̄‖² = 2γ² + 2γ⁴/3; in uniaxial strain F = diag(λ, 1, 1),
+‖dev b̄‖ = √(2/3) λ^{-2/3} (λ² − 1). Yield is at μ‖dev b̄‖ = √(2/3) σ_Y.
+"""
+
+import numpy as np
+import pytest
+from test_taylor import EPS, _simulation
+
+import fe_mpm
+from fe_mpm.material_driver import MaterialDriver
+from fe_mpm.verification import rates, taylor_remainders
+
+SQRT_2_3 = np.sqrt(2.0 / 3.0)
+STEEL = dict(E=200e3, nu=0.3, yield_stress=250.0)  # MPa
+
+
+def bisect(f, a, b, tol=1e-15):
+    """Root of f in [a, b] (f(a) < 0 < f(b)) by bisection, to a relative width tol."""
+    while b - a > tol * abs(b):
+        m = 0.5 * (a + b)
+        a, b = (m, b) if f(m) < 0 else (a, m)
+    return 0.5 * (a + b)
+
+
+def shear(gamma):
+    F = np.tile(np.eye(3), (np.size(gamma), 1, 1))
+    F[:, 0, 1] = gamma
+    return F
+
+
+def stretch(lam):
+    F = np.tile(np.eye(3), (np.size(lam), 1, 1))
+    F[:, 0, 0] = lam
+    return F
+
+
+def dev_norm(tau):
+    dev = tau - np.trace(tau, axis1=1, axis2=2)[:, None, None] / 3 * np.eye(3)
+    return np.sqrt(np.einsum("nij,nij->n", dev, dev))
+
+
+@pytest.mark.parametrize("path", ["simple shear", "uniaxial strain"])
+def test_yield_onset_is_exact(path):
+    """One step from a virgin state just below and just above the analytical yield point."""
+    mat = fe_mpm.J2Plasticity(**STEEL)
+    mu, sy = mat.mu, mat.yield_stress
+    if path == "simple shear":
+        # (2/3)γ⁴ + 2γ² − (2/3)(σ_Y/μ)² = 0, a quadratic in γ²
+        onset = np.sqrt((-2 + np.sqrt(4 + 16 / 9 * (sy / mu) ** 2)) * 3 / 4)
+        F = shear(onset * np.array([1 - 1e-8, 1 + 1e-8]))
+    else:
+        onset = bisect(lambda lam: mu * lam ** (-2 / 3) * (lam**2 - 1) - sy, 1, 2)
+        F = stretch(1 + (onset - 1) * np.array([1 - 1e-8, 1 + 1e-8]))
+    driver = MaterialDriver(mat, n=2)
+    driver.step(F)
+    alpha = driver.history["plastic_strain"]
+    assert alpha[0] == 0.0 and alpha[1] > 0.0
+
+
+@pytest.mark.parametrize("hardening", [0.0, 2000.0])
+def test_returned_stress_lies_on_the_yield_surface_and_hardens_at_H(hardening):
+    """Twenty steps of simple shear to γ = 0.05 (about 27 times the yield strain)."""
+    mat = fe_mpm.J2Plasticity(**STEEL, hardening=hardening)
+    driver = MaterialDriver(mat, n=1)
+    norms, alphas = [], []
+    for gamma in np.linspace(0, 0.05, 21)[1:]:
+        tau = driver.step(shear(gamma))
+        alpha = driver.history["plastic_strain"]
+        assert abs(mat.yield_function(tau, alpha)[0]) < 1e-12 * mat.yield_stress
+        norms.append(dev_norm(tau)[0])
+        alphas.append(alpha[0])
+    norms, alphas = np.array(norms), np.array(alphas)
+    assert np.all(np.diff(alphas) > 0)  # plastic from the first step on
+    slope = np.diff(norms) / np.diff(alphas)
+    assert np.allclose(slope, SQRT_2_3 * hardening, rtol=0, atol=1e-8 * mat.E)
+    if hardening == 0.0:
+        assert np.allclose(norms, SQRT_2_3 * mat.yield_stress, rtol=1e-14)
+
+
+def test_plastic_flow_is_isochoric_in_the_trial_measure():
+    """The return changes only dev b̄ᵉ: tr b̄ᵉ is that of the trial state (Algorithm 3)."""
+    mat = fe_mpm.J2Plasticity(**STEEL)
+    driver = MaterialDriver(mat, n=1)
+    driver.step(shear(0.01))
+    be = driver.history["be_bar"][0]
+    F = shear(0.01)[0]
+    trial = F @ F.T  # det F = 1, virgin b̄ᵉ_n = I
+    assert abs(np.trace(be) - np.trace(trial)) < 1e-14
+    assert np.allclose(be, be.T, atol=1e-15)
+
+
+@pytest.mark.parametrize("gdim", [2, 3])
+def test_algorithmic_tangent_matches_finite_differences(gdim):
+    """∂τ/∂ΔF from UFL against central differences at a plastic, hardening state."""
+    mat = fe_mpm.J2Plasticity(**STEEL, hardening=1000.0)
+    driver = MaterialDriver(mat, n=1, gdim=gdim)
+    rng = np.random.default_rng(0)
+    F1 = np.eye(gdim) + 0.004 * rng.standard_normal((gdim, gdim))
+    driver.step(F1[None])  # a plastic state to start from
+    F2 = F1 + 0.003 * rng.standard_normal((gdim, gdim))
+    result = driver.evaluate(F2[None])
+    assert result["plastic_strain"][0] > driver.history["plastic_strain"][0]
+    D = result["tangent"][0]
+    dF = F2 @ np.linalg.inv(F1)
+    h = 1e-7
+    for k, l in np.ndindex(gdim, gdim):
+        E = np.zeros((gdim, gdim))
+        E[k, l] = h
+        plus = driver.evaluate(((dF + E) @ F1)[None])["tau"][0, :gdim, :gdim]
+        minus = driver.evaluate(((dF - E) @ F1)[None])["tau"][0, :gdim, :gdim]
+        fd = (plus - minus) / (2 * h)
+        assert np.allclose(D[:, :, k, l], fd, rtol=0, atol=1e-5 * np.abs(D).max())
+
+
+@pytest.mark.parametrize("formulation", ["u", "up"])
+def test_elastoplastic_step_residual_and_jacobian_are_consistent(formulation):
+    """Taylor test of the assembled J2 step (u and u-p forms) with every point plastic."""
+    rng, sim = _simulation(2, formulation, material=fe_mpm.J2Plasticity(10.0, 0.3, 0.05, 1.0))
+    pts = sim.points
+    pts.history["plastic_strain"][:] = rng.uniform(0, 0.1, len(pts))
+    forms, layout, R, J, _ = sim.prepare_step(1.0)
+    sim.w.x.array[:] = rng.uniform(-0.02, 0.02, sim.w.x.array.size)
+    q = forms.q
+    plastic = q.evaluate(forms.update, layout)[:, forms.history_columns["plastic_strain"]]
+    assert np.all(plastic[:, 0] > pts.history["plastic_strain"])  # all points yield
+    d = rng.uniform(-1.0, 1.0, sim.w.x.array.size)
+    r0, r1 = taylor_remainders(R, J, sim.w, d, EPS)
+    assert np.all(rates(EPS, r0) > 0.9)
+    assert np.all(rates(EPS, r1) > 1.9), f"remainders {r1}"
