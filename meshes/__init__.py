@@ -26,6 +26,12 @@ from fe_mpm.meshes.cook import (
 from fe_mpm.meshes.disk import disk
 from fe_mpm.meshes.gmsh_session import gmsh_session
 from fe_mpm.meshes.rectangle import rectangle_mesh
+from fe_mpm.meshes.tension import (
+    TENSION_BOTTOM,
+    TENSION_SIDES,
+    TENSION_TOP,
+    tension_specimen,
+)
 
 __all__ = [
     "COLUMN_BASE",
@@ -46,4 +52,8 @@ __all__ = [
     "disk",
     "gmsh_session",
     "rectangle_mesh",
+    "TENSION_BOTTOM",
+    "TENSION_SIDES",
+    "TENSION_TOP",
+    "tension_specimen",
 ]
