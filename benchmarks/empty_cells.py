@@ -31,7 +31,8 @@ def one_step(n: int, factor: int, options: dict | None = None) -> dict:
     grid = rectangle_mesh((0.0, 0.0), (float(factor), 1.0), (factor * n, n))
     centroids = grid.geometry.x[grid.geometry.dofmaps[0]][:, :, :2].mean(axis=1)
     points = fe_mpm.seed(grid, cells=np.flatnonzero(centroids[:, 0] < 1.0), density=1000.0)
-    sim = fe_mpm.Simulation(grid, points, fe_mpm.NeoHookean(1e6, 0.3, 1000.0), petsc_options=options,
+    sim = fe_mpm.Simulation(grid, points, fe_mpm.NeoHookean(1e6, 0.3, 1000.0),
+                            petsc_options=options,
                             dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))],
                             body_force=(0.0, -9.81))
     t0 = time.perf_counter()

@@ -85,7 +85,8 @@ try:
         scene.mesh, points, material, args.formulation, facet_tags=scene.facet_tags,
         dirichlet=[
             fe_mpm.Dirichlet(meshes.TENSION_BOTTOM),
-            fe_mpm.Dirichlet(meshes.TENSION_TOP, value=lambda t: np.array([0.0, args.displacement * t])),
+            fe_mpm.Dirichlet(meshes.TENSION_TOP,
+                             value=lambda t: np.array([0.0, args.displacement * t])),
         ],
         reactions={"top": meshes.TENSION_TOP},
         output_dir=None if args.no_output else args.output,
@@ -105,7 +106,8 @@ limit_load = float(force.max())
 analytical = 2.0 / np.sqrt(3.0) * args.yield_stress * args.width
 iterations = [r.newton_iterations for r in reports]
 wall = time.perf_counter() - START
-print(f"Tension test, {args.formulation}, ν = {args.nu}: {len(points)} points, {len(reports)} steps")
+print(f"Tension test, {args.formulation}, ν = {args.nu}: {len(points)} points, "
+      f"{len(reports)} steps")
 print(f"  limit load {limit_load:.6g} N/m; (2/√3) σ_Y W = {analytical:.6g} N/m "
       f"({limit_load / analytical - 1:+.2%})")
 print(f"  max equivalent plastic strain {points.history['plastic_strain'].max():.4f}")

@@ -40,8 +40,10 @@ class ParticleWriter:
         return self.folder / f"{self.name}.pvd"
 
     def write(self, t: float, points: MaterialPoints, **fields: np.ndarray) -> Path:
-        """Write one step: positions, displacement, volume, mass, F, stress, pressure,
-        the material's history (e.g. ``plastic_strain``) and extras.
+        """Write one step of point data.
+
+        Positions, displacement, volume, mass, F, stress, pressure, the material's
+        history (e.g. ``plastic_strain``) and extras.
 
         Args:
             t: Time (s), or pseudo-time in static runs.

@@ -22,12 +22,15 @@ def cook_membrane(
     structured: bool = True,
     h: float | None = None,
     margin: int = 0,
+    material=None,
+    traction: float = 1.0 / 16.0,
     **options,
 ) -> Simulation:
     """Cook's membrane as in Iaconeta (2019) Table 5.1, with marker ``"A"`` at (48, 60).
 
     Clamped left edge, vertical traction 1/16 on the right edge ramped with the
-    pseudo-time ``t`` (full load at ``t = 1``), Neo-Hookean material.
+    pseudo-time ``t`` (full load at ``t = 1``), Neo-Hookean material unless
+    another law is given.
 
     Args:
         n: Elements per side of the structured grid.
@@ -38,15 +41,17 @@ def cook_membrane(
         structured: Structured (lower-left to upper-right cut) or unstructured grid.
         h: Element size of the unstructured grid.
         margin: Rows of empty cells above and below the body (for several steps).
+        material: The law; default ``NeoHookean(E, nu)``.
+        traction: Vertical traction on the right edge at full load.
         options: Passed on to :class:`~fe_mpm.simulation.Simulation`.
     """
     scene = meshes.cook_membrane(n=n, structured=structured, h=h, margin=margin)
     points = seed(scene.mesh, per_cell=per_cell, cells=meshes.body_cells(scene))
     sim = Simulation(
-        scene.mesh, points, NeoHookean(E=E, nu=nu), formulation,
+        scene.mesh, points, material or NeoHookean(E=E, nu=nu), formulation,
         facet_tags=scene.facet_tags,
         dirichlet=[Dirichlet(meshes.COOK_CLAMPED)],
-        tractions=[Traction(meshes.COOK_LOADED, (0.0, 1.0 / 16.0), scale=lambda t: t)],
+        tractions=[Traction(meshes.COOK_LOADED, (0.0, traction), scale=lambda t: t)],
         **options,
     )
     sim.add_marker("A", meshes.COOK_POINT_A)

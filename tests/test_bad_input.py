@@ -67,7 +67,8 @@ def test_other_bad_values():
         fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1.0, 0.3),
                           dirichlet=[fe_mpm.Dirichlet(7)])
     material = fe_mpm.NeoHookean(1.0, 0.3)
-    with pytest.raises(ValueError, match="Simulation: unknown mass 'diagonal'; choose one of consistent, lumped"):
+    unknown_mass = "Simulation: unknown mass 'diagonal'; choose one of consistent, lumped"
+    with pytest.raises(ValueError, match=unknown_mass):
         fe_mpm.Simulation(mesh, points, material, dynamic=True, mass="diagonal")
     with pytest.raises(ValueError, match=r"Simulation: damping must lie in \[0"):
         fe_mpm.Simulation(mesh, points, material, dynamic=True, damping=-1.0)

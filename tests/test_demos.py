@@ -70,3 +70,17 @@ def test_sliding_block_json_contract(tmp_path):
     for key in ("error", "wall_time_s", "steps", "n_particles"):
         assert key in out
     assert out["steps"] == 20 and out["error"] < 1e-10
+
+
+def test_tension_test_json_contract_and_plastic_output(tmp_path):
+    out = tmp_path / "out"
+    stdout = run_demo("tension_test.py", "--formulation", "up", "--steps", "10", "--json",
+                      "--output", str(out), cwd=tmp_path)
+    summary = json.loads(stdout.strip().splitlines()[-1])
+    for key in ("limit_load", "analytical_limit_load", "newton_iterations_max", "wall_time_s"):
+        assert key in summary
+    assert abs(summary["limit_load"] / summary["analytical_limit_load"] - 1) < 0.01
+    last = sorted(out.glob("particles_*.vtu"))[-1]
+    data = meshio.read(last).point_data
+    assert data["plastic_strain"].max() > 0.005
+    assert (out / "force_displacement.png").exists()
