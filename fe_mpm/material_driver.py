@@ -24,7 +24,7 @@ import numpy as np
 import ufl
 
 from fe_mpm._dolfinx import dolfinx
-from fe_mpm.materials import PointState
+from fe_mpm.materials import PointState, embed_3d
 
 
 class MaterialDriver:
@@ -65,19 +65,19 @@ class MaterialDriver:
         tangent = ufl.diff(tau, dF)
         updated = material.updated_history(F, state)
         self._shapes = {name: ufl.shape(v) for name, v in updated.items()}
-        values = [tau[i, j] for i in range(g) for j in range(g)]
-        values += [tangent[idx] for idx in np.ndindex(g, g, g, g)]
+        values = [tangent[idx] for idx in np.ndindex(g, g, g, g)]
         for value in updated.values():
             shape = ufl.shape(value)
             values += [value[idx] for idx in np.ndindex(*shape)] if shape else [value]
-        tau3 = material.kirchhoff(ufl.as_matrix([[F[i, j] if i < g and j < g else float(i == j)
-                                                  for j in range(3)] for i in range(3)]), state)
+        tau3 = material.kirchhoff(embed_3d(F), state)
         values += [tau3[i, j] for i in range(3) for j in range(3)]
         self._expression = dolfinx.fem.Expression(ufl.as_vector(values), points)
         self._cell = np.zeros(1, dtype=np.int32)
 
     def _pack(self, f: dolfinx.fem.Function, values: np.ndarray) -> None:
-        f.x.array[: values.size] = values.reshape(-1)
+        """Write one value per state into the evaluation cell's quadrature dofs."""
+        bs = f.function_space.dofmap.bs
+        f.x.array.reshape(-1, bs)[f.function_space.dofmap.list[0]] = values.reshape(self.n, bs)
 
     def evaluate(self, F: np.ndarray) -> dict[str, np.ndarray]:
         """The law at total deformation gradients ``F`` (n, g, g), from the committed state.
@@ -94,9 +94,8 @@ class MaterialDriver:
             self._pack(f, self.history[name])
         values = self._expression.eval(self.mesh, self._cell).reshape(self.n, -1)
         g = self.gdim
-        out, k = {}, g * g
-        k += g**4
-        out["tangent"] = values[:, g * g : k].reshape(self.n, g, g, g, g)
+        k = g**4
+        out = {"tangent": values[:, :k].reshape(self.n, g, g, g, g)}
         for name, shape in self._shapes.items():
             size = int(np.prod(shape)) if shape else 1
             out[name] = values[:, k : k + size].reshape(self.n, *shape)

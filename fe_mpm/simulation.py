@@ -100,7 +100,7 @@ class _SlotForms:
             R += inertia.inertia(du, w, q, self.density, sim._newmark, self.lumping)
             V1 = sim._newmark.a_n.function_space
             a, v = ufl.TrialFunction(V1), ufl.TestFunction(V1)
-            self.mass = StepForm(
+            self.mass_matrix = StepForm(
                 inertia.mass_product(a, v, q, self.density, self.lumping), mesh
             )
         J = ufl.derivative(R, fields.w, ufl.TrialFunction(fields.W))
@@ -274,7 +274,6 @@ class Simulation:
         mesh.topology.create_connectivity(fdim, tdim)
 
         self._dirichlet = []  # (spec, value Function, DirichletBC)
-        self._dirichlet_facets = []
         for spec in dirichlet:
             facets = boundary_facets(mesh, spec.where, facet_tags)
             if spec.component is not None:
@@ -290,7 +289,6 @@ class Simulation:
                 dofs = dolfinx.fem.locate_dofs_topological(target, fdim, facets)
                 bc = dolfinx.fem.dirichletbc(value, dofs)
             self._dirichlet.append((spec, value, bc))
-            self._dirichlet_facets.append(facets)
 
         self._tractions = []  # (spec, Constant)
         self._traction_facets: dict[int, np.ndarray] = {}
@@ -440,7 +438,7 @@ class Simulation:
         forms, layout, R, J, bcs = self.prepare_step(t_new)
         dt = t_new - self.t
         if self._newmark is not None and self.step_number == 0:
-            self._consistent_initial_acceleration(forms, layout, R, dt)
+            self._consistent_initial_acceleration(forms, layout, R, bcs, dt)
         self._initial_guess(layout)
         result = self._newton_solver(forms).solve(R, J, bcs)
         if not result.converged or not np.all(np.isfinite(self.w.x.array)):
@@ -641,13 +639,14 @@ class Simulation:
         return nodal, mass
 
     def _consistent_initial_acceleration(
-        self, forms: _SlotForms, layout: SlotLayout, R: dolfinx.fem.Form, dt: float
+        self, forms: _SlotForms, layout: SlotLayout, R: dolfinx.fem.Form, bcs: list, dt: float
     ) -> None:
         """Particle accelerations in equilibrium at the start: ``M a₀ = f_ext − f_int − α_R M v₀``.
 
         Starting Newmark's trapezoidal rule from a₀ = 0 instead leaves the velocity
         lagging by ``Δt/2`` times the true acceleration for the whole run (a
-        first-order error in Δt). Constrained and unsupported nodes get a₀ = 0.
+        first-order error in Δt). The displacement dofs the step's ``bcs`` constrain
+        (Dirichlet and unsupported nodes) get a₀ = 0.
         """
         nm = self._newmark
         # With Δu = 0 and c_a = c_v = 0 the Newmark velocity is −ṽ and the acceleration
@@ -660,22 +659,17 @@ class Simulation:
         b.scatter_reverse(dolfinx.la.InsertMode.add)
         nm.c_a.value, nm.c_v.value, nm.damping.value = saved
         V1 = nm.a_n.function_space
-        g, fdim = self.gdim, self.mesh.topology.dim - 1
+        g = self.gdim
         rhs = dolfinx.fem.Function(V1)
         rhs.x.array[:] = -b.array[self._u_dofs]
-        fixed = np.zeros(rhs.x.array.size, dtype=bool)
-        supported = np.zeros(rhs.x.array.size // g, dtype=bool)
-        supported[V1.dofmap.list[layout.occupied].ravel()] = True
-        fixed.reshape(-1, g)[~supported] = True
-        for (spec, _, _), facets in zip(self._dirichlet, self._dirichlet_facets):
-            blocks = dolfinx.fem.locate_dofs_topological(V1, fdim, facets)
-            comps = range(g) if spec.component is None else [spec.component]
-            for c in comps:
-                fixed.reshape(-1, g)[blocks, c] = True
+        constrained = np.zeros(self.w.x.array.size, dtype=bool)
+        for bc in bcs:
+            constrained[bc.dof_indices()[0]] = True
+        fixed = constrained[self._u_dofs]
         # Over all cells: empty ones add explicit zeros, which keeps every diagonal
         # entry in the pattern for the constraint rows below.
         all_cells = np.arange(self.tracker.num_cells, dtype=np.int32)
-        M = dolfinx.fem.petsc.assemble_matrix(forms.mass.bind(all_cells))
+        M = dolfinx.fem.petsc.assemble_matrix(forms.mass_matrix.bind(all_cells))
         M.assemble()
         rows = np.flatnonzero(fixed).astype(np.int32)
         rhs.x.array[rows] = 0.0

@@ -171,7 +171,7 @@ def test_lumped_mass_is_the_row_sum_of_the_consistent_mass():
         sim = fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1e3, 0.3, 2.0),
                                 dynamic=True, mass=mass)
         forms, layout, *_ = sim.prepare_step(0.1)
-        M = dolfinx.fem.petsc.assemble_matrix(forms.mass.bind(layout.occupied))
+        M = dolfinx.fem.petsc.assemble_matrix(forms.mass_matrix.bind(layout.occupied))
         M.assemble()
         A = M.convert("dense").getDenseArray()
         assert abs(A.sum() - 2 * points.mass.sum()) < 1e-12 * points.mass.sum()
