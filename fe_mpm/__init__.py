@@ -20,7 +20,7 @@ Typical use::
 from fe_mpm import _dolfinx  # noqa: F401, I001
 from fe_mpm.boundary import Dirichlet, Traction
 from fe_mpm.errors import ConvergenceError, PointsOutsideError
-from fe_mpm.materials import J2Plasticity, NeoHookean
+from fe_mpm.materials import J2Plasticity, MohrCoulomb, NeoHookean
 from fe_mpm.particles import MaterialPoints, seed
 from fe_mpm.simulation import Simulation, StepReport
 
@@ -31,6 +31,7 @@ __all__ = [
     "Dirichlet",
     "J2Plasticity",
     "MaterialPoints",
+    "MohrCoulomb",
     "NeoHookean",
     "PointsOutsideError",
     "Simulation",

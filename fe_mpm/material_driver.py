@@ -38,6 +38,13 @@ class MaterialDriver:
 
     def __init__(self, material, n: int = 1, gdim: int = 3):
         self.material, self.n, self.gdim = material, n, gdim
+        g = gdim
+        self.F = np.tile(np.eye(g), (n, 1, 1))
+        self.history = {name: h.initial_values(n) for name, h in material.history.items()}
+        # A pointwise law is its own numpy driver: no UFL to evaluate.
+        self._pointwise = hasattr(material, "return_map")
+        if self._pointwise:
+            return
         cell = "triangle" if gdim == 2 else "tetrahedron"
         self.mesh = dolfinx.mesh.create_unit_square(MPI.COMM_SELF, 1, 1) if gdim == 2 else \
             dolfinx.mesh.create_unit_cube(MPI.COMM_SELF, 1, 1, 1)
@@ -51,12 +58,9 @@ class MaterialDriver:
                 cell, value_shape=shape, scheme="custom", points=points, weights=weights)
             return dolfinx.fem.Function(dolfinx.fem.functionspace(self.mesh, element), name=name)
 
-        g = gdim
         self._dF = function((g, g), "dF")
         self._F_n = function((g, g), "F_n")
         self._hist = {name: function(h.shape, name) for name, h in material.history.items()}
-        self.F = np.tile(np.eye(g), (n, 1, 1))
-        self.history = {name: h.initial_values(n) for name, h in material.history.items()}
 
         dF = ufl.variable(self._dF)
         state = PointState(dF, self._hist)
@@ -85,9 +89,15 @@ class MaterialDriver:
         Returns:
             ``tau`` (n, 3, 3) Kirchhoff stress (Pa, σ_33 included in plane strain),
             ``tangent`` (n, g, g, g, g) = ∂τ_ij/∂ΔF_kl of the in-plane block,
-            and the updated history by name.
+            and the updated history by name; a pointwise law adds ``region``,
+            its return region per state.
         """
         F = np.asarray(F, dtype=np.float64).reshape(self.n, self.gdim, self.gdim)
+        if self._pointwise:
+            g = self.gdim
+            result = self.material.return_map(F @ np.linalg.inv(self.F), self.history)
+            return {"tangent": result.tangent[:, :g, :g], "tau": result.tau,
+                    "region": result.region, **result.history}
         self._pack(self._dF, F @ np.linalg.inv(self.F))
         self._pack(self._F_n, self.F)
         for name, f in self._hist.items():

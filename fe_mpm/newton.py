@@ -10,7 +10,7 @@ and one residual vector, and takes the step's forms and boundary conditions in
 from __future__ import annotations
 
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 from mpi4py import MPI
@@ -97,6 +97,7 @@ class NewtonSolver:
         self.snes.setMonitor(lambda _snes, _it, norm: self.norms.append(norm))
         self._F = self._J = None
         self._bcs: Sequence = ()
+        self._before_residual: Callable[[], None] | None = None
 
     def _with_options(self, configure) -> None:
         """Call ``configure()`` with this solver's options in PETSc's database, then remove them."""
@@ -123,6 +124,11 @@ class NewtonSolver:
         self.timings[key] = self.timings.get(key, 0.0) + time.perf_counter() - t0
 
     def _residual(self, snes, x, b) -> None:
+        if self._before_residual is not None:
+            # The hook reads u (e.g. to evaluate a return map at this iterate).
+            x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+            dolfinx.fem.petsc.assign(x, self.u)
+            self._before_residual()
         t0 = time.perf_counter()
         fem_petsc.assemble_residual(snes, x, b, self.u, self._F, self._J, self._bcs)
         self._add_time("assembly", t0)
@@ -137,14 +143,19 @@ class NewtonSolver:
         F: dolfinx.fem.Form,
         J: dolfinx.fem.Form,
         bcs: Sequence[dolfinx.fem.DirichletBC],
+        before_residual: Callable[[], None] | None = None,
     ) -> NewtonResult:
         """Solve from the current value of ``u``; on return ``u`` holds the last iterate.
+
+        ``before_residual`` is called with ``u`` set to each iterate, before its
+        residual is assembled; SNES assembles the Jacobian at that same iterate.
 
         With ``pc_type redistribute`` every solve gets a fresh linear solver: the
         constrained dofs it removes change from step to step, but the matrix
         pattern does not, so PETSc would keep the last step's reduced system.
         """
         self._F, self._J, self._bcs = F, J, bcs
+        self._before_residual = before_residual
         if self._options.get("pc_type") == "redistribute":
             self._fresh_ksp()
         self.norms = []

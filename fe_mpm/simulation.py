@@ -34,7 +34,7 @@ from fe_mpm.errors import ConvergenceError, PointsOutsideError
 from fe_mpm.forms import displacement, inertia, mixed_up
 from fe_mpm.formulations import FORMULATIONS, GridFields, collapse, constrained_space
 from fe_mpm.io import ParticleWriter
-from fe_mpm.materials import PointState
+from fe_mpm.materials import Linearisation, PointState, ReturnMapResult
 from fe_mpm.newton import NewtonSolver
 from fe_mpm.particles import MaterialPoints, simplex_cell_type
 from fe_mpm.quadrature import OCCUPIED, MaterialPointQuadrature, SlotLayout, bucket
@@ -82,7 +82,18 @@ class _SlotForms:
         du, p = fields.du, fields.p
         dF = ufl.Identity(g) + q.grad_at_points(du, deg)
         self.history = {name: q.function(h.shape, name) for name, h in material.history.items()}
-        state = PointState(dF, self.history)
+        # A pointwise law (numpy return map) enters the forms through its
+        # linearisation at the current iterate, refreshed before every residual.
+        self.pointwise = hasattr(material, "return_map")
+        self.linearisation = None
+        if self.pointwise:
+            self.linearisation = Linearisation(
+                q.function((3, 3), "tau_k"), q.function((9 * g * g,), "tangent_k"),
+                q.function((g, g), "dF_k"), g,
+            )
+            self.dF_at_points = dolfinx.fem.Expression(
+                ufl.as_vector([dF[i, j] for i in range(g) for j in range(g)]), q.points)
+        state = PointState(dF, self.history, self.linearisation)
         if spec.pressure:
             w, q_test = ufl.TestFunctions(fields.W)
             R = mixed_up.residual(
@@ -229,6 +240,9 @@ class Simulation:
                 f"Simulation: formulation {formulation!r} needs a material with a "
                 "deviatoric response (kirchhoff_deviatoric) and a bulk_modulus"
             )
+        check_formulation = getattr(material, "check_formulation", None)
+        if check_formulation is not None:
+            check_formulation(self.spec.pressure)
         self.gdim = g = mesh.geometry.dim
         for name, h in material.history.items():
             if name not in points.history:
@@ -440,7 +454,8 @@ class Simulation:
         if self._newmark is not None and self.step_number == 0:
             self._consistent_initial_acceleration(forms, layout, R, bcs, dt)
         self._initial_guess(layout)
-        result = self._newton_solver(forms).solve(R, J, bcs)
+        hook = self.refresh_material if forms.pointwise else None
+        result = self._newton_solver(forms).solve(R, J, bcs, before_residual=hook)
         if not result.converged or not np.all(np.isfinite(self.w.x.array)):
             norms = ", ".join(f"{r:.3e}" for r in result.residual_norms)
             raise ConvergenceError(
@@ -450,6 +465,7 @@ class Simulation:
                 "Points were not updated and nothing was written for this step."
             )
 
+        self.refresh_material()  # at the converged iterate, for the reactions and history
         reactions = self._reaction_forces(R)
         t0 = time.perf_counter()
         self._convect(forms, layout, step=k, t=t_new, dt=dt)
@@ -503,7 +519,33 @@ class Simulation:
         if self._newmark is not None:
             self._project_to_grid(layout, t_new - self.t)
         self._add_time("packing", t0)
+        self._current = (forms, layout)
+        self.refresh_material()
         return forms, layout, R, J, bcs
+
+    def refresh_material(self) -> ReturnMapResult | None:
+        """Evaluate a pointwise law's return map at the current grid unknown.
+
+        The law's stress, tangent and ΔF at the points go into the slot fields of
+        its linearisation, so the next residual and Jacobian assembled are the
+        law's own at this iterate. The solver calls this before every residual;
+        call it yourself after changing :attr:`w` by hand (e.g. in a Taylor test).
+        Returns the return map's result, or None for laws written in UFL.
+        """
+        forms, layout = self._current
+        if not forms.pointwise:
+            return None
+        t0 = time.perf_counter()
+        g, q = self.gdim, forms.q
+        dF = q.evaluate(forms.dF_at_points, layout).reshape(-1, g, g)
+        result = self.material.return_map(dF, self.points.history)
+        lin = forms.linearisation
+        q.pack(lin.tau, layout, result.tau)
+        q.pack(lin.tangent, layout, Linearisation.flat_tangent(result.tangent))
+        q.pack(lin.dF, layout, dF, empty=np.eye(g))
+        self._last_return = result
+        self._add_time("return_map", t0)
+        return result
 
     # -- the phases of a step --------------------------------------------------
 
@@ -655,6 +697,7 @@ class Simulation:
         nm.c_a.value, nm.c_v.value, nm.damping.value = 0.0, 0.0, -saved[2]
         nm.a_n.x.array[:] = 0.0
         self._initial_guess(layout)  # Δu = 0 (and the projected pressure)
+        self.refresh_material()
         b = dolfinx.fem.assemble_vector(R)
         b.scatter_reverse(dolfinx.la.InsertMode.add)
         nm.c_a.value, nm.c_v.value, nm.damping.value = saved
@@ -771,6 +814,8 @@ class Simulation:
             pts.acceleration = a_new
         for name, columns in forms.history_columns.items():
             pts.history[name] = values[:, columns].reshape(pts.history[name].shape)
+        if forms.pointwise:
+            pts.history.update(self._last_return.history)
 
     def _write_output(self, force: bool = False) -> None:
         if self._particle_writer is None or self.step_number in (0, self._written_step):

@@ -8,7 +8,7 @@ compiler). Only a Taylor test catches that: for a consistent pair the remainder
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import dolfinx.fem.petsc as fem_petsc
 import numpy as np
@@ -28,6 +28,7 @@ def taylor_remainders(
     u: dolfinx.fem.Function,
     direction: np.ndarray,
     eps: Sequence[float] = (1e-3, 5e-4, 2.5e-4, 1.25e-4),
+    before_assembly: Callable[[], object] | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Zeroth- and first-order Taylor remainders of ``R`` about the current ``u``.
 
@@ -37,12 +38,17 @@ def taylor_remainders(
         u: The unknown; restored on return.
         direction: Perturbation direction, same length as ``u.x.array``.
         eps: Perturbation sizes.
+        before_assembly: Called after every change of ``u`` and before assembling,
+            e.g. ``Simulation.refresh_material`` for a law whose return map runs
+            outside UFL.
 
     Returns:
         ``(r0, r1)`` with ``r0[i] = ‖R(u+ε_i d) − R(u)‖`` (falls as ε) and
         ``r1[i] = ‖R(u+ε_i d) − R(u) − ε_i J d‖`` (falls as ε² if J is consistent).
     """
+    refresh = before_assembly or (lambda: None)
     u0 = u.x.array.copy()
+    refresh()
     R0 = _residual(R)
     A = fem_petsc.assemble_matrix(J)
     A.assemble()
@@ -57,11 +63,13 @@ def taylor_remainders(
     try:
         for e in eps:
             u.x.array[:] = u0 + e * direction
+            refresh()
             Re = _residual(R)
             r0.append(np.linalg.norm(Re - R0))
             r1.append(np.linalg.norm(Re - R0 - e * Jd))
     finally:
         u.x.array[:] = u0
+        refresh()
     return np.array(r0), np.array(r1)
 
 

@@ -11,10 +11,26 @@ through ``updated_history``. Every law has:
   form, where the pressure is a field);
 - ``mu``, ``bulk_modulus`` (Pa) and ``density`` (kg/m³);
 - ``history`` (name → :class:`HistoryField`) and ``updated_history(F, state)``.
+
+Laws integrated in principal space (:class:`MohrCoulomb`) run their return map
+in numpy instead: they have ``return_map(dF, history)``, and their UFL stress is
+the linearisation at the current Newton iterate (:mod:`.linearised`).
 """
 
 from fe_mpm.materials.elastic import NeoHookean, embed_3d, in_plane
 from fe_mpm.materials.j2 import J2Plasticity
+from fe_mpm.materials.linearised import Linearisation, ReturnMapResult
+from fe_mpm.materials.mohr_coulomb import MohrCoulomb
 from fe_mpm.materials.state import HistoryField, PointState
 
-__all__ = ["HistoryField", "J2Plasticity", "NeoHookean", "PointState", "embed_3d", "in_plane"]
+__all__ = [
+    "HistoryField",
+    "J2Plasticity",
+    "Linearisation",
+    "MohrCoulomb",
+    "NeoHookean",
+    "PointState",
+    "ReturnMapResult",
+    "embed_3d",
+    "in_plane",
+]

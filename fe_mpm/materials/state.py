@@ -37,7 +37,11 @@ class PointState:
             ``F = ΔF F_n``.
         history: The material's internal variables at t_n, one slot field per
             :class:`HistoryField` of the material, by name.
+        linearisation: For laws whose return map runs in numpy (``return_map``),
+            the slot fields of its linearisation at the current Newton iterate
+            (:class:`~fe_mpm.materials.linearised.Linearisation`); else None.
     """
 
     dF: ufl.core.expr.Expr
     history: dict[str, ufl.Coefficient] = field(default_factory=dict)
+    linearisation: object | None = None

@@ -1,0 +1,65 @@
+r"""Laws whose return map runs in numpy: the UFL side is their linearisation.
+
+A pointwise law (one with ``return_map``) computes, at every Newton iterate
+:math:`\Delta F_k`, the Kirchhoff stress :math:`\tau_k` and its exact derivative
+:math:`D_k = \partial\tau/\partial\Delta F` at the points. The form sees
+
+.. math::  \tau(\Delta F) = \tau_k + D_k : (\Delta F - \Delta F_k),
+
+with :math:`\tau_k, D_k, \Delta F_k` in slot fields. At :math:`\Delta F = \Delta F_k`
+the residual is the law's own, and ``ufl.derivative`` of it is :math:`D_k`, the
+consistent tangent; so Newton stays quadratic. The simulation refreshes the
+slot fields before every residual assembly (see ``NewtonSolver.solve``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import ufl
+
+
+@dataclass(frozen=True)
+class ReturnMapResult:
+    """What a pointwise law returns for ``n`` points.
+
+    Attributes:
+        tau: Kirchhoff stress (n, 3, 3), Pa (τ₃₃ included in plane strain).
+        tangent: ∂τ_ij/∂ΔF_kl (n, 3, 3, g, g), Pa.
+        history: Internal variables at t_{n+1} by name, each (n, *shape).
+        region: Optional per-point label of the return taken (n,).
+    """
+
+    tau: np.ndarray
+    tangent: np.ndarray
+    history: dict[str, np.ndarray]
+    region: np.ndarray | None = None
+
+
+@dataclass
+class Linearisation:
+    """Slot fields holding τ_k (3x3), D_k (flattened 3·3·g·g) and ΔF_k (g x g)."""
+
+    tau: ufl.Coefficient
+    tangent: ufl.Coefficient
+    dF: ufl.Coefficient
+    gdim: int
+
+    def kirchhoff(self, dF: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
+        """τ_k + D_k : (ΔF − ΔF_k), 3x3 (Pa)."""
+        g = self.gdim
+        step = dF - self.dF
+        D = self.tangent
+
+        def entry(i, j):
+            base = (3 * i + j) * g * g
+            return self.tau[i, j] + sum(D[base + g * k + m] * step[k, m]
+                                        for k in range(g) for m in range(g))
+
+        return ufl.as_matrix([[entry(i, j) for j in range(3)] for i in range(3)])
+
+    @staticmethod
+    def flat_tangent(tangent: np.ndarray) -> np.ndarray:
+        """(n, 3, 3, g, g) → (n, 9·g·g) in the order :meth:`kirchhoff` reads."""
+        return tangent.reshape(tangent.shape[0], -1)

@@ -1,0 +1,168 @@
+r"""Finite-strain Mohr-Coulomb and Tresca plasticity on Hencky strains: Iaconeta (2019) §3.3.
+
+Elasticity is linear in the principal logarithmic elastic strains,
+:math:`\tau_A = a_{AB}\,\varepsilon^e_B` (Eqs. 3.99–3.103), and the exponential-map
+integration of the flow rule (App. A) makes the step a small-strain return in
+principal space (Algorithm 4):
+
+1. :math:`b^{tr} = \Delta F\, b^e_n\, \Delta F^T`, eigen-decomposed;
+   :math:`\varepsilon^{tr}_A = \tfrac12 \ln x_A`;
+2. the principal return of :mod:`~fe_mpm.materials.principal_return` (plane,
+   line or apex, non-associative with dilatancy ψ, perfectly plastic);
+3. :math:`\tau = \sum_A \tau_A n_A\otimes n_A`,
+   :math:`b^e_{n+1} = \sum_A \exp(2\varepsilon^e_A)\, n_A\otimes n_A`.
+
+The tangent :math:`\partial\tau/\partial\Delta F` is exact
+(:mod:`~fe_mpm.materials.spectral`), including repeated eigenvalues. The return
+runs in numpy at the points, and the forms see its linearisation
+(:mod:`~fe_mpm.materials.linearised`). Tension is positive; the cohesion and
+friction angle are the usual soil parameters.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import ufl
+
+from fe_mpm.checks import check_range
+from fe_mpm.materials.elastic import in_plane
+from fe_mpm.materials.linearised import ReturnMapResult
+from fe_mpm.materials.principal_return import ELASTIC, MohrCoulombSurface, mohr_coulomb_return
+from fe_mpm.materials.spectral import derivative_wrt_dF, from_principal, spectral_decomposition
+from fe_mpm.materials.state import HistoryField, PointState
+
+_SQRT_2_3 = math.sqrt(2.0 / 3.0)
+
+
+@dataclass(frozen=True)
+class MohrCoulomb:
+    """Hencky-elastic, perfectly plastic Mohr-Coulomb solid.
+
+    Args:
+        E: Young's modulus (Pa), > 0.
+        nu: Poisson's ratio, in (-1, 0.5).
+        cohesion: c (Pa), ≥ 0; > 0 when the friction angle is 0.
+        friction_angle: φ in degrees, in [0, 90). 0 gives Tresca with c = c_u.
+        dilatancy_angle: ψ in degrees, in [0, φ]; ψ = φ is associative.
+        density: Reference mass density (kg/m³), > 0.
+    """
+
+    E: float
+    nu: float
+    cohesion: float
+    friction_angle: float = 0.0
+    dilatancy_angle: float = 0.0
+    density: float = 1.0
+
+    def __post_init__(self) -> None:
+        check_range("MohrCoulomb", "E", self.E, lo=0.0, lo_open=True)
+        check_range("MohrCoulomb", "nu", self.nu, lo=-1.0, hi=0.5, lo_open=True, hi_open=True)
+        check_range("MohrCoulomb", "cohesion", self.cohesion, lo=0.0)
+        check_range("MohrCoulomb", "friction_angle", self.friction_angle, lo=0.0, hi=90.0,
+                    hi_open=True)
+        check_range("MohrCoulomb", "dilatancy_angle", self.dilatancy_angle, lo=0.0,
+                    hi=self.friction_angle)
+        check_range("MohrCoulomb", "density", self.density, lo=0.0, lo_open=True)
+        if self.friction_angle == 0.0 and self.cohesion == 0.0:
+            raise ValueError("MohrCoulomb: cohesion must be > 0 when friction_angle = 0 "
+                             "(the material would have no strength), got 0")
+
+    @classmethod
+    def tresca(cls, E: float, nu: float, cohesion: float, density: float = 1.0) -> MohrCoulomb:
+        """Tresca solid (φ = ψ = 0) with undrained shear strength ``cohesion`` = c_u (Pa)."""
+        return cls(E, nu, cohesion, 0.0, 0.0, density)
+
+    @property
+    def mu(self) -> float:
+        """Shear modulus G (Pa)."""
+        return self.E / (2.0 * (1.0 + self.nu))
+
+    @property
+    def bulk_modulus(self) -> float:
+        """Bulk modulus K (Pa)."""
+        return self.E / (3.0 * (1.0 - 2.0 * self.nu))
+
+    @property
+    def surface(self) -> MohrCoulombSurface:
+        """The principal-space elasticity and yield surface."""
+        return MohrCoulombSurface(
+            self.bulk_modulus, self.mu, self.cohesion,
+            math.sin(math.radians(self.friction_angle)),
+            math.sin(math.radians(self.dilatancy_angle)),
+        )
+
+    @property
+    def history(self) -> dict[str, HistoryField]:
+        """Elastic left Cauchy–Green tensor and equivalent plastic strain."""
+        return {
+            "be": HistoryField((3, 3), np.eye(3), "elastic left Cauchy-Green bᵉ"),
+            "plastic_strain": HistoryField(
+                (), 0.0, "equivalent plastic strain Σ √(2/3)‖Δεᵖ‖ (Hencky)"),
+        }
+
+    def check_formulation(self, pressure: bool) -> None:
+        """The mixed forms take the pressure from a field, so the law must not depend on it."""
+        if pressure and (self.friction_angle > 0.0 or self.dilatancy_angle > 0.0):
+            raise ValueError(
+                "MohrCoulomb: the u-p formulations need a pressure-independent, isochoric law, "
+                f"i.e. friction_angle = dilatancy_angle = 0 (Tresca); got φ = "
+                f"{self.friction_angle:g}°, ψ = {self.dilatancy_angle:g}°. Use formulation='u'."
+            )
+
+    def return_map(self, dF: np.ndarray, history: dict[str, np.ndarray]) -> ReturnMapResult:
+        """Stress, tangent and history at t_{n+1} for step increments ΔF.
+
+        Args:
+            dF: Deformation gradient increments (n, g, g).
+            history: ``be`` (n, 3, 3) and ``plastic_strain`` (n,) at t_n.
+        """
+        n, g = dF.shape[0], dF.shape[1]
+        F3 = np.tile(np.eye(3), (n, 1, 1))
+        F3[:, :g, :g] = dF
+        b_n = history["be"]
+        b = F3 @ b_n @ np.swapaxes(F3, 1, 2)
+        x, Q = spectral_decomposition(b)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            strain = 0.5 * np.log(x)  # nan for an inverted step: reported by the caller
+        surface = self.surface
+        ret = mohr_coulomb_return(surface, strain)
+        tau = from_principal(ret.stress, Q)
+        dy_dx = ret.tangent / (2.0 * x[:, None, :])  # ∂ε_B/∂x_B = 1/(2 x_B)
+        tangent = derivative_wrt_dF(x, Q, ret.stress, dy_dx, F3, b_n)[..., :g, :g]
+
+        elastic = ret.region == ELASTIC
+        strain_e = ret.stress @ surface.compliance
+        be = from_principal(np.exp(2.0 * strain_e), Q)
+        be[elastic] = b[elastic]
+        increment = _SQRT_2_3 * np.linalg.norm(strain - strain_e, axis=1)
+        increment[elastic] = 0.0
+        return ReturnMapResult(
+            tau=tau, tangent=tangent, region=ret.region,
+            history={"be": be, "plastic_strain": history["plastic_strain"] + increment},
+        )
+
+    def kirchhoff(self, F: ufl.core.expr.Expr, state: PointState) -> ufl.core.expr.Expr:
+        """The linearised return-map stress τ (Pa), shape of ``F``."""
+        return in_plane(self._linearised(state), ufl.shape(F)[0])
+
+    def kirchhoff_deviatoric(self, F: ufl.core.expr.Expr, state: PointState) -> ufl.core.expr.Expr:
+        """Dev τ (Pa), shape of ``F``: the u-p part (Tresca only, see :meth:`check_formulation`)."""
+        return in_plane(ufl.dev(self._linearised(state)), ufl.shape(F)[0])
+
+    def _linearised(self, state: PointState) -> ufl.core.expr.Expr:
+        if state is None or state.linearisation is None:
+            raise ValueError("MohrCoulomb: the state has no linearisation slot fields; the "
+                             "law is evaluated in numpy (return_map) by the simulation")
+        return state.linearisation.kirchhoff(state.dF)
+
+    def updated_history(self, F: ufl.core.expr.Expr, state: PointState) -> dict:
+        """Nothing in UFL: :meth:`return_map` gives the history."""
+        return {}
+
+    def yield_function(self, tau: np.ndarray) -> np.ndarray:
+        """F = (τ₁ − τ₃) + (τ₁ + τ₃) sin φ − 2c cos φ (Pa) of Kirchhoff stresses (n, 3, 3)."""
+        principal = np.linalg.eigvalsh(tau)[:, ::-1]
+        return self.surface.yield_function(principal)

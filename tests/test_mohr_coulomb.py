@@ -1,0 +1,262 @@
+"""Mohr-Coulomb and Tresca (Hencky, principal-space return) at single points and in steps.
+
+Closed forms used (tension positive, Kirchhoff stresses): with k = (1 + sin φ)/(1 − sin φ),
+a confined compression path with the least compressive stress held at −p₀ ends on
+
+    τ_major = −(k p₀ + 2c√k),
+
+whether the third stress is free (plane strain: plane return), equal to the least
+compressive one (triaxial compression: line 1) or equal to the major one (triaxial
+extension: line 2). For Tresca (φ = 0, k = 1) that is τ_major = −(p₀ + 2c).
+Isotropic tension ends on the apex, τ = c cot φ.
+"""
+
+import itertools
+
+import numpy as np
+import pytest
+from test_taylor import _simulation
+
+import fe_mpm
+from fe_mpm.material_driver import MaterialDriver
+from fe_mpm.materials.principal_return import (
+    APEX,
+    ELASTIC,
+    LINE_1,
+    LINE_2,
+    PLANE,
+    mohr_coulomb_return,
+)
+from fe_mpm.verification import rates, taylor_remainders
+
+SOIL = dict(E=1.0e4, nu=0.3, cohesion=10.0)  # kPa-like units
+P0 = 20.0  # confining pressure
+
+
+def k_of(phi_deg):
+    s = np.sin(np.radians(phi_deg))
+    return (1 + s) / (1 - s)
+
+
+def mixed_control(driver, F, controlled, target, tol=1e-12):
+    """Adjust the diagonal entries ``controlled`` of F so that τ_ii = target, by Newton.
+
+    The Jacobian is the law's own tangent: with ΔF = F F_n⁻¹,
+    ∂τ_ii/∂F_jj = Σ_l ∂τ_ii/∂ΔF_jl (F_n⁻¹)_jl. Returns the new F and the law's result.
+    """
+    F = F.copy()
+    Fn_inv = np.linalg.inv(driver.F[0])
+    for _ in range(30):
+        result = driver.evaluate(F[None])
+        tau, D = result["tau"][0], result["tangent"][0]
+        r = np.array([tau[i, i] - target for i in controlled])
+        if np.abs(r).max() < tol * abs(target):
+            return F, result
+        jac = np.array([[D[i, i, j] @ Fn_inv[j] for j in controlled] for i in controlled])
+        # lstsq: on a line return the lateral pair moves together and jac is singular.
+        for j, s in zip(controlled, np.linalg.lstsq(jac, -r, rcond=1e-12)[0]):
+            F[j, j] += s
+    raise AssertionError(f"mixed control did not converge: residual {r}")
+
+
+def confined_compression(material, gdim, lateral, axial_axis, n_steps=40, strain=0.03):
+    """Compress along ``axial_axis`` while the ``lateral`` stresses are held at −P0."""
+    driver = MaterialDriver(material, n=1, gdim=gdim)
+    F = np.eye(gdim)
+    # Isotropic pre-compression to −P0 on the controlled axes first.
+    F, _ = mixed_control(driver, F, list(lateral) + [axial_axis], -P0)
+    driver.step(F[None])
+    regions, taus = [], []
+    for e in np.linspace(0, strain, n_steps + 1)[1:]:
+        target = F.copy()
+        target[axial_axis, axial_axis] = F[axial_axis, axial_axis] * (1 - e)
+        Fk, result = mixed_control(driver, target, lateral, -P0)
+        driver.step(Fk[None])
+        regions.append(result["region"][0])
+        taus.append(result["tau"][0])
+    return np.array(regions), np.array(taus), driver
+
+
+@pytest.mark.parametrize("phi", [30.0, 0.0])
+def test_plane_strain_compression_reaches_the_analytical_limit_on_the_plane(phi):
+    mat = fe_mpm.MohrCoulomb(**SOIL, friction_angle=phi, dilatancy_angle=phi / 3)
+    regions, taus, driver = confined_compression(mat, 2, lateral=[0], axial_axis=1)
+    limit = -(k_of(phi) * P0 + 2 * SOIL["cohesion"] * np.sqrt(k_of(phi)))
+    assert regions[0] == ELASTIC and regions[-1] == PLANE
+    assert abs(taus[-1][1, 1] - limit) < 1e-10 * abs(limit)
+    assert abs(taus[-1][0, 0] + P0) < 1e-10 * P0
+    assert taus[-1][1, 1] < taus[-1][2, 2] < taus[-1][0, 0]  # τ_zz is the intermediate one
+    assert driver.history["plastic_strain"][0] > 0.0
+
+
+@pytest.mark.parametrize("phi", [30.0, 0.0])
+@pytest.mark.parametrize("path, line", [("triaxial compression", LINE_1),
+                                        ("triaxial extension", LINE_2)])
+def test_triaxial_paths_end_on_the_lines(path, line, phi):
+    mat = fe_mpm.MohrCoulomb(**SOIL, friction_angle=phi, dilatancy_angle=phi / 3)
+    limit = -(k_of(phi) * P0 + 2 * SOIL["cohesion"] * np.sqrt(k_of(phi)))
+    if path == "triaxial compression":  # τ_xx = τ_yy = −P0, compress z
+        regions, taus, _ = confined_compression(mat, 3, lateral=[0, 1], axial_axis=2)
+        major = taus[-1][2, 2]
+    else:  # τ_zz = −P0 held, the lateral pair compressed together
+        driver = MaterialDriver(mat, n=1, gdim=3)
+        F, _ = mixed_control(driver, np.eye(3), [0, 1, 2], -P0)
+        driver.step(F[None])
+        regions, taus = [], []
+        for e in np.linspace(0, 0.03, 41)[1:]:
+            target = F.copy()
+            target[0, 0] *= 1 - e
+            target[1, 1] *= 1 - e
+            Fk, result = mixed_control(driver, target, [2], -P0)
+            driver.step(Fk[None])
+            regions.append(result["region"][0])
+            taus.append(result["tau"][0])
+        major = taus[-1][0, 0]
+        assert abs(taus[-1][0, 0] - taus[-1][1, 1]) < 1e-10 * P0
+    assert regions[-1] == line
+    assert abs(major - limit) < 1e-10 * abs(limit)
+
+
+def test_isotropic_tension_returns_to_the_apex():
+    mat = fe_mpm.MohrCoulomb(**SOIL, friction_angle=30.0, dilatancy_angle=30.0)
+    driver = MaterialDriver(mat, n=3, gdim=3)
+    F = np.array([(1 + e) * np.eye(3) for e in (1e-4, 1e-3, 1e-2)])
+    result = driver.evaluate(F)
+    apex = SOIL["cohesion"] / np.tan(np.radians(30.0))
+    assert result["region"][0] == ELASTIC
+    assert np.all(result["region"][1:] == APEX)
+    assert np.allclose(result["tau"][1:], apex * np.eye(3), rtol=1e-13, atol=0)
+    assert np.all(result["tangent"][1:] == 0.0)
+
+
+def _random_trials(surface, n, rng, scale):
+    strain = rng.normal(0.0, scale, (n, 3))
+    return -np.sort(-strain, axis=1)
+
+
+@pytest.mark.parametrize("phi, c", [(30.0, 10.0), (0.0, 10.0), (31.0, 0.0)])
+def test_associative_return_is_the_energy_closest_point(phi, c):
+    """For ψ = φ the return is the projection onto the convex elastic domain in the a⁻¹ norm.
+
+    So (τ^tr − τ)ᵀ a⁻¹ (τ' − τ) ≤ 0 for every admissible τ'. This checks the choice
+    of region independently of how it is made. Every region must occur.
+    """
+    mat = fe_mpm.MohrCoulomb(E=1e4, nu=0.3, cohesion=c, friction_angle=phi, dilatancy_angle=phi)
+    surface = mat.surface
+    rng = np.random.default_rng(1)
+    strain = _random_trials(surface, 4000, rng, 0.004)
+    ret = mohr_coulomb_return(surface, strain)
+    expected = {ELASTIC, PLANE, LINE_1, LINE_2} | ({APEX} if phi > 0 else set())
+    assert set(np.unique(ret.region)) == expected
+    plastic = ret.region != ELASTIC
+    trial = strain @ surface.elastic
+    f = surface.yield_function(ret.stress)
+    assert np.abs(f[plastic]).max() < 1e-12 * surface.shear_modulus
+    # Probes: points on the yield surface (returns of other trials) in every axis order,
+    # since the admissible set is symmetric in the principal axes.
+    others = mohr_coulomb_return(surface, _random_trials(surface, 500, rng, 0.004)).stress
+    probes = np.vstack([others[:, perm] for perm in itertools.permutations(range(3))])
+    d = (trial - ret.stress)[plastic] @ surface.compliance
+    inner = d @ probes.T - np.einsum("ni,ni->n", d, ret.stress[plastic])[:, None]
+    spread = np.linalg.norm(d, axis=1).max() * np.abs(probes).max()
+    assert inner.max() <= 1e-12 * spread
+
+
+def test_non_associative_plastic_strain_follows_the_active_potentials():
+    """Δεᵖ = a⁻¹(τ^tr − τ) is a non-negative combination of the active ∂g (ψ < φ)."""
+    mat = fe_mpm.MohrCoulomb(E=1e4, nu=0.3, cohesion=10.0, friction_angle=30.0,
+                             dilatancy_angle=5.0)
+    surface = mat.surface
+    m = surface.m
+    strain = _random_trials(surface, 4000, np.random.default_rng(2), 0.004)
+    ret = mohr_coulomb_return(surface, strain)
+    dep = (strain @ surface.elastic - ret.stress) @ surface.compliance
+    gradients = {
+        PLANE: [[m, 0, -1]],
+        LINE_1: [[m, 0, -1], [0, m, -1]],
+        LINE_2: [[m, 0, -1], [m, -1, 0]],
+    }
+    for region, grads in gradients.items():
+        mask = ret.region == region
+        assert mask.sum() > 20
+        G = np.array(grads, dtype=float).T
+        gammas, *_ = np.linalg.lstsq(G, dep[mask].T, rcond=None)
+        assert np.abs(G @ gammas - dep[mask].T).max() < 1e-12
+        assert gammas.min() > -1e-14
+
+
+@pytest.mark.parametrize("gdim", [2, 3])
+@pytest.mark.parametrize("phi", [30.0, 0.0])
+def test_tangent_matches_finite_differences_in_every_region(gdim, phi):
+    mat = fe_mpm.MohrCoulomb(**SOIL, friction_angle=phi, dilatancy_angle=phi / 3)
+    rng = np.random.default_rng(3)
+    n = 300
+    A = np.eye(3) + rng.normal(0, 0.0005, (n, 3, 3))  # an elastic state at t_n
+    if gdim == 2:
+        A[:, 2, :2] = A[:, :2, 2] = 0.0
+    history = {"be": A @ np.swapaxes(A, 1, 2), "plastic_strain": np.zeros(n)}
+    size = rng.uniform(0.0002, 0.006, (n, 1, 1))  # from elastic to far beyond yield
+    dF = np.eye(gdim) + size * rng.normal(0, 1, (n, gdim, gdim))
+    result = mat.return_map(dF, history)
+    assert len(np.unique(result.region)) >= (5 if phi > 0 else 4)
+    h = 1e-7
+    for k, l in np.ndindex(gdim, gdim):
+        E = np.zeros((gdim, gdim))
+        E[k, l] = h
+        fd = (mat.return_map(dF + E, history).tau - mat.return_map(dF - E, history).tau) / (2 * h)
+        assert np.abs(fd - result.tangent[..., k, l]).max() < 1e-7 * mat.E
+
+
+def test_virgin_tangent_is_linear_elasticity():
+    """At b = I (all eigenvalues equal) the repeated-eigenvalue limit gives λ, 2G exactly."""
+    mat = fe_mpm.MohrCoulomb(**SOIL, friction_angle=30.0)
+    D = MaterialDriver(mat, n=1, gdim=3).evaluate(np.eye(3)[None])["tangent"][0]
+    lam = mat.bulk_modulus - 2 * mat.mu / 3
+    I = np.eye(3)
+    C = lam * np.einsum("ij,kl->ijkl", I, I) + mat.mu * (
+        np.einsum("ik,jl->ijkl", I, I) + np.einsum("il,jk->ijkl", I, I))
+    assert np.allclose(D, C, rtol=0, atol=1e-10 * mat.E)
+
+
+TAYLOR_EPS = (2e-5, 1e-5, 5e-6, 2.5e-6)
+
+
+@pytest.mark.parametrize("formulation, phi", [("u", 30.0), ("u", 0.0), ("up", 0.0)])
+@pytest.mark.parametrize("dim", [2, 3])
+def test_step_residual_and_jacobian_are_consistent(dim, formulation, phi):
+    """Taylor test of an assembled step with points in several return regions.
+
+    The return map is piecewise smooth, so ε is kept small enough that no point
+    changes region, and that is asserted.
+    """
+    mat = fe_mpm.MohrCoulomb(10.0, 0.3, 0.05, friction_angle=phi, dilatancy_angle=phi / 3)
+    rng, sim = _simulation(dim, formulation, material=mat)
+    _, _, R, J, _ = sim.prepare_step(1.0)
+    sim.w.x.array[:] = rng.uniform(-0.02, 0.02, sim.w.x.array.size)
+    regions = []
+
+    def refresh():
+        regions.append(sim.refresh_material().region.copy())
+
+    d = rng.uniform(-1.0, 1.0, sim.w.x.array.size)
+    r0, r1 = taylor_remainders(R, J, sim.w, d, TAYLOR_EPS, before_assembly=refresh)
+    assert all(np.array_equal(regions[0], r) for r in regions)
+    assert len(np.unique(regions[0])) >= 3
+    assert np.all(rates(TAYLOR_EPS, r0) > 0.9)
+    assert np.all(rates(TAYLOR_EPS, r1) > 1.9), f"remainders {r1}"
+
+
+def test_mixed_formulation_refuses_a_frictional_law():
+    with pytest.raises(ValueError, match="friction_angle = dilatancy_angle = 0"):
+        _simulation(2, "up", material=fe_mpm.MohrCoulomb(10.0, 0.3, 0.05, friction_angle=20.0))
+
+
+@pytest.mark.parametrize("bad, match", [
+    (dict(friction_angle=95.0), "friction_angle must lie in"),
+    (dict(friction_angle=20.0, dilatancy_angle=25.0), "dilatancy_angle must lie in"),
+    (dict(cohesion=-1.0), "cohesion must lie in"),
+    (dict(cohesion=0.0), "cohesion must be > 0 when friction_angle = 0"),
+])
+def test_bad_parameters_are_named(bad, match):
+    with pytest.raises(ValueError, match=match):
+        fe_mpm.MohrCoulomb(**{**dict(E=1e4, nu=0.3, cohesion=10.0), **bad})
