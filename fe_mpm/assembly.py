@@ -11,7 +11,7 @@ import numpy as np
 import ufl
 
 from fe_mpm._dolfinx import dolfinx
-from fe_mpm.quadrature import OCCUPIED
+from fe_mpm.quadrature import BOUNDARY_POINTS, OCCUPIED
 
 IntegralType = dolfinx.fem.IntegralType
 
@@ -51,10 +51,17 @@ class StepForm:
             for tag, facets in sorted((facet_domains or {}).items())
         ]
 
-    def bind(self, cells: np.ndarray) -> dolfinx.fem.Form:
-        """The DOLFINx form integrating the material points of ``cells``."""
+    def bind(self, cells: np.ndarray, boundary_cells: np.ndarray | None = None) -> dolfinx.fem.Form:
+        """The DOLFINx form integrating the material points of ``cells``.
+
+        ``boundary_cells`` are the cells of the penalty boundary points (subdomain
+        :data:`~fe_mpm.quadrature.BOUNDARY_POINTS`), for forms that have that integral.
+        """
+        cell_domains = [(OCCUPIED, np.asarray(cells, dtype=np.int32))]
+        if boundary_cells is not None:
+            cell_domains.append((BOUNDARY_POINTS, np.asarray(boundary_cells, dtype=np.int32)))
         subdomains = {
-            IntegralType.cell: [(OCCUPIED, np.asarray(cells, dtype=np.int32))],
+            IntegralType.cell: cell_domains,
             IntegralType.exterior_facet: list(self._facets),
         }
         return dolfinx.fem.create_form(

@@ -88,3 +88,41 @@ def boundary_facets(
     if facets.size == 0:
         raise ValueError("boundary marker selects no exterior facets")
     return np.asarray(facets, dtype=np.int32)
+
+
+@dataclass(frozen=True)
+class PointDirichlet:
+    """Prescribed displacement at boundary points, imposed by a penalty (non-conforming).
+
+    The grid does not follow a moving boundary such as a rigid footing, so no
+    grid node lies on it. Kratos MPM imposes such conditions through boundary
+    material points with a penalty; so does this. Each boundary point is convected
+    with the grid solution like a material point, and the penalty pulls it onto its
+    target ``x₀ + value(t)``: the step adds ``Σ_b β w_b (x_b + Δu(x_b) − x_b^target)·δu(x_b)``
+    (constrained components only) to the residual. The gap left is about
+    ``load / β``; it does not accumulate over steps.
+
+    Args:
+        name: Name of the condition; its force on the body is reported in
+            ``StepReport.reactions[name]`` (N, per unit thickness in 2D).
+        x: Initial positions of the boundary points (n, g), m.
+        weight: Boundary measure each point represents (n,): length (m) in 2D,
+            area (m²) in 3D, > 0.
+        value: Total prescribed displacement of the boundary at time ``t`` (m), a
+            vector of length g (a rigid motion: the same for every point).
+        components: Constrained components, e.g. ``(1,)`` for a smooth footing;
+            None constrains all (a rough footing).
+        penalty: Penalty stiffness β (Pa/m), > 0. About 10³ E/h (E Young's modulus,
+            h cell size) keeps the gap negligible and the tangent well conditioned.
+    """
+
+    name: str
+    x: np.ndarray
+    weight: np.ndarray
+    value: Callable[[float], Sequence[float]]
+    penalty: float
+    components: tuple[int, ...] | None = None
+
+    def at(self, t: float) -> np.ndarray:
+        """Prescribed displacement at time ``t``, shape (g,)."""
+        return np.asarray(self.value(t), dtype=np.float64)

@@ -24,7 +24,6 @@ import numpy as np
 import ufl
 
 from fe_mpm._dolfinx import dolfinx
-from fe_mpm.particles import MaterialPoints
 
 #: Slot counts are rounded up to one of these, so a slowly growing maximum
 #: count per cell recompiles rarely and hits the FFCx disk cache.
@@ -32,6 +31,8 @@ SLOT_BUCKETS = (1, 2, 3, 4, 6, 8, 12, 16, 24, 32, 48, 64, 96, 128, 192, 256)
 
 #: Subdomain id of the occupied cells in every material-point integral.
 OCCUPIED = 1
+#: Subdomain id of the cells holding boundary (penalty) points.
+BOUNDARY_POINTS = 2
 
 
 def bucket(count: int) -> int:
@@ -81,9 +82,11 @@ class MaterialPointQuadrature:
     Args:
         mesh: Affine triangle or tetrahedron mesh.
         nslot: Slots per cell (≥ the largest number of points in a cell).
+        subdomain_id: Cell subdomain id of the integral (:data:`OCCUPIED` for the
+            material points, :data:`BOUNDARY_POINTS` for penalty points).
     """
 
-    def __init__(self, mesh: dolfinx.mesh.Mesh, nslot: int):
+    def __init__(self, mesh: dolfinx.mesh.Mesh, nslot: int, subdomain_id: int = OCCUPIED):
         self.mesh = mesh
         self.nslot = nslot
         cell = basix.CellType[mesh.topology.cell_name()]
@@ -95,7 +98,7 @@ class MaterialPointQuadrature:
         self.dx = ufl.Measure(
             "dx",
             domain=mesh,
-            subdomain_id=OCCUPIED,
+            subdomain_id=subdomain_id,
             metadata={
                 "quadrature_rule": "custom",
                 "quadrature_points": self.points,
@@ -173,19 +176,27 @@ class MaterialPointQuadrature:
         arr[self.slot_dofs(f, layout)] = values.reshape(values.shape[0], bs)
 
     def pack_geometry(
-        self, points: MaterialPoints, layout: SlotLayout, centroids: np.ndarray, volumes: np.ndarray
+        self,
+        x: np.ndarray,
+        weights: np.ndarray,
+        layout: SlotLayout,
+        centroids: np.ndarray,
+        volumes: np.ndarray,
     ) -> None:
         """Set the offset and volume scale of every slot from the points.
 
         Args:
-            points: The material points.
+            x: Point positions, shape ``(n, g)`` (m).
+            weights: What :meth:`sum` weighs each point by, shape ``(n,)``: the
+                volume ``V_p`` of a material point, or the length/area of a
+                boundary point.
             layout: Their cells and slots.
             centroids: Physical centroid of every cell, shape ``(ncells, g)``.
             volumes: Volume ``|K|`` of every cell, shape ``(ncells,)``.
         """
-        self.pack(self.offset, layout, points.x - centroids[layout.cell])
+        self.pack(self.offset, layout, x - centroids[layout.cell])
         # w_s |det J| = |K| / nslot
-        self.pack(self.scale, layout, points.volume * self.nslot / volumes[layout.cell])
+        self.pack(self.scale, layout, weights * self.nslot / volumes[layout.cell])
 
     def evaluate(
         self, expression: dolfinx.fem.Expression, layout: SlotLayout

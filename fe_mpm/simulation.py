@@ -28,16 +28,19 @@ import ufl
 
 from fe_mpm._dolfinx import dolfinx
 from fe_mpm.assembly import StepForm
-from fe_mpm.boundary import Dirichlet, Traction, boundary_facets
+from fe_mpm.boundary import Dirichlet, PointDirichlet, Traction, boundary_facets
 from fe_mpm.checks import check_choice, check_range
 from fe_mpm.errors import ConvergenceError, PointsOutsideError
-from fe_mpm.forms import displacement, inertia, mixed_up
+from fe_mpm.forms import displacement, inertia, mixed_up, penalty
 from fe_mpm.formulations import FORMULATIONS, GridFields, collapse, constrained_space
 from fe_mpm.io import ParticleWriter
 from fe_mpm.materials import Linearisation, PointState, ReturnMapResult
 from fe_mpm.newton import NewtonSolver
 from fe_mpm.particles import MaterialPoints, simplex_cell_type
-from fe_mpm.quadrature import OCCUPIED, MaterialPointQuadrature, SlotLayout, bucket
+from fe_mpm.penalty_points import PenaltyPoints
+from fe_mpm.quadrature import (
+    BOUNDARY_POINTS, OCCUPIED, MaterialPointQuadrature, SlotLayout, bucket,
+)
 from fe_mpm.tracker import Tracker
 
 
@@ -72,7 +75,7 @@ class StepReport:
 class _SlotForms:
     """Everything that depends on the slot count: quadrature, data fields, compiled forms."""
 
-    def __init__(self, sim: Simulation, nslot: int):
+    def __init__(self, sim: Simulation, nslot: int, nslot_boundary: int = 0):
         mesh, g = sim.mesh, sim.gdim
         spec, fields, material = sim.spec, sim.fields, sim.material
         deg = spec.u_degree
@@ -106,6 +109,14 @@ class _SlotForms:
                 du, w, q, self.F_n, self.density, lambda F: material.kirchhoff(F, state),
                 sim._body_force, sim._traction_terms,
             )
+        self.q_boundary = None
+        if nslot_boundary:
+            # Boundary points with a prescribed displacement (penalty), their own rule.
+            qb = self.q_boundary = MaterialPointQuadrature(mesh, nslot_boundary, BOUNDARY_POINTS)
+            self.gap = qb.function((g,), "gap")
+            self.penalty_stiffness = qb.function((g,), "penalty")
+            R += penalty.penalty(du, w, qb, self.gap, self.penalty_stiffness)
+            self.du_at_boundary = dolfinx.fem.Expression(qb.at_points(du), qb.points)
         self.lumping = q.function((g, g), "second_moment") if sim.mass == "lumped" else None
         if sim._newmark is not None:
             R += inertia.inertia(du, w, q, self.density, sim._newmark, self.lumping)
@@ -166,6 +177,9 @@ class Simulation:
             see :mod:`fe_mpm.formulations`.
         dirichlet: Prescribed grid displacements.
         tractions: Surface tractions on grid facets.
+        point_dirichlet: Prescribed displacements at boundary points that the grid
+            does not follow (e.g. a rigid footing), imposed by a penalty; their
+            forces on the body are reported in ``StepReport.reactions``.
         body_force: Body force per unit mass (m/s², length g), e.g. gravity.
         body_force_scale: Load factor of the body force as a function of time,
             ``t -> float``; constant 1 if None (e.g. ``lambda t: t`` to ramp
@@ -200,6 +214,7 @@ class Simulation:
         *,
         dirichlet: Sequence[Dirichlet] = (),
         tractions: Sequence[Traction] = (),
+        point_dirichlet: Sequence[PointDirichlet] = (),
         body_force: Sequence[float] | None = None,
         body_force_scale: Callable[[float], float] | None = None,
         facet_tags: dolfinx.mesh.MeshTags | None = None,
@@ -326,6 +341,9 @@ class Simulation:
                 dofs = dolfinx.fem.locate_dofs_topological((sub_c, collapsed), fdim, facets)
                 comps.append(np.asarray(dofs[0], dtype=np.int32))
             self._reactions[name] = comps
+
+        self._penalty_points = PenaltyPoints(point_dirichlet, g) if point_dirichlet else None
+        self._boundary_layout = None
 
         self._ppp = None
         if self.spec.ppp:
@@ -467,6 +485,7 @@ class Simulation:
 
         self.refresh_material()  # at the converged iterate, for the reactions and history
         reactions = self._reaction_forces(R)
+        reactions.update(self._convect_boundary_points(forms, t_new))
         t0 = time.perf_counter()
         self._convect(forms, layout, step=k, t=t_new, dt=dt)
         self._add_time("update", t0)
@@ -497,12 +516,14 @@ class Simulation:
 
         t0 = time.perf_counter()
         nslot = bucket(layout.max_count)
-        forms = self._forms.get(nslot) or self._compile(nslot)
+        boundary = self._locate_boundary_points(layout, t_new)
+        nslot_b = bucket(max(boundary.max_count, 1)) if boundary is not None else 0
+        forms = self._forms.get((nslot, nslot_b)) or self._compile(nslot, nslot_b)
         self._add_time("compile", t0)
 
         t0 = time.perf_counter()
         q, pts = forms.q, self.points
-        q.pack_geometry(pts, layout, self.tracker.centroids, self.tracker.volumes)
+        q.pack_geometry(pts.x, pts.volume, layout, self.tracker.centroids, self.tracker.volumes)
         q.pack(forms.F_n, layout, pts.F, empty=np.eye(self.gdim))
         q.pack(forms.density, layout, pts.density)
         for name, h in self.material.history.items():
@@ -513,8 +534,12 @@ class Simulation:
             fill = self._ppp.fill
             volume = np.bincount(layout.cell, weights=pts.volume, minlength=self.tracker.num_cells)
             fill.x.array[fill.function_space.dofmap.list[:, 0]] = volume / self.tracker.volumes
-        R = forms.residual.bind(layout.occupied)
-        J = forms.jacobian.bind(layout.occupied)
+        boundary_cells = None
+        if boundary is not None:
+            boundary_cells = boundary.occupied
+            self._pack_boundary_points(forms, boundary, t_new)
+        R = forms.residual.bind(layout.occupied, boundary_cells)
+        J = forms.jacobian.bind(layout.occupied, boundary_cells)
         bcs = self._boundary_conditions(layout, self.t, t_new)
         if self._newmark is not None:
             self._project_to_grid(layout, t_new - self.t)
@@ -599,16 +624,60 @@ class Simulation:
             "into otherwise empty cells; a coarser grid or a dynamic analysis avoids it. "
         )
 
-    def _compile(self, nslot: int) -> _SlotForms:
-        forms = _SlotForms(self, nslot)
-        self._forms[nslot] = forms
+    def _compile(self, nslot: int, nslot_boundary: int) -> _SlotForms:
+        forms = _SlotForms(self, nslot, nslot_boundary)
+        self._forms[(nslot, nslot_boundary)] = forms
         return forms
+
+    def _locate_boundary_points(self, layout: SlotLayout, t_new: float) -> SlotLayout | None:
+        """Slot layout of the penalty points that lie in occupied cells.
+
+        The others (e.g. a footing point above the soil) take no part in the step
+        and follow their target until material reaches them.
+        """
+        pp = self._penalty_points
+        if pp is None:
+            return None
+        cells = self.tracker.locate(pp.x)
+        if np.any(cells < 0):
+            first = np.flatnonzero(cells < 0)[0]
+            raise PointsOutsideError(
+                f"boundary point {first} of PointDirichlet "
+                f"{pp.conditions[pp.owner[first]].name!r} at x = {pp.x[first]} is outside the grid "
+                f"(step to t = {t_new:g})")
+        occupied = np.zeros(self.tracker.num_cells, dtype=bool)
+        occupied[layout.occupied] = True
+        cells = self.tracker.snap_to(pp.x, cells, occupied)
+        self._boundary_active = cells >= 0
+        self._boundary_layout = SlotLayout.from_cells(cells[self._boundary_active])
+        return self._boundary_layout
+
+    def _pack_boundary_points(self, forms: _SlotForms, layout: SlotLayout, t_new: float) -> None:
+        pp, active, qb = self._penalty_points, self._boundary_active, forms.q_boundary
+        qb.pack_geometry(pp.x[active], pp.weight[active], layout, self.tracker.centroids,
+                         self.tracker.volumes)
+        self._boundary_gap = pp.x[active] - pp.targets(t_new)[active]
+        qb.pack(forms.gap, layout, self._boundary_gap)
+        qb.pack(forms.penalty_stiffness, layout, pp.stiffness[active])
+
+    def _convect_boundary_points(self, forms: _SlotForms, t_new: float) -> dict[str, np.ndarray]:
+        """Move the penalty points with the grid solution; return each condition's force."""
+        pp = self._penalty_points
+        if pp is None:
+            return {}
+        active = self._boundary_active
+        du = forms.q_boundary.evaluate(forms.du_at_boundary, self._boundary_layout)
+        forces = pp.forces(self._boundary_gap + du, active)
+        pp.x[active] += du
+        pp.x[~active] = pp.targets(t_new)[~active]  # outside the material: follow the target
+        return forces
 
     def _newton_solver(self, forms: _SlotForms) -> NewtonSolver:
         if self._newton is None:
             all_cells = np.arange(self.tracker.num_cells, dtype=np.int32)
+            boundary_cells = all_cells if forms.q_boundary is not None else None
             self._newton = NewtonSolver(
-                self.w, forms.jacobian.bind(all_cells),
+                self.w, forms.jacobian.bind(all_cells, boundary_cells),
                 prefix=f"fe_mpm_{self.formulation.replace('-', '_')}_",
                 petsc_options=self.petsc_options, timings=self.timings,
             )

@@ -47,7 +47,9 @@ class Tracker:
         #: Volume (area in 2D) of every cell, shape (nc,).
         self.volumes = np.abs(np.linalg.det(jac)) / math.factorial(tdim)
         self.neighbours = _facet_neighbours(nodes_of)
+        self._nodes_of = nodes_of
         self._tree = None  # built on first need
+        self._node_cells = None  # node -> cells (CSR), built on first need
 
     def barycentric(self, x: np.ndarray, cells: np.ndarray) -> np.ndarray:
         """Barycentric coordinates of points ``x`` (n, g) in ``cells`` (n,), shape (n, t+1).
@@ -79,6 +81,43 @@ class Tracker:
         if todo.size:
             cells[todo] = self._tree_search(x[todo])
         return cells
+
+    def snap_to(self, x: np.ndarray, cells: np.ndarray, allowed: np.ndarray,
+                tol: float = 1e-6) -> np.ndarray:
+        """Move points whose cell is not ``allowed`` to an allowed cell touching it, if close.
+
+        A point on a facet between an empty and an occupied cell belongs to
+        either; boundary points must read the occupied one. Among the allowed
+        cells sharing a vertex with the point's cell, the one with the largest
+        smallest barycentric coordinate is taken if that is ≥ −tol.
+
+        Args:
+            x: Points (n, g).
+            cells: Their cells (n,), from :meth:`locate`.
+            allowed: Boolean mask over all cells.
+            tol: How far outside an allowed cell a point may be, in barycentric units.
+
+        Returns:
+            Cells (n,): the allowed cell, or -1 where none is close enough.
+        """
+        out = np.where(allowed[np.maximum(cells, 0)] & (cells >= 0), cells, -1).astype(np.int32)
+        if self._node_cells is None:
+            flat = self._nodes_of.ravel()
+            order = np.argsort(flat, kind="stable")
+            starts = np.searchsorted(flat[order], np.arange(flat.max() + 2))
+            self._node_cells = (order // self._nodes_of.shape[1], starts)
+        owner, starts = self._node_cells
+        for i in np.flatnonzero((out < 0) & (cells >= 0)):
+            nodes = self._nodes_of[cells[i]]
+            candidates = np.unique(np.concatenate([owner[starts[v]:starts[v + 1]] for v in nodes]))
+            candidates = candidates[allowed[candidates]]
+            if candidates.size == 0:
+                continue
+            lam = self.barycentric(np.repeat(x[i : i + 1], candidates.size, axis=0), candidates)
+            best = np.argmax(lam.min(axis=1))
+            if lam[best].min() >= -tol:
+                out[i] = candidates[best]
+        return out
 
     def _walk(self, x: np.ndarray, cells: np.ndarray, active: np.ndarray) -> np.ndarray:
         """Walk the points ``active`` from ``cells`` in place; return those not settled."""

@@ -37,7 +37,7 @@ def _setup(dim, seed=1, F_spread=0.0):
     layout = SlotLayout.from_cells(cells)
     q = MaterialPointQuadrature(mesh, bucket(layout.max_count))
     tracker = Tracker(mesh)
-    q.pack_geometry(pts, layout, tracker.centroids, tracker.volumes)
+    q.pack_geometry(pts.x, pts.volume, layout, tracker.centroids, tracker.volumes)
     return rng, mesh, pts, layout, q
 
 

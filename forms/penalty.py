@@ -1,0 +1,37 @@
+r"""Penalty term of boundary points with a prescribed displacement (non-conforming Dirichlet).
+
+For boundary points :math:`b` with weight :math:`w_b` (the boundary length or
+area each represents), penalty stiffness :math:`\beta` and the gap
+:math:`g_b = x_b - x_b^{target}(t_{n+1})` at the start of the step,
+
+.. math::  R_{pen} = \sum_b w_b\, \beta\, P_b \big(g_b + \Delta u(x_b)\big) \cdot \delta u(x_b),
+
+where :math:`P_b` keeps the constrained components. It is linear in
+:math:`\Delta u`, so its tangent is the constant :math:`\sum_b w_b \beta\, N^T P_b N`.
+"""
+
+from __future__ import annotations
+
+import ufl
+
+from fe_mpm.quadrature import MaterialPointQuadrature
+
+
+def penalty(
+    du: ufl.core.expr.Expr,
+    w: ufl.core.expr.Expr,
+    q: MaterialPointQuadrature,
+    gap: ufl.Coefficient,
+    stiffness: ufl.Coefficient,
+) -> ufl.Form:
+    """The penalty residual.
+
+    Args:
+        du: Grid displacement increment (P1).
+        w: Displacement test function.
+        q: Quadrature of the boundary points (its scale carries w_b).
+        gap: Slot field g_b (g,), m.
+        stiffness: Slot field β P_b as a vector (g,): β on constrained components, 0 else (Pa/m).
+    """
+    mismatch = gap + q.at_points(du)
+    return q.sum(ufl.dot(ufl.elem_mult(stiffness, mismatch), q.at_points(w)))
