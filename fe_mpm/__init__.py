@@ -21,7 +21,7 @@ from fe_mpm import _dolfinx  # noqa: F401, I001
 from fe_mpm.boundary import Dirichlet, PointDirichlet, Traction
 from fe_mpm.errors import ConvergenceError, PointsOutsideError
 from fe_mpm.materials import J2Plasticity, MohrCoulomb, NeoHookean
-from fe_mpm.particles import MaterialPoints, seed
+from fe_mpm.particles import MaterialPoints, merge, seed
 from fe_mpm.simulation import Simulation, StepReport
 
 __version__ = "0.1.0"
@@ -38,5 +38,6 @@ __all__ = [
     "Simulation",
     "StepReport",
     "Traction",
+    "merge",
     "seed",
 ]

@@ -29,3 +29,26 @@ def pressure_oscillation(sim: Simulation) -> float:
     )
     lo, hi = np.percentile(p[np.unique(cells)], [5, 95])
     return float(np.mean(jumps) / (hi - lo))
+
+
+def stress_oscillation(x: np.ndarray, values: np.ndarray, neighbours: int = 8) -> float:
+    """RMS deviation of a per-point field from the mean of each point's nearest neighbours.
+
+    A field that varies smoothly over the points gives a small value (of the order
+    of its gradient times the point spacing); point-to-point scatter, e.g. the
+    locked stress of the u form at near incompressibility, gives a value of the
+    order of the scatter. Same units as ``values``.
+
+    Args:
+        x: Point positions (n, g).
+        values: One value per point (n,).
+        neighbours: How many nearest points make the local mean.
+    """
+    n = x.shape[0]
+    if n <= neighbours:
+        raise ValueError(f"stress_oscillation: need more than {neighbours} points, got {n}")
+    d2 = np.sum((x[:, None, :] - x[None, :, :]) ** 2, axis=2)
+    np.fill_diagonal(d2, np.inf)
+    nearest = np.argpartition(d2, neighbours, axis=1)[:, :neighbours]
+    local_mean = values[nearest].mean(axis=1)
+    return float(np.sqrt(np.mean((values - local_mean) ** 2)))

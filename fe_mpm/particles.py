@@ -181,6 +181,18 @@ def seed(
     )
 
 
+def merge(*sets: MaterialPoints) -> MaterialPoints:
+    """One set of undeformed points from several seeds (e.g. zones seeded at other densities)."""
+    if not sets:
+        raise ValueError("merge: no point sets given")
+    return MaterialPoints(
+        x=np.vstack([s.x for s in sets]),
+        volume=np.concatenate([s.volume for s in sets]),
+        mass=np.concatenate([s.mass for s in sets]),
+        cell=np.concatenate([s.cell for s in sets]),
+    )
+
+
 def simplex_cell_type(mesh: dolfinx.mesh.Mesh) -> basix.CellType:
     """The basix cell type of an affine simplex mesh; a clear error for anything else."""
     name = mesh.topology.cell_name()

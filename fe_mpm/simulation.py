@@ -39,7 +39,11 @@ from fe_mpm.newton import NewtonSolver
 from fe_mpm.particles import MaterialPoints, simplex_cell_type
 from fe_mpm.penalty_points import PenaltyPoints
 from fe_mpm.quadrature import (
-    BOUNDARY_POINTS, OCCUPIED, MaterialPointQuadrature, SlotLayout, bucket,
+    BOUNDARY_POINTS,
+    OCCUPIED,
+    MaterialPointQuadrature,
+    SlotLayout,
+    bucket,
 )
 from fe_mpm.tracker import Tracker
 
@@ -647,7 +651,9 @@ class Simulation:
                 f"(step to t = {t_new:g})")
         occupied = np.zeros(self.tracker.num_cells, dtype=bool)
         occupied[layout.occupied] = True
-        cells = self.tracker.snap_to(pp.x, cells, occupied)
+        # The body's surface lies between its points, often in a cell whose points
+        # have moved on: read the field of an occupied neighbour, up to half a cell out.
+        cells = self.tracker.snap_to(pp.x, cells, occupied, tol=0.5)
         self._boundary_active = cells >= 0
         self._boundary_layout = SlotLayout.from_cells(cells[self._boundary_active])
         return self._boundary_layout

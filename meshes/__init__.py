@@ -24,6 +24,16 @@ from fe_mpm.meshes.cook import (
     cook_membrane,
 )
 from fe_mpm.meshes.disk import disk
+from fe_mpm.meshes.footing import (
+    FOOTING_BASE,
+    FOOTING_FAR_SIDE,
+    FOOTING_MARGIN,
+    FOOTING_SOIL,
+    FOOTING_SOIL_NEAR,
+    FOOTING_SYMMETRY,
+    footing_points,
+    strip_footing,
+)
 from fe_mpm.meshes.gmsh_session import gmsh_session
 from fe_mpm.meshes.rectangle import rectangle_mesh
 from fe_mpm.meshes.tension import (
@@ -50,6 +60,14 @@ __all__ = [
     "COOK_POINT_A",
     "cook_membrane",
     "disk",
+    "FOOTING_BASE",
+    "FOOTING_FAR_SIDE",
+    "FOOTING_MARGIN",
+    "FOOTING_SOIL",
+    "FOOTING_SOIL_NEAR",
+    "FOOTING_SYMMETRY",
+    "footing_points",
+    "strip_footing",
     "gmsh_session",
     "rectangle_mesh",
     "TENSION_BOTTOM",

@@ -131,7 +131,7 @@ class MohrCoulomb:
         ret = mohr_coulomb_return(surface, strain)
         tau = from_principal(ret.stress, Q)
         dy_dx = ret.tangent / (2.0 * x[:, None, :])  # ∂ε_B/∂x_B = 1/(2 x_B)
-        tangent = derivative_wrt_dF(x, Q, ret.stress, dy_dx, F3, b_n)[..., :g, :g]
+        tangent = derivative_wrt_dF(x, Q, ret.stress, dy_dx, F3, b_n, g)
 
         elastic = ret.region == ELASTIC
         strain_e = ret.stress @ surface.compliance

@@ -40,9 +40,9 @@ def from_principal(values: np.ndarray, Q: np.ndarray) -> np.ndarray:
 
 def derivative_wrt_dF(
     x: np.ndarray, Q: np.ndarray, y: np.ndarray, dy_dx: np.ndarray,
-    dF: np.ndarray, b_n: np.ndarray,
+    dF: np.ndarray, b_n: np.ndarray, g: int = 3,
 ) -> np.ndarray:
-    """∂τ_ij/∂ΔF_kl (n, 3, 3, 3, 3) of τ = Σ y_A(x) n_A⊗n_A with b^tr = ΔF b_n ΔFᵀ.
+    """∂τ_ij/∂ΔF_kl (n, 3, 3, g, g) of τ = Σ y_A(x) n_A⊗n_A with b^tr = ΔF b_n ΔFᵀ.
 
     Args:
         x: Eigenvalues of b^tr (n, 3).
@@ -51,6 +51,8 @@ def derivative_wrt_dF(
         dy_dx: ∂y_A/∂x_B (n, 3, 3).
         dF: ΔF embedded in 3D (n, 3, 3).
         b_n: b^e at t_n (n, 3, 3), symmetric.
+        g: How many leading components of ΔF vary (2 in plane strain, where
+            ΔF_33 = 1); the derivative is returned for those only.
     """
     n = x.shape[0]
     theta = np.zeros((n, 3, 3))
@@ -62,12 +64,13 @@ def derivative_wrt_dF(
         quotient = (y[:, A] - y[:, B]) / np.where(close, 1.0, gap)
         theta[:, A, B] = theta[:, B, A] = np.where(close, limit, quotient)
     # db'_AB/dΔF_kl = Q_kA M_lB + M_lA Q_kB with M = b_n ΔFᵀ Q.
-    M = b_n @ np.swapaxes(dF, 1, 2) @ Q
-    db = np.einsum("nka,nlb->nabkl", Q, M)
-    db = db + np.swapaxes(db, 1, 2)
-    db_diag = np.einsum("naakl->nakl", db)
-    dtau = theta[:, :, :, None, None] * db
-    diag = np.einsum("nab,nbkl->nakl", dy_dx, db_diag)
+    M = (b_n @ np.swapaxes(dF, 1, 2) @ Q)[:, :g]
+    Qg = Q[:, :g]
+    # Work with (n, k, l, a, b) so that the rotations are batched 3x3 matmuls.
+    db = Qg[:, :, None, :, None] * M[:, None, :, None, :]
+    db = db + np.swapaxes(db, 3, 4)
     idx = np.arange(3)
-    dtau[:, idx, idx] = diag
-    return np.einsum("nia,njb,nabkl->nijkl", Q, Q, dtau)
+    dtau = theta[:, None, None] * db
+    dtau[..., idx, idx] = np.einsum("nab,nklb->nkla", dy_dx, db[..., idx, idx])
+    rotated = Q[:, None, None] @ dtau @ np.swapaxes(Q, 1, 2)[:, None, None]
+    return np.moveaxis(rotated, (1, 2), (3, 4))

@@ -1,0 +1,145 @@
+"""Half model of a plane-strain rigid strip footing on a soil layer (Iaconeta 2019 §6.2).
+
+The grid covers the soil ``[0, width] x [−depth, 0]`` and an empty strip
+``[0, width] x [0, margin]`` above it, into which the soil beside the footing
+heaves. The footing (half-width ``B/2``) sits on the surface y = 0 at x ∈ [0, B/2];
+x = 0 is the symmetry line. A zone ``[0, near_width] x [−near_depth, 0]`` below
+the footing is tagged separately so that it can be seeded with more material
+points, as the thesis does (12 per cell there, fewer elsewhere). The grid lines
+y = 0 and the zone's edges are meshed conformingly, so seeding by cell tag fills
+the soil exactly.
+"""
+
+from __future__ import annotations
+
+from mpi4py import MPI
+
+import gmsh
+import numpy as np
+
+from fe_mpm.checks import check_range
+from fe_mpm.meshes.gmsh_session import gmsh_session, to_dolfinx
+
+#: Facet tag of the symmetry line x = 0.
+FOOTING_SYMMETRY = 1
+#: Facet tag of the far side x = width.
+FOOTING_FAR_SIDE = 2
+#: Facet tag of the fixed base y = −depth.
+FOOTING_BASE = 3
+#: Cell tag of the soil near the footing (the refined seeding zone).
+FOOTING_SOIL_NEAR = 1
+#: Cell tag of the rest of the soil.
+FOOTING_SOIL = 2
+#: Cell tag of the empty strip above the soil.
+FOOTING_MARGIN = 3
+
+
+def strip_footing(
+    B: float = 1.0,
+    *,
+    width: float | None = None,
+    depth: float | None = None,
+    margin: float | None = None,
+    near_width: float | None = None,
+    near_depth: float | None = None,
+    h: float = 0.05,
+    h_far: float | None = None,
+    comm: MPI.Comm = MPI.COMM_WORLD,
+):
+    """Unstructured triangle grid of the footing scene.
+
+    Args:
+        B: Footing width (m); the model holds its half, B/2.
+        width: Grid width from the symmetry line (m); 5B by default.
+        depth: Soil depth (m); 5B by default.
+        margin: Height of the empty strip above the soil (m); B by default.
+        near_width: Width of the refined seeding zone (m); 1.5B by default.
+        near_depth: Depth of the refined seeding zone (m); 3B by default (the
+            footing ends 2B down).
+        h: Cell size in the refined zone and the margin above it (m); 0.05 by default.
+        h_far: Cell size far from it (m); ``h`` by default (a uniform grid).
+        comm: MPI communicator.
+
+    Returns:
+        ``dolfinx.io.gmsh.MeshData`` with ``cell_tags`` (:data:`FOOTING_SOIL_NEAR`,
+        :data:`FOOTING_SOIL`, :data:`FOOTING_MARGIN`) and ``facet_tags``
+        (:data:`FOOTING_SYMMETRY`, :data:`FOOTING_FAR_SIDE`, :data:`FOOTING_BASE`).
+    """
+    check_range("strip_footing", "B", B, lo=0.0, lo_open=True)
+    width = check_range("strip_footing", "width", 5 * B if width is None else width,
+                        lo=B / 2, lo_open=True)
+    depth = check_range("strip_footing", "depth", 5 * B if depth is None else depth,
+                        lo=0.0, lo_open=True)
+    margin = check_range("strip_footing", "margin", B if margin is None else margin,
+                         lo=0.0, lo_open=True)
+    near_width = check_range("strip_footing", "near_width",
+                             1.5 * B if near_width is None else near_width,
+                             lo=0.0, hi=width, lo_open=True, hi_open=True)
+    near_depth = check_range("strip_footing", "near_depth",
+                             3 * B if near_depth is None else near_depth,
+                             lo=0.0, hi=depth, lo_open=True, hi_open=True)
+    check_range("strip_footing", "h", h, lo=0.0, hi=min(near_width, margin), lo_open=True)
+    h_far = check_range("strip_footing", "h_far", h if h_far is None else h_far, lo=h)
+    with gmsh_session("strip_footing") as model:
+        if comm.rank == 0:
+            occ = model.occ
+            near = occ.addRectangle(0.0, -near_depth, 0.0, near_width, near_depth)
+            soil = occ.addRectangle(0.0, -depth, 0.0, width, depth)
+            above = occ.addRectangle(0.0, 0.0, 0.0, width, margin)
+            out, _ = occ.fragment([(2, soil)], [(2, near), (2, above)])
+            occ.synchronize()
+            tags = {FOOTING_SOIL_NEAR: [], FOOTING_SOIL: [], FOOTING_MARGIN: []}
+            for _, s in out:
+                x, y, _ = occ.getCenterOfMass(2, s)
+                if y > 0:
+                    tags[FOOTING_MARGIN].append(s)
+                elif x < near_width and y > -near_depth:
+                    tags[FOOTING_SOIL_NEAR].append(s)
+                else:
+                    tags[FOOTING_SOIL].append(s)
+            sides = {FOOTING_SYMMETRY: [], FOOTING_FAR_SIDE: [], FOOTING_BASE: []}
+            tol = 1e-6 * max(width, depth)  # OCC bounding boxes carry a small tolerance
+            for _, c in model.getEntities(1):
+                x, y, _ = occ.getCenterOfMass(1, c)
+                lo, hi = occ.getBoundingBox(1, c)[:3], occ.getBoundingBox(1, c)[3:]
+                if hi[0] - lo[0] < tol and abs(x) < tol:
+                    sides[FOOTING_SYMMETRY].append(c)
+                elif hi[0] - lo[0] < tol and abs(x - width) < tol:
+                    sides[FOOTING_FAR_SIDE].append(c)
+                elif hi[1] - lo[1] < tol and abs(y + depth) < tol:
+                    sides[FOOTING_BASE].append(c)
+            names = {FOOTING_SYMMETRY: "symmetry", FOOTING_FAR_SIDE: "far_side",
+                     FOOTING_BASE: "base"}
+            for tag, curves in sides.items():
+                model.addPhysicalGroup(1, curves, tag, name=names[tag])
+            cell_names = {FOOTING_SOIL_NEAR: "soil_near", FOOTING_SOIL: "soil",
+                          FOOTING_MARGIN: "margin"}
+            for tag, surfaces in tags.items():
+                model.addPhysicalGroup(2, surfaces, tag, name=cell_names[tag])
+            # h in the refined zone and the strip above it, growing to h_far away from it.
+            field = model.mesh.field
+            box = field.add("Box")
+            field.setNumber(box, "VIn", h)
+            field.setNumber(box, "VOut", h_far)
+            field.setNumber(box, "XMin", -1.0)
+            field.setNumber(box, "XMax", near_width)
+            field.setNumber(box, "YMin", -near_depth)
+            field.setNumber(box, "YMax", margin + 1.0)
+            field.setNumber(box, "Thickness", max(near_width, near_depth))
+            field.setAsBackgroundMesh(box)
+            model.mesh.setSize(model.getEntities(0), h_far)
+            gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
+            gmsh.option.setNumber("Mesh.MeshSizeFromPoints", 0)
+            model.mesh.generate(2)
+        return to_dolfinx(model, gdim=2, comm=comm)
+
+
+def footing_points(B: float, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Boundary points on the footing base, y = 0, x ∈ [0, B/2], equally spaced.
+
+    Returns:
+        Positions (n, 2) at the segment midpoints and weights (n,) = B/(2n) (m).
+    """
+    check_range("footing_points", "n", n, lo=1)
+    s = (np.arange(int(n)) + 0.5) / int(n) * (B / 2)
+    return np.column_stack([s, np.zeros_like(s)]), np.full(int(n), B / (2 * int(n)))
