@@ -84,3 +84,29 @@ def test_tension_test_json_contract_and_plastic_output(tmp_path):
     data = meshio.read(last).point_data
     assert data["plastic_strain"].max() > 0.005
     assert (out / "force_displacement.png").exists()
+
+
+def test_strip_footing_contract_and_u_versus_up_stress(tmp_path):
+    """Coarse footing (h = 0.2 near it), 10 steps to s/B = 0.1, u and u-p (Tresca).
+
+    Measured: u locks (q/c_u 8.8 at s/B = 0.1) and its vertical stress under the
+    footing scatters from −38 c_u to +20 c_u (tension under a footing that pushes
+    down), oscillation 6.2 c_u; u-p gives q/c_u 5.66, σ_yy in [−6.6, −1.8] c_u,
+    oscillation 0.30 c_u.
+    """
+    common = ("--steps", "10", "--settlement", "0.1", "--h", "0.2", "--h-far", "0.5", "--json")
+    runs = {}
+    for formulation in ("u", "up"):
+        out = tmp_path / formulation
+        stdout = run_demo("strip_footing.py", "--formulation", formulation, *common,
+                          "--output", str(out), cwd=tmp_path)
+        runs[formulation] = json.loads(stdout.strip().splitlines()[-1])
+        for key in ("settlement_over_B", "q_over_cu", "wall_time_s", "n_particles"):
+            assert key in runs[formulation]
+        assert (out / "load_settlement.csv").exists() and (out / "load_settlement.png").exists()
+    u, up = runs["u"], runs["up"]
+    assert u["q_over_cu"][-1] > 1.3 * up["q_over_cu"][-1]  # u overestimates the capacity
+    assert u["sigma_yy_over_cu_range"][1] > 0.0  # u: out-of-range (tensile) σ_yy
+    assert up["sigma_yy_over_cu_range"][1] < 0.0  # u-p: compressive everywhere under it
+    assert up["stress_oscillation"] < 0.1 * u["stress_oscillation"]
+    assert 1.0 < up["q_over_cu"][-1] / (2 + np.pi) < 1.2  # coarse grid: 1.10 measured

@@ -1,0 +1,95 @@
+"""Boundary points with a prescribed displacement (penalty), the footing's boundary condition.
+
+A smooth rigid platen pushes a Neo-Hookean block down by 10 % in plane strain,
+with rollers below and on the left and the right side free. The deformation is
+homogeneous, F = diag(λ_x, 0.9), with λ_x from σ_xx = 0:
+τ_xx = λ ln J + μ(λ_x² − 1) = 0, J = 0.9 λ_x. The platen force per unit
+thickness is σ_yy times the current width.
+
+The platen's points sit inside the grid's top cells after the first step, so
+their force reaches the nodes below them too (through N_I(x_b)): the
+non-conforming boundary error of MPM. The stress field is then homogeneous only
+to a few per cent, and the test allows for that; the stroke itself is exact to
+the penalty gap.
+"""
+
+import numpy as np
+import pytest
+
+import fe_mpm
+from fe_mpm.meshes import rectangle_mesh
+
+E, NU, STRETCH = 10.0, 0.3, 0.9
+
+
+def _platen_run(components=(1,), penalty=1e5):
+    mesh = rectangle_mesh((0.0, 0.0), (1.4, 1.2), (7, 6))
+    points = fe_mpm.seed(mesh, per_cell=3)
+    points.keep((points.x[:, 0] < 1.0) & (points.x[:, 1] < 1.0))
+    n = 20
+    xb = np.column_stack([(np.arange(n) + 0.5) / n, np.ones(n)])
+    platen = fe_mpm.PointDirichlet("platen", xb, np.full(n, 1.0 / n),
+                                   lambda t: np.array([0.0, (STRETCH - 1) * t]),
+                                   penalty=penalty, components=components)
+    sim = fe_mpm.Simulation(
+        mesh, points, fe_mpm.NeoHookean(E, NU), "u",
+        dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0), component=1),
+                   fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0), component=0)],
+        point_dirichlet=[platen],
+    )
+    reports = sim.run(1.0, 4, progress=False)
+    return sim, points, reports
+
+
+def test_smooth_platen_gives_the_homogeneous_compression():
+    sim, points, reports = _platen_run()
+    mat = sim.material
+    lam, mu = mat.lmbda, mat.mu
+
+    def tau_xx(lx):
+        return lam * np.log(STRETCH * lx) + mu * (lx**2 - 1)
+
+    lo, hi = 1.0, 1.5  # τ_xx(1) < 0 < τ_xx(1.5)
+    for _ in range(100):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if tau_xx(mid) < 0 else (lo, mid)
+    lx = 0.5 * (lo + hi)
+    J = STRETCH * lx
+    sigma_yy = (lam * np.log(J) + mu * (STRETCH**2 - 1)) / J
+    # Mean vertical stretch: the stroke, less the part the top cells absorb (measured 0.3 %).
+    assert np.average(points.F[:, 1, 1], weights=points.volume) == pytest.approx(STRETCH, abs=5e-3)
+    assert np.abs(points.F[:, 1, 1] - STRETCH).max() < 0.04  # non-conforming boundary error
+    force = reports[-1].reactions["platen"][1]
+    # Pushes down on the body; the top cells absorb part of the stroke (measured −2.8 %).
+    assert force == pytest.approx(sigma_yy * lx, rel=0.04)
+    assert max(r.newton_iterations for r in reports) <= 6
+
+
+def test_platen_gap_falls_like_one_over_the_penalty_and_does_not_accumulate():
+    """The gap is re-measured from the convected points every step, so it is load/β."""
+    gaps = {}
+    for beta in (1e3, 1e5):
+        sim, _, reports = _platen_run(penalty=beta)
+        pp = sim._penalty_points
+        gap = pp.x[:, 1] - pp.targets(sim.t)[:, 1]
+        gaps[beta] = np.average(gap, weights=pp.weight)
+        load = abs(reports[-1].reactions["platen"][1])
+        # force = Σ β w_b gap_b exactly: the mean gap is load/(β × platen width 1)
+        assert gaps[beta] == pytest.approx(load / beta, rel=1e-6)
+    assert gaps[1e5] < gaps[1e3] / 50
+
+
+@pytest.mark.parametrize("bad, match", [
+    (dict(penalty=0.0), "penalty must lie in"),
+    (dict(weight=np.zeros(2)), "every weight must be > 0"),
+    (dict(x=np.zeros((2, 3))), "x must have shape"),
+    (dict(components=(2,)), "components must lie in"),
+])
+def test_bad_point_conditions_are_named(bad, match):
+    mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (2, 2))
+    spec = dict(name="p", x=np.array([[0.2, 0.5], [0.6, 0.5]]), weight=np.ones(2),
+                value=lambda t: (0.0, 0.0), penalty=1.0)
+    spec.update(bad)
+    with pytest.raises(ValueError, match=match):
+        fe_mpm.Simulation(mesh, fe_mpm.seed(mesh), fe_mpm.NeoHookean(1.0, 0.3),
+                          point_dirichlet=[fe_mpm.PointDirichlet(**spec)])
