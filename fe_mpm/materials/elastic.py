@@ -10,8 +10,22 @@ from fe_mpm.checks import check_range
 from fe_mpm.materials.state import HistoryField, PointState
 
 
+class IsotropicModuli:
+    """Shear and bulk moduli of a law with fields ``E`` (Pa) and ``nu``."""
+
+    @property
+    def mu(self) -> float:
+        """Shear modulus μ (Pa)."""
+        return self.E / (2.0 * (1.0 + self.nu))
+
+    @property
+    def bulk_modulus(self) -> float:
+        """Bulk modulus K (Pa) of the 3D law."""
+        return self.E / (3.0 * (1.0 - 2.0 * self.nu))
+
+
 @dataclass(frozen=True)
-class NeoHookean:
+class NeoHookean(IsotropicModuli):
     """Compressible Neo-Hookean solid (Iaconeta 2019, Eqs. 3.17 and 3.25).
 
     Energy ``Ψ = λ/2 (ln J)² − μ ln J + μ/2 (tr C − 3)`` and Kirchhoff stress
@@ -39,19 +53,9 @@ class NeoHookean:
         return {}
 
     @property
-    def mu(self) -> float:
-        """Shear modulus μ (Pa)."""
-        return self.E / (2.0 * (1.0 + self.nu))
-
-    @property
     def lmbda(self) -> float:
         """First Lamé parameter λ (Pa)."""
         return self.E * self.nu / ((1.0 + self.nu) * (1.0 - 2.0 * self.nu))
-
-    @property
-    def bulk_modulus(self) -> float:
-        """Bulk modulus K (Pa) of the 3D law."""
-        return self.E / (3.0 * (1.0 - 2.0 * self.nu))
 
     def kirchhoff(
         self, F: ufl.core.expr.Expr, state: PointState | None = None

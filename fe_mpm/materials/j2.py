@@ -34,14 +34,14 @@ import numpy as np
 import ufl
 
 from fe_mpm.checks import check_range
-from fe_mpm.materials.elastic import embed_3d, in_plane
+from fe_mpm.materials.elastic import IsotropicModuli, embed_3d, in_plane
 from fe_mpm.materials.state import HistoryField, PointState
 
 _SQRT_2_3 = float(np.sqrt(2.0 / 3.0))
 
 
 @dataclass(frozen=True)
-class J2Plasticity:
+class J2Plasticity(IsotropicModuli):
     """Hyperelastic–plastic von Mises solid with linear isotropic hardening.
 
     Args:
@@ -64,16 +64,6 @@ class J2Plasticity:
         check_range("J2Plasticity", "yield_stress", self.yield_stress, lo=0.0, lo_open=True)
         check_range("J2Plasticity", "hardening", self.hardening, lo=0.0)
         check_range("J2Plasticity", "density", self.density, lo=0.0, lo_open=True)
-
-    @property
-    def mu(self) -> float:
-        """Shear modulus μ (Pa)."""
-        return self.E / (2.0 * (1.0 + self.nu))
-
-    @property
-    def bulk_modulus(self) -> float:
-        """Bulk modulus K (Pa)."""
-        return self.E / (3.0 * (1.0 - 2.0 * self.nu))
 
     @property
     def history(self) -> dict[str, HistoryField]:

@@ -28,7 +28,7 @@ import numpy as np
 import ufl
 
 from fe_mpm.checks import check_range
-from fe_mpm.materials.elastic import in_plane
+from fe_mpm.materials.elastic import IsotropicModuli, in_plane
 from fe_mpm.materials.linearised import ReturnMapResult
 from fe_mpm.materials.principal_return import ELASTIC, MohrCoulombSurface, mohr_coulomb_return
 from fe_mpm.materials.spectral import derivative_wrt_dF, from_principal, spectral_decomposition
@@ -38,7 +38,7 @@ _SQRT_2_3 = math.sqrt(2.0 / 3.0)
 
 
 @dataclass(frozen=True)
-class MohrCoulomb:
+class MohrCoulomb(IsotropicModuli):
     """Hencky-elastic, perfectly plastic Mohr-Coulomb solid.
 
     Args:
@@ -74,16 +74,6 @@ class MohrCoulomb:
     def tresca(cls, E: float, nu: float, cohesion: float, density: float = 1.0) -> MohrCoulomb:
         """Tresca solid (φ = ψ = 0) with undrained shear strength ``cohesion`` = c_u (Pa)."""
         return cls(E, nu, cohesion, 0.0, 0.0, density)
-
-    @property
-    def mu(self) -> float:
-        """Shear modulus G (Pa)."""
-        return self.E / (2.0 * (1.0 + self.nu))
-
-    @property
-    def bulk_modulus(self) -> float:
-        """Bulk modulus K (Pa)."""
-        return self.E / (3.0 * (1.0 - 2.0 * self.nu))
 
     @property
     def surface(self) -> MohrCoulombSurface:
