@@ -69,6 +69,5 @@ class PenaltyPoints:
             active: Boolean mask of the points that took part in the step (N,).
         """
         per_point = -(self.weight[active, None] * self.stiffness[active]) * mismatch
-        g = self.x.shape[1]
-        return {c.name: per_point[self.owner[active] == i].sum(axis=0) if per_point.size else
-                np.zeros(g) for i, c in enumerate(self.conditions)}
+        return {c.name: per_point[self.owner[active] == i].sum(axis=0)
+                for i, c in enumerate(self.conditions)}

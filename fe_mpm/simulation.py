@@ -513,7 +513,8 @@ class Simulation:
         Returns:
             ``(forms, layout, R, J, bcs)``: the slot forms, the slot layout, the
             residual and Jacobian DOLFINx forms and the boundary conditions. The
-            Taylor tests use this to check every residual/Jacobian pair.
+            Taylor tests use this to check every residual/Jacobian pair (with
+            :meth:`refresh_material` before each assembly for a pointwise law).
         """
         layout = self._track(step=self.step_number + 1, t=t_new)
         self._check_points_per_cell(layout)
@@ -549,7 +550,6 @@ class Simulation:
             self._project_to_grid(layout, t_new - self.t)
         self._add_time("packing", t0)
         self._current = (forms, layout)
-        self.refresh_material()
         return forms, layout, R, J, bcs
 
     def refresh_material(self) -> ReturnMapResult | None:

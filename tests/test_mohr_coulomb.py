@@ -59,18 +59,18 @@ def mixed_control(driver, F, controlled, target, tol=1e-12):
     raise AssertionError(f"mixed control did not converge: residual {r}")
 
 
-def confined_compression(material, gdim, lateral, axial_axis, n_steps=40, strain=0.03):
-    """Compress along ``axial_axis`` while the ``lateral`` stresses are held at −P0."""
+def confined_compression(material, gdim, held, compressed, n_steps=40, strain=0.03):
+    """Compress the axes ``compressed`` together while the ``held`` stresses stay at −P0."""
     driver = MaterialDriver(material, n=1, gdim=gdim)
-    F = np.eye(gdim)
-    # Isotropic pre-compression to −P0 on the controlled axes first.
-    F, _ = mixed_control(driver, F, list(lateral) + [axial_axis], -P0)
+    # Isotropic pre-compression to −P0 on every controlled axis first.
+    F, _ = mixed_control(driver, np.eye(gdim), list(held) + list(compressed), -P0)
     driver.step(F[None])
     regions, taus = [], []
     for e in np.linspace(0, strain, n_steps + 1)[1:]:
         target = F.copy()
-        target[axial_axis, axial_axis] = F[axial_axis, axial_axis] * (1 - e)
-        Fk, result = mixed_control(driver, target, lateral, -P0)
+        for axis in compressed:
+            target[axis, axis] = F[axis, axis] * (1 - e)
+        Fk, result = mixed_control(driver, target, held, -P0)
         driver.step(Fk[None])
         regions.append(result["region"][0])
         taus.append(result["tau"][0])
@@ -80,7 +80,7 @@ def confined_compression(material, gdim, lateral, axial_axis, n_steps=40, strain
 @pytest.mark.parametrize("phi", [30.0, 0.0])
 def test_plane_strain_compression_reaches_the_analytical_limit_on_the_plane(phi):
     mat = fe_mpm.MohrCoulomb(**SOIL, friction_angle=phi, dilatancy_angle=phi / 3)
-    regions, taus, driver = confined_compression(mat, 2, lateral=[0], axial_axis=1)
+    regions, taus, driver = confined_compression(mat, 2, held=[0], compressed=[1])
     limit = -(k_of(phi) * P0 + 2 * SOIL["cohesion"] * np.sqrt(k_of(phi)))
     assert regions[0] == ELASTIC and regions[-1] == PLANE
     assert abs(taus[-1][1, 1] - limit) < 1e-10 * abs(limit)
@@ -96,21 +96,10 @@ def test_triaxial_paths_end_on_the_lines(path, line, phi):
     mat = fe_mpm.MohrCoulomb(**SOIL, friction_angle=phi, dilatancy_angle=phi / 3)
     limit = -(k_of(phi) * P0 + 2 * SOIL["cohesion"] * np.sqrt(k_of(phi)))
     if path == "triaxial compression":  # τ_xx = τ_yy = −P0, compress z
-        regions, taus, _ = confined_compression(mat, 3, lateral=[0, 1], axial_axis=2)
+        regions, taus, _ = confined_compression(mat, 3, held=[0, 1], compressed=[2])
         major = taus[-1][2, 2]
     else:  # τ_zz = −P0 held, the lateral pair compressed together
-        driver = MaterialDriver(mat, n=1, gdim=3)
-        F, _ = mixed_control(driver, np.eye(3), [0, 1, 2], -P0)
-        driver.step(F[None])
-        regions, taus = [], []
-        for e in np.linspace(0, 0.03, 41)[1:]:
-            target = F.copy()
-            target[0, 0] *= 1 - e
-            target[1, 1] *= 1 - e
-            Fk, result = mixed_control(driver, target, [2], -P0)
-            driver.step(Fk[None])
-            regions.append(result["region"][0])
-            taus.append(result["tau"][0])
+        regions, taus, _ = confined_compression(mat, 3, held=[2], compressed=[0, 1])
         major = taus[-1][0, 0]
         assert abs(taus[-1][0, 0] - taus[-1][1, 1]) < 1e-10 * P0
     assert regions[-1] == line

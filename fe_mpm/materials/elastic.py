@@ -13,6 +13,12 @@ from fe_mpm.materials.state import HistoryField, PointState
 class IsotropicModuli:
     """Shear and bulk moduli of a law with fields ``E`` (Pa) and ``nu``."""
 
+    def _check_moduli(self) -> None:
+        """Raise ``ValueError`` naming the law unless E > 0 and ν ∈ (−1, 0.5)."""
+        owner = type(self).__name__
+        check_range(owner, "E", self.E, lo=0.0, lo_open=True)
+        check_range(owner, "nu", self.nu, lo=-1.0, hi=0.5, lo_open=True, hi_open=True)
+
     @property
     def mu(self) -> float:
         """Shear modulus μ (Pa)."""
@@ -43,8 +49,7 @@ class NeoHookean(IsotropicModuli):
     density: float = 1.0
 
     def __post_init__(self) -> None:
-        check_range("NeoHookean", "E", self.E, lo=0.0, lo_open=True)
-        check_range("NeoHookean", "nu", self.nu, lo=-1.0, hi=0.5, lo_open=True, hi_open=True)
+        self._check_moduli()
         check_range("NeoHookean", "density", self.density, lo=0.0, lo_open=True)
 
     @property

@@ -59,8 +59,7 @@ class J2Plasticity(IsotropicModuli):
     density: float = 1.0
 
     def __post_init__(self) -> None:
-        check_range("J2Plasticity", "E", self.E, lo=0.0, lo_open=True)
-        check_range("J2Plasticity", "nu", self.nu, lo=-1.0, hi=0.5, lo_open=True, hi_open=True)
+        self._check_moduli()
         check_range("J2Plasticity", "yield_stress", self.yield_stress, lo=0.0, lo_open=True)
         check_range("J2Plasticity", "hardening", self.hardening, lo=0.0)
         check_range("J2Plasticity", "density", self.density, lo=0.0, lo_open=True)

@@ -58,8 +58,7 @@ class MohrCoulomb(IsotropicModuli):
     density: float = 1.0
 
     def __post_init__(self) -> None:
-        check_range("MohrCoulomb", "E", self.E, lo=0.0, lo_open=True)
-        check_range("MohrCoulomb", "nu", self.nu, lo=-1.0, hi=0.5, lo_open=True, hi_open=True)
+        self._check_moduli()
         check_range("MohrCoulomb", "cohesion", self.cohesion, lo=0.0)
         check_range("MohrCoulomb", "friction_angle", self.friction_angle, lo=0.0, hi=90.0,
                     hi_open=True)
