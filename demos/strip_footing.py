@@ -58,10 +58,13 @@ def parse_args(argv=None):
     p.add_argument("--points-near", type=int, default=12, help="points per cell near it")
     p.add_argument("--points-far", type=int, default=3, help="points per cell elsewhere")
     p.add_argument("--smooth", action="store_true", help="smooth footing (vertical only)")
+    p.add_argument("--footing-thickness", type=float, default=None,
+                   help="height of the footing body above its base, filled with penalty points "
+                        "(m); 2h by default, 0 for the base only")
     p.add_argument("--penalty", type=float, default=None,
                    help="footing penalty β (Pa/m); 1e3 E/h by default")
-    p.add_argument("--line-search", choices=("basic", "bt", "l2"), default="basic",
-                   help="SNES line search (basic: full Newton steps)")
+    p.add_argument("--line-search", choices=("basic", "bt", "l2"), default="bt",
+                   help="SNES line search (bt: backtracking, basic: full Newton steps)")
     p.add_argument("--output", default="strip_footing_output", help="output folder")
     p.add_argument("--no-output", action="store_true", help="write no files")
     p.add_argument("--json", action="store_true", help="print a JSON summary as the last line")
@@ -74,9 +77,13 @@ args = parse_args()
 # ## Scene
 #
 # The grid holds the soil and an empty strip B high above it. The footing is a
-# row of boundary points on the soil surface under x ∈ [0, B/2], two per cell
-# width; they are pulled down by `settlement · t` and their reaction is the
-# footing load per unit length of the half model.
+# set of boundary points, two per cell width: a row on the soil surface under
+# x ∈ [0, B/2] and a lattice filling the footing body two cells high above it.
+# They are pulled down by `settlement · t`, and their reaction is the footing
+# load per unit length of the half model. The body points matter: with the base
+# row alone, the cells the base crosses have upper nodes held only by the few
+# soil points under it, and once that soil is plastic those cells collapse
+# (u-p stopped at s/B = 0.33 on a grid of h = 0.2; with the body it reaches 2B).
 
 # +
 try:
@@ -88,7 +95,8 @@ try:
     far = scene.cell_tags.find(meshes.FOOTING_SOIL)
     points = fe_mpm.merge(fe_mpm.seed(scene.mesh, args.points_near, cells=near),
                           fe_mpm.seed(scene.mesh, args.points_far, cells=far))
-    x_f, w_f = meshes.footing_points(B, max(4, int(round(B / args.h))))
+    thickness = 2 * args.h if args.footing_thickness is None else args.footing_thickness
+    x_f, w_f = meshes.footing_points(B, max(4, int(round(B / args.h))), thickness)
     footing = fe_mpm.PointDirichlet(
         "footing", x_f, w_f, lambda t: np.array([0.0, -args.settlement * t]),
         penalty=args.penalty or 1e3 * args.E / args.h,

@@ -52,3 +52,20 @@ def stress_oscillation(x: np.ndarray, values: np.ndarray, neighbours: int = 8) -
     nearest = np.argpartition(d2, neighbours, axis=1)[:, :neighbours]
     local_mean = values[nearest].mean(axis=1)
     return float(np.sqrt(np.mean((values - local_mean) ** 2)))
+
+
+def contiguous_front(x: np.ndarray, gap: float) -> float:
+    """Farthest x-coordinate (m) of the material that hangs together, from x = min.
+
+    The points are sorted by x; the front is the last point before the first
+    empty band wider than ``gap`` (m). Single points thrown ahead of a granular
+    flow therefore do not count, as in an experiment's run-out.
+
+    Args:
+        x: Point positions (n, g), m.
+        gap: Widest empty band (m) that still counts as the same deposit; about two
+            cell sizes.
+    """
+    xs = np.sort(np.asarray(x)[:, 0])
+    breaks = np.flatnonzero(np.diff(xs) > gap)
+    return float(xs[breaks[0]] if breaks.size else xs[-1])

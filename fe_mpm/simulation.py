@@ -417,7 +417,12 @@ class Simulation:
         return self._markers[name][0].copy()
 
     def run(
-        self, t_end: float = 1.0, n_steps: int = 1, *, progress: bool = True
+        self,
+        t_end: float = 1.0,
+        n_steps: int = 1,
+        *,
+        progress: bool = True,
+        on_step: Callable[[StepReport], None] | None = None,
     ) -> list[StepReport]:
         """Advance from the current time to ``t_end`` in ``n_steps`` equal steps.
 
@@ -425,6 +430,8 @@ class Simulation:
         and the prescribed displacements. When Newton fails, the step is halved
         and retried, and grown back (doubling, up to the nominal step) after two
         successes. Below ``min_step`` the run stops with the last failure's message.
+        ``on_step(report)`` is called after every accepted step, with the points
+        updated (e.g. to record a front position).
         """
         check_range("Simulation.run", "n_steps", n_steps, lo=1)
         check_range("Simulation.run", "t_end", t_end, lo=self.t, lo_open=True)
@@ -454,6 +461,8 @@ class Simulation:
                         ) from None
                     continue
                 reports.append(report)
+                if on_step is not None:
+                    on_step(report)
                 successes += 1
                 if dt < nominal and successes >= 2:
                     dt, successes = min(2 * dt, nominal), 0

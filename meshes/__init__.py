@@ -4,6 +4,16 @@ Each builder returns :class:`dolfinx.io.gmsh.MeshData` with ``.mesh``,
 ``.cell_tags`` and ``.facet_tags`` (the gmsh physical groups).
 """
 
+from fe_mpm.meshes.collapse import (
+    COLLAPSE_BASE,
+    COLLAPSE_CHANNEL,
+    COLLAPSE_COLUMN,
+    COLLAPSE_WALL,
+    granular_column,
+    lube_height,
+    lube_runout,
+    lube_time,
+)
 from fe_mpm.meshes.column import (
     COLUMN_BASE,
     COLUMN_BODY,
@@ -44,6 +54,14 @@ from fe_mpm.meshes.tension import (
 )
 
 __all__ = [
+    "COLLAPSE_BASE",
+    "COLLAPSE_CHANNEL",
+    "COLLAPSE_COLUMN",
+    "COLLAPSE_WALL",
+    "granular_column",
+    "lube_height",
+    "lube_runout",
+    "lube_time",
     "COLUMN_BASE",
     "COLUMN_BODY",
     "COLUMN_MARGIN",
