@@ -63,8 +63,9 @@ def parse_args(argv=None):
                         "(m); 2h by default, 0 for the base only")
     p.add_argument("--penalty", type=float, default=None,
                    help="footing penalty β (Pa/m); 1e3 E/h by default")
-    p.add_argument("--line-search", choices=("basic", "bt", "l2"), default="bt",
-                   help="SNES line search (bt: backtracking, basic: full Newton steps)")
+    p.add_argument("--line-search", choices=("basic", "bt", "l2"), default="basic",
+                   help="SNES line search (basic: full Newton steps); a failed step is "
+                        "retried with bt before it is cut")
     p.add_argument("--output", default="strip_footing_output", help="output folder")
     p.add_argument("--no-output", action="store_true", help="write no files")
     p.add_argument("--json", action="store_true", help="print a JSON summary as the last line")
@@ -166,6 +167,7 @@ if args.json:
         "settlement_over_B": s_over_B.tolist(), "q_over_cu": q_over_cu.tolist(),
         "wall_time_s": wall, "n_particles": len(points), "steps": len(reports),
         "newton_iterations_max": max(iterations), "newton_iterations": iterations,
+        "residual_norms": [r.residual_norms for r in reports],
         "sigma_yy_over_cu_range": [float(sigma_yy.min()), float(sigma_yy.max())],
         "stress_oscillation": float(oscillation), "formulation": args.formulation,
         "timings": sim.timings,

@@ -99,6 +99,11 @@ class NewtonSolver:
         self._bcs: Sequence = ()
         self._before_residual: Callable[[], None] | None = None
 
+    @property
+    def line_search(self) -> str:
+        """The configured SNES line-search type (e.g. ``"basic"``)."""
+        return self.snes.getLineSearch().getType()
+
     def _with_options(self, configure) -> None:
         """Call ``configure()`` with this solver's options in PETSc's database, then remove them."""
         opts = PETSc.Options()
@@ -144,11 +149,14 @@ class NewtonSolver:
         J: dolfinx.fem.Form,
         bcs: Sequence[dolfinx.fem.DirichletBC],
         before_residual: Callable[[], None] | None = None,
+        line_search: str | None = None,
     ) -> NewtonResult:
         """Solve from the current value of ``u``; on return ``u`` holds the last iterate.
 
         ``before_residual`` is called with ``u`` set to each iterate, before its
         residual is assembled; SNES assembles the Jacobian at that same iterate.
+        ``line_search`` (a SNES line-search type, e.g. ``"bt"``) replaces the
+        configured one for this solve only.
 
         With ``pc_type redistribute`` every solve gets a fresh linear solver: the
         constrained dofs it removes change from step to step, but the matrix
@@ -160,8 +168,15 @@ class NewtonSolver:
             self._fresh_ksp()
         self.norms = []
         dolfinx.fem.petsc.assign(self.u, self.x)
+        search = self.snes.getLineSearch()
+        configured = search.getType()
+        if line_search is not None:
+            search.setType(line_search)
         t0 = time.perf_counter()
-        self.snes.solve(None, self.x)
+        try:
+            self.snes.solve(None, self.x)
+        finally:
+            search.setType(configured)
         self._add_time("newton", t0)
         dolfinx.fem.petsc.assign(self.x, self.u)
         self.u.x.scatter_forward()

@@ -207,6 +207,12 @@ class Simulation:
             name -> facet tag or marker (see ``StepReport.reactions``).
         min_step: Smallest step :meth:`run` may cut to after Newton failures (s);
             default 1/1024 of the nominal step.
+        fallback_line_search: SNES line search with which a failed step is retried
+            from its start before it is cut (None: cut at once). Full Newton steps
+            (the default) can diverge from a poor start, and a backtracking search
+            (``"bt"``, the default here) can crawl where full steps converge: on
+            the strip footing each of the two alone stopped short of s/B = 2, on
+            different grids, and together they reach it.
     """
 
     def __init__(
@@ -232,6 +238,7 @@ class Simulation:
         mass: str = "consistent",
         reactions: dict[str, int | Callable] | None = None,
         min_step: float | None = None,
+        fallback_line_search: str | None = "bt",
     ):
         check_choice("Simulation", "formulation", formulation, tuple(FORMULATIONS))
         check_range("Simulation", "ppp_alpha", ppp_alpha, lo=0.0)
@@ -279,6 +286,7 @@ class Simulation:
         self.fields = GridFields(mesh, self.spec)
         self.dynamic = bool(dynamic)
         self.min_step = min_step
+        self.fallback_line_search = fallback_line_search
         self._newmark = None
         if self.dynamic:
             if self.spec.u_degree != 1:
@@ -486,7 +494,16 @@ class Simulation:
             self._consistent_initial_acceleration(forms, layout, R, bcs, dt)
         self._initial_guess(layout)
         hook = self.refresh_material if forms.pointwise else None
-        result = self._newton_solver(forms).solve(R, J, bcs, before_residual=hook)
+        solver = self._newton_solver(forms)
+        result = solver.solve(R, J, bcs, before_residual=hook)
+        fallback = self.fallback_line_search
+        if not result.converged and fallback not in (None, solver.line_search):
+            self._initial_guess(layout)
+            retry = solver.solve(R, J, bcs, before_residual=hook,
+                                 line_search=fallback)
+            retry.residual_norms = result.residual_norms + retry.residual_norms
+            retry.iterations += result.iterations
+            result = retry
         if not result.converged or not np.all(np.isfinite(self.w.x.array)):
             norms = ", ".join(f"{r:.3e}" for r in result.residual_norms)
             raise ConvergenceError(

@@ -99,7 +99,7 @@ def granular_column(
             sides = {COLLAPSE_WALL: [], COLLAPSE_BASE: []}
             tol = 1e-6 * length  # OCC bounding boxes carry a small tolerance
             for _, c in model.getEntities(1):
-                lo, hi = occ.getBoundingBox(1, c)[:3], occ.getBoundingBox(1, c)[3:]
+                hi = occ.getBoundingBox(1, c)[3:]
                 if hi[0] < tol:
                     sides[COLLAPSE_WALL].append(c)
                 elif hi[1] < tol:

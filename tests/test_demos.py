@@ -7,6 +7,7 @@ from pathlib import Path
 
 import meshio
 import numpy as np
+import pytest
 
 from fe_mpm.references import COOK_KRATOS_U
 
@@ -110,3 +111,64 @@ def test_strip_footing_contract_and_u_versus_up_stress(tmp_path):
     assert up["sigma_yy_over_cu_range"][1] < 0.0  # u-p: compressive everywhere under it
     assert up["stress_oscillation"] < 0.1 * u["stress_oscillation"]
     assert 1.0 < up["q_over_cu"][-1] / (2 + np.pi) < 1.2  # coarse grid: 1.10 measured
+
+
+def test_strip_footing_prandtl_plateau(tmp_path):
+    """u-p, h = 0.1 B near the footing, 20 steps to s/B = 0.1 (16284 points).
+
+    With E/c_u = 100 the soil is soft: q/c_u passes 2 + π near s/B = 0.075 and
+    the issue's band 5.14 × [0.98, 1.10] holds from s/B = 0.08 to 0.1 (measured
+    5.27–5.49; 5.50 at s/B = 0.1 with 200 steps of 10 mm).
+    """
+    out = _last_json(run_demo("strip_footing.py", "--formulation", "up", "--steps", "20",
+                              "--settlement", "0.1", "--h", "0.1", "--h-far", "0.4",
+                              "--no-output", "--json", cwd=tmp_path))
+    s, q = np.array(out["settlement_over_B"]), np.array(out["q_over_cu"]) / (2 + np.pi)
+    plateau = q[s >= 0.08 - 1e-9]
+    assert plateau.size >= 4
+    assert np.all((plateau > 0.98) & (plateau < 1.10)), plateau
+
+
+def test_strip_footing_reaches_2B_with_quadratic_newton(tmp_path):
+    """u-p on the coarse grid (h = 0.2 B), 100 steps of 20 mm to s/B = 2.
+
+    Kratos MPM breaks down before the Prandtl plateau on this scene. Here every
+    step converges with the last Newton iteration shrinking ‖R‖ at least a
+    thousandfold (quadratic convergence, not a linear crawl), and q/c_u keeps
+    rising, window by window, with no asymptote (the thesis's "gradually
+    increases"). Single steps jitter by ±10 % as points cross cells, so windows
+    of 0.2 B are compared.
+    """
+    out = _last_json(run_demo("strip_footing.py", "--formulation", "up", "--steps", "100",
+                              "--settlement", "2.0", "--h", "0.2", "--h-far", "0.5",
+                              "--no-output", "--json", cwd=tmp_path))
+    s, q = np.array(out["settlement_over_B"]), np.array(out["q_over_cu"])
+    assert s[-1] == pytest.approx(2.0)
+    for norms in out["residual_norms"]:
+        assert norms[-1] < 1e-3 * norms[-2] or norms[-1] < 1e-10 * norms[0]
+    windows = [q[(s > c - 0.1) & (s <= c + 0.1)].mean() for c in (0.3, 0.8, 1.3, 1.9)]
+    assert np.all(np.diff(windows) > 0), windows
+    assert windows[0] > 2 + np.pi
+
+
+def test_column_collapse_runout_a3(tmp_path):
+    """a = 3 on a coarse grid (h = 0.015 m, 3 points per cell, Δt = 2.5 ms, α_R = 1.5).
+
+    The thesis's own results for a = 3 (Tables 6.2–6.4, three grids, damped)
+    lie above Lube et al.'s laws by 5.2–12.2 % in run-out, 2.9–6.4 % in height
+    and 7.5–16.6 % in duration. Each quantity here must be within the thesis's
+    largest error. Measured: −10.2 %, −4.0 %, +9.0 % (at h = 0.01 m the run-out
+    error shrinks to −4.9 %).
+    """
+    stdout = run_demo("column_collapse.py", "--aspect", "3", "--h", "0.015",
+                      "--points-per-cell", "3", "--dt", "2.5e-3", "--damping", "1.5",
+                      "--output", str(tmp_path / "out"), "--json", cwd=tmp_path)
+    out = _last_json(stdout)
+    for key in ("runout", "final_height", "t_inf", "wall_time_s"):
+        assert key in out
+    errors = out["relative_errors"]
+    assert abs(errors["runout"]) < 0.122
+    assert abs(errors["final_height"]) < 0.064
+    assert abs(errors["t_inf"]) < 0.166
+    assert (tmp_path / "out" / "collapse.png").exists()
+    assert (tmp_path / "out" / "front.csv").exists()

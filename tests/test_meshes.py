@@ -52,3 +52,48 @@ def test_unstructured_cook_has_the_trapezoid_area():
     area = 0.5 * np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]).sum()
     assert area == pytest.approx(0.5 * (44.0 + 16.0) * 48.0, rel=1e-12)
     assert scene.mesh.topology.index_map(2).size_local > 200
+
+
+def _cell_areas(scene, cells):
+    x = scene.mesh.geometry.x[scene.mesh.geometry.dofmaps[0][cells], :2]
+    e1, e2 = x[:, 1] - x[:, 0], x[:, 2] - x[:, 0]
+    return 0.5 * np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
+
+
+def test_granular_column_tags_the_column_exactly():
+    d_i, a = 0.0905, 3.0
+    scene = meshes.granular_column(d_i, a, h=0.015)
+    column = scene.cell_tags.find(meshes.COLLAPSE_COLUMN)
+    assert _cell_areas(scene, column).sum() == pytest.approx(d_i * a * d_i, rel=1e-12)
+    x = scene.mesh.geometry.x
+    assert x[:, 0].max() == pytest.approx(1.3 * meshes.lube_runout(d_i, a) + 5 * 0.015)
+    for tag, axis in ((meshes.COLLAPSE_WALL, 0), (meshes.COLLAPSE_BASE, 1)):
+        facets = scene.facet_tags.find(tag)
+        assert facets.size > 0
+        scene.mesh.topology.create_connectivity(1, 0)
+        nodes = scene.mesh.topology.connectivity(1, 0).array.reshape(-1, 2)[facets]
+        assert np.allclose(x[nodes.ravel(), axis], 0.0)
+
+
+@pytest.mark.parametrize("a, runout, height, duration", [
+    (1.2, 0.264, None, 0.35), (3, 0.505, 0.14, 0.55), (5, 0.673, 0.172, 0.71),
+    (7, 0.819, 0.197, 0.838)])
+def test_lube_laws_reproduce_thesis_table_6_5(a, runout, height, duration):
+    """Table 6.5 of the thesis, with d_i = 0.0905 m (which it implies); 3-digit values."""
+    d_i = 0.0905
+    assert meshes.lube_runout(d_i, a) == pytest.approx(runout, rel=4e-3)
+    if height is not None:  # a = 1.2: the table lists h_i, not the law's d_i a^{2/5}
+        assert meshes.lube_height(d_i, a) == pytest.approx(height, rel=4e-3)
+    assert meshes.lube_time(d_i, a) == pytest.approx(duration, rel=1e-2)
+
+
+def test_footing_points_fill_the_body_with_equal_weights():
+    x, w = meshes.footing_points(1.0, 5, thickness=0.2)
+    assert x.shape == (5 * 3, 2) and np.all(w == pytest.approx(0.1))
+    assert np.allclose(x[:5, 1], 0.0)  # the base row first
+    assert np.allclose(np.unique(x[:, 1]), [0.0, 0.1, 0.2])
+    assert np.allclose(np.unique(x[:, 0]), [0.05, 0.15, 0.25, 0.35, 0.45])
+    base, _ = meshes.footing_points(1.0, 5)
+    assert np.allclose(base, x[:5])
+    with pytest.raises(ValueError, match="thickness"):
+        meshes.footing_points(1.0, 5, thickness=-0.1)
