@@ -245,6 +245,9 @@ class Simulation:
         check_range("Simulation", "damping", damping, lo=0.0)
         check_choice("Simulation", "mass", mass, ("consistent", "lumped"))
         check_choice("Simulation", "points_leaving", points_leaving, ("raise", "drop"))
+        if fallback_line_search is not None:
+            check_choice("Simulation", "fallback_line_search", fallback_line_search,
+                         ("basic", "bt", "l2", "cp"))
         check_range("Simulation", "output_every", output_every, lo=1)
         tdim = mesh.topology.dim
         if mesh.topology.index_map(tdim).size_global == 0:

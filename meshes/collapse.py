@@ -65,8 +65,8 @@ def granular_column(
         d_i: Initial column width (m), > 0.
         aspect: Aspect ratio a = h_i / d_i, > 0.
         h: Cell size (m); the thesis uses 0.0065, 0.005 and 0.0025.
-        length: Channel length (m); 1.3 times the empirical run-out plus 5 cells
-            by default.
+        length: Channel length (m); 1.6 times the empirical run-out plus 5 cells
+            by default (an undamped a = 5 run threw a point past 1.3 times).
         height: Grid height (m); h_i plus 3 cells by default.
         comm: MPI communicator.
 
@@ -80,7 +80,7 @@ def granular_column(
     h_i = aspect * d_i
     check_range("granular_column", "h", h, lo=0.0, hi=min(d_i, h_i), lo_open=True)
     length = check_range("granular_column", "length",
-                         1.3 * lube_runout(d_i, aspect) + 5 * h if length is None else length,
+                         1.6 * lube_runout(d_i, aspect) + 5 * h if length is None else length,
                          lo=d_i, lo_open=True)
     height = check_range("granular_column", "height", h_i + 3 * h if height is None else height,
                          lo=h_i, lo_open=True)

@@ -66,7 +66,7 @@ def test_granular_column_tags_the_column_exactly():
     column = scene.cell_tags.find(meshes.COLLAPSE_COLUMN)
     assert _cell_areas(scene, column).sum() == pytest.approx(d_i * a * d_i, rel=1e-12)
     x = scene.mesh.geometry.x
-    assert x[:, 0].max() == pytest.approx(1.3 * meshes.lube_runout(d_i, a) + 5 * 0.015)
+    assert x[:, 0].max() == pytest.approx(1.6 * meshes.lube_runout(d_i, a) + 5 * 0.015)
     for tag, axis in ((meshes.COLLAPSE_WALL, 0), (meshes.COLLAPSE_BASE, 1)):
         facets = scene.facet_tags.find(tag)
         assert facets.size > 0
