@@ -107,7 +107,9 @@ class PointDirichlet:
             ``StepReport.reactions[name]`` (N, per unit thickness in 2D).
         x: Initial positions of the boundary points (n, g), m.
         weight: Boundary measure each point represents (n,): length (m) in 2D,
-            area (m²) in 3D, > 0.
+            area (m²) in 3D, > 0. Points may also fill a rigid body to tie the grid
+            nodes inside it (see ``meshes.footing_points``); each then carries the
+            stiffness β·w of a boundary point of the same spacing.
         value: Total prescribed displacement of the boundary at time ``t`` (m), a
             vector of length g (a rigid motion: the same for every point).
         components: Constrained components, e.g. ``(1,)`` for a smooth footing;

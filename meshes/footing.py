@@ -151,8 +151,8 @@ def footing_points(B: float, n: int, thickness: float = 0.0) -> tuple[np.ndarray
         thickness: Height of the body above the base (m), ≥ 0; 0 gives the base only.
 
     Returns:
-        Positions (m, 2), base points first (at the segment midpoints), and weights
-        (m,), all B/(2n) (m): every point carries the same penalty stiffness β·B/(2n).
+        Positions (k, 2), base points first (at the segment midpoints), and weights
+        (k,), all B/(2n) (m): every point carries the same penalty stiffness β·B/(2n).
     """
     check_range("footing_points", "n", n, lo=1)
     check_range("footing_points", "thickness", thickness, lo=0.0)
