@@ -40,6 +40,7 @@ import numpy as np
 import fe_mpm
 from fe_mpm import meshes
 from fe_mpm.diagnostics import contiguous_front
+from fe_mpm.references import lube_height, lube_runout, lube_time
 
 
 def parse_args(argv=None):
@@ -71,8 +72,8 @@ def parse_args(argv=None):
 args = parse_args()
 a, d_i, g = args.aspect, args.d_i, args.gravity
 h_i = a * d_i
-runout_law, height_law = meshes.lube_runout(d_i, a), meshes.lube_height(d_i, a)
-time_law = meshes.lube_time(d_i, a, g)
+runout_law, height_law = lube_runout(d_i, a), lube_height(d_i, a)
+time_law = lube_time(d_i, a, g)
 t_end = 1.6 * time_law if args.t_end is None else args.t_end
 # -
 

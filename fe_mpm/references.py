@@ -5,7 +5,12 @@ n x n meshes cut lower-left to upper-right, one material point per triangle,
 one static load step. Source: Kratos MPM 10.4.4 runs (``HyperElasticNeoHookean
 PlaneStrain2DLaw`` for U, the UP law with PPP for UP+PPP) and Iaconeta (2019)
 Table 5.1, as collected in shared/notes/cook_membrane_anchor.md.
+
+Granular column collapse: the empirical laws of Lube et al. (2005), as Iaconeta
+(2019) quotes them in Eqs. 6.1–6.3 and Table 6.5.
 """
+
+import math
 
 #: Kratos MPM 10.4.4, irreducible (U) formulation: {nu: {n: u_A_y}}.
 COOK_KRATOS_U = {
@@ -53,3 +58,27 @@ def cook_reference(formulation: str, nu: float, n: int) -> tuple[str, float] | N
     source, table = tables[formulation]
     value = table.get(nu, {}).get(n)
     return None if value is None else (source, value)
+
+
+def lube_runout(d_i: float, aspect: float) -> float:
+    """Empirical run-out d∞ (m) of Lube et al. (2005), thesis Eqs. 6.1–6.2.
+
+    ``d_i (1 + 1.6 a)`` below a = 1.8, else ``d_i (1 + 2.2 a^{2/3})``. The laws
+    hold below 1.8 and above 2.8; in the transition between them this returns the
+    second.
+    """
+    return d_i * (1 + 1.6 * aspect if aspect < 1.8 else 1 + 2.2 * aspect ** (2 / 3))
+
+
+def lube_height(d_i: float, aspect: float) -> float:
+    """Empirical final height h∞ (m) at the wall: ``a d_i`` up to a = 1.15, else ``d_i a^{2/5}``.
+
+    The thesis prints the exponent 2/3 in Eq. 6.3, but its Table 6.5 (and Lube
+    et al.) follow 2/5.
+    """
+    return aspect * d_i if aspect <= 1.15 else d_i * aspect ** 0.4
+
+
+def lube_time(d_i: float, aspect: float, g: float = 9.81) -> float:
+    """Empirical duration t∞ = 3.3 √(h_i / g) (s) of the collapse, h_i = a d_i."""
+    return 3.3 * math.sqrt(aspect * d_i / g)

@@ -10,9 +10,6 @@ from fe_mpm.meshes.collapse import (
     COLLAPSE_COLUMN,
     COLLAPSE_WALL,
     granular_column,
-    lube_height,
-    lube_runout,
-    lube_time,
 )
 from fe_mpm.meshes.column import (
     COLUMN_BASE,
@@ -59,9 +56,6 @@ __all__ = [
     "COLLAPSE_COLUMN",
     "COLLAPSE_WALL",
     "granular_column",
-    "lube_height",
-    "lube_runout",
-    "lube_time",
     "COLUMN_BASE",
     "COLUMN_BODY",
     "COLUMN_MARGIN",

@@ -11,10 +11,9 @@ from __future__ import annotations
 
 from mpi4py import MPI
 
-import numpy as np
-
 from fe_mpm.checks import check_range
 from fe_mpm.meshes.gmsh_session import gmsh_session, to_dolfinx
+from fe_mpm.references import lube_runout
 
 #: Facet tag of the wall x = 0.
 COLLAPSE_WALL = 1
@@ -24,30 +23,6 @@ COLLAPSE_BASE = 2
 COLLAPSE_COLUMN = 1
 #: Cell tag of the empty channel.
 COLLAPSE_CHANNEL = 2
-
-
-def lube_runout(d_i: float, aspect: float) -> float:
-    """Empirical run-out d∞ (m) of Lube et al. (2005), thesis Eqs. 6.1–6.2.
-
-    ``d_i (1 + 1.6 a)`` below a = 1.8, else ``d_i (1 + 2.2 a^{2/3})``. The laws
-    hold below 1.8 and above 2.8; in the transition between them this returns the
-    second.
-    """
-    return d_i * (1 + 1.6 * aspect if aspect < 1.8 else 1 + 2.2 * aspect ** (2 / 3))
-
-
-def lube_height(d_i: float, aspect: float) -> float:
-    """Empirical final height h∞ (m) at the wall: ``a d_i`` up to a = 1.15, else ``d_i a^{2/5}``.
-
-    The thesis prints the exponent 2/3 in Eq. 6.3, but its Table 6.5 (and Lube
-    et al.) follow 2/5.
-    """
-    return aspect * d_i if aspect <= 1.15 else d_i * aspect ** 0.4
-
-
-def lube_time(d_i: float, aspect: float, g: float = 9.81) -> float:
-    """Empirical duration t∞ = 3.3 √(h_i / g) (s) of the collapse, h_i = a d_i."""
-    return 3.3 * np.sqrt(aspect * d_i / g)
 
 
 def granular_column(
