@@ -18,7 +18,7 @@ Typical use::
 # dolfinx must be imported through fe_mpm._dolfinx first: the PyPI wheel needs
 # `import dolfinx_solver` before dolfinx, petsc4py and mpi4py.
 from fe_mpm import _dolfinx  # noqa: F401, I001
-from fe_mpm.boundary import Dirichlet, PointDirichlet, Traction
+from fe_mpm.boundary import Dirichlet, PointDirichlet, PointTraction, Traction
 from fe_mpm.errors import ConvergenceError, PointsOutsideError
 from fe_mpm.materials import J2Plasticity, MohrCoulomb, NeoHookean
 from fe_mpm.particles import MaterialPoints, merge, seed
@@ -34,6 +34,7 @@ __all__ = [
     "MohrCoulomb",
     "NeoHookean",
     "PointDirichlet",
+    "PointTraction",
     "PointsOutsideError",
     "Simulation",
     "StepReport",

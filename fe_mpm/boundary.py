@@ -128,3 +128,36 @@ class PointDirichlet:
     def at(self, t: float) -> np.ndarray:
         """Prescribed displacement at time ``t``, shape (g,)."""
         return np.asarray(self.value(t), dtype=np.float64)
+
+
+@dataclass(frozen=True)
+class PointTraction:
+    """Surface traction carried by boundary points that move with the body.
+
+    A :class:`Traction` stays on its grid facets; once the body moves off them its
+    load acts on nothing. These points are convected with the grid solution like
+    material points (Kratos MPM's particle line loads), so the load follows the
+    body. The step adds ``−Σ_b w_b t(t)·δu(x_b)`` to the residual: with the points
+    at the midpoints of boundary facets and ``w_b`` their lengths, this is exactly
+    the grid traction's integral while the body still lies on those facets
+    (``meshes.facet_points`` places them so).
+
+    Args:
+        name: Name of the load; the force it applies is reported in
+            ``StepReport.reactions[name]`` (N, per unit thickness in 2D).
+        x: Initial positions of the points (n, g), m, on the body's boundary.
+        weight: Boundary measure each point represents (n,): length (m) in 2D, area in 3D.
+        value: Traction vector (Pa), length g, a dead load (fixed direction).
+        scale: Load factor as a function of time, ``t -> float``; constant 1 if None.
+    """
+
+    name: str
+    x: np.ndarray
+    weight: np.ndarray
+    value: Sequence[float]
+    scale: Callable[[float], float] | None = None
+
+    def at(self, t: float) -> np.ndarray:
+        """Traction vector at time ``t`` (Pa)."""
+        factor = 1.0 if self.scale is None else float(self.scale(t))
+        return factor * np.asarray(self.value, dtype=np.float64)

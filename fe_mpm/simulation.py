@@ -28,7 +28,13 @@ import ufl
 
 from fe_mpm._dolfinx import dolfinx
 from fe_mpm.assembly import StepForm
-from fe_mpm.boundary import Dirichlet, PointDirichlet, Traction, boundary_facets
+from fe_mpm.boundary import (
+    Dirichlet,
+    PointDirichlet,
+    PointTraction,
+    Traction,
+    boundary_facets,
+)
 from fe_mpm.checks import check_choice, check_range
 from fe_mpm.errors import ConvergenceError, PointsOutsideError
 from fe_mpm.forms import displacement, inertia, mixed_up, penalty
@@ -37,7 +43,7 @@ from fe_mpm.io import ParticleWriter
 from fe_mpm.materials import Linearisation, PointState, ReturnMapResult
 from fe_mpm.newton import NewtonSolver
 from fe_mpm.particles import MaterialPoints, simplex_cell_type
-from fe_mpm.penalty_points import PenaltyPoints
+from fe_mpm.boundary_points import BoundaryPoints
 from fe_mpm.quadrature import (
     BOUNDARY_POINTS,
     OCCUPIED,
@@ -119,7 +125,9 @@ class _SlotForms:
             qb = self.q_boundary = MaterialPointQuadrature(mesh, nslot_boundary, BOUNDARY_POINTS)
             self.gap = qb.function((g,), "gap")
             self.penalty_stiffness = qb.function((g,), "penalty")
-            R += penalty.penalty(du, w, qb, self.gap, self.penalty_stiffness)
+            self.boundary_traction = qb.function((g,), "boundary_traction")
+            R += penalty.penalty(du, w, qb, self.gap, self.penalty_stiffness,
+                                 self.boundary_traction)
             self.du_at_boundary = dolfinx.fem.Expression(qb.at_points(du), qb.points)
         self.lumping = q.function((g, g), "second_moment") if sim.mass == "lumped" else None
         if sim._newmark is not None:
@@ -184,6 +192,9 @@ class Simulation:
         point_dirichlet: Prescribed displacements at boundary points that the grid
             does not follow (e.g. a rigid footing), imposed by a penalty; their
             forces on the body are reported in ``StepReport.reactions``.
+        point_tractions: Tractions carried by boundary points that move with the
+            body (a grid ``Traction`` stays on its facets); their forces are
+            reported in ``StepReport.reactions`` too.
         body_force: Body force per unit mass (m/s², length g), e.g. gravity.
         body_force_scale: Load factor of the body force as a function of time,
             ``t -> float``; constant 1 if None (e.g. ``lambda t: t`` to ramp
@@ -225,6 +236,7 @@ class Simulation:
         dirichlet: Sequence[Dirichlet] = (),
         tractions: Sequence[Traction] = (),
         point_dirichlet: Sequence[PointDirichlet] = (),
+        point_tractions: Sequence[PointTraction] = (),
         body_force: Sequence[float] | None = None,
         body_force_scale: Callable[[float], float] | None = None,
         facet_tags: dolfinx.mesh.MeshTags | None = None,
@@ -357,7 +369,8 @@ class Simulation:
                 comps.append(np.asarray(dofs[0], dtype=np.int32))
             self._reactions[name] = comps
 
-        self._penalty_points = PenaltyPoints(point_dirichlet, g) if point_dirichlet else None
+        conditions = [*point_dirichlet, *point_tractions]
+        self._boundary_points = BoundaryPoints(conditions, g) if conditions else None
         self._boundary_layout = None
 
         self._ppp = None
@@ -518,9 +531,9 @@ class Simulation:
 
         self.refresh_material()  # at the converged iterate, for the reactions and history
         reactions = self._reaction_forces(R)
-        reactions.update(self._convect_boundary_points(forms, t_new))
         t0 = time.perf_counter()
-        self._convect(forms, layout, step=k, t=t_new, dt=dt)
+        self._convect(forms, layout, step=k, t=t_new, dt=dt)  # may still reject the step
+        reactions.update(self._convect_boundary_points(forms, t_new))
         self._add_time("update", t0)
 
         self.t = t_new
@@ -663,19 +676,20 @@ class Simulation:
         return forms
 
     def _locate_boundary_points(self, layout: SlotLayout, t_new: float) -> SlotLayout | None:
-        """Slot layout of the penalty points that lie in occupied cells.
+        """Slot layout of the boundary points that lie in occupied cells.
 
         The others (e.g. a footing point above the soil) take no part in the step
-        and follow their target until material reaches them.
+        and follow their target until material reaches them. A traction point out
+        of the material has nothing to load, which is worth a warning.
         """
-        pp = self._penalty_points
+        pp = self._boundary_points
         if pp is None:
             return None
         cells = self.tracker.locate(pp.x)
         if np.any(cells < 0):
             first = np.flatnonzero(cells < 0)[0]
             raise PointsOutsideError(
-                f"boundary point {first} of PointDirichlet "
+                f"boundary point {first} of {type(pp.conditions[pp.owner[first]]).__name__} "
                 f"{pp.conditions[pp.owner[first]].name!r} at x = {pp.x[first]} is outside the grid "
                 f"(step to t = {t_new:g})")
         occupied = np.zeros(self.tracker.num_cells, dtype=bool)
@@ -684,25 +698,34 @@ class Simulation:
         # have moved on: read the field of an occupied neighbour, up to half a cell out.
         cells = self.tracker.snap_to(pp.x, cells, occupied, tol=0.5)
         self._boundary_active = cells >= 0
+        idle = ~self._boundary_active & pp.loaded
+        if np.any(idle):
+            first = np.flatnonzero(idle)[0]
+            warnings.warn(
+                f"{idle.sum()} point(s) of PointTraction "
+                f"{pp.conditions[pp.owner[first]].name!r} lie in no occupied cell at the step "
+                f"to t = {t_new:g} (first at x = {pp.x[first]}); their load is not applied.",
+                stacklevel=4)
         self._boundary_layout = SlotLayout.from_cells(cells[self._boundary_active])
         return self._boundary_layout
 
     def _pack_boundary_points(self, forms: _SlotForms, layout: SlotLayout, t_new: float) -> None:
-        pp, active, qb = self._penalty_points, self._boundary_active, forms.q_boundary
+        pp, active, qb = self._boundary_points, self._boundary_active, forms.q_boundary
         qb.pack_geometry(pp.x[active], pp.weight[active], layout, self.tracker.centroids,
                          self.tracker.volumes)
         self._boundary_gap = pp.x[active] - pp.targets(t_new)[active]
         qb.pack(forms.gap, layout, self._boundary_gap)
         qb.pack(forms.penalty_stiffness, layout, pp.stiffness[active])
+        qb.pack(forms.boundary_traction, layout, pp.tractions(t_new)[active])
 
     def _convect_boundary_points(self, forms: _SlotForms, t_new: float) -> dict[str, np.ndarray]:
         """Move the penalty points with the grid solution; return each condition's force."""
-        pp = self._penalty_points
+        pp = self._boundary_points
         if pp is None:
             return {}
         active = self._boundary_active
         du = forms.q_boundary.evaluate(forms.du_at_boundary, self._boundary_layout)
-        forces = pp.forces(self._boundary_gap + du, active)
+        forces = pp.forces(self._boundary_gap + du, active, t_new)
         pp.x[active] += du
         pp.x[~active] = pp.targets(t_new)[~active]  # outside the material: follow the target
         return forces

@@ -8,6 +8,8 @@ area each represents), penalty stiffness :math:`\beta` and the gap
 
 where :math:`P_b` keeps the constrained components. It is linear in
 :math:`\Delta u`, so its tangent is the constant :math:`\sum_b w_b \beta\, N^T P_b N`.
+Boundary points that carry a traction :math:`t_b` (and no penalty) add
+:math:`-\sum_b w_b\, t_b \cdot \delta u(x_b)`.
 """
 
 from __future__ import annotations
@@ -23,8 +25,9 @@ def penalty(
     q: MaterialPointQuadrature,
     gap: ufl.Coefficient,
     stiffness: ufl.Coefficient,
+    traction: ufl.Coefficient,
 ) -> ufl.Form:
-    """The penalty residual.
+    """The residual of the boundary points: penalty minus the tractions they carry.
 
     Args:
         du: Grid displacement increment (P1).
@@ -32,6 +35,7 @@ def penalty(
         q: Quadrature of the boundary points (its scale carries w_b).
         gap: Slot field g_b (g,), m.
         stiffness: Slot field β P_b as a vector (g,): β on constrained components, 0 else (Pa/m).
+        traction: Slot field t_b (g,), Pa; zero on penalty points.
     """
     mismatch = gap + q.at_points(du)
-    return q.sum(ufl.dot(ufl.elem_mult(stiffness, mismatch), q.at_points(w)))
+    return q.sum(ufl.dot(ufl.elem_mult(stiffness, mismatch) - traction, q.at_points(w)))

@@ -31,6 +31,7 @@ from fe_mpm.meshes.cook import (
     cook_membrane,
 )
 from fe_mpm.meshes.disk import disk
+from fe_mpm.meshes.facet_points import facet_points
 from fe_mpm.meshes.footing import (
     FOOTING_BASE,
     FOOTING_FAR_SIDE,
@@ -56,6 +57,7 @@ __all__ = [
     "COLLAPSE_COLUMN",
     "COLLAPSE_WALL",
     "granular_column",
+    "facet_points",
     "COLUMN_BASE",
     "COLUMN_BODY",
     "COLUMN_MARGIN",

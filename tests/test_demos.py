@@ -1,30 +1,18 @@
 """The demos run as users run them, and keep their command-line contract."""
 
-import json
-import subprocess
-import sys
-from pathlib import Path
-
 import meshio
 import numpy as np
 import pytest
+from demo_runner import last_json as _last_json
+from demo_runner import run_demo
 
 from fe_mpm.references import COOK_KRATOS_U
-
-DEMOS = Path(__file__).resolve().parents[1] / "demos"
-
-
-def run_demo(name, *args, cwd):
-    out = subprocess.run([sys.executable, str(DEMOS / name), *args], cwd=cwd,
-                         capture_output=True, text=True, timeout=600)
-    assert out.returncode == 0, out.stderr[-3000:]
-    return out.stdout
 
 
 def test_cook_membrane_json_contract(tmp_path):
     stdout = run_demo("cook_membrane.py", "--n", "8", "--nu", "0.499", "--json",
                       "--output", str(tmp_path / "out"), cwd=tmp_path)
-    summary = json.loads(stdout.strip().splitlines()[-1])
+    summary = _last_json(stdout)
     for key in ("tip_displacement_y", "newton_iterations", "wall_time_s", "n_particles"):
         assert key in summary
     assert summary["n_particles"] == 2 * 8 * 8
@@ -51,10 +39,6 @@ def test_cook_membrane_writes_paraview_series(tmp_path):
     assert (out / "load_deflection.png").stat().st_size > 1000
 
 
-def _last_json(stdout):
-    return json.loads(stdout.strip().splitlines()[-1])
-
-
 def test_elastic_column_json_contract(tmp_path):
     static = _last_json(run_demo("elastic_column.py", "--ny", "16", "--json", cwd=tmp_path))
     for key in ("error", "wall_time_s", "steps", "n_particles"):
@@ -77,7 +61,7 @@ def test_tension_test_json_contract_and_plastic_output(tmp_path):
     out = tmp_path / "out"
     stdout = run_demo("tension_test.py", "--formulation", "up", "--steps", "10", "--json",
                       "--output", str(out), cwd=tmp_path)
-    summary = json.loads(stdout.strip().splitlines()[-1])
+    summary = _last_json(stdout)
     for key in ("limit_load", "analytical_limit_load", "newton_iterations_max", "wall_time_s"):
         assert key in summary
     assert abs(summary["limit_load"] / summary["analytical_limit_load"] - 1) < 0.01
@@ -101,7 +85,7 @@ def test_strip_footing_contract_and_u_versus_up_stress(tmp_path):
         out = tmp_path / formulation
         stdout = run_demo("strip_footing.py", "--formulation", formulation, *common,
                           "--output", str(out), cwd=tmp_path)
-        runs[formulation] = json.loads(stdout.strip().splitlines()[-1])
+        runs[formulation] = _last_json(stdout)
         for key in ("settlement_over_B", "q_over_cu", "wall_time_s", "n_particles"):
             assert key in runs[formulation]
         assert (out / "load_settlement.csv").exists() and (out / "load_settlement.png").exists()

@@ -1,0 +1,21 @@
+"""Run a demo script as a user does and read its JSON summary."""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+DEMOS = Path(__file__).resolve().parents[1] / "demos"
+
+
+def run_demo(name: str, *args: str, cwd) -> str:
+    """Standard output of ``python demos/<name> <args>``; fails the test on a non-zero exit."""
+    out = subprocess.run([sys.executable, str(DEMOS / name), *args], cwd=cwd,
+                         capture_output=True, text=True, timeout=600)
+    assert out.returncode == 0, out.stderr[-3000:]
+    return out.stdout
+
+
+def last_json(stdout: str) -> dict:
+    """The JSON object a demo prints on its last line with ``--json``."""
+    return json.loads(stdout.strip().splitlines()[-1])
