@@ -1,5 +1,4 @@
-"""The boundary points of every :class:`~fe_mpm.boundary.PointDirichlet` and
-:class:`~fe_mpm.boundary.PointTraction`, all together."""
+"""The boundary points of every PointDirichlet and PointTraction, all together."""
 
 from __future__ import annotations
 
@@ -69,8 +68,11 @@ class BoundaryPoints:
         return self.x.shape[0]
 
     def targets(self, t: float) -> np.ndarray:
-        """Where the points should be at time ``t`` (N, g): ``x₀ + value(t)`` for a
-        prescribed displacement; traction points have no target and stay where they are."""
+        """Where the points should be at time ``t`` (N, g).
+
+        ``x₀ + value(t)`` for a prescribed displacement; traction points have no
+        target and stay where they are.
+        """
         shifts = np.array([np.zeros(self.x.shape[1]) if loaded else c.at(t)
                            for c, loaded in zip(self.conditions, self._loaded)])
         return np.where(self._loaded[self.owner, None], self.x, self.x0 + shifts[self.owner])
@@ -82,8 +84,10 @@ class BoundaryPoints:
         return values[self.owner]
 
     def forces(self, mismatch: np.ndarray, active: np.ndarray, t: float) -> dict[str, np.ndarray]:
-        """Force of each condition on the body (g,): ``−Σ_b w_b β P_b (x_b − x_b^target)``
-        for a prescribed displacement, ``Σ_b w_b t_b`` for a traction.
+        """Force of each condition on the body (g,).
+
+        ``−Σ_b w_b β P_b (x_b − x_b^target)`` for a prescribed displacement,
+        ``Σ_b w_b t_b`` for a traction.
 
         Args:
             mismatch: End-of-step gap of the active points (n_active, g), m.

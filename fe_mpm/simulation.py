@@ -35,6 +35,7 @@ from fe_mpm.boundary import (
     Traction,
     boundary_facets,
 )
+from fe_mpm.boundary_points import BoundaryPoints
 from fe_mpm.checks import check_choice, check_range
 from fe_mpm.errors import ConvergenceError, PointsOutsideError
 from fe_mpm.forms import displacement, inertia, mixed_up, penalty
@@ -43,7 +44,6 @@ from fe_mpm.io import ParticleWriter
 from fe_mpm.materials import Linearisation, PointState, ReturnMapResult
 from fe_mpm.newton import NewtonSolver
 from fe_mpm.particles import MaterialPoints, simplex_cell_type
-from fe_mpm.boundary_points import BoundaryPoints
 from fe_mpm.quadrature import (
     BOUNDARY_POINTS,
     OCCUPIED,
@@ -348,6 +348,8 @@ class Simulation:
 
         self._tractions = []  # (spec, Constant)
         self._traction_facets: dict[int, np.ndarray] = {}
+        self._traction_vertices: dict[int, np.ndarray] = {}  # grid nodes of the loaded facets
+        self._warned_tractions: set[int] = set()
         self._traction_terms = []  # (Constant, ds(i)); the test function comes later
         ds = ufl.Measure("ds", domain=mesh)
         for i, spec in enumerate(tractions, start=1):
@@ -355,6 +357,8 @@ class Simulation:
                 raise ValueError(f"Traction: value must have {g} components, got {len(spec.value)}")
             value = dolfinx.fem.Constant(mesh, np.zeros(g))
             self._traction_facets[i] = boundary_facets(mesh, spec.where, facet_tags)
+            self._traction_vertices[i] = np.unique(dolfinx.mesh.entities_to_geometry(
+                mesh, fdim, self._traction_facets[i]))
             self._traction_terms.append((value, ds(i)))
             self._tractions.append((spec, value))
 
@@ -560,6 +564,7 @@ class Simulation:
         """
         layout = self._track(step=self.step_number + 1, t=t_new)
         self._check_points_per_cell(layout)
+        self._check_loaded_facets(layout, t_new)
 
         t0 = time.perf_counter()
         nslot = bucket(layout.max_count)
@@ -647,6 +652,25 @@ class Simulation:
         pts.cell = cells
         self._add_time("tracking", t0)
         return SlotLayout.from_cells(cells)
+
+    def _check_loaded_facets(self, layout: SlotLayout, t_new: float) -> None:
+        """Warn when a grid traction's nodes have no material: their load acts on nothing.
+
+        Nodes that no point reaches are pinned, so the load the facets put there is lost.
+        """
+        if not self._traction_vertices:
+            return
+        active = np.zeros(self.mesh.geometry.x.shape[0], dtype=bool)
+        active[self.mesh.geometry.dofmaps[0][layout.occupied]] = True
+        for i, nodes in self._traction_vertices.items():
+            idle = ~active[nodes]
+            if np.any(idle) and i not in self._warned_tractions:
+                self._warned_tractions.add(i)
+                warnings.warn(
+                    f"Traction {i - 1}: {idle.sum()} of its {nodes.size} grid nodes carry no "
+                    f"material at the step to t = {t_new:g}, so the load there is lost. A grid "
+                    "traction stays on the grid; use PointTraction for a load that follows "
+                    "the body.", stacklevel=4)
 
     def _hinge_diagnosis(self, layout: SlotLayout) -> str:
         """Explain a singular tangent by occupied cells hinged to the rest at one node.
