@@ -349,7 +349,7 @@ class Simulation:
         self._tractions = []  # (spec, Constant)
         self._traction_facets: dict[int, np.ndarray] = {}
         self._traction_vertices: dict[int, np.ndarray] = {}  # grid nodes of the loaded facets
-        self._warned_tractions: set[int] = set()
+        self._warned_tractions: set[int | str] = set()  # warn once per load
         self._traction_terms = []  # (Constant, ds(i)); the test function comes later
         ds = ufl.Measure("ds", domain=mesh)
         for i, spec in enumerate(tractions, start=1):
@@ -723,7 +723,8 @@ class Simulation:
         cells = self.tracker.snap_to(pp.x, cells, occupied, tol=0.5)
         self._boundary_active = cells >= 0
         idle = ~self._boundary_active & pp.loaded
-        if np.any(idle):
+        if np.any(idle) and "points" not in self._warned_tractions:
+            self._warned_tractions.add("points")
             first = np.flatnonzero(idle)[0]
             warnings.warn(
                 f"{idle.sum()} point(s) of PointTraction "

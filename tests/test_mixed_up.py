@@ -5,6 +5,7 @@ from functools import cache
 
 import numpy as np
 import pytest
+from newton_rates import quadratic
 
 from fe_mpm import scenes
 from fe_mpm.diagnostics import pressure_oscillation
@@ -25,13 +26,6 @@ def cook(n, nu, formulation, structured=True, h=None, per_cell=1):
     sim = scenes.cook_membrane(n, nu, formulation, structured=structured, h=h, per_cell=per_cell)
     (report,) = sim.run(progress=False)
     return sim, scenes.tip_deflection(sim), report
-
-
-def quadratic(norms):
-    """Each contraction at least squares the previous one (up to round-off)."""
-    rates = [b / a for a, b in zip(norms, norms[1:])]
-    return all(r2 < 10 * r1**2 or b < 1e-9 * norms[0]
-               for r1, r2, b in zip(rates, rates[1:], norms[2:]))
 
 
 @pytest.mark.parametrize("nu", [0.33, 0.499])
