@@ -1,6 +1,6 @@
 """Stability stress tests at reduced size (issue: run time against error, stability).
 
-Full-size versions: ``benchmarks/stress.py``. Each test states what it measured.
+Each test states what it measured. Full-size versions in ``benchmarks/`` are still to come.
 """
 
 import meshio
