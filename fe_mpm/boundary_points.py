@@ -24,6 +24,8 @@ class BoundaryPoints:
         weight: Boundary measure of each point (N,).
         stiffness: β on the constrained components, 0 on the free ones and on
             traction points (N, g), Pa/m.
+        loaded: Whether each point carries a traction (N,), bool; the others are
+            penalty points.
     """
 
     def __init__(self, conditions: Sequence[PointDirichlet | PointTraction], gdim: int):
@@ -57,15 +59,14 @@ class BoundaryPoints:
         self.weight = np.concatenate(weights)
         self.owner = np.concatenate(owners)
         self.stiffness = np.vstack(stiffness)
-        self._loaded = np.array([isinstance(c, PointTraction) for c in self.conditions])
-
-    @property
-    def loaded(self) -> np.ndarray:
-        """Whether each point carries a traction (N,), bool."""
-        return self._loaded[self.owner]
+        self.loaded = np.array([isinstance(c, PointTraction) for c in self.conditions])[self.owner]
 
     def __len__(self) -> int:
         return self.x.shape[0]
+
+    def _values(self, t: float) -> np.ndarray:
+        """Each point's condition value at time ``t`` (N, g): a displacement or a traction."""
+        return np.array([c.at(t) for c in self.conditions])[self.owner]
 
     def targets(self, t: float) -> np.ndarray:
         """Where the points should be at time ``t`` (N, g).
@@ -73,15 +74,11 @@ class BoundaryPoints:
         ``x₀ + value(t)`` for a prescribed displacement; traction points have no
         target and stay where they are.
         """
-        shifts = np.array([np.zeros(self.x.shape[1]) if loaded else c.at(t)
-                           for c, loaded in zip(self.conditions, self._loaded)])
-        return np.where(self._loaded[self.owner, None], self.x, self.x0 + shifts[self.owner])
+        return np.where(self.loaded[:, None], self.x, self.x0 + self._values(t))
 
     def tractions(self, t: float) -> np.ndarray:
         """Traction at each point at time ``t`` (N, g), Pa; zero on penalty points."""
-        values = np.array([c.at(t) if loaded else np.zeros(self.x.shape[1])
-                           for c, loaded in zip(self.conditions, self._loaded)])
-        return values[self.owner]
+        return np.where(self.loaded[:, None], self._values(t), 0.0)
 
     def forces(self, mismatch: np.ndarray, active: np.ndarray, t: float) -> dict[str, np.ndarray]:
         """Force of each condition on the body (g,).
