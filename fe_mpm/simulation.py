@@ -399,6 +399,7 @@ class Simulation:
         self._body_force_scale = body_force_scale
 
         self._forms: dict[int, _SlotForms] = {}
+        self._refreshed: dict | None = None  # the iterate of the last return map
         self._newton: NewtonSolver | None = None
         self._markers: dict[str, tuple[np.ndarray, int]] = {}  # name -> (x, host point)
         self._add_time("setup", t0)
@@ -513,14 +514,16 @@ class Simulation:
         if self._newmark is not None and self.step_number == 0:
             self._consistent_initial_acceleration(forms, layout, R, bcs, dt)
         self._initial_guess(layout)
-        hook = self.refresh_material if forms.pointwise else None
+        hooks = {}
+        if forms.pointwise:
+            hooks = {"before_residual": lambda: self.refresh_material(tangent=False),
+                     "before_jacobian": self.refresh_material}
         solver = self._newton_solver(forms)
-        result = solver.solve(R, J, bcs, before_residual=hook)
+        result = solver.solve(R, J, bcs, **hooks)
         fallback = self.fallback_line_search
         if not result.converged and fallback not in (None, solver.line_search):
             self._initial_guess(layout)
-            retry = solver.solve(R, J, bcs, before_residual=hook,
-                                 line_search=fallback)
+            retry = solver.solve(R, J, bcs, **hooks, line_search=fallback)
             retry.residual_norms = result.residual_norms + retry.residual_norms
             retry.iterations += result.iterations
             result = retry
@@ -533,7 +536,7 @@ class Simulation:
                 "Points were not updated and nothing was written for this step."
             )
 
-        self.refresh_material()  # at the converged iterate, for the reactions and history
+        self.refresh_material(tangent=False)  # the converged iterate's, for reactions and history
         reactions = self._reaction_forces(R)
         t0 = time.perf_counter()
         self._convect(forms, layout, step=k, t=t_new, dt=dt)  # may still reject the step
@@ -597,31 +600,38 @@ class Simulation:
             self._project_to_grid(layout, t_new - self.t)
         self._add_time("packing", t0)
         self._current = (forms, layout)
+        self._refreshed = None  # new points and history: no return map is current
         return forms, layout, R, J, bcs
 
-    def refresh_material(self) -> ReturnMapResult | None:
+    def refresh_material(self, tangent: bool = True) -> ReturnMapResult | None:
         """Evaluate a pointwise law's return map at the current grid unknown.
 
-        The law's stress, tangent and ΔF at the points go into the slot fields of
-        its linearisation, so the next residual and Jacobian assembled are the
-        law's own at this iterate. The solver calls this before every residual;
-        call it yourself after changing :attr:`w` by hand (e.g. in a Taylor test).
+        The law's stress, ΔF and (if ``tangent``) tangent at the points go into
+        the slot fields of its linearisation, so the next residual (and Jacobian)
+        assembled are the law's own at this iterate. The solver calls this before
+        every residual without the tangent, and again before every Jacobian; call
+        it yourself after changing :attr:`w` by hand (e.g. in a Taylor test).
+        At an iterate already evaluated nothing is recomputed.
         Returns the return map's result, or None for laws written in UFL.
         """
         forms, layout = self._current
         if not forms.pointwise:
             return None
         t0 = time.perf_counter()
-        g, q = self.gdim, forms.q
-        dF = q.evaluate(forms.dF_at_points, layout).reshape(-1, g, g)
-        result = self.material.return_map(dF, self.points.history)
-        lin = forms.linearisation
-        q.pack(lin.tau, layout, result.tau)
-        q.pack(lin.tangent, layout, Linearisation.flat_tangent(result.tangent))
-        q.pack(lin.dF, layout, dF, empty=np.eye(g))
-        self._last_return = result
+        g, q, lin = self.gdim, forms.q, forms.linearisation
+        done = self._refreshed
+        if done is None or not np.array_equal(done["w"], self.w.x.array):
+            dF = q.evaluate(forms.dF_at_points, layout).reshape(-1, g, g)
+            result = self.material.return_map(dF, self.points.history)
+            q.pack(lin.tau, layout, result.tau)
+            q.pack(lin.dF, layout, dF, empty=np.eye(g))
+            done = self._refreshed = {"w": self.w.x.array.copy(), "tangent": False}
+            self._last_return = result
+        if tangent and not done["tangent"]:
+            q.pack(lin.tangent, layout, Linearisation.flat_tangent(self._last_return.tangent))
+            done["tangent"] = True
         self._add_time("return_map", t0)
-        return result
+        return self._last_return
 
     # -- the phases of a step --------------------------------------------------
 
@@ -849,7 +859,7 @@ class Simulation:
         nm.c_a.value, nm.c_v.value, nm.damping.value = 0.0, 0.0, -saved[2]
         nm.a_n.x.array[:] = 0.0
         self._initial_guess(layout)  # Δu = 0 (and the projected pressure)
-        self.refresh_material()
+        self.refresh_material(tangent=False)
         b = dolfinx.fem.assemble_vector(R)
         b.scatter_reverse(dolfinx.la.InsertMode.add)
         nm.c_a.value, nm.c_v.value, nm.damping.value = saved

@@ -11,6 +11,7 @@ extension: line 2). For Tresca (φ = 0, k = 1) that is τ_major = −(p₀ + 2c)
 Isotropic tension ends on the apex, τ = c cot φ.
 """
 
+import dataclasses
 import itertools
 
 import numpy as np
@@ -19,6 +20,7 @@ from test_taylor import _simulation
 
 import fe_mpm
 from fe_mpm.material_driver import MaterialDriver
+from fe_mpm.meshes import rectangle_mesh
 from fe_mpm.materials.principal_return import (
     APEX,
     ELASTIC,
@@ -233,6 +235,39 @@ def test_step_residual_and_jacobian_are_consistent(dim, formulation, phi):
     assert len(np.unique(regions[0])) >= 3
     assert np.all(rates(TAYLOR_EPS, r0) > 0.9)
     assert np.all(rates(TAYLOR_EPS, r1) > 1.9), f"remainders {r1}"
+
+
+def test_a_step_runs_the_return_map_once_per_residual_and_the_tangent_once_per_jacobian():
+    """The tangent costs more than the return; the converged state is not recomputed.
+
+    A solve of k iterations assembles k + 1 residuals and k Jacobians. Before the
+    tangent was computed lazily, every residual paid for a tangent, and the
+    converged iterate was returned twice (once more for the reactions).
+    """
+    calls = {"return_map": 0, "tangent": 0}
+
+    class Counted(fe_mpm.MohrCoulomb):
+        def return_map(self, dF, history):
+            calls["return_map"] += 1
+            result = super().return_map(dF, history)
+
+            def counted():
+                calls["tangent"] += 1
+                return result.derivative()
+
+            return dataclasses.replace(result, derivative=counted)
+
+    mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (4, 4))
+    sim = fe_mpm.Simulation(
+        mesh, fe_mpm.seed(mesh, 3), Counted(**SOIL, friction_angle=30.0), "u",
+        dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0)),
+                   fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 1.0), lambda t: (0.0, -0.01 * t))],
+    )
+    report = sim.step(1.0)
+    assert np.any(sim._last_return.region != ELASTIC)
+    k = report.newton_iterations
+    assert k >= 3  # plastic points: a real Newton solve
+    assert calls == {"return_map": k + 1, "tangent": k}
 
 
 def test_mixed_formulation_refuses_a_frictional_law():

@@ -10,11 +10,17 @@ with :math:`\tau_k, D_k, \Delta F_k` in slot fields. At :math:`\Delta F = \Delta
 the residual is the law's own, and ``ufl.derivative`` of it is :math:`D_k`, the
 consistent tangent; so Newton stays quadratic. The simulation refreshes the
 slot fields before every residual assembly (see ``NewtonSolver.solve``).
+
+:math:`D_k` costs more than the return itself, and a residual needs only
+:math:`\tau_k` (the last residual of a solve, the convergence check, has no
+Jacobian after it). So a result computes its tangent on first access.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 import ufl
@@ -26,15 +32,21 @@ class ReturnMapResult:
 
     Attributes:
         tau: Kirchhoff stress (n, 3, 3), Pa (τ₃₃ included in plane strain).
-        tangent: ∂τ_ij/∂ΔF_kl (n, 3, 3, g, g), Pa.
+        derivative: Computes ∂τ_ij/∂ΔF_kl (n, 3, 3, g, g) in Pa; read it
+            through :attr:`tangent`, which calls it once.
         history: Internal variables at t_{n+1} by name, each (n, *shape).
         region: Optional per-point label of the return taken (n,).
     """
 
     tau: np.ndarray
-    tangent: np.ndarray
+    derivative: Callable[[], np.ndarray]
     history: dict[str, np.ndarray]
     region: np.ndarray | None = None
+
+    @cached_property
+    def tangent(self) -> np.ndarray:
+        """∂τ_ij/∂ΔF_kl (n, 3, 3, g, g), Pa, computed on first access."""
+        return self.derivative()
 
 
 @dataclass

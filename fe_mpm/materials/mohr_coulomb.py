@@ -119,8 +119,10 @@ class MohrCoulomb(IsotropicModuli):
         surface = self.surface
         ret = mohr_coulomb_return(surface, strain)
         tau = from_principal(ret.stress, Q)
-        dy_dx = ret.tangent / (2.0 * x[:, None, :])  # ∂ε_B/∂x_B = 1/(2 x_B)
-        tangent = derivative_wrt_dF(x, Q, ret.stress, dy_dx, F3, b_n, g)
+
+        def tangent() -> np.ndarray:
+            dy_dx = ret.tangent / (2.0 * x[:, None, :])  # ∂ε_B/∂x_B = 1/(2 x_B)
+            return derivative_wrt_dF(x, Q, ret.stress, dy_dx, F3, b_n, g)
 
         elastic = ret.region == ELASTIC
         strain_e = ret.stress @ surface.compliance
@@ -129,7 +131,7 @@ class MohrCoulomb(IsotropicModuli):
         increment = _SQRT_2_3 * np.linalg.norm(strain - strain_e, axis=1)
         increment[elastic] = 0.0
         return ReturnMapResult(
-            tau=tau, tangent=tangent, region=ret.region,
+            tau=tau, derivative=tangent, region=ret.region,
             history={"be": be, "plastic_strain": history["plastic_strain"] + increment},
         )
 
