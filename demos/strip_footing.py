@@ -37,7 +37,7 @@ from pathlib import Path
 import numpy as np
 
 import fe_mpm
-from fe_mpm import meshes
+from fe_mpm import scenes
 from fe_mpm.diagnostics import stress_oscillation
 
 
@@ -86,35 +86,27 @@ args = parse_args()
 # soil points under it, and once that soil is plastic those cells collapse
 # (u-p stopped at s/B = 0.33 on a grid of h = 0.2; with the body it reaches 2B).
 
+#
+# `fe_mpm.scenes.strip_footing` builds the grid (`meshes.strip_footing`: soil, the
+# empty strip, a refined zone seeded with `--points-near` points per cell, the rest
+# with `--points-far`, merged with `fe_mpm.merge`), the Tresca soil
+# (`fe_mpm.MohrCoulomb.tresca`), the footing points (`meshes.footing_points`, as a
+# `fe_mpm.PointDirichlet` with a penalty of 1e3 E/h by default) and the rollers.
+
 # +
 try:
     B = args.B
-    scene = meshes.strip_footing(B, h=args.h, h_far=args.h_far, near_width=args.near_width,
-                                 near_depth=args.near_depth)
-    material = fe_mpm.MohrCoulomb.tresca(args.E, args.nu, args.cu)
-    near = scene.cell_tags.find(meshes.FOOTING_SOIL_NEAR)
-    far = scene.cell_tags.find(meshes.FOOTING_SOIL)
-    points = fe_mpm.merge(fe_mpm.seed(scene.mesh, args.points_near, cells=near),
-                          fe_mpm.seed(scene.mesh, args.points_far, cells=far))
-    thickness = 2 * args.h if args.footing_thickness is None else args.footing_thickness
-    x_f, w_f = meshes.footing_points(B, max(4, int(round(B / args.h))), thickness)
-    footing = fe_mpm.PointDirichlet(
-        "footing", x_f, w_f, lambda t: np.array([0.0, -args.settlement * t]),
-        penalty=args.penalty or 1e3 * args.E / args.h,
-        components=(1,) if args.smooth else None,
-    )
-    sim = fe_mpm.Simulation(
-        scene.mesh, points, material, args.formulation, facet_tags=scene.facet_tags,
-        dirichlet=[
-            fe_mpm.Dirichlet(meshes.FOOTING_SYMMETRY, component=0),
-            fe_mpm.Dirichlet(meshes.FOOTING_FAR_SIDE, component=0),
-            fe_mpm.Dirichlet(meshes.FOOTING_BASE),
-        ],
-        point_dirichlet=[footing],
+    sim = scenes.strip_footing(
+        args.formulation, B=B, cu=args.cu, E=args.E, nu=args.nu, h=args.h, h_far=args.h_far,
+        near_width=args.near_width, near_depth=args.near_depth,
+        points_near=args.points_near, points_far=args.points_far,
+        settlement=args.settlement, smooth=args.smooth,
+        footing_thickness=args.footing_thickness, penalty=args.penalty,
         petsc_options={"snes_linesearch_type": args.line_search},
         output_dir=None if args.no_output else args.output,
         output_every=max(1, args.steps // 20),
     )
+    points = sim.points
     reports = sim.run(t_end=1.0, n_steps=args.steps, progress=not args.json)
 except (ValueError, fe_mpm.ConvergenceError, fe_mpm.PointsOutsideError) as err:
     sys.exit(f"strip_footing.py: {err}")

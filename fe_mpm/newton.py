@@ -10,6 +10,7 @@ and one residual vector, and takes the step's forms and boundary conditions in
 from __future__ import annotations
 
 import time
+import weakref
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
@@ -17,19 +18,19 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 import dolfinx.fem.petsc as fem_petsc
+import numpy as np
 
 from fe_mpm._dolfinx import dolfinx
+from fe_mpm.formulations import collapse
 
-#: Full Newton (no line search) with MUMPS LU; quadratic convergence is checked, not hoped for.
+#: Full Newton (no line search); quadratic convergence is checked, not hoped for.
 #: The step test (stol) ends a solve whose residual sits at its round-off floor: in
 #: dynamics the inertia terms scale as 4/Δt², and that floor can exceed rtol·‖R₀‖.
 #: After a Newton correction of relative size 1e-10 the error is far below it.
 #: The divergence test (‖R‖ > 1e4 ‖R₀‖) is off: under a prescribed displacement
 #: ‖R₀‖ is the boundary gap in metres while later residuals are forces, so it
 #: stopped sound solves after one iteration; a diverging solve ends at snes_max_it.
-#: PCREDISTRIBUTE drops the constrained rows (Dirichlet and the pinned dofs of empty
-#: cells) before MUMPS sees the matrix, so empty grid costs no factorisation time.
-DEFAULT_PETSC_OPTIONS = {
+NEWTON_OPTIONS = {
     "snes_type": "newtonls",
     "snes_linesearch_type": "basic",
     "snes_rtol": 1e-10,
@@ -37,12 +38,51 @@ DEFAULT_PETSC_OPTIONS = {
     "snes_stol": 1e-10,
     "snes_max_it": 25,
     "snes_divergence_tolerance": "unlimited",
+}
+
+#: MUMPS LU. PCREDISTRIBUTE drops the constrained rows (Dirichlet and the pinned
+#: dofs of empty cells) before MUMPS sees the matrix, so empty grid costs no
+#: factorisation time.
+_DIRECT = {
     "ksp_type": "preonly",
     "pc_type": "redistribute",
     "redistribute_ksp_type": "preonly",
     "redistribute_pc_type": "lu",
     "redistribute_pc_factor_mat_solver_type": "mumps",
 }
+
+#: Krylov options shared by the iterative set-ups. The tolerance is tight enough
+#: that Newton's history matches the direct solver's; ``ksp_rtol = 1e-6`` is about
+#: 30 % faster with the same Newton iterations on the scaling benchmark's block.
+_KRYLOV = {"ksp_rtol": 1e-12, "ksp_atol": 1e-14, "ksp_max_it": 1000, "ksp_gmres_restart": 200}
+
+#: The linear solvers of ``Simulation(linear_solver=...)``, by name and by whether
+#: the unknown is mixed (u, p). ``petsc_options`` still override any entry.
+#:
+#: - ``"direct"``: MUMPS LU behind PCREDISTRIBUTE (the default).
+#: - ``"iterative"``: GMRES with smoothed-aggregation AMG (GAMG) given the rigid
+#:   body modes for u; for u-p a Schur-complement field split, GAMG on the
+#:   displacement block and Jacobi on PETSc's ``selfp`` Schur approximation.
+LINEAR_SOLVERS = {
+    ("direct", False): _DIRECT,
+    ("direct", True): _DIRECT,
+    ("iterative", False): {
+        "ksp_type": "gmres", **_KRYLOV, "pc_type": "gamg",
+    },
+    ("iterative", True): {
+        "ksp_type": "fgmres", **_KRYLOV, "pc_type": "fieldsplit",
+        "pc_fieldsplit_type": "schur",
+        "pc_fieldsplit_schur_fact_type": "full",
+        "pc_fieldsplit_schur_precondition": "selfp",
+        "fieldsplit_u_ksp_type": "preonly",
+        "fieldsplit_u_pc_type": "gamg",
+        "fieldsplit_p_ksp_type": "preonly",
+        "fieldsplit_p_pc_type": "jacobi",
+    },
+}
+
+#: What a run uses unless told otherwise: Newton with the direct solver.
+DEFAULT_PETSC_OPTIONS = {**NEWTON_OPTIONS, **_DIRECT}
 
 _REASONS = {v: k for k, v in vars(PETSc.SNES.ConvergedReason).items() if isinstance(v, int)}
 
@@ -57,6 +97,46 @@ class NewtonResult:
     residual_norms: list[float]
 
 
+def rigid_body_modes(V: dolfinx.fem.FunctionSpace, order: np.ndarray) -> PETSc.NullSpace:
+    """Translations and rotations of a blocked displacement space, as a PETSc null space.
+
+    Args:
+        V: A vector P1/P2 space (block size = geometric dimension 2 or 3).
+        order: Which of V's dofs each entry of the vectors holds (e.g. their
+            order inside a mixed unknown).
+    """
+    g = V.dofmap.index_map_bs
+    x = V.tabulate_dof_coordinates()[:, :g]  # one row per node
+    n_nodes = x.shape[0]
+    modes = [np.zeros((n_nodes, g)) for _ in range(3 if g == 2 else 6)]
+    for c in range(g):
+        modes[c][:, c] = 1.0
+    if g == 2:
+        modes[2][:, 0], modes[2][:, 1] = -x[:, 1], x[:, 0]
+    else:
+        for k, (i, j) in enumerate(((0, 1), (1, 2), (2, 0)), start=3):
+            modes[k][:, i], modes[k][:, j] = -x[:, j], x[:, i]
+    vectors = []
+    for m in modes:
+        v = PETSc.Vec().createWithArray(m.reshape(-1)[order].copy())
+        vectors.append(v)
+    # GAMG wants them orthonormal.
+    basis = np.linalg.qr(np.column_stack([v.getArray() for v in vectors]))[0]
+    for v, column in zip(vectors, basis.T):
+        v.setArray(column)
+    return PETSc.NullSpace().create(vectors=vectors)
+
+
+def _weak(method: Callable) -> Callable:
+    """A callback that calls ``method`` without keeping its object alive."""
+    ref = weakref.WeakMethod(method)
+
+    def call(*args):
+        return ref()(*args)
+
+    return call
+
+
 class NewtonSolver:
     """SNES Newton for ``R(u) = 0`` with a tangent from the same UFL form.
 
@@ -65,8 +145,12 @@ class NewtonSolver:
         sparsity_form: A bilinear form over all cells, to build the matrix once; its
             coefficients must hold finite values (they only fill the pattern).
         prefix: PETSc options prefix, e.g. ``"fe_mpm_u_"``; ``-fe_mpm_u_snes_monitor`` works.
-        petsc_options: Overrides of :data:`DEFAULT_PETSC_OPTIONS`.
+        petsc_options: Overrides of :data:`NEWTON_OPTIONS` and the linear solver's options.
         timings: Dict to which assembly and total solve seconds are added.
+        linear_solver: A name of :data:`LINEAR_SOLVERS`.
+        displacement: The displacement's subspace of ``u``'s space (``u``'s own
+            space for the u form); the iterative solvers need its rigid body
+            modes, and for a mixed unknown its dofs.
     """
 
     def __init__(
@@ -76,6 +160,8 @@ class NewtonSolver:
         prefix: str,
         petsc_options: dict | None = None,
         timings: dict | None = None,
+        linear_solver: str = "direct",
+        displacement: dolfinx.fem.FunctionSpace | None = None,
     ):
         self.u = u
         self.A = fem_petsc.create_matrix(sparsity_form)
@@ -91,19 +177,52 @@ class NewtonSolver:
         self._gap = fem_petsc.create_vector(u.function_space)
         self.timings = timings if timings is not None else {}
         self.snes = PETSc.SNES().create(MPI.COMM_WORLD)
-        self.snes.setFunction(self._residual, self.b)
-        self.snes.setJacobian(self._jacobian, self.A)
+        # SNES keeps its callbacks alive, and a bound method keeps this solver
+        # alive: a cycle through PETSc that Python's collector cannot see. Every
+        # solver would then leak, with its MPI communicators, until MPI runs out
+        # of them (after a few hundred simulations in one process).
+        self.snes.setFunction(_weak(self._residual), self.b)
+        self.snes.setJacobian(_weak(self._jacobian), self.A)
         self.snes.setOptionsPrefix(prefix)
         self.A.setOptionsPrefix(f"{prefix}A_")
         self._prefix = prefix
-        self._options = {**DEFAULT_PETSC_OPTIONS, **(petsc_options or {})}
+        mixed = displacement is not None and displacement is not u.function_space
+        self._options = {**NEWTON_OPTIONS, **LINEAR_SOLVERS[linear_solver, mixed],
+                         **(petsc_options or {})}
+        if linear_solver == "iterative":
+            self._set_up_iterative(displacement or u.function_space, mixed)
         self._with_options(self.snes.setFromOptions)
         self.norms: list[float] = []
-        self.snes.setMonitor(lambda _snes, _it, norm: self.norms.append(norm))
+        self.snes.setMonitor(_weak(self._monitor))
         self._F = self._J = None
         self._bcs: Sequence = ()
         self._before_residual: Callable[[], None] | None = None
         self._before_jacobian: Callable[[], None] | None = None
+
+    def _monitor(self, snes, iteration: int, norm: float) -> None:
+        self.norms.append(norm)
+
+    def _set_up_iterative(self, V: dolfinx.fem.FunctionSpace, mixed: bool) -> None:
+        """Give AMG the rigid body modes, and a mixed unknown's field split its dofs."""
+        pc = self.snes.getKSP().getPC()
+        W = self.u.function_space
+        if not mixed:
+            self.A.setNearNullSpace(rigid_body_modes(V, np.arange(self.A.getSize()[0])))
+            return
+        collapsed, u_dofs = collapse(V)
+        if u_dofs.size != collapsed.dofmap.index_map.size_local * collapsed.dofmap.index_map_bs:
+            raise RuntimeError("iterative solver: unexpected layout of the displacement dofs")
+        order = np.argsort(u_dofs)
+        is_u = PETSc.IS().createGeneral(u_dofs[order], comm=self.A.comm)
+        p_dofs = np.setdiff1d(np.arange(W.dofmap.index_map.size_local * W.dofmap.index_map_bs),
+                              u_dofs).astype(np.int32)
+        is_p = PETSc.IS().createGeneral(p_dofs, comm=self.A.comm)
+        # PCFIELDSPLIT hands a near null space composed with a split's IS to its block.
+        modes = rigid_body_modes(collapsed, order)
+        is_u.compose("nearnullspace", modes)
+        self._keep = (is_u, is_p, modes)  # PETSc holds references, Python must too
+        pc.setType("fieldsplit")
+        pc.setFieldSplitIS(("u", is_u), ("p", is_p))
 
     @property
     def line_search(self) -> str:

@@ -5,10 +5,12 @@ The demos spell these set-ups out step by step; tests and benchmarks call them.
 
 from __future__ import annotations
 
+import numpy as np
+
 from fe_mpm import meshes
-from fe_mpm.boundary import Dirichlet, PointTraction, Traction
-from fe_mpm.materials import NeoHookean
-from fe_mpm.particles import seed
+from fe_mpm.boundary import Dirichlet, PointDirichlet, PointTraction, Traction
+from fe_mpm.materials import MohrCoulomb, NeoHookean
+from fe_mpm.particles import merge, seed
 from fe_mpm.simulation import Simulation
 
 
@@ -74,3 +76,71 @@ def cook_membrane(
 def tip_deflection(sim: Simulation) -> float:
     """Vertical displacement of Cook's point A (m)."""
     return float(sim.marker("A")[1] - meshes.COOK_POINT_A[1])
+
+
+def strip_footing(
+    formulation: str = "up",
+    *,
+    B: float = 1.0,
+    cu: float = 100.0,
+    E: float = 1.0e4,
+    nu: float = 0.495,
+    h: float = 0.05,
+    h_far: float | None = None,
+    near_width: float | None = None,
+    near_depth: float | None = None,
+    points_near: int = 12,
+    points_far: int = 3,
+    settlement: float = 2.0,
+    smooth: bool = False,
+    footing_thickness: float | None = None,
+    penalty: float | None = None,
+    **options,
+) -> Simulation:
+    """The rigid strip footing of Iaconeta (2019) §6.2 on weightless Tresca soil.
+
+    The scene of ``demos/strip_footing.py`` (which explains it): a half model with
+    rollers on the sides and a fixed base; the footing is a :class:`PointDirichlet`
+    of base and body points pulled down by ``settlement · t``, whose force is
+    ``reactions["footing"]``.
+
+    Args:
+        formulation: ``"u"`` or ``"up"``.
+        B: Footing width (m).
+        cu: Undrained strength c_u (Pa).
+        E: Young's modulus (Pa).
+        nu: Poisson's ratio.
+        h: Cell size near the footing (m).
+        h_far: Cell size far away (m); see :func:`fe_mpm.meshes.strip_footing`.
+        near_width: Width of the refined, densely seeded zone (m).
+        near_depth: Its depth (m).
+        points_near: Material points per cell in the refined zone.
+        points_far: Material points per cell elsewhere.
+        settlement: Settlement at ``t = 1`` (m).
+        smooth: Smooth footing (vertical constraint only) instead of rough.
+        footing_thickness: Height of the footing's body points (m); default 2h.
+        penalty: Penalty stiffness of the footing points (Pa/m); default 1e3 E/h.
+        options: Passed on to :class:`~fe_mpm.simulation.Simulation`.
+    """
+    scene = meshes.strip_footing(B, h=h, h_far=h_far, near_width=near_width,
+                                 near_depth=near_depth)
+    near = scene.cell_tags.find(meshes.FOOTING_SOIL_NEAR)
+    far = scene.cell_tags.find(meshes.FOOTING_SOIL)
+    points = merge(seed(scene.mesh, points_near, cells=near),
+                   seed(scene.mesh, points_far, cells=far))
+    thickness = 2 * h if footing_thickness is None else footing_thickness
+    x_f, w_f = meshes.footing_points(B, max(4, int(round(B / h))), thickness)
+    footing = PointDirichlet(
+        "footing", x_f, w_f, lambda t: np.array([0.0, -settlement * t]),
+        penalty=penalty or 1e3 * E / h, components=(1,) if smooth else None,
+    )
+    return Simulation(
+        scene.mesh, points, MohrCoulomb.tresca(E, nu, cu), formulation,
+        facet_tags=scene.facet_tags,
+        dirichlet=[
+            Dirichlet(meshes.FOOTING_SYMMETRY, component=0),
+            Dirichlet(meshes.FOOTING_FAR_SIDE, component=0),
+            Dirichlet(meshes.FOOTING_BASE),
+        ],
+        point_dirichlet=[footing], **options,
+    )

@@ -200,7 +200,8 @@ class Simulation:
             ``t -> float``; constant 1 if None (e.g. ``lambda t: t`` to ramp
             self-weight over static load steps).
         facet_tags: Facet tags for ``Dirichlet``/``Traction`` given by tag.
-        petsc_options: Overrides of :data:`fe_mpm.newton.DEFAULT_PETSC_OPTIONS`.
+        petsc_options: Overrides of :data:`fe_mpm.newton.DEFAULT_PETSC_OPTIONS` (or of
+            the iterative solver's, :data:`fe_mpm.newton.LINEAR_SOLVERS`).
         points_leaving: ``"raise"`` (default) stops when points leave the grid;
             ``"drop"`` removes them with a warning and counts them in ``dropped``.
         output_dir: Folder for ParaView output (``particles.pvd`` and ``grid.bp``);
@@ -224,6 +225,9 @@ class Simulation:
             (``"bt"``, the default here) can crawl where full steps converge: on
             the strip footing each of the two alone stopped short of s/B = 2, on
             different grids, and together they reach it.
+        linear_solver: ``"direct"`` (default: MUMPS LU) or ``"iterative"`` (GMRES
+            with algebraic multigrid; a Schur field split for u-p), see
+            :data:`fe_mpm.newton.LINEAR_SOLVERS`.
     """
 
     def __init__(
@@ -251,6 +255,7 @@ class Simulation:
         reactions: dict[str, int | Callable] | None = None,
         min_step: float | None = None,
         fallback_line_search: str | None = "bt",
+        linear_solver: str = "direct",
     ):
         check_choice("Simulation", "formulation", formulation, tuple(FORMULATIONS))
         check_range("Simulation", "ppp_alpha", ppp_alpha, lo=0.0)
@@ -261,6 +266,8 @@ class Simulation:
             check_choice("Simulation", "fallback_line_search", fallback_line_search,
                          ("basic", "bt", "l2", "cp"))
         check_range("Simulation", "output_every", output_every, lo=1)
+        check_choice("Simulation", "linear_solver", linear_solver, ("direct", "iterative"))
+        self.linear_solver = linear_solver
         tdim = mesh.topology.dim
         if mesh.topology.index_map(tdim).size_global == 0:
             raise ValueError("Simulation: the mesh is empty (it has no cells)")
@@ -773,6 +780,7 @@ class Simulation:
                 self.w, forms.jacobian.bind(all_cells, boundary_cells),
                 prefix=f"fe_mpm_{self.formulation.replace('-', '_')}_",
                 petsc_options=self.petsc_options, timings=self.timings,
+                linear_solver=self.linear_solver, displacement=self.fields.U,
             )
         return self._newton
 

@@ -110,7 +110,7 @@ def test_taylor_hood_needs_no_stabilisation_and_beats_p1p1(nu):
     """P2/P1 with 3 points per triangle: a smooth pressure without PPP (the same bound as
     for PPP, and the jumps shrink with h), and on an 8 x 8 grid it is closer to the limit
     than P1/P1+PPP on 16 x 16 (similar wall time, 0.03 s each; see
-    benchmarks/cook_formulations.py)."""
+    benchmarks/cook_pareto.py)."""
     sim, tip_p2p1, report = cook(8, nu, "up-p2p1", per_cell=3)
     _, tip_p1p1, _ = cook(16, nu, "up")
     limit = COOK_FINITE_STRAIN_LIMIT[nu]

@@ -20,7 +20,6 @@ from test_taylor import _simulation
 
 import fe_mpm
 from fe_mpm.material_driver import MaterialDriver
-from fe_mpm.meshes import rectangle_mesh
 from fe_mpm.materials.principal_return import (
     APEX,
     ELASTIC,
@@ -29,6 +28,7 @@ from fe_mpm.materials.principal_return import (
     PLANE,
     mohr_coulomb_return,
 )
+from fe_mpm.meshes import rectangle_mesh
 from fe_mpm.verification import rates, taylor_remainders
 
 SOIL = dict(E=1.0e4, nu=0.3, cohesion=10.0)  # kPa-like units

@@ -203,3 +203,25 @@ def test_impossible_or_nan_load_stops_cleanly_and_keeps_the_last_good_output(tmp
     assert 'timestep="0.5"' in (tmp_path / "particles.pvd").read_text()
     last = meshio.read(tmp_path / written[0])
     assert np.allclose(last.points[:, :2], points.x)
+
+
+@pytest.mark.parametrize("solver", ["direct", "iterative"])
+def test_a_dropped_simulation_is_freed_with_its_solver(solver):
+    """Nothing keeps a simulation alive once its user lets go of it.
+
+    The SNES callbacks used to hold the Newton solver (and so the simulation) in a
+    cycle through PETSc that Python cannot collect: each simulation leaked its MPI
+    communicators, and a process ran out of them after a few hundred (the suite
+    itself hit "MatCreate ... General MPI error")."""
+    import gc
+    import weakref
+
+    mesh = rectangle_mesh((0, 0), (1, 1), (2, 2))
+    sim = fe_mpm.Simulation(mesh, fe_mpm.seed(mesh), fe_mpm.NeoHookean(1.0, 0.3),
+                            dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0))],
+                            linear_solver=solver)
+    sim.step(1.0)
+    alive = (weakref.ref(sim), weakref.ref(sim._newton))
+    del sim
+    gc.collect()
+    assert all(ref() is None for ref in alive)
