@@ -22,6 +22,7 @@ import numpy as np
 
 from fe_mpm._dolfinx import dolfinx
 from fe_mpm.formulations import collapse
+from fe_mpm.packing import BoundForm
 
 #: Full Newton (no line search); quadratic convergence is checked, not hoped for.
 #: The step test (stol) ends a solve whose residual sits at its round-off floor: in
@@ -261,9 +262,10 @@ class NewtonSolver:
         t0 = time.perf_counter()
         with b.localForm() as b_local:
             b_local.set(0.0)
-        fem_petsc.assemble_vector(b, self._F)
+        fem_petsc.assemble_vector(b, self._F.form, coeffs=self._F.coefficients())
         if self._needs_lifting(x):
-            fem_petsc.apply_lifting(b, [self._J], bcs=[self._bcs], x0=[x], alpha=-1.0)
+            fem_petsc.apply_lifting(b, [self._J.form], bcs=[self._bcs], x0=[x], alpha=-1.0,
+                                    coeffs=[self._J.coefficients()])
         b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         fem_petsc.set_bc(b, self._bcs, x, -1.0)
         self._add_time("assembly", t0)
@@ -287,18 +289,18 @@ class NewtonSolver:
         return gap.norm(PETSc.NormType.INFINITY) > 1e-13 * g_max
 
     def _jacobian(self, snes, x, A, P) -> None:
+        x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+        dolfinx.fem.petsc.assign(x, self.u)
         if self._before_jacobian is not None:
-            x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
-            dolfinx.fem.petsc.assign(x, self.u)
             self._before_jacobian()
         t0 = time.perf_counter()
-        fem_petsc.assemble_jacobian(snes, x, A, P, self.u, self._J, None, self._bcs)
+        self._J.assemble_matrix(A, self._bcs)
         self._add_time("assembly", t0)
 
     def solve(
         self,
-        F: dolfinx.fem.Form,
-        J: dolfinx.fem.Form,
+        F: BoundForm,
+        J: BoundForm,
         bcs: Sequence[dolfinx.fem.DirichletBC],
         before_residual: Callable[[], None] | None = None,
         line_search: str | None = None,

@@ -1,9 +1,9 @@
 """Material points as the quadrature of UFL forms (design note: material-point-quadrature.md).
 
-Every cell gets ``nslot`` *slots*: a custom FFCx rule of ``nslot`` coincident
-points at the reference centroid with weights ``w_s = |K̂| / nslot``. Particle
-data live in quadrature-element functions on that rule, one value per
-(cell, slot). Two per-slot fields make the rule exact for the particle set:
+A rule of ``nslot`` *slots*: a custom FFCx rule of ``nslot`` coincident points at
+the reference centroid with weights ``w_s = |K̂| / nslot``. Particle data live
+in quadrature-element fields on that rule, one value per slot. Two per-slot
+fields make the rule exact for the particle set:
 
 - the offset ``d = x_p − x_c`` of the point from the slot (centroid) position, and
 - the scale ``s = V_p / (w_s |det J_K|)``, which turns the slot weight into the
@@ -12,6 +12,14 @@ data live in quadrature-element functions on that rule, one value per
 A P1 field is linear on an affine cell, so ``u(x_p) = u(x_c) + ∇u · d`` exactly and
 ``∇u(x_p) = ∇u``. With these, ``Σ_slots w_s |det J| s f(u(x_p), ∇u(x_p))`` equals
 ``Σ_p V_p f(...)`` to round-off, and ``ufl.derivative`` sees straight through it.
+
+**Entities.** The integral runs over *entities*, not cells: a cell holding k
+points appears ``ceil(k / nslot)`` times, each copy with up to ``nslot`` of its
+points. So one compiled rule serves every layout (a cell filling up needs no
+recompilation), and a grid seeded unevenly (12 points per cell in one zone, 3 in
+another) carries few empty slots. The slot data are numpy arrays with a row per
+entity (:attr:`MaterialPointQuadrature.values`), written into the kernels'
+coefficient arrays by :mod:`fe_mpm.packing`.
 """
 
 from __future__ import annotations
@@ -29,10 +37,16 @@ from fe_mpm._dolfinx import dolfinx
 #: count per cell recompiles rarely and hits the FFCx disk cache.
 SLOT_BUCKETS = (1, 2, 3, 4, 6, 8, 12, 16, 24, 32, 48, 64, 96, 128, 192, 256)
 
-#: Subdomain id of the occupied cells in every material-point integral.
+#: Subdomain id of the material-point integral (its entities, see the module docstring).
 OCCUPIED = 1
-#: Subdomain id of the cells holding boundary (penalty) points.
+#: Subdomain id of the boundary (penalty) points' integral, over their entities.
 BOUNDARY_POINTS = 2
+#: Subdomain id of plain cell integrals over the occupied cells, once each (e.g. PPP).
+OCCUPIED_CELLS = 3
+
+#: Cost of an entity, in slots, when choosing the slot count: the per-entity work
+#: of a kernel call (geometry, the dofs' gather and scatter) against a slot's.
+ENTITY_COST = 2.0
 
 
 def bucket(count: int) -> int:
@@ -46,31 +60,76 @@ def bucket(count: int) -> int:
     )
 
 
+def slot_count(counts: np.ndarray, current: int | None = None) -> int:
+    """Slots per entity for cells holding ``counts`` points.
+
+    Minimises ``slots + ENTITY_COST · entities`` over :data:`SLOT_BUCKETS` (up to the
+    fullest cell's bucket). The ``current`` count is kept unless another saves a
+    fifth of that cost, so a changing layout seldom recompiles.
+    """
+    counts = np.asarray(counts)
+    counts = counts[counts > 0]
+    if counts.size == 0:
+        return current or 1
+
+    def cost(nslot: int) -> float:
+        entities = np.ceil(counts / nslot).sum()
+        return entities * (nslot + ENTITY_COST)
+
+    candidates = [b for b in SLOT_BUCKETS if b <= bucket(int(counts.max()))]
+    best = min(candidates, key=cost)
+    if current is not None and cost(best) > 0.8 * cost(current):
+        return current
+    return best
+
+
 @dataclass
 class SlotLayout:
-    """Which (cell, slot) each point occupies in one step.
+    """Which entity and slot each point occupies in one step.
 
     Attributes:
         cell: Cell of each point, shape ``(n,)``.
-        slot: Slot of each point within its cell, shape ``(n,)``.
+        slot: Slot of each point within its entity, shape ``(n,)``.
+        entity: Entity (row of :attr:`entities`) of each point, shape ``(n,)``.
+        entities: Cell of each entity, sorted; a cell with k points appears
+            ``ceil(k / nslot)`` times, shape ``(E,)``.
         occupied: Sorted unique cells holding points, shape ``(n_occ,)``.
         max_count: Largest number of points in one cell.
+        nslot: Slots per entity.
     """
 
     cell: np.ndarray
     slot: np.ndarray
+    entity: np.ndarray
+    entities: np.ndarray
     occupied: np.ndarray
     max_count: int
+    nslot: int
 
     @classmethod
-    def from_cells(cls, cells: np.ndarray) -> SlotLayout:
-        """Number the points of each cell 0, 1, ... in their input order."""
+    def from_cells(cls, cells: np.ndarray, nslot: int | None = None) -> SlotLayout:
+        """Number the points of each cell 0, 1, ... in their input order, ``nslot`` per entity.
+
+        ``nslot`` defaults to the fullest cell's count (one entity per cell).
+        """
+        cells = np.asarray(cells)
         order = np.argsort(cells, kind="stable")
-        sorted_cells = cells[order]
-        occupied, first, counts = np.unique(sorted_cells, return_index=True, return_counts=True)
-        slot = np.empty_like(cells)
-        slot[order] = np.arange(cells.size) - np.repeat(first, counts)
-        return cls(cells, slot, occupied.astype(np.int32), int(counts.max(initial=0)))
+        occupied, first, counts = np.unique(cells[order], return_index=True, return_counts=True)
+        max_count = int(counts.max(initial=0))
+        nslot = nslot or max(max_count, 1)
+        rank = np.empty_like(cells)
+        rank[order] = np.arange(cells.size) - np.repeat(first, counts)
+        per_cell = -(-counts // nslot)  # entities of each occupied cell
+        first_entity = np.concatenate([[0], np.cumsum(per_cell)[:-1]]).astype(np.int64)
+        row = np.searchsorted(occupied, cells)
+        entity = first_entity[row] + rank // nslot
+        return cls(cells, rank % nslot, entity, np.repeat(occupied, per_cell).astype(np.int32),
+                   occupied.astype(np.int32), max_count, nslot)
+
+    @property
+    def num_entities(self) -> int:
+        """Number of entities E."""
+        return self.entities.size
 
 
 class MaterialPointQuadrature:
@@ -106,6 +165,8 @@ class MaterialPointQuadrature:
             },
         )
         gdim = mesh.geometry.dim
+        #: Slot data of this step by field: (E, nslot · value size) arrays.
+        self.values: dict[dolfinx.fem.Function, np.ndarray] = {}
         self.offset = self.function((gdim,), "offset")  # d = x_p - x_slot (m)
         self.scale = self.function((), "volume_scale")  # V_p / (w_s |det J|)
         self._tdim = tdim
@@ -120,10 +181,21 @@ class MaterialPointQuadrature:
             weights=self.weights,
         )
 
-    def function(self, value_shape: tuple[int, ...], name: str) -> dolfinx.fem.Function:
-        """A per-slot data field (one value of ``value_shape`` per cell and slot)."""
+    def function(
+        self, value_shape: tuple[int, ...], name: str, empty: float | np.ndarray = 0.0
+    ) -> dolfinx.fem.Function:
+        """A per-slot data field (one value of ``value_shape`` per entity and slot).
+
+        Its data go to :attr:`values` (see :meth:`pack`); the Function itself only
+        stands for the field in UFL, and holds ``empty`` in every slot of every
+        cell (finite values for assembling a sparsity pattern over all cells).
+        """
         V = dolfinx.fem.functionspace(self.mesh, self.element(value_shape))
-        return dolfinx.fem.Function(V, name=name)
+        f = dolfinx.fem.Function(V, name=name)
+        bs = V.dofmap.bs
+        f.x.array.reshape(-1, bs)[:] = np.reshape(empty, (-1,))
+        f.slot_rule = self  # marks a slot field for fe_mpm.packing
+        return f
 
     def sum(self, integrand: ufl.core.expr.Expr) -> ufl.Form:
         """The form ``Σ_p V_p integrand(x_p)`` over the occupied cells."""
@@ -153,10 +225,6 @@ class MaterialPointQuadrature:
 
     # -- packing -------------------------------------------------------------
 
-    def slot_dofs(self, f: dolfinx.fem.Function, layout: SlotLayout) -> np.ndarray:
-        """Index of each point's slot in ``f.x.array.reshape(-1, bs)``, shape ``(n,)``."""
-        return f.function_space.dofmap.list[layout.cell, layout.slot]
-
     def pack(
         self,
         f: dolfinx.fem.Function,
@@ -164,16 +232,17 @@ class MaterialPointQuadrature:
         values: np.ndarray,
         empty: float | np.ndarray = 0.0,
     ) -> None:
-        """Write per-point ``values`` (n, *value_shape) into ``f``.
+        """Set the slot data of ``f`` from per-point ``values`` (n, *value_shape).
 
         Empty slots carry zero weight but are still evaluated, so they get the
         harmless value ``empty`` (e.g. the identity for a deformation gradient,
         where zero would give ``ln det F = nan`` and ``nan * 0 = nan``).
         """
-        bs = f.function_space.dofmap.bs
-        arr = f.x.array.reshape(-1, bs)
-        arr[:] = np.reshape(empty, (-1,))
-        arr[self.slot_dofs(f, layout)] = values.reshape(values.shape[0], bs)
+        size = f.function_space.dofmap.bs
+        data = np.empty((layout.num_entities, self.nslot, size))
+        data[:] = np.reshape(empty, (-1,))
+        data[layout.entity, layout.slot] = values.reshape(values.shape[0], size)
+        self.values[f] = data.reshape(layout.num_entities, -1)
 
     def pack_geometry(
         self,
@@ -190,23 +259,12 @@ class MaterialPointQuadrature:
             weights: What :meth:`sum` weighs each point by, shape ``(n,)``: the
                 volume ``V_p`` of a material point, or the length/area of a
                 boundary point.
-            layout: Their cells and slots.
+            layout: Their cells, entities and slots.
             centroids: Physical centroid of every cell, shape ``(ncells, g)``.
             volumes: Volume ``|K|`` of every cell, shape ``(ncells,)``.
         """
+        if layout.nslot != self.nslot:
+            raise ValueError(f"layout has {layout.nslot} slots per entity, the rule {self.nslot}")
         self.pack(self.offset, layout, x - centroids[layout.cell])
         # w_s |det J| = |K| / nslot
         self.pack(self.scale, layout, weights * self.nslot / volumes[layout.cell])
-
-    def evaluate(
-        self, expression: dolfinx.fem.Expression, layout: SlotLayout
-    ) -> np.ndarray:
-        """Evaluate an expression compiled at :attr:`points` at every material point.
-
-        Returns:
-            Array of shape ``(n, value_size)``.
-        """
-        values = expression.eval(self.mesh, layout.occupied)
-        values = values.reshape(layout.occupied.size, self.nslot, -1)
-        row = np.searchsorted(layout.occupied, layout.cell)
-        return values[row, layout.slot]

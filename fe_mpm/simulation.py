@@ -43,13 +43,15 @@ from fe_mpm.formulations import FORMULATIONS, GridFields, collapse, constrained_
 from fe_mpm.io import ParticleWriter
 from fe_mpm.materials import Linearisation, PointState, ReturnMapResult
 from fe_mpm.newton import NewtonSolver
+from fe_mpm.packing import PointExpression
 from fe_mpm.particles import MaterialPoints, simplex_cell_type
 from fe_mpm.quadrature import (
     BOUNDARY_POINTS,
     OCCUPIED,
+    OCCUPIED_CELLS,
     MaterialPointQuadrature,
     SlotLayout,
-    bucket,
+    slot_count,
 )
 from fe_mpm.tracker import Tracker
 
@@ -90,22 +92,25 @@ class _SlotForms:
         spec, fields, material = sim.spec, sim.fields, sim.material
         deg = spec.u_degree
         self.q = q = MaterialPointQuadrature(mesh, nslot)
-        self.F_n = q.function((g, g), "F_n")
+        self.F_n = q.function((g, g), "F_n", empty=np.eye(g))
         self.density = q.function((), "density")
         du, p = fields.du, fields.p
         dF = ufl.Identity(g) + q.grad_at_points(du, deg)
-        self.history = {name: q.function(h.shape, name) for name, h in material.history.items()}
+        self.history = {name: q.function(h.shape, name, empty=h.initial)
+                        for name, h in material.history.items()}
         # A pointwise law (numpy return map) enters the forms through its
         # linearisation at the current iterate, refreshed before every residual.
         self.pointwise = hasattr(material, "return_map")
         self.linearisation = None
+        dynamic = set()  # slot fields that change during Newton
         if self.pointwise:
-            self.linearisation = Linearisation(
+            lin = self.linearisation = Linearisation(
                 q.function((3, 3), "tau_k"), q.function((9 * g * g,), "tangent_k"),
-                q.function((g, g), "dF_k"), g,
+                q.function((g, g), "dF_k", empty=np.eye(g)), g,
             )
-            self.dF_at_points = dolfinx.fem.Expression(
-                ufl.as_vector([dF[i, j] for i in range(g) for j in range(g)]), q.points)
+            dynamic = {lin.tau, lin.tangent, lin.dF}
+            self.dF_at_points = PointExpression(
+                ufl.as_vector([dF[i, j] for i in range(g) for j in range(g)]), q)
         state = PointState(dF, self.history, self.linearisation)
         if spec.pressure:
             w, q_test = ufl.TestFunctions(fields.W)
@@ -128,18 +133,20 @@ class _SlotForms:
             self.boundary_traction = qb.function((g,), "boundary_traction")
             R += penalty.penalty(du, w, qb, self.gap, self.penalty_stiffness,
                                  self.boundary_traction)
-            self.du_at_boundary = dolfinx.fem.Expression(qb.at_points(du), qb.points)
+            self.du_at_boundary = PointExpression(qb.at_points(du), qb)
+        rules = {OCCUPIED: q, BOUNDARY_POINTS: self.q_boundary}
         self.lumping = q.function((g, g), "second_moment") if sim.mass == "lumped" else None
         if sim._newmark is not None:
             R += inertia.inertia(du, w, q, self.density, sim._newmark, self.lumping)
             V1 = sim._newmark.a_n.function_space
             a, v = ufl.TrialFunction(V1), ufl.TestFunction(V1)
             self.mass_matrix = StepForm(
-                inertia.mass_product(a, v, q, self.density, self.lumping), mesh
+                inertia.mass_product(a, v, q, self.density, self.lumping), mesh,
+                quadratures=rules,
             )
         J = ufl.derivative(R, fields.w, ufl.TrialFunction(fields.W))
-        self.residual = StepForm(R, mesh, sim._traction_facets)
-        self.jacobian = StepForm(J, mesh, sim._traction_facets)
+        self.residual = StepForm(R, mesh, sim._traction_facets, rules, dynamic)
+        self.jacobian = StepForm(J, mesh, sim._traction_facets, rules, dynamic)
         # Per-point values after convergence: Δu_p, ΔF_p, the 3x3 Cauchy stress,
         # the acceleration (dynamics) and the material's history at t_{n+1}.
         F = dF * self.F_n
@@ -160,7 +167,7 @@ class _SlotForms:
             shape = ufl.shape(value)
             values += [value[idx] for idx in np.ndindex(*shape)] if shape else [value]
             self.history_columns[name] = slice(start, len(values))
-        self.update = dolfinx.fem.Expression(ufl.as_vector(values), q.points)
+        self.update = PointExpression(ufl.as_vector(values), q)
 
 
 class Simulation:
@@ -392,7 +399,7 @@ class Simulation:
             cells = np.arange(self.tracker.num_cells)
             centroid.x.array.reshape(-1, g)[dg0_vec.dofmap.list[cells, 0]] = self.tracker.centroids
             fill = dolfinx.fem.Function(dg0, name="fill")
-            dx2 = ufl.Measure("dx", domain=mesh, subdomain_id=OCCUPIED,
+            dx2 = ufl.Measure("dx", domain=mesh, subdomain_id=OCCUPIED_CELLS,
                               metadata={"quadrature_degree": 2})
             alpha = mixed_up.effective_alpha(ppp_alpha, g)
             self._ppp = mixed_up.PPPData(alpha, centroid, fill, dx2)
@@ -407,6 +414,7 @@ class Simulation:
 
         self._forms: dict[int, _SlotForms] = {}
         self._refreshed: dict | None = None  # the iterate of the last return map
+        self._nslot = self._nslot_boundary = None  # slots per entity, kept while they suit
         self._newton: NewtonSolver | None = None
         self._markers: dict[str, tuple[np.ndarray, int]] = {}  # name -> (x, host point)
         self._add_time("setup", t0)
@@ -577,10 +585,9 @@ class Simulation:
         self._check_loaded_facets(layout, t_new)
 
         t0 = time.perf_counter()
-        nslot = bucket(layout.max_count)
         boundary = self._locate_boundary_points(layout, t_new)
-        nslot_b = bucket(max(boundary.max_count, 1)) if boundary is not None else 0
-        forms = self._forms.get((nslot, nslot_b)) or self._compile(nslot, nslot_b)
+        nslot_b = boundary.nslot if boundary is not None else 0
+        forms = self._forms.get((layout.nslot, nslot_b)) or self._compile(layout.nslot, nslot_b)
         self._add_time("compile", t0)
 
         t0 = time.perf_counter()
@@ -596,12 +603,10 @@ class Simulation:
             fill = self._ppp.fill
             volume = np.bincount(layout.cell, weights=pts.volume, minlength=self.tracker.num_cells)
             fill.x.array[fill.function_space.dofmap.list[:, 0]] = volume / self.tracker.volumes
-        boundary_cells = None
         if boundary is not None:
-            boundary_cells = boundary.occupied
             self._pack_boundary_points(forms, boundary, t_new)
-        R = forms.residual.bind(layout.occupied, boundary_cells)
-        J = forms.jacobian.bind(layout.occupied, boundary_cells)
+        R = forms.residual.bind(layout, boundary)
+        J = forms.jacobian.bind(layout, boundary)
         bcs = self._boundary_conditions(layout, self.t, t_new)
         if self._newmark is not None:
             self._project_to_grid(layout, t_new - self.t)
@@ -628,10 +633,13 @@ class Simulation:
         g, q, lin = self.gdim, forms.q, forms.linearisation
         done = self._refreshed
         if done is None or not np.array_equal(done["w"], self.w.x.array):
-            dF = q.evaluate(forms.dF_at_points, layout).reshape(-1, g, g)
+            dF = forms.dF_at_points.evaluate(layout).reshape(-1, g, g)
             result = self.material.return_map(dF, self.points.history)
             q.pack(lin.tau, layout, result.tau)
             q.pack(lin.dF, layout, dF, empty=np.eye(g))
+            # The residual reads D_k only times ΔF − ΔF_k = 0: an old one must not
+            # linger (it may belong to another step's entities), none is needed.
+            q.values.pop(lin.tangent, None)
             done = self._refreshed = {"w": self.w.x.array.copy(), "tangent": False}
             self._last_return = result
         if tangent and not done["tangent"]:
@@ -668,7 +676,8 @@ class Simulation:
                 raise PointsOutsideError(f"all material points have left the grid at {where}")
         pts.cell = cells
         self._add_time("tracking", t0)
-        return SlotLayout.from_cells(cells)
+        self._nslot = slot_count(np.bincount(cells), self._nslot)
+        return SlotLayout.from_cells(cells, self._nslot)
 
     def _check_loaded_facets(self, layout: SlotLayout, t_new: float) -> None:
         """Warn when a grid traction's nodes have no material: their load acts on nothing.
@@ -748,7 +757,9 @@ class Simulation:
                 f"{pp.conditions[pp.owner[first]].name!r} lie in no occupied cell at the step "
                 f"to t = {t_new:g} (first at x = {pp.x[first]}); their load is not applied.",
                 stacklevel=4)
-        self._boundary_layout = SlotLayout.from_cells(cells[self._boundary_active])
+        cells = cells[self._boundary_active]
+        self._nslot_boundary = slot_count(np.bincount(cells), self._nslot_boundary)
+        self._boundary_layout = SlotLayout.from_cells(cells, self._nslot_boundary)
         return self._boundary_layout
 
     def _pack_boundary_points(self, forms: _SlotForms, layout: SlotLayout, t_new: float) -> None:
@@ -766,7 +777,7 @@ class Simulation:
         if pp is None:
             return {}
         active = self._boundary_active
-        du = forms.q_boundary.evaluate(forms.du_at_boundary, self._boundary_layout)
+        du = forms.du_at_boundary.evaluate(self._boundary_layout)
         forces = pp.forces(self._boundary_gap + du, active, t_new)
         pp.x[active] += du
         pp.x[~active] = pp.targets(t_new)[~active]  # outside the material: follow the target
@@ -775,9 +786,8 @@ class Simulation:
     def _newton_solver(self, forms: _SlotForms) -> NewtonSolver:
         if self._newton is None:
             all_cells = np.arange(self.tracker.num_cells, dtype=np.int32)
-            boundary_cells = all_cells if forms.q_boundary is not None else None
             self._newton = NewtonSolver(
-                self.w, forms.jacobian.bind(all_cells, boundary_cells),
+                self.w, forms.jacobian.bind_cells(all_cells),
                 prefix=f"fe_mpm_{self.formulation.replace('-', '_')}_",
                 petsc_options=self.petsc_options, timings=self.timings,
                 linear_solver=self.linear_solver, displacement=self.fields.U,
@@ -868,22 +878,22 @@ class Simulation:
         nm.a_n.x.array[:] = 0.0
         self._initial_guess(layout)  # Δu = 0 (and the projected pressure)
         self.refresh_material(tangent=False)
-        b = dolfinx.fem.assemble_vector(R)
-        b.scatter_reverse(dolfinx.la.InsertMode.add)
+        b = R.assemble_vector()
         nm.c_a.value, nm.c_v.value, nm.damping.value = saved
         V1 = nm.a_n.function_space
         g = self.gdim
         rhs = dolfinx.fem.Function(V1)
-        rhs.x.array[:] = -b.array[self._u_dofs]
+        rhs.x.array[:] = -b[self._u_dofs]
         constrained = np.zeros(self.w.x.array.size, dtype=bool)
         for bc in bcs:
             constrained[bc.dof_indices()[0]] = True
         fixed = constrained[self._u_dofs]
-        # Over all cells: empty ones add explicit zeros, which keeps every diagonal
-        # entry in the pattern for the constraint rows below.
+        # The pattern of all cells (explicit zeros where empty) keeps every diagonal
+        # entry for the constraint rows below.
         all_cells = np.arange(self.tracker.num_cells, dtype=np.int32)
-        M = dolfinx.fem.petsc.assemble_matrix(forms.mass_matrix.bind(all_cells))
+        M = dolfinx.fem.petsc.assemble_matrix(forms.mass_matrix.bind_cells(all_cells))
         M.assemble()
+        forms.mass_matrix.bind(layout).assemble_matrix(M)
         rows = np.flatnonzero(fixed).astype(np.int32)
         rhs.x.array[rows] = 0.0
         M.zeroRowsColumns(rows, 1.0)
@@ -912,9 +922,8 @@ class Simulation:
         """
         if not self._reactions:
             return {}
-        b = dolfinx.fem.assemble_vector(R)
-        b.scatter_reverse(dolfinx.la.InsertMode.add)
-        return {name: np.array([b.array[dofs].sum() for dofs in comps])
+        b = R.assemble_vector()
+        return {name: np.array([b[dofs].sum() for dofs in comps])
                 for name, comps in self._reactions.items()}
 
     def _initial_guess(self, layout: SlotLayout) -> None:
@@ -954,7 +963,7 @@ class Simulation:
         self, forms: _SlotForms, layout: SlotLayout, step: int, t: float, dt: float
     ) -> None:
         g = self.gdim
-        values = forms.q.evaluate(forms.update, layout)
+        values = forms.update.evaluate(layout)
         if not np.all(np.isfinite(values)):
             bad = np.flatnonzero(~np.all(np.isfinite(values), axis=1))
             raise ConvergenceError(

@@ -14,17 +14,28 @@ import dolfinx.fem.petsc as fem_petsc
 import numpy as np
 
 from fe_mpm._dolfinx import dolfinx
+from fe_mpm.packing import BoundForm
 
 
-def _residual(R: dolfinx.fem.Form) -> np.ndarray:
+def _residual(R: BoundForm | dolfinx.fem.Form, size: int) -> np.ndarray:
+    if isinstance(R, BoundForm):
+        return R.assemble_vector()[:size].copy()
     b = dolfinx.fem.assemble_vector(R)
     b.scatter_reverse(dolfinx.la.InsertMode.add)
-    return b.array[: b.index_map.size_local * b.block_size].copy()
+    return b.array[:size].copy()
+
+
+def _matrix(J: BoundForm | dolfinx.fem.Form):
+    if isinstance(J, BoundForm):
+        return J.assemble_matrix()
+    A = fem_petsc.assemble_matrix(J)
+    A.assemble()
+    return A
 
 
 def taylor_remainders(
-    R: dolfinx.fem.Form,
-    J: dolfinx.fem.Form,
+    R: BoundForm | dolfinx.fem.Form,
+    J: BoundForm | dolfinx.fem.Form,
     u: dolfinx.fem.Function,
     direction: np.ndarray,
     eps: Sequence[float] = (1e-3, 5e-4, 2.5e-4, 1.25e-4),
@@ -33,7 +44,7 @@ def taylor_remainders(
     """Zeroth- and first-order Taylor remainders of ``R`` about the current ``u``.
 
     Args:
-        R: Residual form, depending on ``u``.
+        R: Residual form, depending on ``u`` (a step's, or a plain DOLFINx form).
         J: Its Jacobian form.
         u: The unknown; restored on return.
         direction: Perturbation direction, same length as ``u.x.array``.
@@ -48,10 +59,10 @@ def taylor_remainders(
     """
     refresh = before_assembly or (lambda: None)
     u0 = u.x.array.copy()
+    size = u.function_space.dofmap.index_map.size_local * u.function_space.dofmap.index_map_bs
     refresh()
-    R0 = _residual(R)
-    A = fem_petsc.assemble_matrix(J)
-    A.assemble()
+    R0 = _residual(R, size)
+    A = _matrix(J)
     d = dolfinx.fem.Function(u.function_space)
     d.x.array[:] = direction
     Jd_vec = A.createVecLeft()
@@ -64,7 +75,7 @@ def taylor_remainders(
         for e in eps:
             u.x.array[:] = u0 + e * direction
             refresh()
-            Re = _residual(R)
+            Re = _residual(R, size)
             r0.append(np.linalg.norm(Re - R0))
             r1.append(np.linalg.norm(Re - R0 - e * Jd))
     finally:

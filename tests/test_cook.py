@@ -48,9 +48,11 @@ def test_load_steps_with_cell_crossing_stay_close():
     must be larger than the body). Single-point MPM then carries the known
     cell-crossing error: measured +0.7 %, bounded here by 1 %. The load rides on
     boundary points: the tip node of the grid edge is left without material in the
-    second step, and a grid traction there would be lost (-0.7 % then)."""
+    second step, and a grid traction there would be lost (-0.7 % then). A cell that a
+    second point enters becomes a second entity of the same one-slot rule: nothing
+    is recompiled."""
     one, _ = cook_tip(32, 0.33)
     two, reports = cook_tip(32, 0.33, steps=2, margin=2, load="points")
-    assert reports[-1].occupied_cells < 2048 and reports[-1].nslot == 2
+    assert reports[-1].occupied_cells < 2048 and reports[-1].nslot == 1
     assert abs(two / one - 1) < 0.01
     assert all(r.newton_iterations <= 4 for r in reports)

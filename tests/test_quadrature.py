@@ -1,8 +1,10 @@
 """Material points as quadrature: assembled forms equal a brute-force particle loop.
 
 Points at random positions, random volumes, 0 to 5 points per cell (so some
-cells are empty and the slot count is not a bucket size), and a nonlinear
-integrand. The slot rule (design note) must reproduce Σ_p V_p f(x_p) to round-off.
+cells are empty), and a nonlinear integrand. The slot rule (design note) must
+reproduce Σ_p V_p f(x_p) to round-off, both with one entity per cell and with
+two slots per entity (so cells with up to 5 points appear up to 3 times, each
+copy with its own points).
 """
 
 import dolfinx.fem.petsc  # noqa: F401
@@ -16,7 +18,7 @@ from fe_mpm.assembly import StepForm
 from fe_mpm.forms import displacement
 from fe_mpm.materials import NeoHookean
 from fe_mpm.meshes import rectangle_mesh
-from fe_mpm.quadrature import MaterialPointQuadrature, SlotLayout, bucket
+from fe_mpm.quadrature import OCCUPIED, MaterialPointQuadrature, SlotLayout, bucket, slot_count
 from fe_mpm.tracker import Tracker
 
 RTOL = 1e-12
@@ -28,14 +30,14 @@ def _mesh(dim):
     return rectangle_mesh((0.0, 0.0, 0.0), (1.0, 1.0, 2.0), (2, 2, 3))
 
 
-def _setup(dim, seed=1, F_spread=0.0):
+def _setup(dim, seed=1, F_spread=0.0, nslot=None):
     rng = np.random.default_rng(seed)
     mesh = _mesh(dim)
     ncells = mesh.topology.index_map(dim).size_local
     counts = rng.integers(0, 6, size=ncells)
     pts, cells = random_points(mesh, rng, counts, fill=False, F_spread=F_spread)
-    layout = SlotLayout.from_cells(cells)
-    q = MaterialPointQuadrature(mesh, bucket(layout.max_count))
+    layout = SlotLayout.from_cells(cells, nslot)
+    q = MaterialPointQuadrature(mesh, layout.nslot)
     tracker = Tracker(mesh)
     q.pack_geometry(pts.x, pts.volume, layout, tracker.centroids, tracker.volumes)
     return rng, mesh, pts, layout, q
@@ -51,20 +53,21 @@ def _p1_basis(V, cell, x):
     return dofs, Minv @ np.concatenate([[1.0], x]), Minv[:, 1:]
 
 
-def _assemble(form, mesh, layout):
-    f = StepForm(form, mesh).bind(layout.occupied)
+def _assemble(form, mesh, layout, q):
+    f = StepForm(form, mesh, quadratures={OCCUPIED: q}).bind(layout)
     if form.arguments().__len__() == 1:
-        b = dolfinx.fem.assemble_vector(f)
-        b.scatter_reverse(dolfinx.la.InsertMode.add)
-        return b.array.copy()
-    A = dolfinx.fem.assemble_matrix(f)
+        return f.assemble_vector().copy()
+    A = dolfinx.fem.assemble_matrix(f.form, coeffs=f.coefficients())
     A.scatter_reverse()
     return A.to_dense()
 
 
+@pytest.mark.parametrize("nslot", [None, 2])
 @pytest.mark.parametrize("dim", [2, 3])
-def test_scalar_nonlinear_form_equals_particle_sum(dim):
-    rng, mesh, pts, layout, q = _setup(dim)
+def test_scalar_nonlinear_form_equals_particle_sum(dim, nslot):
+    rng, mesh, pts, layout, q = _setup(dim, nslot=nslot)
+    if nslot is not None:
+        assert layout.num_entities > layout.occupied.size, "want cells split into entities"
     assert layout.occupied.size < mesh.topology.index_map(dim).size_local, "want empty cells"
     V = dolfinx.fem.functionspace(mesh, ("Lagrange", 1))
     u = dolfinx.fem.Function(V)
@@ -73,7 +76,7 @@ def test_scalar_nonlinear_form_equals_particle_sum(dim):
     up, gu = q.at_points(u), q.grad_at_points(u)
     R = q.sum((1 + up**2) * ufl.dot(gu, q.grad_at_points(w)) + up**3 * q.at_points(w))
     J = ufl.derivative(R, u, ufl.TrialFunction(V))
-    R_mp, J_mp = _assemble(R, mesh, layout), _assemble(J, mesh, layout)
+    R_mp, J_mp = _assemble(R, mesh, layout, q), _assemble(J, mesh, layout, q)
 
     R_bf = np.zeros_like(R_mp)
     J_bf = np.zeros_like(J_mp)
@@ -90,9 +93,10 @@ def test_scalar_nonlinear_form_equals_particle_sum(dim):
     assert np.linalg.norm(J_mp - J_bf) <= RTOL * np.linalg.norm(J_bf)
 
 
+@pytest.mark.parametrize("nslot", [None, 2])
 @pytest.mark.parametrize("dim", [2, 3])
-def test_neo_hookean_residual_equals_particle_sum(dim):
-    rng, mesh, pts, layout, q = _setup(dim, seed=2, F_spread=0.1)
+def test_neo_hookean_residual_equals_particle_sum(dim, nslot):
+    rng, mesh, pts, layout, q = _setup(dim, seed=2, F_spread=0.1, nslot=nslot)
     mat = NeoHookean(E=10.0, nu=0.3)
     V = dolfinx.fem.functionspace(mesh, ("Lagrange", 1, (dim,)))
     du = dolfinx.fem.Function(V)
@@ -105,7 +109,7 @@ def test_neo_hookean_residual_equals_particle_sum(dim):
     R = displacement.residual(
         du, ufl.TestFunction(V), q, F_n, rho, mat.kirchhoff, body_force=ufl.as_vector(b)
     )
-    R_mp = _assemble(R, mesh, layout)
+    R_mp = _assemble(R, mesh, layout, q)
 
     R_bf = np.zeros_like(R_mp).reshape(-1, dim)
     U = du.x.array.reshape(-1, dim)
@@ -126,5 +130,26 @@ def test_slot_layout_numbers_points_within_cells():
     layout = SlotLayout.from_cells(cells)
     assert layout.slot.tolist() == [0, 0, 1, 2, 0, 1]
     assert layout.occupied.tolist() == [0, 1, 3]
-    assert layout.max_count == 3
+    assert layout.entities.tolist() == [0, 1, 3]
+    assert layout.max_count == 3 and layout.nslot == 3
     assert bucket(3) == 3 and bucket(5) == 6 and bucket(13) == 16
+
+
+def test_a_full_cell_is_split_into_entities_of_nslot_points():
+    cells = np.array([3, 1, 3, 3, 0, 1], dtype=np.int32)
+    layout = SlotLayout.from_cells(cells, nslot=2)
+    assert layout.entities.tolist() == [0, 1, 3, 3]
+    assert layout.entity.tolist() == [2, 1, 2, 3, 0, 1]
+    assert layout.slot.tolist() == [0, 0, 1, 0, 0, 1]
+
+
+def test_slot_count_balances_empty_slots_against_entities():
+    """The footing's seeding (12 points per cell near it, 3 elsewhere) gets 3 slots,
+    not 12; an even seeding gets its count; a current count is kept unless another
+    saves a fifth of the cost (no recompiling for small gains)."""
+    mixed = np.r_[np.full(100, 12), np.full(450, 3)]
+    assert slot_count(mixed) == 3
+    assert slot_count(np.full(50, 1)) == 1 and slot_count(np.full(50, 6)) == 6
+    assert slot_count(np.r_[np.full(99, 1), 2]) == 1  # one cell crossed into: no recompile
+    assert slot_count(mixed, current=4) == 4
+    assert slot_count(mixed, current=12) == 3

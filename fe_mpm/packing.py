@@ -1,0 +1,171 @@
+"""The coefficient arrays of the material-point kernels, packed by fe-mpm.
+
+DOLFINx packs a form's coefficients cell by cell from the Functions' dof arrays.
+The material-point integrals run over entities instead (a cell appears once per
+``nslot`` of its points, see :mod:`fe_mpm.quadrature`), so the slot fields'
+data come from :attr:`MaterialPointQuadrature.values`, one row per entity. The
+finite element fields (the unknown, the PPP centroids, Newmark's nodal
+velocity, ...) are gathered from their dof arrays cell by cell, as DOLFINx would.
+
+A :class:`BoundForm` packs everything on its first assembly in a step, then
+only what Newton changes: the finite element fields and the slot fields marked
+*dynamic* (a pointwise law's linearisation).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+
+import numpy as np
+import ufl
+
+from fe_mpm._dolfinx import dolfinx
+from fe_mpm.quadrature import MaterialPointQuadrature, SlotLayout
+
+_cpp = dolfinx.cpp
+
+
+def coefficient_columns(ufl_object, ufcx_object) -> tuple[dict, int]:
+    """Columns of each coefficient in a kernel's packed array, and the array's width.
+
+    The order is the compiled kernel's (``original_coefficient_positions``), as
+    ``dolfinx.fem.create_form`` and ``Expression`` use it.
+    """
+    original = ufl.algorithms.extract_coefficients(ufl_object)
+    columns, offset = {}, 0
+    for i in range(ufcx_object.num_coefficients):
+        c = original[ufcx_object.original_coefficient_positions[i]]
+        dofmap = c.function_space.dofmap
+        width = dofmap.dof_layout.num_dofs * dofmap.bs
+        columns[c] = slice(offset, offset + width)
+        offset += width
+    return columns, offset
+
+
+def gather(f: dolfinx.fem.Function, cells: np.ndarray) -> np.ndarray:
+    """The dof values of ``f`` on each of ``cells``, shape (len(cells), dofs per cell).
+
+    Valid for elements without dof transformations (Lagrange, quadrature, and
+    mixed elements of these on simplices), which is all fe-mpm uses.
+    """
+    dofmap = f.function_space.dofmap
+    return f.x.array.reshape(-1, dofmap.bs)[dofmap.list[cells]].reshape(len(cells), -1)
+
+
+def is_slot_field(c) -> bool:
+    """Whether ``c`` is a slot field (made by :meth:`MaterialPointQuadrature.function`)."""
+    return getattr(c, "slot_rule", None) is not None
+
+
+class _Kernel:
+    """One kernel's packed coefficients over its entities."""
+
+    def __init__(self, columns: dict, width: int, cells: np.ndarray,
+                 quadrature: MaterialPointQuadrature | None):
+        self.columns, self.width, self.cells = columns, width, cells
+        self.quadrature = quadrature
+        self.array: np.ndarray | None = None
+
+    def pack(self, only: Iterable | None = None) -> np.ndarray:
+        """Write the columns of every coefficient, or of those in ``only``."""
+        if self.array is None:
+            self.array = np.zeros((len(self.cells), self.width))
+            only = None
+        q = self.quadrature
+        for c, cols in self.columns.items():
+            if only is not None and c not in only:
+                continue
+            if is_slot_field(c):
+                if q is not None and c in q.values:
+                    self.array[:, cols] = q.values[c]
+                # else: another rule's field, which this kernel does not read
+            else:
+                self.array[:, cols] = gather(c, self.cells)
+        return self.array
+
+
+class BoundForm:
+    """A compiled form bound to one step's entities, with coefficients packed here.
+
+    Args:
+        form: The DOLFINx form (its cell integrals' entities may repeat cells).
+        columns: Each coefficient's columns in the packed arrays
+            (:func:`coefficient_columns`), and ``width`` their total.
+        quadratures: Subdomain id -> the rule whose slot data its cell integral reads.
+        dynamic: Slot fields that change during Newton (repacked at every assembly).
+    """
+
+    def __init__(self, form: dolfinx.fem.Form, columns: dict, width: int,
+                 quadratures: dict[int, MaterialPointQuadrature], dynamic: set):
+        self.form = form
+        self._changing = [c for c in columns if not is_slot_field(c) or c in dynamic]
+        self._kernels = {}
+        cpp = form._cpp_object
+        for t in cpp.integral_types:
+            ids = _integral_ids(form.ufcx_form, t)
+            for i in range(cpp.num_integrals(t, 0)):
+                entities = np.asarray(cpp.domains(t, i))
+                cells = entities if entities.ndim == 1 else entities[:, 0]
+                q = quadratures.get(ids[i]) if t == dolfinx.fem.IntegralType.cell else None
+                self._kernels[(t, i)] = _Kernel(columns, width, cells, q)
+
+    def coefficients(self) -> dict:
+        """The packed coefficients for DOLFINx's assemblers, current for this iterate."""
+        return {key: kernel.pack(None if kernel.array is None else self._changing)
+                for key, kernel in self._kernels.items()}
+
+    def assemble_vector(self) -> np.ndarray:
+        """The assembled vector (owned and ghost entries), for checks and reactions."""
+        b = dolfinx.fem.assemble_vector(self.form, coeffs=self.coefficients())
+        b.scatter_reverse(dolfinx.la.InsertMode.add)
+        return b.array
+
+    def assemble_matrix(self, A=None, bcs=(), diag: float = 1.0):
+        """Assemble into the PETSc matrix ``A`` (a new one if None); returns it, assembled."""
+        import dolfinx.fem.petsc as fem_petsc
+
+        coeffs = self.coefficients()
+        if A is None:
+            A = fem_petsc.assemble_matrix(self.form, bcs=list(bcs), diag=diag, coeffs=coeffs)
+        else:
+            A.zeroEntries()
+            fem_petsc.assemble_matrix(A, self.form, bcs=list(bcs), diag=diag, coeffs=coeffs)
+        A.assemble()
+        return A
+
+
+def _integral_ids(ufcx_form, integral_type) -> list[int]:
+    """Subdomain ids of a compiled form's integrals of one type, in DOLFINx's order."""
+    t = {dolfinx.fem.IntegralType.cell: 0, dolfinx.fem.IntegralType.exterior_facet: 1,
+         dolfinx.fem.IntegralType.interior_facet: 2}[integral_type]
+    offsets = ufcx_form.form_integral_offsets
+    return [ufcx_form.form_integral_ids[j] for j in range(offsets[t], offsets[t + 1])]
+
+
+class PointExpression:
+    """A UFL expression evaluated at the material points of a rule.
+
+    Args:
+        expression: UFL expression (fields at the points via the rule's
+            ``at_points``/``grad_at_points``).
+        quadrature: The rule; its slot data are read at evaluation.
+    """
+
+    def __init__(self, expression: ufl.core.expr.Expr, quadrature: MaterialPointQuadrature):
+        self.quadrature = quadrature
+        self.expression = dolfinx.fem.Expression(expression, quadrature.points)
+        self._columns, self._width = coefficient_columns(
+            expression, self.expression._ufcx_expression)
+        self._shape = self.expression.value_shape
+
+    def evaluate(self, layout: SlotLayout) -> np.ndarray:
+        """Values at every point of ``layout``, shape ``(n, value size)``."""
+        q = self.quadrature
+        kernel = _Kernel(self._columns, self._width, layout.entities, q)
+        coeffs = kernel.pack()
+        cpp = self.expression._cpp_object
+        mesh = q.mesh
+        values = np.zeros((layout.num_entities, q.nslot, *self._shape))
+        _cpp.fem.tabulate_expression(values, cpp, _cpp.fem.pack_constants(cpp), coeffs,
+                                     mesh._cpp_object, layout.entities)
+        return values.reshape(layout.num_entities, q.nslot, -1)[layout.entity, layout.slot]
