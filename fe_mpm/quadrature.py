@@ -114,15 +114,20 @@ class SlotLayout:
         """
         cells = np.asarray(cells)
         order = np.argsort(cells, kind="stable")
-        occupied, first, counts = np.unique(cells[order], return_index=True, return_counts=True)
+        sorted_cells = cells[order]
+        first = np.flatnonzero(np.r_[True, sorted_cells[1:] != sorted_cells[:-1]]) \
+            if cells.size else np.zeros(0, dtype=np.int64)
+        occupied = sorted_cells[first]
+        counts = np.diff(np.r_[first, cells.size])
         max_count = int(counts.max(initial=0))
         nslot = nslot or max(max_count, 1)
         rank = np.empty_like(cells)
         rank[order] = np.arange(cells.size) - np.repeat(first, counts)
         per_cell = -(-counts // nslot)  # entities of each occupied cell
-        first_entity = np.concatenate([[0], np.cumsum(per_cell)[:-1]]).astype(np.int64)
-        row = np.searchsorted(occupied, cells)
-        entity = first_entity[row] + rank // nslot
+        first_entity = (np.cumsum(per_cell) - per_cell).astype(np.int64)
+        entity = np.empty(cells.size, dtype=np.int64)
+        entity[order] = np.repeat(first_entity, counts)
+        entity += rank // nslot
         return cls(cells, rank % nslot, entity, np.repeat(occupied, per_cell).astype(np.int32),
                    occupied.astype(np.int32), max_count, nslot)
 

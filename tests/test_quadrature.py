@@ -135,6 +135,11 @@ def test_slot_layout_numbers_points_within_cells():
     assert bucket(3) == 3 and bucket(5) == 6 and bucket(13) == 16
 
 
+def test_no_points_give_an_empty_layout():
+    layout = SlotLayout.from_cells(np.zeros(0, dtype=np.int32), nslot=2)
+    assert layout.num_entities == 0 and layout.occupied.size == 0 and layout.max_count == 0
+
+
 def test_a_full_cell_is_split_into_entities_of_nslot_points():
     cells = np.array([3, 1, 3, 3, 0, 1], dtype=np.int32)
     layout = SlotLayout.from_cells(cells, nslot=2)
