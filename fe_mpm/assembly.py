@@ -13,13 +13,7 @@ import ufl
 
 from fe_mpm._dolfinx import dolfinx
 from fe_mpm.packing import BoundForm, coefficient_columns
-from fe_mpm.quadrature import (
-    BOUNDARY_POINTS,
-    OCCUPIED,
-    OCCUPIED_CELLS,
-    MaterialPointQuadrature,
-    SlotLayout,
-)
+from fe_mpm.quadrature import BOUNDARY_POINTS, OCCUPIED, MaterialPointQuadrature, SlotLayout
 
 IntegralType = dolfinx.fem.IntegralType
 
@@ -30,9 +24,10 @@ class StepForm:
     Args:
         form: The UFL form. Its material-point integrals use subdomain id
             :data:`~fe_mpm.quadrature.OCCUPIED` (and
-            :data:`~fe_mpm.quadrature.BOUNDARY_POINTS` for boundary points),
-            plain cell integrals :data:`~fe_mpm.quadrature.OCCUPIED_CELLS`, and
-            exterior-facet integrals the ids in ``facet_domains``.
+            :data:`~fe_mpm.quadrature.BOUNDARY_POINTS` for boundary points), and
+            exterior-facet integrals the ids in ``facet_domains``. Other cell
+            integrals in those subdomains (PPP's) see every entity, so they must
+            be proportional to a field packed by ``pack_cell_field``.
         mesh: The mesh of the form.
         facet_domains: Map from ``ds`` subdomain id to the exterior facets (local indices).
         quadratures: Subdomain id -> the rule of that point integral.
@@ -73,7 +68,7 @@ class StepForm:
 
         Its coefficients are packed from the rules' slot data.
         """
-        cells = {OCCUPIED: layout.entities, OCCUPIED_CELLS: layout.occupied}
+        cells = {OCCUPIED: layout.entities}
         if boundary is not None:
             cells[BOUNDARY_POINTS] = boundary.entities
         return BoundForm(self._create(cells), self.columns, self.width, self.quadratures,
@@ -85,7 +80,7 @@ class StepForm:
         DOLFINx packs its slot fields from the Functions' placeholder values:
         for a sparsity pattern, not for numbers.
         """
-        return self._create({OCCUPIED: cells, OCCUPIED_CELLS: cells, BOUNDARY_POINTS: cells})
+        return self._create({OCCUPIED: cells, BOUNDARY_POINTS: cells})
 
     def _create(self, cells: dict[int, np.ndarray]) -> dolfinx.fem.Form:
         subdomains = {

@@ -57,6 +57,15 @@ def is_slot_field(c) -> bool:
     return getattr(c, "slot_rule", None) is not None
 
 
+def is_per_entity(c) -> bool:
+    """Whether the rules' data give ``c`` per entity.
+
+    That is a slot field, or a cell field packed by
+    :meth:`MaterialPointQuadrature.pack_cell_field`.
+    """
+    return is_slot_field(c) or getattr(c, "per_entity", False)
+
+
 class _Kernel:
     """One kernel's packed coefficients over its entities."""
 
@@ -75,12 +84,11 @@ class _Kernel:
         for c, cols in self.columns.items():
             if only is not None and c not in only:
                 continue
-            if is_slot_field(c):
-                if q is not None and c in q.values:
-                    self.array[:, cols] = q.values[c]
-                # else: another rule's field, which this kernel does not read
-            else:
+            if q is not None and c in q.values:
+                self.array[:, cols] = q.values[c]
+            elif not is_per_entity(c):
                 self.array[:, cols] = gather(c, self.cells)
+            # else: another rule's field, which this kernel does not read
         return self.array
 
 
@@ -98,7 +106,7 @@ class BoundForm:
     def __init__(self, form: dolfinx.fem.Form, columns: dict, width: int,
                  quadratures: dict[int, MaterialPointQuadrature], dynamic: set):
         self.form = form
-        self._changing = [c for c in columns if not is_slot_field(c) or c in dynamic]
+        self._changing = [c for c in columns if not is_per_entity(c) or c in dynamic]
         self._kernels = {}
         cpp = form._cpp_object
         for t in cpp.integral_types:

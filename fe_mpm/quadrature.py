@@ -41,8 +41,6 @@ SLOT_BUCKETS = (1, 2, 3, 4, 6, 8, 12, 16, 24, 32, 48, 64, 96, 128, 192, 256)
 OCCUPIED = 1
 #: Subdomain id of the boundary (penalty) points' integral, over their entities.
 BOUNDARY_POINTS = 2
-#: Subdomain id of plain cell integrals over the occupied cells, once each (e.g. PPP).
-OCCUPIED_CELLS = 3
 
 #: Cost of an entity, in slots, when choosing the slot count: the per-entity work
 #: of a kernel call (geometry, the dofs' gather and scatter) against a slot's.
@@ -248,6 +246,20 @@ class MaterialPointQuadrature:
         data[:] = np.reshape(empty, (-1,))
         data[layout.entity, layout.slot] = values.reshape(values.shape[0], size)
         self.values[f] = data.reshape(layout.num_entities, -1)
+
+    def pack_cell_field(
+        self, f: dolfinx.fem.Function, layout: SlotLayout, values: np.ndarray
+    ) -> None:
+        """Give a DG0 field ``f`` its per-cell ``values`` (ncells,) on first entities only.
+
+        A cell's copies get zero, so a cell integral in the material-point
+        subdomain (another rule, e.g. PPP's) proportional to ``f`` counts every
+        cell once.
+        """
+        first = np.r_[True, layout.entities[1:] != layout.entities[:-1]] \
+            if layout.num_entities else np.zeros(0, dtype=bool)
+        self.values[f] = np.where(first, values[layout.entities], 0.0)[:, None]
+        f.per_entity = True  # packed from these values, not gathered per cell
 
     def pack_geometry(
         self,

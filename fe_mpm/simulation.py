@@ -48,7 +48,6 @@ from fe_mpm.particles import MaterialPoints, simplex_cell_type
 from fe_mpm.quadrature import (
     BOUNDARY_POINTS,
     OCCUPIED,
-    OCCUPIED_CELLS,
     MaterialPointQuadrature,
     SlotLayout,
     slot_count,
@@ -399,7 +398,9 @@ class Simulation:
             cells = np.arange(self.tracker.num_cells)
             centroid.x.array.reshape(-1, g)[dg0_vec.dofmap.list[cells, 0]] = self.tracker.centroids
             fill = dolfinx.fem.Function(dg0, name="fill")
-            dx2 = ufl.Measure("dx", domain=mesh, subdomain_id=OCCUPIED_CELLS,
+            # In the material-point subdomain, so one kernel does both; the fill
+            # is packed per entity (zero on a cell's copies), so each cell counts once.
+            dx2 = ufl.Measure("dx", domain=mesh, subdomain_id=OCCUPIED,
                               metadata={"quadrature_degree": 2})
             alpha = mixed_up.effective_alpha(ppp_alpha, g)
             self._ppp = mixed_up.PPPData(alpha, centroid, fill, dx2)
@@ -600,9 +601,8 @@ class Simulation:
         if forms.lumping is not None:
             q.pack(forms.lumping, layout, self._second_moments(layout))
         if self._ppp is not None:
-            fill = self._ppp.fill
             volume = np.bincount(layout.cell, weights=pts.volume, minlength=self.tracker.num_cells)
-            fill.x.array[fill.function_space.dofmap.list[:, 0]] = volume / self.tracker.volumes
+            q.pack_cell_field(self._ppp.fill, layout, volume / self.tracker.volumes)
         if boundary is not None:
             self._pack_boundary_points(forms, boundary, t_new)
         R = forms.residual.bind(layout, boundary)
