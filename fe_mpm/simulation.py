@@ -3,8 +3,8 @@
 Each step:
 
 1. **Track**: locate every material point in the (undeformed) grid.
-2. **Pack**: number the points of each cell into slots and write their data
-   (offset, volume, F_n, density) into the slot fields of the forms.
+2. **Pack**: number the points of each cell into entities and slots and write
+   their data (offset, volume, F_n, density) as the slot fields' values.
 3. **Solve**: Newton for the grid displacement increment Δu, assembling only
    the occupied cells; grid nodes with no material support are pinned.
 4. **Convect**: evaluate Δu, ΔF and the stress at the points and update
@@ -65,7 +65,7 @@ class StepReport:
         newton_iterations: Newton iterations of the step.
         residual_norms: ‖R‖ at each Newton iterate.
         markers: Position of every marker at ``t``, name -> array (g,).
-        nslot: Slots per cell used in the step.
+        nslot: Slots per entity in the step (a cell with k points is ceil(k/nslot) entities).
         occupied_cells: Number of cells holding points.
         dt: Length of the step (s).
         reactions: Force each requested boundary exerts on the body, name -> (g,)
