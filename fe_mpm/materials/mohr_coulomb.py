@@ -114,18 +114,20 @@ class MohrCoulomb(IsotropicModuli):
         b_n = history["be"]
         b = F3 @ b_n @ np.swapaxes(F3, 1, 2)
         x, Q = spectral_decomposition(b)
+        # An inverted trial step gives nan here; it propagates to the residual,
+        # where Newton reports it (DIVERGED_FUNCTION_NANORINF) with the step.
         with np.errstate(invalid="ignore", divide="ignore"):
-            strain = 0.5 * np.log(x)  # nan for an inverted step: reported by the caller
-        surface = self.surface
-        ret = mohr_coulomb_return(surface, strain)
-        tau = from_principal(ret.stress, Q)
+            strain = 0.5 * np.log(x)
+            surface = self.surface
+            ret = mohr_coulomb_return(surface, strain)
+            tau = from_principal(ret.stress, Q)
+            strain_e = ret.stress @ surface.compliance
 
         def tangent() -> np.ndarray:
             dy_dx = ret.tangent / (2.0 * x[:, None, :])  # ∂ε_B/∂x_B = 1/(2 x_B)
             return derivative_wrt_dF(x, Q, ret.stress, dy_dx, F3, b_n, g)
 
         elastic = ret.region == ELASTIC
-        strain_e = ret.stress @ surface.compliance
         be = from_principal(np.exp(2.0 * strain_e), Q)
         be[elastic] = b[elastic]
         increment = _SQRT_2_3 * np.linalg.norm(strain - strain_e, axis=1)
