@@ -16,6 +16,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 
+import dolfinx.fem.petsc as fem_petsc
 import numpy as np
 import ufl
 
@@ -130,8 +131,6 @@ class BoundForm:
 
     def assemble_matrix(self, A=None, bcs=(), diag: float = 1.0):
         """Assemble into the PETSc matrix ``A`` (a new one if None); returns it, assembled."""
-        import dolfinx.fem.petsc as fem_petsc
-
         coeffs = self.coefficients()
         if A is None:
             A = fem_petsc.assemble_matrix(self.form, bcs=list(bcs), diag=diag, coeffs=coeffs)
