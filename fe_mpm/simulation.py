@@ -413,7 +413,7 @@ class Simulation:
             self._body_force_value = np.asarray(body_force, dtype=float)
         self._body_force_scale = body_force_scale
 
-        self._forms: dict[int, _SlotForms] = {}
+        self._forms: dict[tuple[int, int], _SlotForms] = {}  # by slots of points, boundary
         self._refreshed: dict | None = None  # the iterate of the last return map
         self._nslot = self._nslot_boundary = None  # slots per entity, kept while they suit
         self._newton: NewtonSolver | None = None
