@@ -39,6 +39,8 @@ import sys
 import time
 from pathlib import Path
 
+from step_timing import phases
+
 from fe_mpm import scenes
 from fe_mpm.references import COOK_FINITE_STRAIN_LIMIT, COOK_KRATOS_UP_PPP
 
@@ -67,14 +69,8 @@ def one_run(n: int, nu: float, formulation: str, per_cell: int, structured: bool
     (report,) = sim.run(progress=False)
     total = time.perf_counter() - t0
     sim.close()
-    t = sim.timings
-    assembly = t.get("assembly", 0.0)
-    split = {
-        "tracking": t.get("tracking", 0.0),
-        "packing": t.get("packing", 0.0) + t.get("compile", 0.0),
-        "assembly": assembly,
-        "solve": t.get("newton", 0.0) - assembly - t.get("return_map", 0.0),
-    }
+    split = {k: v for k, v in phases(sim.timings).items()
+             if k in ("tracking", "packing", "assembly", "solve")}
     split["rest"] = total - sum(split.values())
     return {"u_A_y": scenes.tip_deflection(sim), "newton": report.newton_iterations,
             "points": len(sim.points), "time_s": total, **split}

@@ -11,41 +11,18 @@ Usage: ``./run python benchmarks/footing_steps.py [--h 0.05 0.1] [--steps 6]
 """
 
 import argparse
-import statistics
-import time
+
+from step_timing import PHASES, median_steps
 
 from fe_mpm import scenes
-
-PHASES = ("tracking", "packing", "return_map", "assembly", "solve", "update")
 
 
 def step_times(h: float, formulation: str, steps: int, solver: str) -> dict:
     """Median wall time of steps 2…steps and of its phases."""
     sim = scenes.strip_footing(formulation, h=h, settlement=0.001 * steps,
                                linear_solver=solver)
-    walls, splits, iterations = [], [], []
-    for k in range(1, steps + 1):
-        before = dict(sim.timings)
-        t0 = time.perf_counter()
-        report = sim.step(k / steps)
-        wall = time.perf_counter() - t0
-        if k == 1:
-            continue
-        d = {key: sim.timings[key] - before.get(key, 0.0) for key in sim.timings}
-        splits.append({
-            "tracking": d.get("tracking", 0.0),
-            "packing": d.get("packing", 0.0) + d.get("compile", 0.0),
-            "return_map": d.get("return_map", 0.0),
-            "assembly": d.get("assembly", 0.0),
-            "solve": d["newton"] - d.get("assembly", 0.0) - d.get("return_map", 0.0),
-            "update": d.get("update", 0.0),
-        })
-        walls.append(wall)
-        iterations.append(report.newton_iterations)
+    row = {"points": len(sim.points), **median_steps(sim, steps)}
     sim.close()
-    row = {"points": len(sim.points), "step_s": statistics.median(walls),
-           "newton": statistics.median(iterations)}
-    row.update({ph: statistics.median(s[ph] for s in splits) for ph in PHASES})
     return row
 
 

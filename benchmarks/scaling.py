@@ -21,16 +21,13 @@ Usage: ``./run python benchmarks/scaling.py [--points 1e4 1e5 1e6] [--formulatio
 import argparse
 import csv
 import math
-import statistics
-import time
 from pathlib import Path
 
 import numpy as np
+from step_timing import PHASES, median_steps
 
 import fe_mpm
 from fe_mpm.meshes import rectangle_mesh
-
-PHASES = ("tracking", "packing", "assembly", "return_map", "solve", "update")
 
 
 def block(points_wanted: float, formulation: str, solver: str):
@@ -53,33 +50,11 @@ def block(points_wanted: float, formulation: str, solver: str):
 def time_steps(points_wanted: float, formulation: str, solver: str, steps: int) -> dict:
     """Median time per step after the first, and its split by phase."""
     sim = block(points_wanted, formulation, solver)
-    per_step, splits, iterations = [], [], []
-    for k in range(1, steps + 1):
-        before = dict(sim.timings)
-        t0 = time.perf_counter()
-        report = sim.step(k / steps)
-        wall = time.perf_counter() - t0
-        if k == 1:
-            continue
-        d = {key: sim.timings.get(key, 0.0) - before.get(key, 0.0) for key in sim.timings}
-        split = {
-            "tracking": d.get("tracking", 0.0),
-            "packing": d.get("packing", 0.0) + d.get("compile", 0.0),
-            "assembly": d.get("assembly", 0.0),
-            "return_map": d.get("return_map", 0.0),
-            "solve": d.get("newton", 0.0) - d.get("assembly", 0.0) - d.get("return_map", 0.0),
-            "update": d.get("update", 0.0),
-        }
-        per_step.append(wall)
-        splits.append(split)
-        iterations.append(report.newton_iterations)
+    timed = median_steps(sim, steps)
     sim.close()
-    median = statistics.median(per_step)
     row = {"points": len(sim.points), "dofs": sim.w.x.array.size, "formulation": formulation,
-           "solver": solver, "step_s": median, "newton": max(iterations)}
-    for phase in PHASES:
-        row[phase] = statistics.median(s[phase] for s in splits)
-    row["outside_solve_us_per_point"] = 1e6 * (median - row["solve"]) / row["points"]
+           "solver": solver, **timed}
+    row["outside_solve_us_per_point"] = 1e6 * (row["step_s"] - row["solve"]) / row["points"]
     return row
 
 
@@ -110,7 +85,7 @@ def main() -> None:
                 r = time_steps(n, formulation, solver, args.steps)
                 rows.append(r)
                 print(f"{formulation:<5}{solver:<10}{r['points']:>9}{r['dofs']:>9}"
-                      f"{r['newton']:>7}{r['step_s']:>8.3f}  "
+                      f"{r['newton']:>7g}{r['step_s']:>8.3f}  "
                       + "".join(f"{r[ph]:>11.3f}" for ph in PHASES)
                       + f"  {r['outside_solve_us_per_point']:.2f}", flush=True)
     with open(args.output / "scaling.csv", "w", newline="") as f:
