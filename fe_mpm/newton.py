@@ -117,14 +117,9 @@ def rigid_body_modes(V: dolfinx.fem.FunctionSpace, order: np.ndarray) -> PETSc.N
     else:
         for k, (i, j) in enumerate(((0, 1), (1, 2), (2, 0)), start=3):
             modes[k][:, i], modes[k][:, j] = -x[:, j], x[:, i]
-    vectors = []
-    for m in modes:
-        v = PETSc.Vec().createWithArray(m.reshape(-1)[order].copy())
-        vectors.append(v)
     # GAMG wants them orthonormal.
-    basis = np.linalg.qr(np.column_stack([v.getArray() for v in vectors]))[0]
-    for v, column in zip(vectors, basis.T):
-        v.setArray(column)
+    basis = np.linalg.qr(np.column_stack([m.reshape(-1)[order] for m in modes]))[0]
+    vectors = [PETSc.Vec().createWithArray(column.copy()) for column in basis.T]
     return PETSc.NullSpace().create(vectors=vectors)
 
 

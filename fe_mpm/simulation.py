@@ -577,7 +577,8 @@ class Simulation:
 
         Returns:
             ``(forms, layout, R, J, bcs)``: the slot forms, the slot layout, the
-            residual and Jacobian DOLFINx forms and the boundary conditions. The
+            residual and Jacobian (:class:`~fe_mpm.packing.BoundForm`, with
+            ``assemble_vector``/``assemble_matrix``) and the boundary conditions. The
             Taylor tests use this to check every residual/Jacobian pair (with
             :meth:`refresh_material` before each assembly for a pointwise law).
         """
