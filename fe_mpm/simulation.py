@@ -54,6 +54,9 @@ from fe_mpm.quadrature import (
 )
 from fe_mpm.tracker import Tracker
 
+# Warnings point at the first caller outside the package, however deep they arise.
+_PACKAGE = (str(Path(__file__).parent),)
+
 
 @dataclass
 class StepReport:
@@ -70,6 +73,8 @@ class StepReport:
         dt: Length of the step (s).
         reactions: Force each requested boundary exerts on the body, name -> (g,)
             (N, per unit thickness in 2D).
+        held_points: Points integrated in their last step's cell instead of the
+            one they are in (nonzero only in a step retried without re-binning).
     """
 
     step: int
@@ -81,6 +86,7 @@ class StepReport:
     occupied_cells: int = 0
     dt: float = 0.0
     reactions: dict[str, np.ndarray] = field(default_factory=dict)
+    held_points: int = 0
 
 
 class _SlotForms:
@@ -231,6 +237,11 @@ class Simulation:
             (``"bt"``, the default here) can crawl where full steps converge: on
             the strip footing each of the two alone stopped short of s/B = 2, on
             different grids, and together they reach it.
+        fallback_hold_cells: When a static step fails, :meth:`run` retries it once
+            with the points in the cells they were in during the last step (no
+            re-binning) before it cuts the step; see :meth:`step`. Not in dynamic
+            analyses, whose mass projection would weigh the held points by negative
+            shape function values.
         linear_solver: ``"direct"`` (default: MUMPS LU) or ``"iterative"`` (GMRES
             with algebraic multigrid; a Schur field split for u-p), see
             :data:`fe_mpm.newton.LINEAR_SOLVERS`.
@@ -261,6 +272,7 @@ class Simulation:
         reactions: dict[str, int | Callable] | None = None,
         min_step: float | None = None,
         fallback_line_search: str | None = "bt",
+        fallback_hold_cells: bool = True,
         linear_solver: str = "direct",
     ):
         check_choice("Simulation", "formulation", formulation, tuple(FORMULATIONS))
@@ -315,6 +327,8 @@ class Simulation:
         self.dynamic = bool(dynamic)
         self.min_step = min_step
         self.fallback_line_search = fallback_line_search
+        self.fallback_hold_cells = bool(fallback_hold_cells)
+        self._cells_of_last_step: np.ndarray | None = None
         self._newmark = None
         if self.dynamic:
             if self.spec.u_degree != 1:
@@ -472,9 +486,10 @@ class Simulation:
         """Advance from the current time to ``t_end`` in ``n_steps`` equal steps.
 
         In a static analysis ``t`` is a pseudo-time that only drives the loads
-        and the prescribed displacements. When Newton fails, the step is halved
-        and retried, and grown back (doubling, up to the nominal step) after two
-        successes. Below ``min_step`` the run stops with the last failure's message.
+        and the prescribed displacements. When Newton fails, the step is first
+        retried with the points held in their last cells (``fallback_hold_cells``),
+        then halved and retried, and grown back (doubling, up to the nominal step)
+        after two successes. Below ``min_step`` the run stops with the last failure's message.
         ``on_step(report)`` is called after every accepted step, with the points
         updated (e.g. to record a front position).
         """
@@ -495,7 +510,7 @@ class Simulation:
                 if t_end - t_new < 1e-9 * nominal:
                     t_new = t_end
                 try:
-                    report = self.step(t_new)
+                    report = self._step_with_fallbacks(t_new)
                 except ConvergenceError as err:
                     dt /= 2
                     successes = 0
@@ -520,12 +535,32 @@ class Simulation:
         self._write_output(force=True)
         return reports
 
-    def step(self, t_new: float) -> StepReport:
-        """Take one implicit step from the current time to ``t_new``."""
+    def _step_with_fallbacks(self, t_new: float) -> StepReport:
+        try:
+            return self.step(t_new)
+        except ConvergenceError:
+            if not self.fallback_hold_cells or self._cells_of_last_step is None or self.dynamic:
+                raise
+            return self.step(t_new, rebin=False)
+
+    def step(self, t_new: float, rebin: bool = True) -> StepReport:
+        """Take one implicit step from the current time to ``t_new``.
+
+        With ``rebin=False`` every point stays in the cell it was in during the
+        last step, as long as it lies within half a cell of it (its barycentric
+        coordinates there are all ≥ −1/2); a P1 field is linear, so the point then
+        reads its old cell's field extended beyond the cell. This is a fallback
+        for a step that fails right after re-binning: the points that crossed
+        cells change the grid's discrete equilibrium at once, and on a perfectly
+        plastic body that change can leave Newton with no nearby solution,
+        however short the step. Holding them integrates one more step as a
+        finite element method with moving quadrature points would; they are
+        re-binned at the next step.
+        """
         if not t_new > self.t:
             raise ValueError(f"Simulation.step: t_new must exceed the current time {self.t}")
         k = self.step_number + 1
-        forms, layout, R, J, bcs = self.prepare_step(t_new)
+        forms, layout, R, J, bcs = self.prepare_step(t_new, rebin=rebin)
         dt = t_new - self.t
         if self._newmark is not None and self.step_number == 0:
             self._consistent_initial_acceleration(forms, layout, R, bcs, dt)
@@ -559,6 +594,7 @@ class Simulation:
         reactions.update(self._convect_boundary_points(forms, t_new))
         self._add_time("update", t0)
 
+        self._cells_of_last_step = layout.cell.copy()
         self.t = t_new
         self.step_number = k
         report = StepReport(
@@ -566,14 +602,16 @@ class Simulation:
             residual_norms=result.residual_norms,
             markers={name: xm.copy() for name, (xm, _) in self._markers.items()},
             nslot=forms.q.nslot, occupied_cells=layout.occupied.size, dt=dt,
-            reactions=reactions,
+            reactions=reactions, held_points=self._held_points,
         )
         self.history.append(report)
         self._write_output()
         return report
 
-    def prepare_step(self, t_new: float):
+    def prepare_step(self, t_new: float, rebin: bool = True):
         """Track, pack and bind the forms of the step to ``t_new`` without solving.
+
+        ``rebin=False`` holds the points in their last cells (see :meth:`step`).
 
         Returns:
             ``(forms, layout, R, J, bcs)``: the slot forms, the slot layout, the
@@ -582,7 +620,8 @@ class Simulation:
             Taylor tests use this to check every residual/Jacobian pair (with
             :meth:`refresh_material` before each assembly for a pointwise law).
         """
-        layout = self._track(step=self.step_number + 1, t=t_new)
+        layout = self._track(step=self.step_number + 1, t=t_new,
+                             hold=None if rebin else self._cells_of_last_step)
         self._check_points_per_cell(layout)
         self._check_loaded_facets(layout, t_new)
 
@@ -651,10 +690,17 @@ class Simulation:
 
     # -- the phases of a step --------------------------------------------------
 
-    def _track(self, step: int = 0, t: float = 0.0) -> SlotLayout:
+    def _track(self, step: int = 0, t: float = 0.0, hold: np.ndarray | None = None) -> SlotLayout:
         t0 = time.perf_counter()
         pts = self.points
         cells = self.tracker.locate(pts.x, pts.cell)
+        if hold is not None and hold.size == cells.size and np.all(cells >= 0):
+            near = self.tracker.barycentric(pts.x, hold).min(axis=1) >= -0.5
+            held = np.where(near, hold, cells).astype(np.int32)
+            self._held_points = int(np.count_nonzero(held != cells))
+            cells = held
+        else:
+            self._held_points = 0
         outside = np.flatnonzero(cells < 0)
         if outside.size:
             where = f"step {step} (t = {t:g})" if step else "set-up"
@@ -663,7 +709,7 @@ class Simulation:
                    f"point {first} at x = {pts.x[first]}")
             if self.points_leaving == "raise":
                 raise PointsOutsideError(msg + ". Pass points_leaving='drop' to remove them.")
-            warnings.warn(msg + "; dropped.", stacklevel=3)
+            warnings.warn(msg + "; dropped.", skip_file_prefixes=_PACKAGE)
             keep = cells >= 0
             new_index = np.cumsum(keep) - 1
             for name, (xm, host) in self._markers.items():
@@ -697,7 +743,7 @@ class Simulation:
                     f"Traction {i - 1}: {idle.sum()} of its {nodes.size} grid nodes carry no "
                     f"material at the step to t = {t_new:g}, so the load there is lost. A grid "
                     "traction stays on the grid; use PointTraction for a load that follows "
-                    "the body.", stacklevel=4)
+                    "the body.", skip_file_prefixes=_PACKAGE)
 
     def _hinge_diagnosis(self, layout: SlotLayout) -> str:
         """Explain a singular tangent by occupied cells hinged to the rest at one node.
@@ -757,7 +803,7 @@ class Simulation:
                 f"{idle.sum()} point(s) of PointTraction "
                 f"{pp.conditions[pp.owner[first]].name!r} lie in no occupied cell at the step "
                 f"to t = {t_new:g} (first at x = {pp.x[first]}); their load is not applied.",
-                stacklevel=4)
+                skip_file_prefixes=_PACKAGE)
         cells = cells[self._boundary_active]
         self._nslot_boundary = slot_count(np.bincount(cells), self._nslot_boundary)
         self._boundary_layout = SlotLayout.from_cells(cells, self._nslot_boundary)
@@ -958,7 +1004,7 @@ class Simulation:
         if self.step_number == 0:  # the seeded layout: a set-up error
             raise ValueError(f"Simulation: {message} Seed more points per cell.")
         # Points moved there: neighbouring cells may still constrain those modes.
-        warnings.warn(f"{message} The tangent may be singular.", stacklevel=3)
+        warnings.warn(f"{message} The tangent may be singular.", skip_file_prefixes=_PACKAGE)
 
     def _convect(
         self, forms: _SlotForms, layout: SlotLayout, step: int, t: float, dt: float
