@@ -22,6 +22,12 @@
 # thesis omits them). Domain 5B x 5B with rollers on the sides and a fixed base;
 # rough footing (no horizontal motion under it) unless `--smooth`.
 #
+# **Robustness.** After every step the grid is reset and the points are re-binned,
+# so the next step starts out of balance. On a perfectly plastic body Newton can
+# then fail whatever the step length. `Simulation.run` retries a failed step with a
+# backtracking line search, then with the points held in their last cells (no
+# re-binning, `Simulation.step(rebin=False)`), and only then cuts it.
+#
 # Usage: `python demos/strip_footing.py --formulation up --steps 100 --json`.
 
 # +
@@ -134,6 +140,9 @@ for target in (0.05, 0.1, 0.25, 0.5, 1.0, 1.5, 2.0):
 print(f"  σ_yy/c_u under the footing: [{sigma_yy.min():.2f}, {sigma_yy.max():.2f}]; "
       f"oscillation {oscillation:.3f}")
 print(f"  Newton iterations per step: max {max(iterations)}, mean {np.mean(iterations):.2f}")
+held = [r.step for r in reports if r.held_points]
+if held:
+    print(f"  steps retried without re-binning (Simulation.step): {held}")
 
 if not args.no_output:
     import matplotlib
@@ -159,6 +168,7 @@ if args.json:
         "settlement_over_B": s_over_B.tolist(), "q_over_cu": q_over_cu.tolist(),
         "wall_time_s": wall, "n_particles": len(points), "steps": len(reports),
         "newton_iterations_max": max(iterations), "newton_iterations": iterations,
+        "steps_with_held_points": held,
         "residual_norms": [r.residual_norms for r in reports],
         "sigma_yy_over_cu_range": [float(sigma_yy.min()), float(sigma_yy.max())],
         "stress_oscillation": float(oscillation), "formulation": args.formulation,
