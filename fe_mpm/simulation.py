@@ -486,10 +486,11 @@ class Simulation:
         """Advance from the current time to ``t_end`` in ``n_steps`` equal steps.
 
         In a static analysis ``t`` is a pseudo-time that only drives the loads
-        and the prescribed displacements. When Newton fails, the step is first
-        retried with the points held in their last cells (``fallback_hold_cells``),
-        then halved and retried, and grown back (doubling, up to the nominal step)
-        after two successes. Below ``min_step`` the run stops with the last failure's message.
+        and the prescribed displacements. When Newton fails, the step is retried
+        with ``fallback_line_search``, then with the points held in their last
+        cells (``fallback_hold_cells``), and then halved, and grown back (doubling,
+        up to the nominal step) after two successes. Below ``min_step`` the run
+        stops with the last failure's message.
         ``on_step(report)`` is called after every accepted step, with the points
         updated (e.g. to record a front position).
         """
@@ -536,6 +537,7 @@ class Simulation:
         return reports
 
     def _step_with_fallbacks(self, t_new: float) -> StepReport:
+        """:meth:`step`, and once more without re-binning if it fails (static runs)."""
         try:
             return self.step(t_new)
         except ConvergenceError:
