@@ -12,7 +12,8 @@ Skempton's (1951) factor for a strip footing *embedded* to depth D,
 for one pushed into weightless soil that leaves an open trench.
 
 Writes ``footing_grids.csv`` (every step of every grid; ``held`` is 1 for a step
-retried with the points held in their last cells) and ``footing_grids.png``
+retried with the points held in their last cells, ``short`` for one shorter than
+nominal after a cut) and ``footing_grids.png``
 into ``--output``; ``--replot CSV`` redraws both from a saved CSV without running.
 Not a test.
 
@@ -40,29 +41,36 @@ def skempton(depth_over_B: np.ndarray) -> np.ndarray:
     return np.minimum(5.0 * (1.0 + 0.2 * np.asarray(depth_over_B)), 7.5)
 
 
-def run_grid(h: float, steps: int) -> list[dict]:
-    """Every step of the u-p footing on cell size ``h``, to s/B = 2 or to where it stops."""
-    sim = scenes.strip_footing("up", h=h, h_far=H_FAR.get(h), settlement=2.0)
+def run_grid(h: float, steps: int, h_far: float | None = None,
+             progress: bool = True) -> list[dict]:
+    """Every step of the u-p footing to s/B = 2, or to where it stops (printed).
+
+    ``h`` is the cell size near the footing; ``h_far`` the far one, by default
+    from :data:`H_FAR`.
+    """
+    sim = scenes.strip_footing("up", h=h, h_far=h_far or H_FAR.get(h), settlement=2.0)
     t0 = time.perf_counter()
     try:
-        sim.run(1.0, steps, progress=True)
+        sim.run(1.0, steps, progress=progress)
     except fe_mpm.ConvergenceError as err:
-        print(f"h = {h}: stopped: {str(err).split(';')[0]}")
+        print(f"h = {h}, {steps} steps: stopped at s/B = {2.0 * sim.t:.2f}: "
+              f"{str(err).split(';')[0]}")
     wall = time.perf_counter() - t0
     rows = [{"h": h, "points": len(sim.points), "step": r.step, "s_over_B": 2.0 * r.t,
              "q_over_cu": -r.reactions["footing"][1] / 0.5 / 100.0,
-             "newton": r.newton_iterations, "held": int(r.held_points > 0), "wall_s": wall}
+             "newton": r.newton_iterations, "held": int(r.held_points > 0),
+             "short": int(r.dt < 0.999 / steps), "wall_s": wall}
             for r in sim.history]
     sim.close()
     return rows
 
 
-def window_means(rows: list[dict], h: float) -> list[float]:
-    """Mean q/c_u over s/B ± 0.1 around each of :data:`CENTRES` (NaN past the end)."""
-    s = np.array([r["s_over_B"] for r in rows if r["h"] == h])
-    q = np.array([r["q_over_cu"] for r in rows if r["h"] == h])
+def window_means(rows: list[dict], centres=CENTRES) -> list[float]:
+    """Mean q/c_u of ``rows`` (one run) over s/B ± 0.1 around each centre (NaN past the end)."""
+    s = np.array([r["s_over_B"] for r in rows])
+    q = np.array([r["q_over_cu"] for r in rows])
     return [q[np.abs(s - c) <= 0.1 + 1e-9].mean() if s.size and s[-1] >= c + 0.1 - 1e-9
-            else np.nan for c in CENTRES]
+            else np.nan for c in centres]
 
 
 def report(rows: list[dict]) -> None:
@@ -74,7 +82,7 @@ def report(rows: list[dict]) -> None:
     means = {}
     for h in grids:
         mine = [r for r in rows if r["h"] == h]
-        means[h] = np.array(window_means(rows, h))
+        means[h] = np.array(window_means(mine))
         print(f"{h:>6}{mine[0]['points']:>8}" + "".join(f"{m:>8.2f}" for m in means[h])
               + f"{np.mean([r['newton'] for r in mine]):>8.1f}"
               + f"{sum(r['held'] > 0 for r in mine):>6}{mine[0]['wall_s']:>8.0f}")
@@ -124,7 +132,7 @@ def main() -> None:
     if args.replot:
         with open(args.replot) as f:
             rows = [{k: float(v) if k in ("h", "s_over_B", "q_over_cu", "wall_s") else int(v)
-                     for k, v in r.items()} for r in csv.DictReader(f)]
+                     for k, v in r.items() if v is not None} for r in csv.DictReader(f)]
     else:
         rows = [row for h in args.h for row in run_grid(h, args.steps)]
         with open(out / "footing_grids.csv", "w", newline="") as f:
