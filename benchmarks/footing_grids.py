@@ -132,7 +132,7 @@ def main() -> None:
     if args.replot:
         with open(args.replot) as f:
             rows = [{k: float(v) if k in ("h", "s_over_B", "q_over_cu", "wall_s") else int(v)
-                     for k, v in r.items() if v is not None} for r in csv.DictReader(f)]
+                     for k, v in r.items()} for r in csv.DictReader(f)]
     else:
         rows = [row for h in args.h for row in run_grid(h, args.steps)]
         with open(out / "footing_grids.csv", "w", newline="") as f:
