@@ -7,16 +7,99 @@ vertices' coordinates (shape ``(3, n)``), as in ``dolfinx.mesh.locate_entities_b
 
 from __future__ import annotations
 
+import numbers
+import reprlib
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
 from fe_mpm._dolfinx import dolfinx
+from fe_mpm.checks import check_finite, check_int, check_range
 
 Where = int | Callable[[np.ndarray], np.ndarray]
 Value = float | Sequence[float] | Callable[[float], float | Sequence[float]]
 Profile = Callable[[np.ndarray, float], np.ndarray]
+
+
+def _check_where(owner: str, where: object) -> None:
+    """Raise ``TypeError`` unless ``where`` is a facet tag (an int) or a marker."""
+    if callable(where):
+        return
+    # int(1.5) would select tag 1 without a word.
+    if isinstance(where, bool | np.bool_) or not isinstance(where, numbers.Integral):
+        raise TypeError(f"{owner}: where must be a facet tag (an int) or a marker x -> bool, "
+                        f"got {reprlib.repr(where)}")
+
+
+def _check_callable(owner: str, field: str, value: object, kind: str) -> None:
+    """Raise ``TypeError`` unless ``value`` is None or callable (``kind`` describes it)."""
+    if value is not None and not callable(value):
+        raise TypeError(f"{owner}: {field} must be {kind} or None, got {reprlib.repr(value)}")
+
+
+def _vector(owner: str, field: str, value: object) -> tuple[float, ...]:
+    """A non-empty 1-D sequence of finite numbers as a tuple of floats, or raise."""
+    a = check_finite(owner, field, value, what="component")
+    if a.ndim != 1 or a.size == 0:
+        raise TypeError(f"{owner}: {field} must be a sequence of numbers, one per component, "
+                        f"got {reprlib.repr(value)}")
+    return tuple(a.tolist())
+
+
+def _value_at(owner: str, field: str, f: Callable, t: float) -> np.ndarray:
+    """``f(t)`` as a float array; raise ``ValueError`` unless it holds finite numbers.
+
+    Args:
+        owner: The condition, for the message.
+        field: The name of the callable, e.g. ``"value"`` or ``"scale"``.
+        f: The callable, ``t -> number or vector``.
+        t: Time (s, or the pseudo-time of a static run).
+    """
+    v = f(t)
+    try:
+        a = np.asarray(v)
+    except ValueError:  # ragged
+        a = np.asarray(np.nan)
+    # A nan here would reach the grid as a boundary value and Newton would fail far from the cause.
+    if a.dtype.kind not in "iuf" or not np.all(np.isfinite(a)):
+        raise ValueError(f"{owner}: {field}(t) must return finite numbers, got "
+                         f"{reprlib.repr(v)} at t = {float(t):g}")
+    return a.astype(np.float64)
+
+
+def _scale_at(owner: str, scale: Callable[[float], float] | None, t: float) -> float:
+    """The load factor ``scale(t)`` (1 if None), a finite number, or raise ``ValueError``."""
+    if scale is None:
+        return 1.0
+    factor = _value_at(owner, "scale", scale, t)
+    if factor.size != 1:
+        raise ValueError(f"{owner}: scale(t) must return one number, got shape {factor.shape} "
+                         f"at t = {float(t):g}")
+    return float(factor.reshape(-1)[0])
+
+
+def _points(owner: str, x: object, weight: object) -> tuple[np.ndarray, np.ndarray]:
+    """Positions (n, g) and weights (n,) of boundary points, checked.
+
+    Raises:
+        TypeError: ``x`` or ``weight`` holds something other than numbers.
+        ValueError: ``x`` is not (n, 2) or (n, 3) with n ≥ 1 or not finite, or a
+            weight is not finite and > 0 (the message names the first bad point).
+    """
+    x = check_finite(owner, "x", x, what="point")
+    if x.ndim != 2 or x.shape[1] not in (2, 3) or x.shape[0] == 0:
+        raise ValueError(f"{owner}: x must have shape (n, 2) or (n, 3) with n ≥ 1, got {x.shape}")
+    w = check_finite(owner, "weight", weight, what="point")
+    if w.ndim > 1 or w.size not in (1, x.shape[0]):
+        raise ValueError(f"{owner}: weight must be one number or one per point, shape "
+                         f"({x.shape[0]},), got shape {w.shape}")
+    w = np.broadcast_to(w, (x.shape[0],)).copy()
+    bad = np.flatnonzero(w <= 0)
+    if bad.size:
+        raise ValueError(f"{owner}: every weight must be > 0 (m in 2D, m² in 3D); point "
+                         f"{bad[0]} has {w[bad[0]]:g}")
+    return x, w
 
 
 @dataclass(frozen=True)
@@ -42,10 +125,29 @@ class Dirichlet:
     component: int | None = None
     profile: Profile | None = None
 
+    def __post_init__(self) -> None:
+        _check_where("Dirichlet", self.where)
+        if self.component is not None:
+            check_int("Dirichlet", "component", self.component, lo=0, hi=2)
+        _check_callable("Dirichlet", "profile", self.profile, "a function (x, t) -> u")
+        if not callable(self.value):
+            value = check_finite("Dirichlet", "value", self.value, what="component")
+            if value.ndim > 1:
+                raise ValueError(f"Dirichlet: value must be a number or a vector, got shape "
+                                 f"{value.shape}")
+            # object.__setattr__: the dataclass is frozen; keep floats, not what was given.
+            object.__setattr__(self, "value", float(value) if value.ndim == 0
+                               else tuple(value.tolist()))
+
     def at(self, t: float) -> np.ndarray:
-        """Prescribed displacement at time ``t`` as an array."""
-        v = self.value(t) if callable(self.value) else self.value
-        return np.asarray(v, dtype=np.float64)
+        """Prescribed displacement at time ``t`` (m) as an array.
+
+        Raises:
+            ValueError: A callable ``value`` returned a non-finite value at ``t``.
+        """
+        if callable(self.value):
+            return _value_at("Dirichlet", "value", self.value, t)
+        return np.asarray(self.value, dtype=np.float64)
 
 
 @dataclass(frozen=True)
@@ -63,17 +165,36 @@ class Traction:
     value: Sequence[float]
     scale: Callable[[float], float] | None = None
 
+    def __post_init__(self) -> None:
+        _check_where("Traction", self.where)
+        object.__setattr__(self, "value", _vector("Traction", "value", self.value))
+        _check_callable("Traction", "scale", self.scale, "a function t -> float")
+
     def at(self, t: float) -> np.ndarray:
-        """Traction vector at time ``t`` (Pa)."""
-        factor = 1.0 if self.scale is None else float(self.scale(t))
-        return factor * np.asarray(self.value, dtype=np.float64)
+        """Traction vector at time ``t`` (Pa).
+
+        Raises:
+            ValueError: ``scale`` returned a non-finite value at ``t``.
+        """
+        return _scale_at("Traction", self.scale, t) * np.asarray(self.value, dtype=np.float64)
 
 
 def boundary_facets(
     mesh: dolfinx.mesh.Mesh, where: Where, facet_tags: dolfinx.mesh.MeshTags | None
 ) -> np.ndarray:
-    """Local indices of the exterior facets selected by ``where``."""
-    fdim = mesh.topology.dim - 1
+    """Local indices of the exterior facets selected by ``where``.
+
+    Raises:
+        ValueError: ``facet_tags`` does not tag facets (e.g. cell tags), a tag
+            is given without facet tags, or nothing is selected.
+    """
+    tdim = mesh.topology.dim
+    fdim = tdim - 1
+    if facet_tags is not None and facet_tags.dim != fdim:
+        # find() would return cell indices, taken for facet indices without a word.
+        raise ValueError(
+            f"facet_tags has entities of dimension {facet_tags.dim} but the facets of this "
+            f"{tdim}D mesh have dimension {fdim}; cell tags cannot select boundary facets")
     if callable(where):
         facets = dolfinx.mesh.locate_entities_boundary(mesh, fdim, where)
     else:
@@ -125,9 +246,31 @@ class PointDirichlet:
     penalty: float
     components: tuple[int, ...] | None = None
 
+    def __post_init__(self) -> None:
+        owner = f"PointDirichlet {self.name!r}"
+        x, weight = _points(owner, self.x, self.weight)
+        if not callable(self.value):
+            raise TypeError(f"{owner}: value must be a function t -> displacement (m), "
+                            f"got {reprlib.repr(self.value)}")
+        penalty = check_range(owner, "penalty", self.penalty, lo=0.0, lo_open=True)
+        components = self.components
+        if components is not None:
+            if isinstance(components, str) or not isinstance(components, Sequence | np.ndarray):
+                raise TypeError(f"{owner}: components must be a tuple of component indices "
+                                f"such as (1,), got {reprlib.repr(components)}")
+            components = tuple(check_int(owner, "components", c, lo=0, hi=2) for c in components)
+        # object.__setattr__: the dataclass is frozen; keep the checked arrays and floats.
+        for name, value in (("x", x), ("weight", weight), ("penalty", penalty),
+                            ("components", components)):
+            object.__setattr__(self, name, value)
+
     def at(self, t: float) -> np.ndarray:
-        """Prescribed displacement at time ``t``, shape (g,)."""
-        return np.asarray(self.value(t), dtype=np.float64)
+        """Prescribed displacement at time ``t`` (m), shape (g,).
+
+        Raises:
+            ValueError: ``value`` returned a non-finite value at ``t``.
+        """
+        return _value_at(f"PointDirichlet {self.name!r}", "value", self.value, t)
 
 
 @dataclass(frozen=True)
@@ -157,7 +300,20 @@ class PointTraction:
     value: Sequence[float]
     scale: Callable[[float], float] | None = None
 
+    def __post_init__(self) -> None:
+        owner = f"PointTraction {self.name!r}"
+        x, weight = _points(owner, self.x, self.weight)
+        _check_callable(owner, "scale", self.scale, "a function t -> float")
+        # object.__setattr__: the dataclass is frozen; keep the checked arrays and floats.
+        for name, value in (("x", x), ("weight", weight),
+                            ("value", _vector(owner, "value", self.value))):
+            object.__setattr__(self, name, value)
+
     def at(self, t: float) -> np.ndarray:
-        """Traction vector at time ``t`` (Pa)."""
-        factor = 1.0 if self.scale is None else float(self.scale(t))
+        """Traction vector at time ``t`` (Pa).
+
+        Raises:
+            ValueError: ``scale`` returned a non-finite value at ``t``.
+        """
+        factor = _scale_at(f"PointTraction {self.name!r}", self.scale, t)
         return factor * np.asarray(self.value, dtype=np.float64)

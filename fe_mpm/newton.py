@@ -14,7 +14,6 @@ import weakref
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
-from mpi4py import MPI
 from petsc4py import PETSc
 
 import dolfinx.fem.petsc as fem_petsc
@@ -25,21 +24,27 @@ from fe_mpm.formulations import collapse
 from fe_mpm.packing import BoundForm
 
 #: Full Newton (no line search); quadratic convergence is checked, not hoped for.
-#: The step test (stol) ends a solve whose residual sits at its round-off floor: in
-#: dynamics the inertia terms scale as 4/Δt², and that floor can exceed rtol·‖R₀‖.
-#: After a Newton correction of relative size 1e-10 the error is far below it.
-#: The divergence test (‖R‖ > 1e4 ‖R₀‖) is off: under a prescribed displacement
-#: ‖R₀‖ is the boundary gap in metres while later residuals are forces, so it
-#: stopped sound solves after one iteration; a diverging solve ends at snes_max_it.
+#: SNES's own tests are replaced by :class:`ForceTest` (see there): ``snes_rtol``
+#: is its tolerance relative to the forces in play, ``snes_atol`` an absolute floor
+#: (N), and ``snes_max_it`` the iteration limit. ``snes_stol`` is not used: a small
+#: update says nothing about the residual when the tangent is singular.
 NEWTON_OPTIONS = {
     "snes_type": "newtonls",
     "snes_linesearch_type": "basic",
     "snes_rtol": 1e-10,
-    "snes_atol": 1e-12,
-    "snes_stol": 1e-10,
+    "snes_atol": 0.0,
     "snes_max_it": 25,
     "snes_divergence_tolerance": "unlimited",
 }
+
+#: The residual of a converged iterate may be as large as the forces that a
+#: displacement error of ``ROUND_OFF_FACTOR`` machine epsilons of a cell would
+#: cause, ``ROUND_OFF_FACTOR ε h ‖diag K‖``: below that, ‖R‖ is round-off of the
+#: internal forces (computed from total deformations, about ε E |F| per point), not
+#: an equilibrium error. Measured floors where Newton stagnates: 0.015 to 0.2 times
+#: ε h ‖diag K‖ (Cook u, u-p, P2/P1 and J2; 2D and 3D gravity blocks with E from
+#: 1e7 to 1e9 Pa; the strip footing), so 10 leaves a margin of 50 or more.
+ROUND_OFF_FACTOR = 10.0
 
 #: MUMPS LU. PCREDISTRIBUTE drops the constrained rows (Dirichlet and the pinned
 #: dofs of empty cells) before MUMPS sees the matrix, so empty grid costs no
@@ -90,12 +95,104 @@ _REASONS = {v: k for k, v in vars(PETSc.SNES.ConvergedReason).items() if isinsta
 
 @dataclass
 class NewtonResult:
-    """Outcome of one Newton solve."""
+    """Outcome of one Newton solve.
+
+    Attributes:
+        converged: Whether the last iterate passed :class:`ForceTest`.
+        iterations: Newton iterations taken.
+        reason: Why the solve ended, in words (e.g. ``"residual 3.1e-12 of the
+            force scale"``, or PETSc's reason when it failed).
+        residual_norms: ‖R‖ at each iterate (displacement and pressure rows).
+        force_scale: The forces in play at the last iterate, S (N; N/m in 2D).
+        tolerance: The largest ‖R‖ accepted at the last iterate (N).
+    """
 
     converged: bool
     iterations: int
     reason: str
     residual_norms: list[float]
+    force_scale: float = 0.0
+    tolerance: float = 0.0
+
+    @property
+    def relative_residual(self) -> float:
+        """The last ‖R‖ over the force scale (inf when there are no forces)."""
+        final = self.residual_norms[-1] if self.residual_norms else np.inf
+        return final / self.force_scale if self.force_scale > 0 else np.inf
+
+
+class ForceTest:
+    r"""When a Newton iterate counts as converged: a residual small against the forces.
+
+    The relative test of PETSc, ‖R‖ ≤ rtol ‖R₀‖, compares a step with its own start.
+    Once the loads stop changing, ‖R₀‖ is only the imbalance left by re-binning,
+    and a converged step cannot reach rtol times it (Newton then fails on a body at
+    rest); and a step whose update was unusable can end on the step-length test
+    with ‖R‖ not fallen at all. Here an iterate is accepted only when
+
+    .. math::
+
+        \|R_u\| \le \max(\mathrm{rtol}\, S,\ \mathrm{atol},\ f_arepsilon), \qquad
+        S = \max(\|f_{ext}\|, \|f_{int}\|),
+
+    over the displacement rows, where :math:`f_{ext}` are the loads (body forces and
+    tractions) and :math:`f_{int} = R + f_{ext}` everything else — stress
+    divergence, inertia, penalties — including the rows of supported dofs, whose
+    internal force is the reaction. :math:`f_arepsilon =` ``ROUND_OFF_FACTOR`` ε h
+    ‖diag K‖ is the round-off floor: what a displacement error of 10 ε h (h the
+    largest cell size) would unbalance. The pressure rows of a mixed form (volume ×
+    strain) pass when :math:`\|R_p\| \le \max(\mathrm{rtol}, 1000 ε) \|V\|`, with
+    :math:`\|V\|` the norm of the nodal volumes: a volumetric strain error of rtol.
+    A step that starts in equilibrium passes at iteration 0.
+
+    Args:
+        rtol: Tolerance relative to the force scale (``snes_rtol``).
+        atol: Absolute floor (N), ``snes_atol``.
+        max_it: Iteration limit (``snes_max_it``).
+        length: Largest cell size h (m).
+    """
+
+    def __init__(self, rtol: float, atol: float, max_it: int, length: float):
+        self.rtol, self.atol, self.max_it, self.length = rtol, atol, max_it, length
+        self.loads = 0.0  # ‖f_ext‖ of the step
+        self.internal = 0.0  # ‖f_int‖ at the last residual
+        self.round_off = 0.0  # f_ε from the last tangent (kept across steps for iteration 0)
+        self.volume = 0.0  # ‖V‖ of the pressure nodes; 0 without pressure
+        self.pressure_norm = 0.0  # ‖R_p‖ at the last residual
+        self.displacement_norm = 0.0  # ‖R_u‖ at the last residual
+        self.verdict = ""
+        self.passed = False
+
+    @property
+    def scale(self) -> float:
+        """S = max(‖f_ext‖, ‖f_int‖) at the last residual (N)."""
+        return max(self.loads, self.internal)
+
+    @property
+    def tolerance(self) -> float:
+        """The largest ‖R_u‖ accepted at the last residual (N)."""
+        return max(self.rtol * self.scale, self.atol, self.round_off)
+
+    def __call__(self, snes, it: int, norms) -> int:
+        """SNES's convergence test: a ``PETSc.SNES.ConvergedReason`` for iterate ``it``."""
+        _, _, fnorm = norms
+        Reason = PETSc.SNES.ConvergedReason
+        if not np.isfinite(fnorm):
+            self.verdict = "non-finite residual"
+            return Reason.DIVERGED_FUNCTION_NANORINF
+        pressure_ok = self.pressure_norm <= max(self.rtol, 1e3 * _EPS) * self.volume
+        if self.displacement_norm <= self.tolerance and pressure_ok:
+            ratio = self.displacement_norm / self.scale if self.scale > 0 else 0.0
+            self.verdict = f"‖R‖ = {ratio:.2e} of the force scale {self.scale:.3e}"
+            self.passed = True
+            return Reason.CONVERGED_FNORM_ABS
+        if it >= self.max_it:
+            self.verdict = "DIVERGED_MAX_IT"
+            return Reason.DIVERGED_MAX_IT
+        return Reason.ITERATING
+
+
+_EPS = float(np.finfo(float).eps)
 
 
 def rigid_body_modes(V: dolfinx.fem.FunctionSpace, order: np.ndarray) -> PETSc.NullSpace:
@@ -147,6 +244,8 @@ class NewtonSolver:
         displacement: The displacement's subspace of ``u``'s space (``u``'s own
             space for the u form); the iterative solvers need its rigid body
             modes, and for a mixed unknown its dofs.
+        length: Largest cell size h (m), the length of :class:`ForceTest`'s
+            round-off floor.
     """
 
     def __init__(
@@ -158,6 +257,7 @@ class NewtonSolver:
         timings: dict | None = None,
         linear_solver: str = "direct",
         displacement: dolfinx.fem.FunctionSpace | None = None,
+        length: float = 1.0,
     ):
         self.u = u
         self.A = fem_petsc.create_matrix(sparsity_form)
@@ -171,8 +271,11 @@ class NewtonSolver:
         self.b = fem_petsc.create_vector(u.function_space)
         self.x = fem_petsc.create_vector(u.function_space)
         self._gap = fem_petsc.create_vector(u.function_space)
+        self._loads = fem_petsc.create_vector(u.function_space)  # f_ext of the step
+        self._scratch = fem_petsc.create_vector(u.function_space)
+        self._diagonal = fem_petsc.create_vector(u.function_space)
         self.timings = timings if timings is not None else {}
-        self.snes = PETSc.SNES().create(MPI.COMM_WORLD)
+        self.snes = PETSc.SNES().create(self.A.comm)  # the mesh's: COMM_SELF runs per rank
         # SNES keeps its callbacks alive, and a bound method keeps this solver
         # alive: a cycle through PETSc that Python's collector cannot see. Every
         # solver would then leak, with its MPI communicators, until MPI runs out
@@ -188,12 +291,31 @@ class NewtonSolver:
         if linear_solver == "iterative":
             self._set_up_iterative(displacement or u.function_space, mixed)
         self._with_options(self.snes.setFromOptions)
+        self._u_rows, self._p_rows = self._owned_rows(displacement, mixed)
+        self.test = ForceTest(float(self._options["snes_rtol"]),
+                              float(self._options["snes_atol"]),
+                              int(self._options["snes_max_it"]), length)
+        self.snes.setConvergenceTest(_weak(self.test.__call__))
         self.norms: list[float] = []
         self.snes.setMonitor(_weak(self._monitor))
         self._F = self._J = None
         self._bcs: Sequence = ()
         self._before_residual: Callable[[], None] | None = None
         self._before_jacobian: Callable[[], None] | None = None
+
+    def _owned_rows(self, V, mixed: bool) -> tuple[np.ndarray, np.ndarray]:
+        """Owned local rows of the displacement and of the pressure."""
+        W = self.u.function_space
+        owned = W.dofmap.index_map.size_local * W.dofmap.index_map_bs
+        if not mixed:
+            return np.arange(owned, dtype=np.int32), np.zeros(0, dtype=np.int32)
+        u_rows = collapse(V)[1]
+        u_rows = np.unique(u_rows[u_rows < owned])
+        return u_rows, np.setdiff1d(np.arange(owned, dtype=np.int32), u_rows)
+
+    def _norm(self, values: np.ndarray) -> float:
+        """The global 2-norm of owned entries."""
+        return float(np.sqrt(self.A.comm.tompi4py().allreduce(float(values @ values))))
 
     def _monitor(self, snes, iteration: int, norm: float) -> None:
         self.norms.append(norm)
@@ -258,11 +380,21 @@ class NewtonSolver:
         with b.localForm() as b_local:
             b_local.set(0.0)
         fem_petsc.assemble_vector(b, self._F.form, coeffs=self._F.coefficients())
-        if self._needs_lifting(x):
-            fem_petsc.apply_lifting(b, [self._J.form], bcs=[self._bcs], x0=[x], alpha=-1.0,
-                                    coeffs=[self._J.coefficients()])
         b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        # Before the conditions overwrite them, supported rows hold their reactions.
+        rows = self._u_rows
+        self.test.internal = self._norm(b.array_r[rows] + self._loads.array_r[rows])
+        if self._needs_lifting(x):
+            lift = self._scratch
+            with lift.localForm() as local:
+                local.set(0.0)
+            fem_petsc.apply_lifting(lift, [self._J.form], bcs=[self._bcs], x0=[x], alpha=-1.0,
+                                    coeffs=[self._J.coefficients()])
+            lift.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+            b.axpy(1.0, lift)
         fem_petsc.set_bc(b, self._bcs, x, -1.0)
+        self.test.displacement_norm = self._norm(b.array_r[rows])
+        self.test.pressure_norm = self._norm(b.array_r[self._p_rows])
         self._add_time("assembly", t0)
 
     def _needs_lifting(self, x: PETSc.Vec) -> bool:
@@ -290,6 +422,9 @@ class NewtonSolver:
             self._before_jacobian()
         t0 = time.perf_counter()
         self._J.assemble_matrix(A, self._bcs)
+        A.getDiagonal(self._diagonal)
+        diagonal = np.abs(self._diagonal.array_r[self._u_rows])
+        self.test.round_off = ROUND_OFF_FACTOR * _EPS * self.test.length * self._norm(diagonal)
         self._add_time("assembly", t0)
 
     def solve(
@@ -300,13 +435,17 @@ class NewtonSolver:
         before_residual: Callable[[], None] | None = None,
         line_search: str | None = None,
         before_jacobian: Callable[[], None] | None = None,
+        loads: BoundForm | None = None,
+        pressure_volume: float = 0.0,
     ) -> NewtonResult:
         """Solve from the current value of ``u``; on return ``u`` holds the last iterate.
 
         ``before_residual`` and ``before_jacobian`` are called with ``u`` set to
         each iterate, before its residual or Jacobian is assembled.
         ``line_search`` (a SNES line-search type, e.g. ``"bt"``) replaces the
-        configured one for this solve only.
+        configured one for this solve only. ``loads`` is the step's external
+        force form f_ext and ``pressure_volume`` the norm of the pressure nodes'
+        volumes ‖V‖ (m³; m² in 2D), both for :class:`ForceTest`.
 
         With ``pc_type redistribute`` every solve gets a fresh linear solver: the
         constrained dofs it removes change from step to step, but the matrix
@@ -318,6 +457,14 @@ class NewtonSolver:
         if self._options.get("pc_type") == "redistribute":
             self._fresh_ksp()
         self.norms = []
+        with self._loads.localForm() as local:
+            local.set(0.0)
+        if loads is not None:
+            fem_petsc.assemble_vector(self._loads, loads.form, coeffs=loads.coefficients())
+            self._loads.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        self.test.loads = self._norm(self._loads.array_r[self._u_rows])
+        self.test.volume = float(pressure_volume)
+        self.test.verdict, self.test.passed = "", False
         dolfinx.fem.petsc.assign(self.u, self.x)
         search = self.snes.getLineSearch()
         configured = search.getType()
@@ -332,14 +479,19 @@ class NewtonSolver:
         dolfinx.fem.petsc.assign(self.x, self.u)
         self.u.x.scatter_forward()
         reason = self.snes.getConvergedReason()
+        # Only ForceTest says converged; any other positive reason is not trusted.
+        converged = reason > 0 and self.test.passed
         return NewtonResult(
-            converged=reason > 0,
+            converged=converged,
             iterations=self.snes.getIterationNumber(),
-            reason=_REASONS.get(reason, str(reason)),
+            reason=self.test.verdict if converged else _REASONS.get(reason, str(reason)),
             residual_norms=list(self.norms),
+            force_scale=self.test.scale,
+            tolerance=self.test.tolerance,
         )
 
     def destroy(self) -> None:
         """Free the PETSc objects."""
-        for obj in (self.snes, self.A, self.b, self.x, self._gap):
+        for obj in (self.snes, self.A, self.b, self.x, self._gap, self._loads, self._scratch,
+                    self._diagonal):
             obj.destroy()

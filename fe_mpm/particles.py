@@ -6,6 +6,7 @@ number of points and ``g`` for the geometric dimension (2 or 3).
 
 from __future__ import annotations
 
+import reprlib
 from dataclasses import dataclass, field
 
 import basix
@@ -13,7 +14,7 @@ import numpy as np
 import numpy.typing as npt
 
 from fe_mpm._dolfinx import dolfinx
-from fe_mpm.checks import check_choice, check_range
+from fe_mpm.checks import check_choice, check_finite, check_int, check_range
 
 #: The per-point arrays of :class:`MaterialPoints` (all indexed by point first).
 PER_POINT_FIELDS = ("x", "volume", "mass", "F", "stress", "cell", "x0", "velocity", "acceleration")
@@ -36,6 +37,12 @@ class MaterialPoints:
         acceleration: Accelerations ``a_p``, shape ``(n, g)`` (m/s²); used by dynamic runs.
         history: The material's internal variables by name, each ``(n, *shape)``
             (e.g. ``plastic_strain`` for J2); filled in by the simulation.
+
+    Raises:
+        TypeError: An array holds something other than real numbers.
+        ValueError: A shape is wrong, a value is not finite, a volume is not > 0,
+            a mass is < 0 or a given ``F`` has ``det F ≤ 0``; the message names the
+            first bad point.
     """
 
     x: np.ndarray
@@ -48,22 +55,24 @@ class MaterialPoints:
     velocity: np.ndarray = field(default=None)  # type: ignore[assignment]
     acceleration: np.ndarray = field(default=None)  # type: ignore[assignment]
     history: dict[str, np.ndarray] = field(default_factory=dict)
+    #: False when ``mass`` is a placeholder (ρ₀ = 1) to be replaced by the law's density.
+    density_given: bool = True
 
     def __post_init__(self) -> None:
-        self.x = np.ascontiguousarray(self.x, dtype=np.float64)
+        self.x = np.ascontiguousarray(check_finite("MaterialPoints", "x", self.x, what="point"))
         if self.x.ndim != 2 or self.x.shape[1] not in (2, 3):
             raise ValueError(
                 f"MaterialPoints: x must have shape (n, 2) or (n, 3), got {self.x.shape}"
             )
         n, g = self.x.shape
-        self.volume = np.asarray(self.volume, dtype=np.float64).reshape(n)
-        self.mass = np.asarray(self.mass, dtype=np.float64).reshape(n)
-        if np.any(self.volume <= 0) or not np.all(np.isfinite(self.volume)):
-            raise ValueError("MaterialPoints: volume must be > 0 and finite at every point")
-        if np.any(self.mass < 0):
-            raise ValueError("MaterialPoints: mass must be >= 0 at every point")
+        self.volume = check_finite("MaterialPoints", "volume", self.volume, what="point").reshape(n)
+        self.mass = check_finite("MaterialPoints", "mass", self.mass, what="point").reshape(n)
+        _refuse_points("volume", self.volume <= 0, "> 0", self.volume)
+        _refuse_points("mass", self.mass < 0, ">= 0", self.mass)
         if self.F is None:
             self.F = np.tile(np.eye(g), (n, 1, 1))
+        else:
+            self.F = self._checked_F(n, g)
         if self.stress is None:
             self.stress = np.zeros((n, 3, 3))
         if self.cell is None:
@@ -72,12 +81,23 @@ class MaterialPoints:
             self.x0 = self.x.copy()
         for name in ("velocity", "acceleration"):
             value = getattr(self, name)
-            value = np.zeros((n, g)) if value is None else np.array(value, dtype=np.float64)
+            value = (np.zeros((n, g)) if value is None
+                     else check_finite("MaterialPoints", name, value, what="point").copy())
             if value.shape != (n, g):
                 raise ValueError(
                     f"MaterialPoints: {name} must have shape {(n, g)}, got {value.shape}"
                 )
             setattr(self, name, value)
+
+    def _checked_F(self, n: int, g: int) -> np.ndarray:
+        """The given deformation gradients as a (n, g, g) float array with det F > 0."""
+        F = check_finite("MaterialPoints", "F", self.F, what="point")
+        if F.shape != (n, g, g):
+            raise ValueError(f"MaterialPoints: F must have shape {(n, g, g)}, got {F.shape}")
+        # det F ≤ 0 is an inverted or flattened point: its volume V = J V₀ would be ≤ 0.
+        J = np.linalg.det(F)
+        _refuse_points("det F", J <= 0, "> 0", J)
+        return F
 
     def __len__(self) -> int:
         return self.x.shape[0]
@@ -107,6 +127,15 @@ class MaterialPoints:
         self.history = {name: values[mask] for name, values in self.history.items()}
 
 
+def _refuse_points(field: str, bad: np.ndarray, valid: str, values: np.ndarray) -> None:
+    """Raise ``ValueError`` naming the first point where ``bad`` holds, if any."""
+    where = np.flatnonzero(bad)
+    if where.size:
+        i = int(where[0])
+        raise ValueError(f"MaterialPoints: {field} must be {valid} at every point; point {i} "
+                         f"has {values[i]:g} ({where.size} of {bad.size} points)")
+
+
 def _rule_with_count(cell: basix.CellType, per_cell: int) -> tuple[np.ndarray, np.ndarray]:
     """Return the lowest-degree basix Gauss rule with exactly ``per_cell`` points."""
     counts = {}
@@ -124,7 +153,7 @@ def seed(
     mesh: dolfinx.mesh.Mesh,
     per_cell: int = 1,
     *,
-    density: float = 1.0,
+    density: float | None = None,
     cells: npt.ArrayLike | None = None,
     volumes: str = "gauss",
 ) -> MaterialPoints:
@@ -138,28 +167,36 @@ def seed(
         mesh: An affine simplex mesh (triangles or tetrahedra) covering the body.
         per_cell: Points per cell; any size of a basix Gauss rule (triangles:
             1, 3, 6, 7, 12, ...; tetrahedra: 1, 4, 6, 11, ...).
-        density: Mass density ρ₀ (kg/m³), > 0.
-        cells: Cells to seed (local indices); all cells by default.
+        density: Mass density ρ₀ (kg/m³), > 0. None takes the law's ``density``
+            when the simulation starts (1 if the law has none either); give it
+            here to seed zones of different densities (see :func:`merge`).
+        cells: Cells to seed: a 1-D array of local indices of owned cells
+            (``0 <= c < size_local``; ghost cells cannot be seeded), each once; all
+            cells by default. A boolean mask is refused: pass ``np.flatnonzero(mask)``.
         volumes: ``"gauss"`` gives each point the Gauss weight times the cell
             volume (exact quadrature of the initial body); ``"equal"`` splits the
             cell volume equally, as in the thesis.
 
     Returns:
         The material points, undeformed (``F = I``).
+
+    Raises:
+        TypeError: ``per_cell`` is not an int, or ``cells`` is a boolean mask or
+            not integer indices.
+        ValueError: A value lies outside its range, or ``cells`` is not 1-D, is
+            empty, holds duplicates or indices outside ``[0, size_local)``.
     """
-    check_range("seed", "density", density, lo=0.0, lo_open=True)
+    if density is not None:
+        check_range("seed", "density", density, lo=0.0, lo_open=True)
     check_choice("seed", "volumes", volumes, ("gauss", "equal"))
-    if per_cell < 1:
-        raise ValueError(f"seed: per_cell must be >= 1, got {per_cell}")
+    per_cell = check_int("seed", "per_cell", per_cell, lo=1)
     tdim = mesh.topology.dim
     num_cells = mesh.topology.index_map(tdim).size_local
     if num_cells == 0:
         raise ValueError("seed: the mesh has no cells")
     cell_type = simplex_cell_type(mesh)
     ref_pts, ref_wts = _rule_with_count(cell_type, per_cell)
-    cells = np.arange(num_cells, dtype=np.int32) if cells is None else np.asarray(cells, np.int32)
-    if cells.size == 0:
-        raise ValueError("seed: no cells to seed")
+    cells = np.arange(num_cells, dtype=np.int32) if cells is None else _cells(cells, num_cells)
 
     X = mesh.geometry.x[:, : mesh.geometry.dim]
     nodes = X[mesh.geometry.dofmaps[0][cells]]  # (nc, tdim+1, g)
@@ -176,20 +213,65 @@ def seed(
     return MaterialPoints(
         x=x.reshape(-1, gdim),
         volume=vol.reshape(-1),
-        mass=density * vol.reshape(-1),
+        mass=(1.0 if density is None else float(density)) * vol.reshape(-1),
         cell=np.repeat(cells, per_cell),
+        density_given=density is not None,
     )
+
+
+def _cells(cells: npt.ArrayLike, num_cells: int) -> np.ndarray:
+    """The cells to seed as int32 local indices, or raise saying what is wrong with them.
+
+    Args:
+        cells: The ``cells`` given to :func:`seed`.
+        num_cells: Number of cells this rank owns (``size_local``); the ghost cells
+            after them belong to another rank, which seeds them.
+    """
+    a = np.asarray(cells)
+    # np.asarray(mask, np.int32) would read a mask as the indices 0 and 1.
+    if a.dtype.kind == "b":
+        raise TypeError("seed: cells must be cell indices, got a boolean mask; "
+                        "use np.flatnonzero(mask)")
+    if a.ndim != 1:
+        raise ValueError(f"seed: cells must be a 1-D array of cell indices, got shape {a.shape}")
+    if a.size == 0:
+        raise ValueError("seed: no cells to seed")
+    # Whole floats such as 3.0 are indices; a cast would truncate 2.5 to 2 silently.
+    if a.dtype.kind == "f" and np.all(np.isfinite(a) & (a == np.trunc(a))):
+        a = a.astype(np.int64)
+    if a.dtype.kind not in "iu":
+        raise TypeError(f"seed: cells must be integer cell indices, got "
+                        f"{reprlib.repr(cells)} (dtype {a.dtype})")
+    outside = np.flatnonzero((a < 0) | (a >= num_cells))
+    if outside.size:
+        raise ValueError(
+            f"seed: cells must lie in [0, {num_cells - 1}] (this rank's {num_cells} owned cells), "
+            f"got {a[outside[0]]}; ghost cells (index >= size_local = {num_cells}) cannot be "
+            "seeded: the rank that owns them seeds them")
+    values, counts = np.unique(a, return_counts=True)
+    repeated = np.flatnonzero(counts > 1)
+    if repeated.size:
+        cell, k = int(values[repeated[0]]), int(counts[repeated[0]])
+        times = "twice" if k == 2 else f"{k} times"
+        raise ValueError(f"seed: cells holds duplicates, e.g. cell {cell} {times}; each cell "
+                         "would get its points again")
+    return a.astype(np.int32)
 
 
 def merge(*sets: MaterialPoints) -> MaterialPoints:
     """One set of undeformed points from several seeds (e.g. zones seeded at other densities)."""
     if not sets:
         raise ValueError("merge: no point sets given")
+    given = {s.density_given for s in sets}
+    if len(given) > 1:
+        raise ValueError("merge: some sets were seeded with a density and some without; "
+                         "give every zone its density (seed(..., density=...))")
     return MaterialPoints(
         x=np.vstack([s.x for s in sets]),
         volume=np.concatenate([s.volume for s in sets]),
         mass=np.concatenate([s.mass for s in sets]),
         cell=np.concatenate([s.cell for s in sets]),
+        density_given=given.pop(),
     )
 
 

@@ -46,6 +46,9 @@ class Tracker:
         self.centroids = nodes.mean(axis=1)
         #: Volume (area in 2D) of every cell, shape (nc,).
         self.volumes = np.abs(np.linalg.det(jac)) / math.factorial(tdim)
+        #: Longest edge of every cell (m), shape (nc,).
+        edges = [nodes[:, i] - nodes[:, j] for i in range(tdim + 1) for j in range(i)]
+        self.sizes = np.max([np.linalg.norm(e, axis=1) for e in edges], axis=0)
         self.neighbours = _facet_neighbours(nodes_of)
         self._nodes_of = nodes_of
         self._tree = None  # built on first need

@@ -31,6 +31,7 @@ from collections.abc import Sequence
 
 import ufl
 
+from fe_mpm.forms.loads import external_work
 from fe_mpm.materials import embed_3d
 from fe_mpm.quadrature import MaterialPointQuadrature
 
@@ -67,11 +68,8 @@ def residual(
     F = dF * F_n
     tau = kirchhoff(F)
     R = q.sum(ufl.inner(tau * ufl.inv(dF).T / ufl.det(F_n), q.grad_at_points(w)))
-    if body_force is not None:
-        R -= q.sum(density * ufl.dot(body_force, q.at_points(w)))
-    for t, ds in tractions:
-        R -= ufl.dot(t, w) * ds
-    return R
+    loads = external_work(w, q, density, body_force, tractions)
+    return R if loads is None else R - loads
 
 
 def cauchy_stress_3d(kirchhoff, F: ufl.core.expr.Expr) -> ufl.core.expr.Expr:

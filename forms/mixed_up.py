@@ -48,6 +48,7 @@ from dataclasses import dataclass
 
 import ufl
 
+from fe_mpm.forms.loads import external_work
 from fe_mpm.materials import embed_3d
 from fe_mpm.quadrature import MaterialPointQuadrature
 
@@ -131,11 +132,8 @@ def residual(
         R -= (ppp.alpha_eff / material.mu) * ppp.fill * (
             ufl.dot(ufl.grad(q_test), r) * ufl.dot(ufl.grad(p), r)
         ) * ppp.dx
-    if body_force is not None:
-        R -= mpq.sum(density * ufl.dot(body_force, mpq.at_points(w, u_degree)))
-    for t, ds in tractions:
-        R -= ufl.dot(t, w) * ds
-    return R
+    loads = external_work(w, mpq, density, body_force, tractions, u_degree)
+    return R if loads is None else R - loads
 
 
 def cauchy_stress_3d(material, F: ufl.core.expr.Expr, p: ufl.core.expr.Expr, state=None):

@@ -27,7 +27,9 @@ def test_cook_membrane_writes_paraview_series(tmp_path):
     assert "u_A = " in stdout and "Newton iterations per step: [" in stdout
     pvd = (out / "particles.pvd").read_text()
     files = [line.split('file="')[1].split('"')[0] for line in pvd.splitlines() if "file=" in line]
-    assert len(files) == 3
+    assert len(files) == 4  # t = 0 and three steps
+    first = meshio.read(out / files[0])
+    assert np.abs(first.point_data["displacement"]).max() == 0.0
     last = meshio.read(out / files[-1])
     assert last.points.shape == (2 * 4 * 4, 3)
     for field in ("displacement", "stress", "pressure", "deformation_gradient", "volume"):

@@ -14,10 +14,17 @@ class IsotropicModuli:
     """Shear and bulk moduli of a law with fields ``E`` (Pa) and ``nu``."""
 
     def _check_moduli(self) -> None:
-        """Raise ``ValueError`` naming the law unless E > 0 and ν ∈ (−1, 0.5)."""
-        owner = type(self).__name__
-        check_range(owner, "E", self.E, lo=0.0, lo_open=True)
-        check_range(owner, "nu", self.nu, lo=-1.0, hi=0.5, lo_open=True, hi_open=True)
+        """Raise naming the law unless E > 0 and ν ∈ (−1, 0.5); store both as floats."""
+        self._check("E", lo=0.0, lo_open=True)
+        self._check("nu", lo=-1.0, hi=0.5, lo_open=True, hi_open=True)
+
+    def _check(self, field: str, **bounds: float | bool) -> None:
+        """Check ``field`` with :func:`~fe_mpm.checks.check_range` and store the float back.
+
+        A law then never keeps a string, a bool or a numpy scalar.
+        """
+        value = check_range(type(self).__name__, field, getattr(self, field), **bounds)
+        object.__setattr__(self, field, value)  # the laws are frozen dataclasses
 
     @property
     def mu(self) -> float:
@@ -41,16 +48,18 @@ class NeoHookean(IsotropicModuli):
     Args:
         E: Young's modulus (Pa), > 0.
         nu: Poisson's ratio, in (-1, 0.5).
-        density: Reference mass density (kg/m³), > 0. Used for body forces and inertia.
+        density: Reference mass density ρ₀ (kg/m³), > 0, or None to take it from the
+            points (``seed(..., density=...)``). Given in both places, they must agree.
     """
 
     E: float
     nu: float
-    density: float = 1.0
+    density: float | None = None
 
     def __post_init__(self) -> None:
         self._check_moduli()
-        check_range("NeoHookean", "density", self.density, lo=0.0, lo_open=True)
+        if self.density is not None:
+            self._check("density", lo=0.0, lo_open=True)
 
     @property
     def history(self) -> dict[str, HistoryField]:

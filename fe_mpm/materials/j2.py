@@ -33,7 +33,6 @@ from dataclasses import dataclass
 import numpy as np
 import ufl
 
-from fe_mpm.checks import check_range
 from fe_mpm.materials.elastic import IsotropicModuli, embed_3d, in_plane
 from fe_mpm.materials.state import HistoryField, PointState
 
@@ -49,20 +48,22 @@ class J2Plasticity(IsotropicModuli):
         nu: Poisson's ratio, in (-1, 0.5).
         yield_stress: Uniaxial flow stress σ_Y (Pa), > 0.
         hardening: Linear isotropic hardening modulus H (Pa), ≥ 0; 0 is perfectly plastic.
-        density: Reference mass density (kg/m³), > 0.
+        density: Reference mass density ρ₀ (kg/m³), > 0, or None to take it from the
+            points (``seed(..., density=...)``). Given in both places, they must agree.
     """
 
     E: float
     nu: float
     yield_stress: float
     hardening: float = 0.0
-    density: float = 1.0
+    density: float | None = None
 
     def __post_init__(self) -> None:
         self._check_moduli()
-        check_range("J2Plasticity", "yield_stress", self.yield_stress, lo=0.0, lo_open=True)
-        check_range("J2Plasticity", "hardening", self.hardening, lo=0.0)
-        check_range("J2Plasticity", "density", self.density, lo=0.0, lo_open=True)
+        self._check("yield_stress", lo=0.0, lo_open=True)
+        self._check("hardening", lo=0.0)
+        if self.density is not None:
+            self._check("density", lo=0.0, lo_open=True)
 
     @property
     def history(self) -> dict[str, HistoryField]:

@@ -27,7 +27,6 @@ from dataclasses import dataclass
 import numpy as np
 import ufl
 
-from fe_mpm.checks import check_range
 from fe_mpm.materials.elastic import IsotropicModuli, in_plane
 from fe_mpm.materials.linearised import ReturnMapResult
 from fe_mpm.materials.principal_return import ELASTIC, MohrCoulombSurface, mohr_coulomb_return
@@ -47,7 +46,8 @@ class MohrCoulomb(IsotropicModuli):
         cohesion: c (Pa), ≥ 0; > 0 when the friction angle is 0.
         friction_angle: φ in degrees, in [0, 90). 0 gives Tresca with c = c_u.
         dilatancy_angle: ψ in degrees, in [0, φ]; ψ = φ is associative.
-        density: Reference mass density (kg/m³), > 0.
+        density: Reference mass density ρ₀ (kg/m³), > 0, or None to take it from the
+            points (``seed(..., density=...)``). Given in both places, they must agree.
     """
 
     E: float
@@ -55,22 +55,23 @@ class MohrCoulomb(IsotropicModuli):
     cohesion: float
     friction_angle: float = 0.0
     dilatancy_angle: float = 0.0
-    density: float = 1.0
+    density: float | None = None
 
     def __post_init__(self) -> None:
         self._check_moduli()
-        check_range("MohrCoulomb", "cohesion", self.cohesion, lo=0.0)
-        check_range("MohrCoulomb", "friction_angle", self.friction_angle, lo=0.0, hi=90.0,
-                    hi_open=True)
-        check_range("MohrCoulomb", "dilatancy_angle", self.dilatancy_angle, lo=0.0,
-                    hi=self.friction_angle)
-        check_range("MohrCoulomb", "density", self.density, lo=0.0, lo_open=True)
+        self._check("cohesion", lo=0.0)
+        self._check("friction_angle", lo=0.0, hi=90.0, hi_open=True)
+        self._check("dilatancy_angle", lo=0.0, hi=self.friction_angle)
+        if self.density is not None:
+            self._check("density", lo=0.0, lo_open=True)
         if self.friction_angle == 0.0 and self.cohesion == 0.0:
             raise ValueError("MohrCoulomb: cohesion must be > 0 when friction_angle = 0 "
                              "(the material would have no strength), got 0")
 
     @classmethod
-    def tresca(cls, E: float, nu: float, cohesion: float, density: float = 1.0) -> MohrCoulomb:
+    def tresca(
+        cls, E: float, nu: float, cohesion: float, density: float | None = None
+    ) -> MohrCoulomb:
         """Tresca solid (φ = ψ = 0) with undrained shear strength ``cohesion`` = c_u (Pa)."""
         return cls(E, nu, cohesion, 0.0, 0.0, density)
 

@@ -1,0 +1,44 @@
+r"""External loads of a step: body forces through the points, tractions on grid facets.
+
+.. math::
+
+    f_{ext}(w) = \sum_p m_p\, b \cdot w(x_p) + \int_{\Gamma_N} \bar t \cdot w \, ds ,
+
+with :math:`b` per unit mass (m/s²) and :math:`\bar t` per unit area of the grid
+at :math:`t_n` (Pa). Every residual subtracts this form; the Newton test
+(:mod:`fe_mpm.newton`) also assembles it alone, as one of the forces against
+which a residual counts as small.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import ufl
+
+from fe_mpm.quadrature import MaterialPointQuadrature
+
+
+def external_work(
+    w: ufl.core.expr.Expr,
+    q: MaterialPointQuadrature,
+    density: ufl.Coefficient,
+    body_force: ufl.core.expr.Expr | None = None,
+    tractions: Sequence[tuple[ufl.core.expr.Expr, ufl.Measure]] = (),
+    u_degree: int = 1,
+) -> ufl.Form | None:
+    """The virtual work of the loads, or None when there are none.
+
+    Args:
+        w: Displacement test function (of degree ``u_degree``).
+        q: Material-point quadrature of the step.
+        density: Mass density of the points m_p/V_p (kg/m³, slot field).
+        body_force: Body force per unit mass b (m/s²), or None.
+        tractions: Pairs (t̄, ds) of traction vector (Pa) and facet measure.
+        u_degree: Polynomial degree of the displacement.
+    """
+    terms = []
+    if body_force is not None:
+        terms.append(q.sum(density * ufl.dot(body_force, q.at_points(w, u_degree))))
+    terms += [ufl.dot(t, w) * ds for t, ds in tractions]
+    return sum(terms[1:], terms[0]) if terms else None

@@ -1,0 +1,111 @@
+"""What Simulation refuses or reports on a user's scene, instead of a silently wrong answer."""
+
+import numpy as np
+import pytest
+
+import fe_mpm
+from fe_mpm import scenes
+from fe_mpm.meshes import rectangle_mesh
+
+RHO, G = 2000.0, 9.81
+
+
+def _mesh():
+    return rectangle_mesh((0.0, 0.0), (1.0, 1.0), (4, 4))
+
+
+def _base():
+    return fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))
+
+
+def test_the_law_density_is_the_mass_when_seed_has_none():
+    """NeoHookean(density=2000) with seed(...) alone: the block weighs 2000 kg/m³
+    (this used to weigh 1 kg/m³, with σ_yy = −9.2 Pa at the base for −18.4 kPa)."""
+    mesh = _mesh()
+    points = fe_mpm.seed(mesh, per_cell=3)
+    sim = fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1e7, 0.3, density=RHO),
+                            body_force=(0.0, -G), dirichlet=[_base()],
+                            reactions={"base": lambda x: np.isclose(x[1], 0.0)})
+    assert np.allclose(points.density, RHO, rtol=1e-12)
+    report = sim.step(1.0)
+    assert abs(report.reactions["base"][1] / (RHO * G) - 1.0) < 1e-9
+
+
+def test_two_different_densities_are_refused_naming_both():
+    mesh = _mesh()
+    points = fe_mpm.seed(mesh, density=1000.0)
+    with pytest.raises(ValueError, match=r"material's density 2000 kg/m³ differs from the "
+                                         r"points' 1000 kg/m³"):
+        fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1e7, 0.3, density=RHO))
+    same = fe_mpm.seed(mesh, density=RHO)  # the same value in both places is fine
+    fe_mpm.Simulation(mesh, same, fe_mpm.NeoHookean(1e7, 0.3, density=RHO))
+    with pytest.raises(ValueError, match="some sets were seeded with a density and some without"):
+        fe_mpm.merge(fe_mpm.seed(mesh, density=RHO), fe_mpm.seed(mesh))
+
+
+@pytest.mark.parametrize(("dirichlet", "free"), [
+    ([], "x, y"),
+    ([fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0), component=0)], "y"),
+    # a support on the grid's edge, but the material sits in the middle: it holds nothing
+    ([fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 1.0))], "x, y"),
+])
+def test_a_static_model_that_nothing_holds_is_refused(dirichlet, free):
+    mesh = _mesh()
+    middle = np.flatnonzero(mesh.geometry.x[mesh.geometry.dofmaps[0]][:, :, 1].max(axis=1) < 0.76)
+    points = fe_mpm.seed(mesh, cells=middle, density=RHO)
+    sim = fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1e7, 0.3), body_force=(0.0, -G),
+                            dirichlet=dirichlet)
+    with pytest.raises(ValueError, match=rf"nothing holds the material in {free}: .*rigid-body"):
+        sim.step(1.0)
+    dynamic = fe_mpm.Simulation(mesh, fe_mpm.seed(mesh, cells=middle, density=RHO),
+                                fe_mpm.NeoHookean(1e7, 0.3), body_force=(0.0, -G),
+                                dirichlet=dirichlet, dynamic=True)
+    dynamic.step(1e-3)  # inertia holds a free body: falling is an answer
+
+
+@pytest.mark.parametrize(("options", "match"), [
+    ({"body_force": (0.0, np.nan)}, r"body_force\[1\] must lie in"),
+    ({"body_force": (0.0, "9.81")}, r"body_force\[1\] must be a number"),
+    ({"max_step_cells": 0.0}, r"max_step_cells must lie in \(0, inf\]"),
+])
+def test_bad_simulation_options_are_refused(options, match):
+    mesh = _mesh()
+    with pytest.raises((ValueError, TypeError), match=match):
+        fe_mpm.Simulation(mesh, fe_mpm.seed(mesh), fe_mpm.NeoHookean(1e7, 0.3),
+                          dirichlet=[_base()], **options)
+
+
+def test_a_load_factor_that_turns_nan_stops_at_once_naming_it():
+    mesh = _mesh()
+    sim = fe_mpm.Simulation(mesh, fe_mpm.seed(mesh, density=RHO), fe_mpm.NeoHookean(1e7, 0.3),
+                            dirichlet=[_base()], body_force=(0.0, -G),
+                            body_force_scale=lambda t: t if t <= 0.5 else np.nan)
+    with pytest.raises(ValueError, match=r"body_force_scale\(t = 1\) must lie in"):
+        sim.run(1.0, 2, progress=False)
+    assert sim.step_number == 1  # no retries: the input is wrong, not the step
+
+
+def test_a_marker_is_copied_not_moved_in_the_callers_array():
+    mesh = _mesh()
+    points = fe_mpm.seed(mesh, density=RHO)
+    sim = fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1e5, 0.3), body_force=(0.0, -G),
+                            dirichlet=[_base()])
+    mine = np.array([0.5, 1.0])
+    sim.add_marker("top", mine)
+    sim.step(1.0)
+    assert np.array_equal(mine, [0.5, 1.0])
+    assert sim.marker("top")[1] < 1.0  # the marker itself moved down
+
+
+def test_the_lost_share_of_a_grid_traction_is_reported_at_every_step():
+    """Cook under ten times the load: the tip rises off the loaded grid edge. Every
+    step reports the share of the traction that acts on nodes with no material; it
+    grows as the body moves on, and each new high is warned about."""
+    sim = scenes.cook_membrane(16, 0.499, "up", traction=10 / 16, margin=16)
+    with pytest.warns(UserWarning, match=r"Traction 0: .* % of its load is lost") as caught:
+        reports = sim.run(1.0, 20, progress=False)
+    shares = [r.lost_load.get("Traction 0", 0.0) for r in reports]
+    assert shares[0] == 0.0 and shares[-1] > 0.1
+    assert np.all(np.diff(shares) >= 0)
+    lost_warnings = [w for w in caught if "of its load is lost" in str(w.message)]
+    assert len(lost_warnings) == len(set(shares) - {0.0})
