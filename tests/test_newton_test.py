@@ -55,8 +55,8 @@ def test_gravity_block_runs_four_steps_and_carries_its_weight(law, formulation, 
     """A new user's first scene. Every step ends at ‖R‖ ≤ 1e-9 of the forces
     (1e-10, or the round-off floor when that is larger: measured up to 1.02e-10 on
     the 3D Mohr-Coulomb block); the base reaction equals the weight to 1e-9
-    (measured: 1e-12 and below); the mean vertical stress of the bottom row of cells equals the weight above its points
-    within 1 % in 2D (measured 0.02–0.06 %). In 3D (4 cells a side) the bottom row's
+    (measured: 1e-12 and below); the mean vertical stress of the bottom row of cells
+    equals the weight above its points within 1 % in 2D (measured 0.02–0.06 %). In 3D (4 cells a side) the bottom row's
     stress is checked against the weight on its mid-plane within 3 %."""
     sim, points = _block(LAWS[law](), formulation, dim, ramp)
     reports = sim.run(t_end=1.0, n_steps=4, progress=False)
