@@ -56,8 +56,9 @@ def test_gravity_block_runs_four_steps_and_carries_its_weight(law, formulation, 
     (1e-10, or the round-off floor when that is larger: measured up to 1.02e-10 on
     the 3D Mohr-Coulomb block); the base reaction equals the weight to 1e-9
     (measured: 1e-12 and below); the mean vertical stress of the bottom row of cells
-    equals the weight above its points within 1 % in 2D (measured 0.02–0.06 %). In 3D (4 cells a side) the bottom row's
-    stress is checked against the weight on its mid-plane within 3 %."""
+    equals the weight above its points within 1 % in 2D (measured 0.02–0.06 %). In 3D
+    (4 cells a side) the bottom row's stress is checked against the weight on its
+    mid-plane within 3 %."""
     sim, points = _block(LAWS[law](), formulation, dim, ramp)
     reports = sim.run(t_end=1.0, n_steps=4, progress=False)
     assert [r.step for r in reports] == [1, 2, 3, 4]  # no step was cut
