@@ -100,8 +100,8 @@ class NewtonResult:
     Attributes:
         converged: Whether the last iterate passed :class:`ForceTest`.
         iterations: Newton iterations taken.
-        reason: Why the solve ended, in words (e.g. ``"residual 3.1e-12 of the
-            force scale"``, or PETSc's reason when it failed).
+        reason: Why the solve ended, in words (e.g. ``"‖R‖ = 3.1e-12 of the force
+            scale 1.234e+03"``), or PETSc's reason when it failed.
         residual_norms: ‖R‖ at each iterate (displacement and pressure rows).
         force_scale: The forces in play at the last iterate, S (N; N/m in 2D).
         tolerance: The largest ‖R‖ accepted at the last iterate (N).
@@ -132,13 +132,13 @@ class ForceTest:
 
     .. math::
 
-        \|R_u\| \le \max(\mathrm{rtol}\, S,\ \mathrm{atol},\ f_arepsilon), \qquad
+        \|R_u\| \le \max(\mathrm{rtol}\, S,\ \mathrm{atol},\ f_\varepsilon), \qquad
         S = \max(\|f_{ext}\|, \|f_{int}\|),
 
     over the displacement rows, where :math:`f_{ext}` are the loads (body forces and
     tractions) and :math:`f_{int} = R + f_{ext}` everything else — stress
     divergence, inertia, penalties — including the rows of supported dofs, whose
-    internal force is the reaction. :math:`f_arepsilon =` ``ROUND_OFF_FACTOR`` ε h
+    internal force is the reaction. :math:`f_\varepsilon =` ``ROUND_OFF_FACTOR`` ε h
     ‖diag K‖ is the round-off floor: what a displacement error of 10 ε h (h the
     largest cell size) would unbalance. The pressure rows of a mixed form (volume ×
     strain) pass when :math:`\|R_p\| \le \max(\mathrm{rtol}, 1000 ε) \|V\|`, with
