@@ -59,26 +59,31 @@ class MaterialPoints:
     density_given: bool = True
 
     def __post_init__(self) -> None:
-        self.x = np.ascontiguousarray(check_finite("MaterialPoints", "x", self.x, what="point"))
+        # Copies throughout: the points move and change in place, the caller's arrays must not.
+        self.x = np.array(check_finite("MaterialPoints", "x", self.x, what="point"), order="C")
         if self.x.ndim != 2 or self.x.shape[1] not in (2, 3):
             raise ValueError(
                 f"MaterialPoints: x must have shape (n, 2) or (n, 3), got {self.x.shape}"
             )
         n, g = self.x.shape
-        self.volume = check_finite("MaterialPoints", "volume", self.volume, what="point").reshape(n)
-        self.mass = check_finite("MaterialPoints", "mass", self.mass, what="point").reshape(n)
+        self.volume = check_finite("MaterialPoints", "volume", self.volume,
+                                   what="point").reshape(n).copy()
+        self.mass = check_finite("MaterialPoints", "mass", self.mass, what="point").reshape(n).copy()
         _refuse_points("volume", self.volume <= 0, "> 0", self.volume)
         _refuse_points("mass", self.mass < 0, ">= 0", self.mass)
         if self.F is None:
             self.F = np.tile(np.eye(g), (n, 1, 1))
         else:
-            self.F = self._checked_F(n, g)
+            self.F = self._checked_F(n, g).copy()
         if self.stress is None:
             self.stress = np.zeros((n, 3, 3))
+        else:
+            self.stress = np.array(self.stress, dtype=np.float64).reshape(n, 3, 3)
         if self.cell is None:
             self.cell = np.full(n, -1, dtype=np.int32)
-        if self.x0 is None:
-            self.x0 = self.x.copy()
+        else:
+            self.cell = np.array(self.cell, dtype=np.int32).reshape(n)
+        self.x0 = self.x.copy() if self.x0 is None else np.array(self.x0, dtype=np.float64)
         for name in ("velocity", "acceleration"):
             value = getattr(self, name)
             value = (np.zeros((n, g)) if value is None

@@ -109,3 +109,16 @@ def test_the_lost_share_of_a_grid_traction_is_reported_at_every_step():
     assert np.all(np.diff(shares) >= 0)
     lost_warnings = [w for w in caught if "of its load is lost" in str(w.message)]
     assert len(lost_warnings) == len(set(shares) - {0.0})
+
+
+def test_material_points_copy_the_arrays_they_are_given():
+    """The points move and change in place; the caller's arrays stay as they were."""
+    mesh = _mesh()
+    seeded = fe_mpm.seed(mesh, per_cell=3, density=RHO)
+    x, volume, mass = seeded.x.copy(), seeded.volume.copy(), seeded.mass.copy()
+    points = fe_mpm.MaterialPoints(x=x, volume=volume, mass=mass)
+    sim = fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1e5, 0.3), body_force=(0.0, -G),
+                            dirichlet=[_base()])
+    sim.step(1.0)
+    assert not np.array_equal(points.x, x) and not np.array_equal(points.volume, volume)
+    assert np.array_equal(x, seeded.x) and np.array_equal(volume, seeded.volume)
