@@ -68,7 +68,8 @@ class MaterialPoints:
         n, g = self.x.shape
         self.volume = check_finite("MaterialPoints", "volume", self.volume,
                                    what="point").reshape(n).copy()
-        self.mass = check_finite("MaterialPoints", "mass", self.mass, what="point").reshape(n).copy()
+        self.mass = check_finite("MaterialPoints", "mass", self.mass,
+                                 what="point").reshape(n).copy()
         _refuse_points("volume", self.volume <= 0, "> 0", self.volume)
         _refuse_points("mass", self.mass < 0, ">= 0", self.mass)
         if self.F is None:
