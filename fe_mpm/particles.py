@@ -143,11 +143,20 @@ def _refuse_points(field: str, bad: np.ndarray, valid: str, values: np.ndarray) 
 
 
 def _rule_with_count(cell: basix.CellType, per_cell: int) -> tuple[np.ndarray, np.ndarray]:
-    """Return the lowest-degree basix Gauss rule with exactly ``per_cell`` points."""
+    """Return the lowest-degree basix Gauss rule with exactly ``per_cell`` points.
+
+    Only rules with positive weights and every point inside the cell qualify: a
+    negative weight would give a point a negative volume, and a point on a face
+    lies on the grid's boundary where the body touches it (on tetrahedra basix's
+    rules of 5 and 31 points have a negative weight, and those of 14 and 15 points
+    on the faces).
+    """
     counts = {}
     for degree in range(0, 13):
         pts, wts = basix.make_quadrature(cell, degree)
-        counts.setdefault(len(wts), (pts, wts))
+        inside = np.all(pts > 0) and np.all(pts.sum(axis=1) < 1)
+        if np.all(wts > 0) and inside:
+            counts.setdefault(len(wts), (pts, wts))
     if per_cell not in counts:
         raise ValueError(
             f"seed: per_cell must be one of {sorted(counts)} on {cell.name} cells, got {per_cell}"
@@ -172,7 +181,7 @@ def seed(
     Args:
         mesh: An affine simplex mesh (triangles or tetrahedra) covering the body.
         per_cell: Points per cell; any size of a basix Gauss rule (triangles:
-            1, 3, 6, 7, 12, ...; tetrahedra: 1, 4, 6, 11, ...).
+            1, 3, 6, 7, 12, ...; tetrahedra: 1, 4, 24, 57, ...).
         density: Mass density ρ₀ (kg/m³), > 0. None takes the law's ``density``
             when the simulation starts (1 if the law has none either); give it
             here to seed zones of different densities (see :func:`merge`).

@@ -122,3 +122,17 @@ def test_material_points_copy_the_arrays_they_are_given():
     sim.step(1.0)
     assert not np.array_equal(points.x, x) and not np.array_equal(points.volume, volume)
     assert np.array_equal(x, seeded.x) and np.array_equal(volume, seeded.volume)
+
+
+@pytest.mark.parametrize("per_cell", [5, 14])
+def test_seed_refuses_rules_with_negative_weights_or_points_on_faces(per_cell):
+    """basix's 5-point tetrahedron rule has a negative weight (a point of negative
+    volume) and its 14-point rule puts points on the faces (on the grid's boundary)."""
+    from mpi4py import MPI
+
+    from fe_mpm._dolfinx import dolfinx
+
+    box = dolfinx.mesh.create_box(MPI.COMM_SELF, [[0, 0, 0], [1, 1, 1]], [1, 1, 1],
+                                  dolfinx.mesh.CellType.tetrahedron)
+    with pytest.raises(ValueError, match=r"per_cell must be one of \[1, 4, 24, 57"):
+        fe_mpm.seed(box, per_cell)
