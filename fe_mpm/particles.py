@@ -37,6 +37,9 @@ class MaterialPoints:
         acceleration: Accelerations ``a_p``, shape ``(n, g)`` (m/s²); used by dynamic runs.
         history: The material's internal variables by name, each ``(n, *shape)``
             (e.g. ``plastic_strain`` for J2); filled in by the simulation.
+        density_given: False when ``mass`` is a placeholder (ρ₀ = 1 kg/m³) that the
+            law's ``density`` replaces when the simulation starts (``seed`` without
+            a density).
 
     Raises:
         TypeError: An array holds something other than real numbers.
@@ -55,7 +58,6 @@ class MaterialPoints:
     velocity: np.ndarray = field(default=None)  # type: ignore[assignment]
     acceleration: np.ndarray = field(default=None)  # type: ignore[assignment]
     history: dict[str, np.ndarray] = field(default_factory=dict)
-    #: False when ``mass`` is a placeholder (ρ₀ = 1) to be replaced by the law's density.
     density_given: bool = True
 
     def __post_init__(self) -> None:
