@@ -36,7 +36,7 @@ from fe_mpm.boundary import (
     boundary_facets,
 )
 from fe_mpm.boundary_points import BoundaryPoints
-from fe_mpm.checks import check_choice, check_range
+from fe_mpm.checks import check_choice, check_finite, check_range
 from fe_mpm.errors import ConvergenceError, PointsOutsideError
 from fe_mpm.forms import displacement, inertia, mixed_up, penalty
 from fe_mpm.forms import loads as loads_form
@@ -439,7 +439,7 @@ class Simulation:
         mesh.topology.create_connectivity(fdim, tdim)
 
         self._dirichlet = []  # (spec, value Function, DirichletBC)
-        self._facet_tags = facet_tags
+        self._dirichlet_nodes = []  # grid nodes of each condition's facets, for _check_supports
         for spec in dirichlet:
             facets = boundary_facets(mesh, spec.where, facet_tags)
             if spec.component is not None:
@@ -455,6 +455,7 @@ class Simulation:
                 dofs = dolfinx.fem.locate_dofs_topological(target, fdim, facets)
                 bc = dolfinx.fem.dirichletbc(value, dofs)
             self._dirichlet.append((spec, value, bc))
+            self._dirichlet_nodes.append(_facet_node_weights(mesh, facets)[0])
 
         self._tractions = []  # (spec, Constant)
         self._traction_facets: dict[int, np.ndarray] = {}
@@ -553,10 +554,9 @@ class Simulation:
         that grid node in a step, and never reads an empty cell. Read it from
         ``history[k].markers[name]`` or :meth:`marker`.
         """
-        xm = np.array(x, dtype=np.float64).reshape(self.gdim)  # a copy: it moves
-        if not np.all(np.isfinite(xm)):
-            raise ValueError(f"Simulation.add_marker: x of marker {name!r} must be finite, "
-                             f"got {xm}")
+        # A copy: the marker moves, the caller's array must not.
+        xm = check_finite("Simulation.add_marker", f"x of marker {name!r}", x).reshape(
+            self.gdim).copy()
         if self.tracker.locate(xm[None, :])[0] < 0:
             raise PointsOutsideError(f"marker {name!r} at {xm} is outside the grid")
         host = int(np.argmin(np.linalg.norm(self.points.x - xm, axis=1)))
@@ -1010,10 +1010,7 @@ class Simulation:
             Nodal values ``(nodes, k)`` (zero where no point reaches) and the nodal
             masses ``Σ_p N_I m_p`` ``(nodes,)``.
         """
-        pts = self.points
-        nodes = space.dofmap.list[layout.cell].ravel()
-        weights = (self.tracker.barycentric(pts.x, layout.cell) * pts.mass[:, None]).ravel()
-        n = space.dofmap.index_map.size_local + space.dofmap.index_map.num_ghosts
+        nodes, weights, n = self._nodal_shares(space, layout, self.points.mass)
         mass = np.bincount(nodes, weights=weights, minlength=n)
         repeated = np.repeat(values, space.dofmap.list.shape[1], axis=0)
         moment = np.stack([np.bincount(nodes, weights=weights * repeated[:, c], minlength=n)
@@ -1101,6 +1098,21 @@ class Simulation:
         nodal, _ = self._mass_weighted_projection(self.fields.Q[0], layout, p_p[:, None])
         self.fields.set_pressure(nodal[:, 0])
 
+    def _nodal_shares(
+        self, space: dolfinx.fem.FunctionSpace, layout: SlotLayout, weights: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, int]:
+        """Each point's ``N_I(x_p) w_p`` with its node I in a P1 space, for ``np.bincount``.
+
+        The space's local dofs follow the cell's vertices, like the barycentric coordinates.
+
+        Returns:
+            ``(nodes, shares, n)``: node and share of every (point, vertex) pair, both
+            flat ``(n_points * (g + 1),)``, and the number of nodes (owned and ghost).
+        """
+        nodes = space.dofmap.list[layout.cell].ravel()
+        shares = (self.tracker.barycentric(self.points.x, layout.cell) * weights[:, None]).ravel()
+        return nodes, shares, space.dofmap.index_map.size_local + space.dofmap.index_map.num_ghosts
+
     def _pressure_volume(self, layout: SlotLayout) -> float:
         """‖V‖: the norm of the points' volumes gathered on the pressure nodes (m³; m² in 2D).
 
@@ -1108,10 +1120,8 @@ class Simulation:
         """
         if not self.spec.pressure:
             return 0.0
-        Q = self.fields.Q[0]
-        nodes = Q.dofmap.list[layout.cell].ravel()
-        weights = self.tracker.barycentric(self.points.x, layout.cell) * self.points.volume[:, None]
-        return float(np.linalg.norm(np.bincount(nodes, weights=weights.ravel())))
+        nodes, shares, n = self._nodal_shares(self.fields.Q[0], layout, self.points.volume)
+        return float(np.linalg.norm(np.bincount(nodes, weights=shares, minlength=n)))
 
     def _check_supports(self, layout: SlotLayout) -> None:
         """Refuse a static model whose supports leave a rigid translation free.
@@ -1127,8 +1137,7 @@ class Simulation:
         occupied_nodes = np.zeros(self.mesh.geometry.x.shape[0], dtype=bool)
         occupied_nodes[self.mesh.geometry.dofmaps[0][layout.occupied]] = True
         held = np.zeros(self.gdim, dtype=bool)
-        for spec, _, _ in self._dirichlet:
-            nodes = self._dirichlet_nodes(spec)
+        for (spec, _, _), nodes in zip(self._dirichlet, self._dirichlet_nodes, strict=True):
             if np.any(occupied_nodes[nodes]):
                 held[slice(None) if spec.component is None else spec.component] = True
         pp = self._boundary_points
@@ -1144,11 +1153,6 @@ class Simulation:
                 "condition (or PointDirichlet) on that component touches a node of an "
                 "occupied cell. The tangent would be singular (a rigid-body mode). Add a "
                 "support, or pass dynamic=True.")
-
-    def _dirichlet_nodes(self, spec: Dirichlet) -> np.ndarray:
-        """Geometry nodes of the facets of a Dirichlet condition."""
-        facets = boundary_facets(self.mesh, spec.where, self._facet_tags)
-        return np.unique(dolfinx.mesh.entities_to_geometry(self.mesh, self.gdim - 1, facets))
 
     def _check_points_per_cell(self, layout: SlotLayout) -> None:
         need = self.spec.min_points_per_cell
