@@ -288,10 +288,13 @@ class NewtonSolver:
         mixed = displacement is not None and displacement is not u.function_space
         self._options = {**NEWTON_OPTIONS, **LINEAR_SOLVERS[linear_solver, mixed],
                          **(petsc_options or {})}
+        # The displacement's dofs in the unknown, once: the Newton test and the field
+        # split both need them.
+        split = collapse(displacement) if mixed else None
+        self._u_rows, self._p_rows = self._owned_rows(split)
         if linear_solver == "iterative":
-            self._set_up_iterative(displacement or u.function_space, mixed)
+            self._set_up_iterative(displacement or u.function_space, split)
         self._with_options(self.snes.setFromOptions)
-        self._u_rows, self._p_rows = self._owned_rows(displacement, mixed)
         self.test = ForceTest(float(self._options["snes_rtol"]),
                               float(self._options["snes_atol"]),
                               int(self._options["snes_max_it"]), length)
@@ -303,14 +306,19 @@ class NewtonSolver:
         self._before_residual: Callable[[], None] | None = None
         self._before_jacobian: Callable[[], None] | None = None
 
-    def _owned_rows(self, V, mixed: bool) -> tuple[np.ndarray, np.ndarray]:
-        """Owned local rows of the displacement and of the pressure."""
+    def _owned_rows(self, split) -> tuple[np.ndarray, np.ndarray]:
+        """Owned local rows of the displacement and of the pressure (sorted).
+
+        Args:
+            split: :func:`~fe_mpm.formulations.collapse` of the displacement
+                subspace of a mixed unknown, or None when the unknown is Δu alone.
+        """
         W = self.u.function_space
         owned = W.dofmap.index_map.size_local * W.dofmap.index_map_bs
-        if not mixed:
+        if split is None:
             return np.arange(owned, dtype=np.int32), np.zeros(0, dtype=np.int32)
-        u_rows = collapse(V)[1]
-        u_rows = np.unique(u_rows[u_rows < owned])
+        u_dofs = split[1]
+        u_rows = np.unique(u_dofs[u_dofs < owned])
         return u_rows, np.setdiff1d(np.arange(owned, dtype=np.int32), u_rows)
 
     def _norm(self, values: np.ndarray) -> float:
@@ -320,21 +328,22 @@ class NewtonSolver:
     def _monitor(self, snes, iteration: int, norm: float) -> None:
         self.norms.append(norm)
 
-    def _set_up_iterative(self, V: dolfinx.fem.FunctionSpace, mixed: bool) -> None:
-        """Give AMG the rigid body modes, and a mixed unknown's field split its dofs."""
+    def _set_up_iterative(self, V: dolfinx.fem.FunctionSpace, split) -> None:
+        """Give AMG the rigid body modes, and a mixed unknown's field split its dofs.
+
+        ``split`` is the collapsed displacement space and its dofs in the unknown
+        for a mixed unknown (see :meth:`_owned_rows`), None otherwise.
+        """
         pc = self.snes.getKSP().getPC()
-        W = self.u.function_space
-        if not mixed:
+        if split is None:
             self.A.setNearNullSpace(rigid_body_modes(V, np.arange(self.A.getSize()[0])))
             return
-        collapsed, u_dofs = collapse(V)
+        collapsed, u_dofs = split
         if u_dofs.size != collapsed.dofmap.index_map.size_local * collapsed.dofmap.index_map_bs:
             raise RuntimeError("iterative solver: unexpected layout of the displacement dofs")
         order = np.argsort(u_dofs)
-        is_u = PETSc.IS().createGeneral(u_dofs[order], comm=self.A.comm)
-        p_dofs = np.setdiff1d(np.arange(W.dofmap.index_map.size_local * W.dofmap.index_map_bs),
-                              u_dofs).astype(np.int32)
-        is_p = PETSc.IS().createGeneral(p_dofs, comm=self.A.comm)
+        is_u = PETSc.IS().createGeneral(self._u_rows, comm=self.A.comm)  # = u_dofs[order]
+        is_p = PETSc.IS().createGeneral(self._p_rows, comm=self.A.comm)
         # PCFIELDSPLIT hands a near null space composed with a split's IS to its block.
         modes = rigid_body_modes(collapsed, order)
         is_u.compose("nearnullspace", modes)
