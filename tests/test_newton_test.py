@@ -108,9 +108,11 @@ def test_petsc_step_length_test_cannot_end_a_solve():
     assert report.relative_residual <= 1e-10
 
 
-def test_a_residual_that_did_not_fall_is_not_accepted():
-    """Two iterations cannot bring a loaded elastoplastic step to 1e-10 of its
-    forces: the step fails, whatever PETSc says, and nothing is updated."""
+def test_a_residual_not_yet_small_fails_the_step_and_updates_nothing():
+    """One Newton iteration cannot bring a loaded elastoplastic step to 1e-10 of its
+    forces: the step fails with the force scale and the accepted bound in its message,
+    and nothing is updated. (That no other PETSc reason can accept a step is
+    ``test_petsc_step_length_test_cannot_end_a_solve``.)"""
     sim, points = _block(LAWS["J2"](), petsc_options={"snes_max_it": 1},
                          fallback_line_search=None)
     x = points.x.copy()
