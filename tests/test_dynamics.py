@@ -205,6 +205,7 @@ def test_damped_free_flight_follows_the_trapezoidal_rule(mass):
     assert abs(speed[-1] / np.exp(-alpha * n * dt) - 1) < 1e-3
 
 
+@pytest.mark.slow
 def test_mass_proportional_damping_decays_the_first_mode_at_alpha_over_two():
     """C = α M damps every mode at the rate α/2. Measured (ny = 16, Δt = T/50,
     α = 0.5/s): the damping adds 0.2479 (consistent) and 0.2477 (lumped) to the

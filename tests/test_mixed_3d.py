@@ -33,6 +33,7 @@ def tip(formulation, per_cell):
     ("up", 1, 0.75, 0.9),      # P1/P1 + PPP, coarse
     ("up-p2p1", 4, 0.88, 1.0),  # Taylor–Hood
 ])
+@pytest.mark.slow
 def test_cantilever_tip_against_timoshenko(formulation, per_cell, low, high):
     w, iterations = tip(formulation, per_cell)
     assert low < w / TIMOSHENKO < high, f"{formulation}: w = {w:.4f}, beam theory {TIMOSHENKO:.4f}"

@@ -78,6 +78,8 @@ def test_grid_traction_left_behind_by_the_body_warns():
         sim.run(1.0, 20, progress=False)
 
 
+@pytest.mark.slow
+@pytest.mark.demo
 def test_dynamic_time_step_sweep_converges_and_huge_steps_stay_bounded(tmp_path):
     """Elastic column under sudden self-weight (Tielen et al.), two periods.
     Max error / static deflection, measured: 0.387, 0.179, 0.073 for 20, 40, 80 steps;
@@ -94,6 +96,8 @@ def test_dynamic_time_step_sweep_converges_and_huge_steps_stay_bounded(tmp_path)
         assert np.isfinite(error(steps)) and error(steps) < 2.5
 
 
+@pytest.mark.slow
+@pytest.mark.demo
 def test_too_large_time_step_is_subdivided_automatically(tmp_path):
     """Granular collapse (a = 1.2, h = 0.02 m): at Δt = 40 ms Newton fails and run()
     halves the steps where needed, instead of blowing up.

@@ -41,6 +41,7 @@ def _simulation(dim, formulation, seed=3, material=None):
     return rng, sim
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("formulation", FORMULATIONS)
 @pytest.mark.parametrize("dim", [2, 3])
 def test_step_residual_and_jacobian_are_consistent(dim, formulation):

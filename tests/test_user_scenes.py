@@ -29,6 +29,7 @@ import sys
 import time
 
 import numpy as np
+import pytest
 from hypothesis import HealthCheck, Phase, event, example, given, note, settings
 from scene_strategies import Law, Scene, build, scenes
 
@@ -120,6 +121,7 @@ def measure_any_scene(scene: Scene) -> dict:
     return seen
 
 
+@pytest.mark.slow
 @_settings(6)
 @given(scene=scenes())
 def test_any_scene_finishes_or_stops_with_a_named_error(scene):
@@ -177,6 +179,7 @@ def measure_balance(scene: Scene) -> dict:
 STRONG = 3.0
 
 
+@pytest.mark.slow
 @_settings(6)
 @given(scene=scenes())
 # Found by this test (shrunk) with Newton's old stopping test ‖R‖ ≤ 1e-10 ‖R₀‖, kept as
@@ -244,6 +247,7 @@ def measure_step_count(scene: Scene) -> dict:
             "dstress": float(np.abs(many.stress - one.stress).max()) / sigma}
 
 
+@pytest.mark.slow
 @_settings(4)
 @given(scene=scenes(static=True, names=("NeoHookean",), E=(1e9, 1e10), n_steps=(2, 8)))
 # Found by this test (shrunk) with Newton's old stopping test ‖R‖ ≤ 1e-10 ‖R₀‖, kept as
@@ -288,6 +292,7 @@ def measure_containment(scene: Scene) -> dict:
     return seen
 
 
+@pytest.mark.slow
 @_settings(4)
 @given(scene=scenes(rollers=True, slopes=False))
 def test_block_on_a_fixed_base_between_rollers_never_leaves_its_grid(scene):
