@@ -55,7 +55,7 @@ def test_elastoplastic_cook_membrane_newton_stays_quadratic_over_twenty_steps():
     """Cook's membrane with J2 and linear hardening (E = 70, ν = 0.499, σ_Y = 0.243,
     H = 0.135; the variant of Simo & Rifai used by Code_Aster's SSLP v6.03.178), right
     edge traction 0.1125, u-p, n = 16, 20 load steps. Measured: 3 to 6 iterations per
-    step, tip deflection 0.700 (u locks: 0.160). The grid traction loses its top node
+    step, tip deflection 0.69987 (u locks: 0.160). The grid traction loses its top node
     from t = 0.7 (a warning says so); with the load on boundary points
     (``load="points"``) the tip reaches 0.847 in up to 11 iterations. No published
     value to choose between them was found, so this stays a regression check."""
@@ -71,4 +71,5 @@ def test_elastoplastic_cook_membrane_newton_stays_quadratic_over_twenty_steps():
             assert norms[-1] / norms[-2] < 1e-2 * max(norms[-2] / norms[-3], 1e-6) or \
                 norms[-1] < 1e-8 * norms[0]
     assert sim.points.history["plastic_strain"].max() > 0.01
-    assert 0.6 < tip_deflection(sim) < 0.8
+    # round-off moves the tip by 3e-13 (benchmarks/roundoff_spread.py); a regression value
+    assert abs(tip_deflection(sim) / 0.69987 - 1) < 1e-3

@@ -93,7 +93,8 @@ def test_dynamic_time_step_sweep_converges_and_huge_steps_stay_bounded(tmp_path)
     errors = [error(s) for s in (20, 40, 80)]
     assert errors[1] < 0.6 * errors[0] and errors[2] < 0.6 * errors[1], errors
     for steps in (1, 2, 4):
-        assert np.isfinite(error(steps)) and error(steps) < 2.5
+        huge = error(steps)
+        assert np.isfinite(huge) and huge < 2.5, (steps, huge)
 
 
 @pytest.mark.slow
@@ -102,23 +103,23 @@ def test_too_large_time_step_is_subdivided_automatically(tmp_path):
     """Granular collapse (a = 1.2, h = 0.02 m): at Δt = 40 ms Newton fails and run()
     halves the steps where needed, instead of blowing up.
 
-    Which steps fail depends on round-off: five slot layouts that assemble the same
-    sums to round-off (1 to 4 entities per cell) gave 49 to 59 accepted steps
-    instead of the nominal 15, and a run-out 7 % to 18 % beyond the Δt = 5 ms answer
-    (0.2348 to 0.2581 against 0.2189 m), height within 2.5 %. The force-scaled Newton
-    test (every accepted step at ‖R‖ ≤ 1e-10 S) gave 51 steps and 0.2919 m (+33 %).
-    The run-out moves that much with the step size itself (fixed steps: 0.2446,
-    0.2189 and 0.2064 m for 10, 5 and 2.5 ms), and the cut run takes steps of 5 to
-    20 ms, most of them 10 ms. So the reference is the 10 ms run (+5.5 % before the
-    new Newton test, +19 % with it), and the bound on the run-out (25 %) is one of
-    no blow-up, not of accuracy at this step size."""
+    Which steps fail depends on round-off. ``benchmarks/roundoff_spread.py``
+    (six members with the points moved by 1e-12 or listed in another order, two with
+    other processors' BLAS kernels) gave 49 to 62 accepted steps instead of the
+    nominal 15, a final height within 0.7 % of the 10 ms run's (mean +0.2 %, spread
+    0.6 %), and a run-out from −1.5 % to +28 % of it (mean +10.7 %, spread 9.7 %):
+    the run-out moves as much with the step sizes taken as with the step size itself
+    (fixed steps of 10, 5, 2.5 ms: 0.2446, 0.2189, 0.2064 m). So the run-out is not
+    compared; the checks are that steps were cut, every point stayed in the channel
+    (1.6 times Lube et al.'s run-out: a blow-up throws points off its end), and the
+    height, which is 7.7 spreads inside its 5 % bound."""
     common = ("--aspect", "1.2", "--h", "0.02", "--points-per-cell", "3", "--damping",
               "1.5", "--no-output", "--json")
     coarse = last_json(run_demo("column_collapse.py", "--dt", "0.04", *common, cwd=tmp_path))
     fine = last_json(run_demo("column_collapse.py", "--dt", "0.01", *common, cwd=tmp_path))
     nominal = round(1.6 * coarse["t_inf_lube"] / 0.04)  # the demo runs to 1.6 t∞
     assert coarse["steps"] > nominal  # steps were cut, and the run completed
-    assert abs(coarse["runout"] / fine["runout"] - 1) < 0.25
+    assert coarse["dropped_points"] == 0 and fine["dropped_points"] == 0
     assert abs(coarse["final_height"] / fine["final_height"] - 1) < 0.05
 
 
