@@ -10,7 +10,9 @@ DEMOS = Path(__file__).resolve().parents[1] / "demos"
 
 def run_demo(name: str, *args: str, cwd) -> str:
     """Standard output of ``python demos/<name> <args>``; fails the test on a non-zero exit."""
-    out = subprocess.run([sys.executable, str(DEMOS / name), *args], cwd=cwd,
+    # As in the suite (pyproject.toml), a RuntimeWarning (overflow, 0/0) fails the demo.
+    out = subprocess.run([sys.executable, "-W", "error::RuntimeWarning", str(DEMOS / name),
+                          *args], cwd=cwd,
                          capture_output=True, text=True, timeout=600)
     assert out.returncode == 0, out.stderr[-3000:]
     return out.stdout

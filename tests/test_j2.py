@@ -129,3 +129,16 @@ def test_elastoplastic_step_residual_and_jacobian_are_consistent(formulation):
     r0, r1 = taylor_remainders(R, J, sim.w, d, EPS)
     assert np.all(rates(EPS, r0) > 0.9)
     assert np.all(rates(EPS, r1) > 1.9), f"remainders {r1}"
+
+
+def test_yield_function_is_the_deviatoric_norm_against_the_hardened_radius():
+    """f = ‖dev τ‖ − √(2/3)(σ_Y + Hα): independent of the pressure, and exactly zero on the
+    surface of a uniaxial Kirchhoff stress σ (‖dev‖ = √(2/3) σ)."""
+    law = fe_mpm.J2Plasticity(1e3, 0.3, yield_stress=2.0, hardening=10.0)
+    alpha = np.array([0.0, 0.1, 0.0])
+    uniaxial = np.diag([2.0 + 10.0 * 0.1, 0.0, 0.0])
+    tau = np.array([np.diag([2.0, 0.0, 0.0]), uniaxial + 7.0 * np.eye(3),
+                    np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 0.0]]) - 5 * np.eye(3)])
+    f = law.yield_function(tau, alpha)
+    assert f[:2] == pytest.approx([0.0, 0.0], abs=1e-14)
+    assert f[2] == pytest.approx(np.sqrt(2.0) - np.sqrt(2 / 3) * 2.0, rel=1e-14)

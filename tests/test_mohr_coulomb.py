@@ -16,6 +16,7 @@ import itertools
 
 import numpy as np
 import pytest
+import ufl
 from test_taylor import _simulation
 
 import fe_mpm
@@ -270,9 +271,33 @@ def test_a_step_runs_the_return_map_once_per_residual_and_the_tangent_once_per_j
     assert calls == {"return_map": k + 1, "tangent": k}
 
 
-def test_mixed_formulation_refuses_a_frictional_law():
-    with pytest.raises(ValueError, match="friction_angle = dilatancy_angle = 0"):
-        _simulation(2, "up", material=fe_mpm.MohrCoulomb(10.0, 0.3, 0.05, friction_angle=20.0))
+@pytest.mark.parametrize("phi", [20.0, 0.5])
+def test_mixed_formulation_refuses_a_frictional_law(phi):
+    with pytest.raises(ValueError, match="MohrCoulomb: the u-p formulations need a pressure-"
+                       "independent, isochoric law, i.e. friction_angle = dilatancy_angle = 0"):
+        _simulation(2, "up", material=fe_mpm.MohrCoulomb(10.0, 0.3, 0.05, friction_angle=phi))
+
+
+def test_the_ufl_stress_needs_the_simulations_linearisation():
+    """The law is evaluated in numpy; its UFL stress exists only as the linearisation the
+    simulation packs, and asking without one says so."""
+    F = ufl.Identity(2)
+    for stress in (fe_mpm.MohrCoulomb.tresca(1e4, 0.3, 10.0).kirchhoff,
+                   fe_mpm.MohrCoulomb.tresca(1e4, 0.3, 10.0).kirchhoff_deviatoric):
+        with pytest.raises(ValueError, match="MohrCoulomb: the state has no linearisation "
+                           "slot fields; the law is evaluated in numpy"):
+            stress(F, None)
+
+
+def test_a_collapsed_trial_step_gives_a_non_finite_stress_quietly():
+    """det ΔF = 0 has no logarithmic strain: the stress is not finite, which Newton reports
+    with the step, and no RuntimeWarning is raised on the way (the suite turns those into
+    errors)."""
+    law = fe_mpm.MohrCoulomb(1e4, 0.3, 10.0, friction_angle=30.0)
+    history = {"be": np.tile(np.eye(3), (2, 1, 1)), "plastic_strain": np.zeros(2)}
+    dF = np.array([np.diag([1.01, 0.99]), np.diag([0.0, 1.0])])
+    result = law.return_map(dF, history)
+    assert np.all(np.isfinite(result.tau[0])) and not np.all(np.isfinite(result.tau[1]))
 
 
 @pytest.mark.parametrize("bad, match", [

@@ -6,11 +6,17 @@ import pytest
 import fe_mpm
 from fe_mpm._dolfinx import dolfinx
 from fe_mpm.meshes import rectangle_mesh
-from fe_mpm.tracker import BARY_TOL, Tracker
+from fe_mpm.tracker import Tracker
 
 
-def _inside(tracker, x, cells):
-    return tracker.barycentric(x, cells).min(axis=1) >= -BARY_TOL
+def _inside(mesh, x, cells, tol=1e-14):
+    """Inside each cell, judged from the cell's vertices alone (not with the tracker's own
+    barycentric map or tolerance): x = Σ λ_i v_i, Σ λ_i = 1, every λ_i ≥ −tol."""
+    g = x.shape[1]
+    v = mesh.geometry.x[mesh.geometry.dofmaps[0][cells]][:, :, :g]  # (n, g + 1, g)
+    A = np.concatenate([np.swapaxes(v, 1, 2), np.ones((len(cells), 1, g + 1))], axis=1)
+    lam = np.linalg.solve(A, np.concatenate([x, np.ones((len(cells), 1))], axis=1)[..., None])
+    return lam[..., 0].min(axis=1) >= -tol
 
 
 @pytest.mark.parametrize("dim", [2, 3])
@@ -22,13 +28,13 @@ def test_walk_from_far_cells_finds_the_containing_cell(dim):
     start = rng.integers(0, tracker.num_cells, size=x.shape[0]).astype(np.int32)
     cells = tracker.locate(x, start)
     assert np.all(cells >= 0)
-    assert np.all(_inside(tracker, x, cells))
+    assert np.all(_inside(mesh, x, cells))
     # With enough steps to cross the grid, the walk alone finds every point from
     # any start (the tree search is only the fallback).
     walker = Tracker(mesh, max_walk=100)
     walked = start.copy()
     assert walker._walk(x, walked, np.arange(x.shape[0])).size == 0
-    assert np.array_equal(walked, cells) or np.all(_inside(tracker, x, walked))
+    assert np.array_equal(walked, cells) or np.all(_inside(mesh, x, walked))
 
 
 def test_points_on_vertices_and_facets_are_located():
@@ -41,7 +47,7 @@ def test_points_on_vertices_and_facets_are_located():
     for guess in (None, np.zeros(x.shape[0], dtype=np.int32)):
         cells = tracker.locate(x, guess)
         assert np.all(cells >= 0)
-        assert np.all(_inside(tracker, x, cells))
+        assert np.all(_inside(mesh, x, cells))
 
 
 def test_points_outside_are_reported_and_concave_grids_use_the_tree():
@@ -54,7 +60,7 @@ def test_points_outside_are_reported_and_concave_grids_use_the_tree():
     # Start the walk on the far side of the notch: the straight walk must leave the grid.
     start = tracker.locate(np.array([[1.75, 0.5], [0.5, 1.75], [0.5, 0.5], [0.5, 0.5]]))
     cells = tracker.locate(x, start)
-    assert cells[:2].min() >= 0 and np.all(_inside(tracker, x[:2], cells[:2]))
+    assert cells[:2].min() >= 0 and np.all(_inside(l_shape, x[:2], cells[:2]))
     assert cells[2] == -1 and cells[3] == -1
 
 
@@ -85,3 +91,33 @@ def test_points_leaving_the_grid_can_be_dropped_with_a_count():
         sim.step(2.0)
     assert sim.dropped > 0 and len(points) == n0 - sim.dropped
     assert np.all(points.x[:, 0] <= 2.0 + 0.6 + 1e-12)
+
+
+def test_snap_to_moves_points_into_the_nearest_allowed_cell_within_the_tolerance():
+    """Cells left of x = 0.5 are allowed. A point on that line, or just right of it, read
+    from a cell on the right, moves to the allowed cell that holds it best (largest
+    smallest barycentric coordinate, checked against every allowed cell touching its
+    cell), if that coordinate is ≥ −tol; other points keep their cell or get −1."""
+    mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (4, 4))
+    tracker = Tracker(mesh)
+    nodes = mesh.geometry.dofmaps[0]
+    centroids = mesh.geometry.x[nodes, :2].mean(axis=1)
+    allowed = centroids[:, 0] < 0.5
+    x = np.array([[0.5, 0.4], [0.53, 0.6], [0.9, 0.5], [0.2, 0.3], [0.7, 0.7]])
+    right = np.flatnonzero(~allowed)
+    cells = tracker.locate(x)
+    on_right = [right[_inside(mesh, np.repeat(x[i:i + 1], right.size, 0), right)][0]
+                for i in (0, 1)]
+    cells[:2] = on_right
+    cells[4] = -1
+    snapped = tracker.snap_to(x, cells, allowed, tol=0.5)
+    assert snapped.dtype == np.int32
+    assert allowed[snapped[0]] and _inside(mesh, x[:1], snapped[:1])[0]
+    assert snapped[3] == cells[3] and allowed[cells[3]]
+    assert snapped[2] == -1 and snapped[4] == -1
+    # Point 1 lies 0.03 right of the allowed cells: barycentric −0.12 in the best one.
+    touching = np.flatnonzero(allowed & np.isin(nodes, nodes[cells[1]]).any(axis=1))
+    lam = tracker.barycentric(np.repeat(x[1:2], touching.size, 0), touching).min(axis=1)
+    assert snapped[1] == touching[np.argmax(lam)] and -0.5 < lam.max() < -0.1
+    strict = tracker.snap_to(x, cells, allowed, tol=0.1)
+    assert strict[1] == -1 and strict[0] == snapped[0]

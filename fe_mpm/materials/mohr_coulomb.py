@@ -94,8 +94,11 @@ class MohrCoulomb(IsotropicModuli):
         }
 
     def check_formulation(self, pressure: bool) -> None:
-        """The mixed forms take the pressure from a field, so the law must not depend on it."""
-        if pressure and (self.friction_angle > 0.0 or self.dilatancy_angle > 0.0):
+        """The mixed forms take the pressure from a field, so the law must not depend on it.
+
+        ψ ≤ φ, so φ = 0 means ψ = 0 too.
+        """
+        if pressure and self.friction_angle > 0.0:
             raise ValueError(
                 "MohrCoulomb: the u-p formulations need a pressure-independent, isochoric law, "
                 f"i.e. friction_angle = dilatancy_angle = 0 (Tresca); got φ = "

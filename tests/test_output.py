@@ -1,0 +1,106 @@
+"""What ParaView reads is what the points carry: every written field read back and compared."""
+
+import xml.etree.ElementTree as ET
+
+import meshio
+import numpy as np
+import pytest
+
+import fe_mpm
+from fe_mpm import scenes
+from fe_mpm.io import ParticleWriter
+from fe_mpm.particles import MaterialPoints
+
+
+def _points(g: int, n: int = 7, seed: int = 3) -> MaterialPoints:
+    rng = np.random.default_rng(seed)
+    x0 = rng.random((n, g))
+    points = MaterialPoints(x=x0 + 0.1 * rng.random((n, g)), volume=rng.random(n) + 0.5,
+                            mass=rng.random(n) + 2.0, F=np.eye(g) + 0.1 * rng.random((n, g, g)),
+                            x0=x0, velocity=rng.standard_normal((n, g)))
+    stress = rng.standard_normal((n, 3, 3))
+    points.stress = stress + np.swapaxes(stress, 1, 2)
+    points.cell = rng.integers(0, 50, n).astype(np.int32)
+    points.history = {"plastic_strain": rng.random(n), "be": rng.random((n, 3, 3))}
+    return points
+
+
+def _frames(pvd) -> list[tuple[float, str]]:
+    root = ET.parse(pvd).getroot()
+    assert root.get("type") == "Collection"
+    return [(float(d.get("timestep")), d.get("file")) for d in root.iter("DataSet")]
+
+
+@pytest.mark.parametrize("g", [2, 3])
+def test_every_field_is_written_as_the_points_carry_it(tmp_path, g):
+    points = _points(g)
+    n = len(points)
+    writer = ParticleWriter(tmp_path, name="pts")
+    extra = np.arange(n, dtype=float) * 0.25
+    path = writer.write(0.125, points, marker=extra)
+    assert path == tmp_path / "pts_000000.vtu"
+    mesh = meshio.read(path)
+    assert np.array_equal(mesh.points[:, :g], points.x)
+    assert np.all(mesh.points[:, g:] == 0.0)
+    assert np.array_equal(mesh.cells_dict["vertex"].ravel(), np.arange(n))
+    data = mesh.point_data
+    assert np.array_equal(data["displacement"][:, :g], points.x - points.x0)
+    assert np.all(data["displacement"][:, g:] == 0.0)
+    assert np.array_equal(data["velocity"][:, :g], points.velocity)
+    assert np.all(data["velocity"][:, g:] == 0.0)
+    assert np.array_equal(data["volume"], points.volume)
+    assert np.array_equal(data["mass"], points.mass)
+    F = data["deformation_gradient"].reshape(n, 3, 3)
+    assert np.array_equal(F[:, :g, :g], points.F)
+    if g == 2:
+        assert np.all(F[:, 2, :2] == 0) and np.all(F[:, :2, 2] == 0) and np.all(F[:, 2, 2] == 1)
+    assert np.array_equal(data["stress"].reshape(n, 3, 3), points.stress)
+    assert np.allclose(data["pressure"], -np.trace(points.stress, axis1=1, axis2=2) / 3,
+                       rtol=0, atol=1e-15)
+    assert np.array_equal(data["cell"], points.cell)
+    assert np.array_equal(data["plastic_strain"], points.history["plastic_strain"])
+    assert np.array_equal(data["be"].reshape(n, 3, 3), points.history["be"])
+    assert np.array_equal(data["marker"].ravel(), extra)
+
+
+def test_the_collection_lists_every_frame_with_its_time_and_a_new_writer_clears_old_frames(
+        tmp_path):
+    points = _points(2)
+    writer = ParticleWriter(tmp_path)
+    times = (0.0, 0.1 + 1e-9, 2.5)
+    for t in times:
+        points.x += 0.01
+        writer.write(t, points)
+    frames = _frames(writer.pvd)
+    assert writer.pvd == tmp_path / "particles.pvd"
+    assert [f for _, f in frames] == [f"particles_{k:06d}.vtu" for k in range(3)]
+    assert [t for t, _ in frames] == pytest.approx(times, rel=1e-10, abs=0)
+    last = meshio.read(tmp_path / frames[-1][1])
+    assert np.array_equal(last.points[:, :2], points.x)
+
+    ParticleWriter(tmp_path)  # a new run into the same folder
+    assert not list(tmp_path.glob("particles_*.vtu"))
+    (tmp_path / "other_000000.vtu").write_text("")
+    ParticleWriter(tmp_path, name="particles")
+    assert (tmp_path / "other_000000.vtu").exists()
+
+
+def test_a_run_writes_the_state_of_its_points_at_every_step(tmp_path):
+    """Cook, J2, u-p, 3 steps with output: the frames hold t = 0 and each step's time,
+    and the last frame is the points' final state (stress, F, plastic strain, position)."""
+    material = fe_mpm.J2Plasticity(70.0, 0.499, 0.243, 0.135)
+    sim = scenes.cook_membrane(4, formulation="up", material=material, traction=0.1125,
+                               output_dir=tmp_path)
+    sim.run(1.0, 3, progress=False)
+    frames = _frames(tmp_path / "particles.pvd")
+    assert [t for t, _ in frames] == pytest.approx([0.0, 1 / 3, 2 / 3, 1.0], rel=1e-9)
+    first = meshio.read(tmp_path / frames[0][1]).point_data
+    assert np.all(first["stress"] == 0.0) and np.all(first["displacement"] == 0.0)
+    last = meshio.read(tmp_path / frames[-1][1])
+    points, n = sim.points, len(sim.points)
+    assert np.array_equal(last.points[:, :2], points.x)
+    assert np.array_equal(last.point_data["stress"].reshape(n, 3, 3), points.stress)
+    assert np.array_equal(last.point_data["deformation_gradient"].reshape(n, 3, 3)[:, :2, :2],
+                          points.F)
+    assert np.array_equal(last.point_data["plastic_strain"], points.history["plastic_strain"])
+    assert last.point_data["plastic_strain"].max() > 0
