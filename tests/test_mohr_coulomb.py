@@ -309,3 +309,39 @@ def test_a_collapsed_trial_step_gives_a_non_finite_stress_quietly():
 def test_bad_parameters_are_named(bad, match):
     with pytest.raises(ValueError, match=match):
         fe_mpm.MohrCoulomb(**{**dict(E=1e4, nu=0.3, cohesion=10.0), **bad})
+
+
+def test_tresca_is_mohr_coulomb_without_friction_or_dilatancy():
+    assert fe_mpm.MohrCoulomb.tresca(2e4, 0.45, 12.0, density=1800.0) == fe_mpm.MohrCoulomb(
+        2e4, 0.45, 12.0, friction_angle=0.0, dilatancy_angle=0.0, density=1800.0)
+    assert fe_mpm.MohrCoulomb.tresca(2e4, 0.45, 12.0).density is None
+
+
+def test_history_of_a_plastic_step_is_consistent_with_its_stress():
+    """One step from the virgin state, elastic and plastic points: the new bᵉ has the
+    elastic logarithmic strains of the returned stress (ε = C⁻¹τ in principal axes), the
+    plastic strain grows by √(2/3)‖ε_trial − εᵉ‖ (zero for the elastic point), and the
+    returned stresses lie on the surface (f = 0) or inside (f < 0, elastic)."""
+    law = fe_mpm.MohrCoulomb(**SOIL, friction_angle=30.0, dilatancy_angle=10.0)
+    history = {"be": np.tile(np.eye(3), (3, 1, 1)), "plastic_strain": np.array([0.0, 0.2, 0.1])}
+    dF = np.array([np.diag([1.0 + 1e-6, 1.0]), np.diag([0.97, 1.01]),
+                   [[1.0, 0.04], [0.0, 0.99]]])
+    result = law.return_map(dF, history)
+    assert result.region[0] == ELASTIC and np.all(result.region[1:] != ELASTIC)
+    f = law.yield_function(result.tau)
+    assert f[0] < -0.5 * SOIL["cohesion"]
+    assert np.allclose(f[1:], 0.0, atol=1e-9 * SOIL["cohesion"])
+    F3 = np.tile(np.eye(3), (3, 1, 1))
+    F3[:, :2, :2] = dF
+    trial = 0.5 * np.log(np.linalg.eigvalsh(F3 @ np.swapaxes(F3, 1, 2)))
+    elastic = 0.5 * np.log(np.linalg.eigvalsh(result.history["be"]))
+    # εᵉ of the returned stress: the Hencky law, τ_A = λ tr εᵉ + 2μ εᵉ_A, inverted
+    tau = np.linalg.eigvalsh(result.tau)
+    mu, lam = law.mu, law.bulk_modulus - 2 * law.mu / 3
+    from_tau = (tau - lam / (3 * lam + 2 * mu) * tau.sum(axis=1, keepdims=True)) / (2 * mu)
+    assert np.allclose(elastic, from_tau, rtol=0, atol=1e-12)
+    increment = np.sqrt(2 / 3) * np.linalg.norm(trial - elastic, axis=1)
+    assert increment[0] == pytest.approx(0.0, abs=1e-12) and np.all(increment[1:] > 1e-3)
+    assert np.allclose(result.history["plastic_strain"] - history["plastic_strain"], increment,
+                       rtol=1e-9, atol=0)
+    assert result.history["plastic_strain"][0] == 0.0
