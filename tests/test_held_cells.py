@@ -47,6 +47,32 @@ def test_held_points_read_their_old_cells_field_extended_exactly():
     assert np.abs(dF_own - (np.eye(2) + B)).max() < 1e-13
 
 
+def test_held_points_read_their_old_cells_field_not_their_new_cells():
+    """The same shift, with a grid field that is only piecewise linear (the nodal
+    interpolant of a smooth field): a held point must read the linear function of the
+    cell it was in, extended to where it is now, which differs from its new cell's.
+    The expected values come from that cell's three nodes alone."""
+    sim = _block_sim()
+    sim.step(0.5)
+    old = sim._cells_of_last_step.copy()
+    sim.points.x += np.array([0.037, 0.021])
+    forms, layout, *_ = sim.prepare_step(1.0, rebin=False)
+    held = layout.cell != sim.tracker.locate(sim.points.x)
+    assert held.sum() > 0.5 * len(sim.points) and np.array_equal(layout.cell, old)
+    sim.w.interpolate(lambda x: np.stack([np.sin(3 * x[0]) * x[1], x[0] ** 2 - 2 * x[1] ** 2]))
+    values = forms.update.evaluate(layout)
+    V = sim.w.function_space
+    coords, w = V.tabulate_dof_coordinates()[:, :2], sim.w.x.array.reshape(-1, 2)
+    for p in np.flatnonzero(held)[::7]:
+        dofs = V.dofmap.cell_dofs(old[p])
+        # the linear function a + B x through the old cell's three nodal values
+        A = np.column_stack([np.ones(3), coords[dofs]])
+        coef = np.linalg.solve(A, w[dofs])  # rows: a, then Bᵀ
+        du = coef[0] + sim.points.x[p] @ coef[1:]
+        assert np.abs(values[p, :2] - du).max() < 1e-13
+        assert np.abs(values[p, 2:6].reshape(2, 2) - (np.eye(2) + coef[1:].T)).max() < 1e-12
+
+
 def _failing_once_after_rebinning(sim, at_step):
     """Make ``sim.step`` fail once in step ``at_step`` when it re-bins, as Newton may
     on a plastic body; return the list the failure times go to."""
