@@ -49,3 +49,32 @@ def test_homogeneous_deformation_is_exact_at_every_point(dim):
     sigma = neo_hookean_cauchy_3d(mat, F_bar)
     assert np.abs(points.stress - sigma).max() < 1e-11 * np.abs(sigma).max()
     assert np.allclose(points.volume.sum(), np.linalg.det(F_bar), rtol=1e-12)
+
+
+def test_two_steps_compose_their_increments_in_order():
+    """Two non-commuting homogeneous increments, prescribed at every node of a one-square
+    grid (so the grid field is the linear map itself, whatever the points' layout after
+    step 1). The grid is reset, so each step imposes ΔF_k = I + ΔM_k on the points where
+    they are: they must carry F = ΔF₂ ΔF₁, not ΔF₁ ΔF₂ (which differs by 0.02), positions
+    F X, volumes det F V₀, and the stress of F. Both maps keep the body on the grid."""
+    rng = np.random.default_rng(11)
+    mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (1, 1))
+    points, _ = random_points(mesh, rng, np.array([3, 4]), fill=True)
+    first, second = np.array([[-0.2, 0.1], [0.0, 0.0]]), np.array([[0.0, 0.0], [0.1, -0.2]])
+
+    def M(t):
+        return t * first if t <= 1.0 else first + (t - 1.0) * second
+
+    everywhere = fe_mpm.Dirichlet(lambda x: np.ones(x.shape[1], dtype=bool),
+                                  profile=lambda x, t: M(t) @ x[:2])
+    mat = fe_mpm.NeoHookean(E=50.0, nu=0.35)
+    x0, V0 = points.x.copy(), points.volume.copy()
+    sim = fe_mpm.Simulation(mesh, points, mat, dirichlet=[everywhere])
+    sim.run(t_end=2.0, n_steps=2, progress=False)
+    F = (np.eye(2) + second) @ (np.eye(2) + first)
+    assert np.abs(F - (np.eye(2) + first) @ (np.eye(2) + second)).max() > 0.01
+    assert np.abs(points.F - F).max() < 1e-12
+    assert np.abs(points.x - x0 @ F.T).max() < 1e-12
+    assert np.allclose(points.volume, np.linalg.det(F) * V0, rtol=1e-12, atol=0)
+    sigma = neo_hookean_cauchy_3d(mat, F)
+    assert np.abs(points.stress - sigma).max() < 1e-11 * np.abs(sigma).max()
