@@ -302,9 +302,14 @@ def test_a_collapsed_trial_step_gives_a_non_finite_stress_quietly():
 
 @pytest.mark.parametrize("bad, match", [
     (dict(friction_angle=95.0), "friction_angle must lie in"),
+    (dict(friction_angle=90.0), "friction_angle must lie in"),
+    (dict(friction_angle=-1.0), "friction_angle must lie in"),
     (dict(friction_angle=20.0, dilatancy_angle=25.0), "dilatancy_angle must lie in"),
     (dict(cohesion=-1.0), "cohesion must lie in"),
-    (dict(cohesion=0.0), "cohesion must be > 0 when friction_angle = 0"),
+    (dict(cohesion=0.0), r"MohrCoulomb: cohesion must be > 0 when friction_angle = 0 \(the "
+                         r"material would have no strength\), got 0"),
+    (dict(density=0.0), "density must lie in"),
+    (dict(density=-5.0), "density must lie in"),
 ])
 def test_bad_parameters_are_named(bad, match):
     with pytest.raises(ValueError, match=match):
@@ -345,3 +350,10 @@ def test_history_of_a_plastic_step_is_consistent_with_its_stress():
     assert np.allclose(result.history["plastic_strain"] - history["plastic_strain"], increment,
                        rtol=1e-9, atol=0)
     assert result.history["plastic_strain"][0] == 0.0
+
+
+def test_parameters_at_the_edge_of_their_range_are_accepted():
+    for ok in (dict(friction_angle=89.9, dilatancy_angle=89.9), dict(cohesion=0.0,
+               friction_angle=0.1), dict(density=0.5), dict(friction_angle=0.0)):
+        law = fe_mpm.MohrCoulomb(**{**dict(E=1e4, nu=0.3, cohesion=10.0), **ok})
+        assert all(getattr(law, k) == v for k, v in ok.items())
