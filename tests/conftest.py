@@ -6,7 +6,7 @@
   file (``$XDG_CONFIG_HOME/dolfinx/dolfinx_jit_options.json``, here in a temporary
   folder, inherited by the demos the tests start). A fresh clone compiles about 400
   forms: ``-O1`` halves the compile time of the largest ones (the 3D P2/P1 test:
-  39 s → 21 s) while the kernels run a few per cent slower. It changes no result:
+  39 s → 21 s) while the kernels run about 9 % slower. It changes no result:
   neither level reorders floating-point operations (no ``-ffast-math``).
 - fe_mpm is imported first: the dolfinx-solver-real wheel must be imported before
   dolfinx, petsc4py and mpi4py, and fe_mpm takes care of that.
