@@ -131,7 +131,7 @@ COLLAPSE_DT = ("--aspect", "1.2", "--h", "0.02", "--points-per-cell", "3", "--da
 
 
 def collapse_dt40() -> dict:
-    """test_stability.py::test_too_large_time_step_is_subdivided_automatically."""
+    """Δt = 40 ms: steps are cut (a test until its run-out was found to hinge on round-off)."""
     coarse = _demo("column_collapse.py", "--dt", "0.04", *COLLAPSE_DT)
     fine = _demo("column_collapse.py", "--dt", "0.01", *COLLAPSE_DT)
     return {"runout 40 ms / 10 ms": coarse["runout"] / fine["runout"],
@@ -208,8 +208,8 @@ BOUNDS = [
     Quantity("runout error", -0.122, 0.122, "collapse a = 3"),
     Quantity("final_height error", -0.064, 0.064, "collapse a = 3"),
     Quantity("t_inf_cell error", -0.166, 0.166, "collapse a = 3"),
-    Quantity("runout 40 ms / 10 ms", 0.75, 1.25, "Δt = 40 ms collapse"),
-    Quantity("height 40 ms / 10 ms", 0.95, 1.05, "Δt = 40 ms collapse"),
+    Quantity("runout 40 ms / 10 ms", 0.75, 1.25, "Δt = 40 ms collapse (the old test)"),
+    Quantity("height 40 ms / 10 ms", 0.95, 1.05, "Δt = 40 ms collapse (the old test)"),
     Quantity("q/c_u at s/B = 0.3", 2 + np.pi, np.inf, "footing, 100 steps"),
     Quantity("x5: 40 steps / 1 step", 1.0, 1.25, "Cook ×5"),
     Quantity("x10: 40 steps / 1 step", 1.0, 1.25, "Cook ×10"),
