@@ -14,12 +14,15 @@ from pathlib import Path
 
 SCRIPT = """
 import sys
+from pathlib import Path
 import numpy as np
 import fe_mpm
 import dolfinx.mesh
 from mpi4py import MPI
 
 comm = MPI.COMM_WORLD if sys.argv[1] == "world" else MPI.COMM_SELF
+# One file per rank: the ranks' stdout reaches mpiexec interleaved, even within a line.
+out = Path(sys.argv[2]) / f"rank{MPI.COMM_WORLD.rank}.txt"
 mesh = dolfinx.mesh.create_rectangle(comm, [[0, 0], [1, 1]], [4, 4],
                                      dolfinx.mesh.CellType.triangle)
 points = fe_mpm.seed(mesh, per_cell=3, density=2000.0)
@@ -27,10 +30,10 @@ try:
     sim = fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1e7, 0.3), body_force=(0, -9.81),
                             dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))])
     sim.run(1.0, 2, progress=False)
-    print(f"rank {MPI.COMM_WORLD.rank} ran: {sim.history[-1].reactions} "
-          f"{points.stress[:, 1, 1].min():.6e}", flush=True)
+    out.write_text(f"rank {MPI.COMM_WORLD.rank} ran: {sim.history[-1].reactions} "
+                   f"{points.stress[:, 1, 1].min():.6e}")
 except NotImplementedError as err:
-    print(f"rank {MPI.COMM_WORLD.rank} refused: {err}", flush=True)
+    out.write_text(f"rank {MPI.COMM_WORLD.rank} refused: {err}")
 """
 
 
@@ -42,23 +45,27 @@ def _mpiexec() -> str:
 
 
 def _run(tmp_path, comm):
+    """Exit code and output of ``mpiexec -n 2``, and what each rank wrote (rank order)."""
     script = tmp_path / "scene.py"
     script.write_text(SCRIPT)
-    done = subprocess.run([_mpiexec(), "-n", "2", sys.executable, str(script), comm],
-                          capture_output=True, text=True, timeout=120, env=dict(os.environ))
-    return done.returncode, done.stdout
+    done = subprocess.run([_mpiexec(), "-n", "2", sys.executable, str(script), comm,
+                           str(tmp_path)], capture_output=True, text=True, timeout=120,
+                          env=dict(os.environ))
+    ranks = [tmp_path / f"rank{r}.txt" for r in range(2)]
+    return done.returncode, done.stdout + done.stderr, [
+        p.read_text() if p.exists() else "" for p in ranks]
 
 
 def test_a_distributed_mesh_is_refused_on_every_rank(tmp_path):
-    code, out = _run(tmp_path, "world")
+    code, out, lines = _run(tmp_path, "world")
     assert code == 0, out
-    lines = sorted(line for line in out.splitlines() if "refused" in line)
-    assert len(lines) == 2 and lines[0].startswith("rank 0") and lines[1].startswith("rank 1")
+    assert lines[0].startswith("rank 0 refused: ") and lines[1].startswith("rank 1 refused: ")
     assert all("fe-mpm runs on one MPI rank for now" in line for line in lines)
 
 
 def test_serial_meshes_run_independently_on_each_rank(tmp_path):
-    code, out = _run(tmp_path, "self")
+    code, out, lines = _run(tmp_path, "self")
     assert code == 0, out
-    ran = sorted(line.split(" ran: ")[1] for line in out.splitlines() if " ran: " in line)
-    assert len(ran) == 2 and ran[0] == ran[1]  # the same serial answer on both ranks
+    assert lines[0].startswith("rank 0 ran: ") and lines[1].startswith("rank 1 ran: ")
+    ran = [line.split(" ran: ")[1] for line in lines]
+    assert ran[0] == ran[1]  # the same serial answer on both ranks
