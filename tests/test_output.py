@@ -27,19 +27,28 @@ def _points(g: int, n: int = 7, seed: int = 3) -> MaterialPoints:
 
 def _frames(pvd) -> list[tuple[float, str]]:
     root = ET.parse(pvd).getroot()
-    assert root.get("type") == "Collection"
-    return [(float(d.get("timestep")), d.get("file")) for d in root.iter("DataSet")]
+    assert root.tag == "VTKFile" and root.get("type") == "Collection"
+    (collection,) = list(root)
+    assert collection.tag == "Collection"
+    assert not (root.text or "").strip() and not (collection.tail or "").strip()
+    assert all(d.tag == "DataSet" for d in collection)
+    return [(float(d.get("timestep")), d.get("file")) for d in collection]
 
 
 @pytest.mark.parametrize("g", [2, 3])
 def test_every_field_is_written_as_the_points_carry_it(tmp_path, g):
     points = _points(g)
     n = len(points)
-    writer = ParticleWriter(tmp_path, name="pts")
+    writer = ParticleWriter(tmp_path / "new" / "folder", name="pts")  # made, parents too
     extra = np.arange(n, dtype=float) * 0.25
-    path = writer.write(0.125, points, marker=extra)
-    assert path == tmp_path / "pts_000000.vtu"
+    vector = np.arange(3 * n, dtype=float).reshape(n, 3)
+    path = writer.write(0.125, points, marker=extra, arrow=vector)
+    assert path == tmp_path / "new" / "folder" / "pts_000000.vtu"
     mesh = meshio.read(path)
+    assert mesh.points.shape == (n, 3)
+    for name in ("displacement", "velocity"):
+        assert mesh.point_data[name].shape == (n, 3), name
+    assert np.array_equal(mesh.point_data["arrow"], vector)
     assert np.array_equal(mesh.points[:, :g], points.x)
     assert np.all(mesh.points[:, g:] == 0.0)
     assert np.array_equal(mesh.cells_dict["vertex"].ravel(), np.arange(n))

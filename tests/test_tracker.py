@@ -121,3 +121,55 @@ def test_snap_to_moves_points_into_the_nearest_allowed_cell_within_the_tolerance
     assert snapped[1] == touching[np.argmax(lam)] and -0.5 < lam.max() < -0.1
     strict = tracker.snap_to(x, cells, allowed, tol=0.1)
     assert strict[1] == -1 and strict[0] == snapped[0]
+
+
+def _snapped_by_hand(mesh, x, cells, allowed, tol):
+    """The cells snap_to may return, from the cells' vertices alone: a set per point (two
+    candidates whose smallest barycentric coordinates tie to round-off are both right)."""
+    nodes = mesh.geometry.dofmaps[0]
+    out = []
+    for i, c in enumerate(cells):
+        if c < 0 or allowed[c]:
+            out.append({c})
+            continue
+        touching = np.flatnonzero(allowed & np.isin(nodes, nodes[c]).any(axis=1))
+        if touching.size == 0:
+            out.append({-1})
+            continue
+        v = mesh.geometry.x[nodes[touching]][:, :, :2]
+        A = np.concatenate([np.swapaxes(v, 1, 2), np.ones((touching.size, 1, 3))], axis=1)
+        lam = np.linalg.solve(A, np.tile(np.append(x[i], 1.0), (touching.size, 1))[..., None])
+        worst = lam[..., 0].min(axis=1)
+        best = worst.max()
+        out.append(set(touching[worst >= best - 1e-12]) if best >= -tol else {-1})
+    return out
+
+
+def test_snap_to_agrees_with_a_search_by_hand_over_a_whole_grid():
+    """Random allowed cells (cell 0 allowed, cell 1 not) and a point in every cell, plus
+    points with no cell and points in cells with no allowed neighbour (first, so that the
+    search must go on past them): snap_to with its default tolerance and with 0.3 gives
+    the cells a search by hand gives, and the walk visits every node, the last one too."""
+    rng = np.random.default_rng(2)
+    mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (6, 6))
+    tracker = Tracker(mesh)
+    nodes = mesh.geometry.dofmaps[0]
+    n = nodes.shape[0]
+    allowed = rng.random(n) < 0.4
+    allowed[0], allowed[1] = True, False
+    isolated = np.flatnonzero(~allowed & ~np.isin(nodes, nodes[allowed]).any(axis=1))
+    lam = rng.dirichlet(np.ones(3), size=n)
+    x = np.einsum("cv,cvg->cg", lam, mesh.geometry.x[nodes][:, :, :2])
+    on_facet = mesh.geometry.x[nodes[:, :2]][:, :, :2].mean(axis=1)  # mid-edges
+    x = np.vstack([x[isolated], x, on_facet, [[0.5, 0.5]]])
+    cells = np.concatenate([isolated, np.arange(n), tracker.locate(on_facet), [-1]])
+    assert isolated.size > 0 and cells.size == x.shape[0]
+    for tol in (None, 0.3):
+        snapped = tracker.snap_to(x, cells, allowed) if tol is None else \
+            tracker.snap_to(x, cells, allowed, tol=tol)
+        expected = _snapped_by_hand(mesh, x, cells, allowed, 1e-6 if tol is None else tol)
+        wrong = [i for i, (got, right) in enumerate(zip(snapped, expected)) if got not in right]
+        assert not wrong and snapped.dtype == np.int32, wrong
+        assert sum(len(right) > 1 for right in expected) < 5  # ties are rare
+    # the points were spread over every node's cells, the highest-numbered one included
+    assert np.isin(nodes.max(), nodes[~allowed])
