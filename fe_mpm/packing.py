@@ -129,14 +129,17 @@ class BoundForm:
         b.scatter_reverse(dolfinx.la.InsertMode.add)
         return b.array
 
-    def assemble_matrix(self, A=None, bcs=(), diag: float = 1.0):
-        """Assemble into the PETSc matrix ``A`` (a new one if None); returns it, assembled."""
+    def assemble_matrix(self, A=None, bcs=()):
+        """Assemble into the PETSc matrix ``A`` (a new one if None); returns it, assembled.
+
+        Rows and columns of ``bcs`` get 1 on the diagonal and 0 elsewhere.
+        """
         coeffs = self.coefficients()
         if A is None:
-            A = fem_petsc.assemble_matrix(self.form, bcs=list(bcs), diag=diag, coeffs=coeffs)
+            A = fem_petsc.assemble_matrix(self.form, bcs=list(bcs), coeffs=coeffs)
         else:
             A.zeroEntries()
-            fem_petsc.assemble_matrix(A, self.form, bcs=list(bcs), diag=diag, coeffs=coeffs)
+            fem_petsc.assemble_matrix(A, self.form, bcs=list(bcs), coeffs=coeffs)
         A.assemble()
         return A
 

@@ -256,9 +256,10 @@ class MaterialPointQuadrature:
         subdomain (another rule, e.g. PPP's) proportional to ``f`` counts every
         cell once.
         """
-        first = np.r_[True, layout.entities[1:] != layout.entities[:-1]] \
-            if layout.num_entities else np.zeros(0, dtype=bool)
-        self.values[f] = np.where(first, values[layout.entities], 0.0)[:, None]
+        entities = layout.entities
+        first = np.ones(entities.size, dtype=bool)
+        first[1:] = entities[1:] != entities[:-1]  # entities are sorted by cell
+        self.values[f] = np.where(first, values[entities], 0.0)[:, None]
         f.per_entity = True  # packed from these values, not gathered per cell
 
     def pack_geometry(

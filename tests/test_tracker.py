@@ -145,8 +145,9 @@ def _snapped_by_hand(mesh, x, cells, allowed, tol):
     return out
 
 
-def test_snap_to_agrees_with_a_search_by_hand_over_a_whole_grid():
-    """Random allowed cells (cell 0 allowed, cell 1 not) and a point in every cell, plus
+@pytest.mark.parametrize("first_two", [(True, False), (False, True)])
+def test_snap_to_agrees_with_a_search_by_hand_over_a_whole_grid(first_two):
+    """Random allowed cells (cells 0 and 1 one of each) and a point in every cell, plus
     points with no cell and points in cells with no allowed neighbour (first, so that the
     search must go on past them): snap_to with its default tolerance and with 0.3 gives
     the cells a search by hand gives, and the walk visits every node, the last one too."""
@@ -156,7 +157,7 @@ def test_snap_to_agrees_with_a_search_by_hand_over_a_whole_grid():
     nodes = mesh.geometry.dofmaps[0]
     n = nodes.shape[0]
     allowed = rng.random(n) < 0.4
-    allowed[0], allowed[1] = True, False
+    allowed[:2] = first_two
     isolated = np.flatnonzero(~allowed & ~np.isin(nodes, nodes[allowed]).any(axis=1))
     lam = rng.dirichlet(np.ones(3), size=n)
     x = np.einsum("cv,cvg->cg", lam, mesh.geometry.x[nodes][:, :, :2])
