@@ -158,3 +158,8 @@ def test_slot_count_balances_empty_slots_against_entities():
     assert slot_count(np.r_[np.full(99, 1), 2]) == 1  # one cell crossed into: no recompile
     assert slot_count(mixed, current=4) == 4
     assert slot_count(mixed, current=12) == 3
+    # one cell of 5: one entity of 6 slots (8 in cost) beats 2 of 3 (10), 5 of 1 (15)
+    assert slot_count(np.array([5])) == 6 and slot_count(np.array([0, 5, 0])) == 6
+    # no point anywhere: keep the current count, or 1
+    assert slot_count(np.zeros(3, dtype=int)) == 1 and slot_count(np.array([], dtype=int)) == 1
+    assert slot_count(np.zeros(3, dtype=int), current=4) == 4
