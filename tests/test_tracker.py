@@ -9,14 +9,19 @@ from fe_mpm.meshes import rectangle_mesh
 from fe_mpm.tracker import Tracker
 
 
-def _inside(mesh, x, cells, tol=1e-14):
-    """Inside each cell, judged from the cell's vertices alone (not with the tracker's own
-    barycentric map or tolerance): x = Σ λ_i v_i, Σ λ_i = 1, every λ_i ≥ −tol."""
+def _barycentric(mesh, x, cells):
+    """λ (n, g + 1) of each point x (n, g) in its cell, from the cell's vertices alone (not
+    with the tracker's own map): x = Σ λ_i v_i, Σ λ_i = 1."""
     g = x.shape[1]
     v = mesh.geometry.x[mesh.geometry.dofmaps[0][cells]][:, :, :g]  # (n, g + 1, g)
     A = np.concatenate([np.swapaxes(v, 1, 2), np.ones((len(cells), 1, g + 1))], axis=1)
-    lam = np.linalg.solve(A, np.concatenate([x, np.ones((len(cells), 1))], axis=1)[..., None])
-    return lam[..., 0].min(axis=1) >= -tol
+    b = np.concatenate([x, np.ones((len(cells), 1))], axis=1)
+    return np.linalg.solve(A, b[..., None])[..., 0]
+
+
+def _inside(mesh, x, cells, tol=1e-14):
+    """Inside each cell: every λ_i ≥ −tol (not the tracker's own tolerance)."""
+    return _barycentric(mesh, x, cells).min(axis=1) >= -tol
 
 
 @pytest.mark.parametrize("dim", [2, 3])
@@ -136,10 +141,7 @@ def _snapped_by_hand(mesh, x, cells, allowed, tol):
         if touching.size == 0:
             out.append({-1})
             continue
-        v = mesh.geometry.x[nodes[touching]][:, :, :2]
-        A = np.concatenate([np.swapaxes(v, 1, 2), np.ones((touching.size, 1, 3))], axis=1)
-        lam = np.linalg.solve(A, np.tile(np.append(x[i], 1.0), (touching.size, 1))[..., None])
-        worst = lam[..., 0].min(axis=1)
+        worst = _barycentric(mesh, np.repeat(x[i:i + 1], touching.size, 0), touching).min(axis=1)
         best = worst.max()
         out.append(set(touching[worst >= best - 1e-12]) if best >= -tol else {-1})
     return out
