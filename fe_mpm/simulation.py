@@ -455,7 +455,8 @@ class Simulation:
                 dofs = dolfinx.fem.locate_dofs_topological(target, fdim, facets)
                 bc = dolfinx.fem.dirichletbc(value, dofs)
             self._dirichlet.append((spec, value, bc))
-            self._dirichlet_nodes.append(_facet_node_weights(mesh, facets)[0])
+            self._dirichlet_nodes.append(
+                np.unique(dolfinx.mesh.entities_to_geometry(mesh, fdim, facets)))
 
         self._tractions = []  # (spec, Constant)
         self._traction_facets: dict[int, np.ndarray] = {}
