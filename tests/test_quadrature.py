@@ -7,6 +7,7 @@ two slots per entity (so cells with up to 5 points appear up to 3 times, each
 copy with its own points).
 """
 
+import basix.ufl
 import dolfinx.fem.petsc  # noqa: F401
 import numpy as np
 import pytest
@@ -15,7 +16,8 @@ from layouts import random_points
 
 from fe_mpm._dolfinx import dolfinx
 from fe_mpm.assembly import StepForm
-from fe_mpm.forms import displacement
+from fe_mpm.forms import displacement, inertia, mixed_up
+from fe_mpm.formulations import collapse
 from fe_mpm.materials import NeoHookean
 from fe_mpm.meshes import rectangle_mesh
 from fe_mpm.quadrature import OCCUPIED, MaterialPointQuadrature, SlotLayout, bucket, slot_count
@@ -163,3 +165,133 @@ def test_slot_count_balances_empty_slots_against_entities():
     # no point anywhere: keep the current count, or 1
     assert slot_count(np.zeros(3, dtype=int)) == 1 and slot_count(np.array([], dtype=int)) == 1
     assert slot_count(np.zeros(3, dtype=int), current=4) == 4
+
+
+def _p2_basis(V, cell, x):
+    """Values (n,) and gradients (n, g) of the P2 basis of ``cell`` at ``x``.
+
+    From the node coordinates: the basis is the inverse of the Vandermonde matrix
+    of the monomials of degree ≤ 2, independent of how the form compiler tabulates it.
+    """
+    g = x.size
+    nodes = V.dofmap.list[cell]
+    X = V.tabulate_dof_coordinates()[nodes, :g]
+    pairs = [(i, j) for i in range(g) for j in range(i, g)]
+
+    def monomials(y):
+        return np.concatenate([[1.0], y, [y[i] * y[j] for i, j in pairs]])
+
+    def monomial_gradients(y):
+        d = np.zeros((1 + g + len(pairs), g))
+        d[1 : 1 + g] = np.eye(g)
+        for k, (i, j) in enumerate(pairs):
+            d[1 + g + k, i] += y[j]
+            d[1 + g + k, j] += y[i]
+        return d
+
+    C = np.linalg.inv(np.array([monomials(X_i) for X_i in X]))
+    return nodes, monomials(x) @ C, C.T @ monomial_gradients(x)
+
+
+def _embed_3d(F):
+    F3 = np.eye(3)
+    F3[: F.shape[0], : F.shape[1]] = F
+    return F3
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_taylor_hood_up_residual_and_stress_equal_particle_sums(dim):
+    """P2/P1 u-p: the residual under a body force, and the output Cauchy stress of a
+    compressible state (J far from 1), against a loop over the points with the P2
+    basis built by hand. Guards the degree of the load evaluation (a P2 test function
+    read as P1 misses ½ d·H·d) and the 1/J of the deviatoric Cauchy stress."""
+    rng, mesh, pts, layout, q = _setup(dim, seed=3, F_spread=0.15)
+    mat = NeoHookean(E=10.0, nu=0.3)
+    cell = mesh.topology.cell_name()
+    u_el = basix.ufl.element("Lagrange", cell, 2, shape=(dim,))
+    p_el = basix.ufl.element("Lagrange", cell, 1)
+    W = dolfinx.fem.functionspace(mesh, basix.ufl.mixed_element([u_el, p_el]))
+    V2, to_u = collapse(W.sub(0))
+    Q1, to_p = collapse(W.sub(1))
+    sol = dolfinx.fem.Function(W)
+    sol.x.array[to_u] = rng.uniform(-0.01, 0.01, len(to_u))
+    sol.x.array[to_p] = rng.uniform(-1.0, 1.0, len(to_p))
+    du, p = ufl.split(sol)
+    w, q_test = ufl.TestFunctions(W)
+    F_n = q.function((dim, dim), "F_n")
+    rho = q.function((), "density")
+    q.pack(F_n, layout, pts.F, empty=np.eye(dim))
+    q.pack(rho, layout, pts.density)
+    b = np.arange(1.0, dim + 1.0)
+    R = mixed_up.residual(du, p, w, q_test, q, F_n, rho, mat, None,
+                          body_force=ufl.as_vector(b), u_degree=2)
+    R_mp = _assemble(R, mesh, layout, q)
+    dF_p = ufl.Identity(dim) + q.grad_at_points(du, 2)
+    A = rng.uniform(-1.0, 1.0, (3, 3))
+    v = ufl.TestFunction(Q1)
+    sigma = mixed_up.cauchy_stress_3d(mat, dF_p * F_n, q.at_points(p))
+    S_mp = _assemble(q.sum(ufl.inner(sigma, ufl.as_matrix(A)) * q.at_points(v)), mesh, layout, q)
+
+    R_bf, S_bf = np.zeros_like(R_mp), np.zeros_like(S_mp)
+    U = sol.x.array[to_u].reshape(-1, dim)
+    P = sol.x.array[to_p]
+    J_all = []
+    for k in range(len(pts)):
+        nodes, N2, dN2 = _p2_basis(V2, layout.cell[k], pts.x[k])
+        pdofs, N1, _ = _p1_basis(Q1, layout.cell[k], pts.x[k])
+        dF = np.eye(dim) + U[nodes].T @ dN2
+        F3 = _embed_3d(dF @ pts.F[k])
+        J = np.linalg.det(F3)
+        J_all.append(J)
+        p_k = N1 @ P[pdofs]
+        b_bar = J ** (-2.0 / 3.0) * F3 @ F3.T
+        dev_tau = mat.mu * (b_bar - np.trace(b_bar) / 3.0 * np.eye(3))
+        tau = -J * p_k * np.eye(dim) + dev_tau[:dim, :dim]
+        Piola = tau @ np.linalg.inv(dF).T / np.linalg.det(pts.F[k])
+        V_k = pts.volume[k]
+        r_u = V_k * (dN2 @ Piola.T - pts.density[k] * np.outer(N2, b))
+        R_bf[to_u.reshape(-1, dim)[nodes]] += r_u
+        R_bf[to_p[pdofs]] -= V_k * np.linalg.det(dF) * N1 * ((J - 1.0) + p_k / mat.bulk_modulus)
+        sigma_k = -p_k * np.eye(3) + dev_tau / J
+        S_bf[pdofs] += V_k * np.sum(sigma_k * A) * N1
+    assert max(abs(np.array(J_all) - 1.0)) > 0.2, "want a compressible state"
+    assert np.linalg.norm(R_mp - R_bf) <= RTOL * np.linalg.norm(R_bf)
+    assert np.linalg.norm(S_mp - S_bf) <= RTOL * np.linalg.norm(S_bf)
+
+
+@pytest.mark.parametrize("lumped", [False, True])
+@pytest.mark.parametrize("dim", [2, 3])
+def test_inertia_equals_particle_sum(dim, lumped):
+    """The Newmark inertia and damping term against a loop over the points: the
+    consistent mass Σ_p m_p N_I N_J, or the row-sum lumped mass Σ_p m_p N_I on the
+    diagonal, reached through the second moments C_p = Σ_I N_I r_I ⊗ r_I."""
+    rng, mesh, pts, layout, q = _setup(dim, seed=4)
+    V = dolfinx.fem.functionspace(mesh, ("Lagrange", 1, (dim,)))
+    du, v_n, a_n = (dolfinx.fem.Function(V) for _ in range(3))
+    for f in (du, v_n, a_n):
+        f.x.array[:] = rng.uniform(-1.0, 1.0, f.x.array.size)
+    c_a, c_v, alpha = 400.0, 20.0, 0.3
+    nm = inertia.NewmarkData(v_n, a_n, *(dolfinx.fem.Constant(mesh, c) for c in (c_a, c_v, alpha)))
+    rho = q.function((), "density")
+    q.pack(rho, layout, pts.density)
+    X = V.tabulate_dof_coordinates()[:, :dim]
+    bases = [_p1_basis(V, c, x) for c, x in zip(layout.cell, pts.x)]
+    lumping = None
+    if lumped:
+        lumping = q.function((dim, dim), "second_moment")
+        r = [X[nodes] - x for (nodes, _, _), x in zip(bases, pts.x)]
+        C = np.array([np.einsum("v,vi,vj->ij", N, r_k, r_k) for (_, N, _), r_k in zip(bases, r)])
+        q.pack(lumping, layout, C)
+    R_mp = _assemble(inertia.inertia(du, ufl.TestFunction(V), q, rho, nm, lumping),
+                     mesh, layout, q)
+
+    a_nodes = (c_a * du.x.array - 2 * c_v * v_n.x.array - a_n.x.array
+               + alpha * (c_v * du.x.array - v_n.x.array)).reshape(-1, dim)
+    R_bf = np.zeros_like(R_mp).reshape(-1, dim)
+    for (nodes, N, _), m in zip(bases, pts.mass):
+        if lumped:
+            R_bf[nodes] += m * N[:, None] * a_nodes[nodes]
+        else:
+            R_bf[nodes] += m * np.outer(N, N @ a_nodes[nodes])
+    R_bf = R_bf.ravel()
+    assert np.linalg.norm(R_mp - R_bf) <= RTOL * np.linalg.norm(R_bf)
