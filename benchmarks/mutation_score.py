@@ -9,8 +9,14 @@ lists those by name (``fnmatch`` patterns allowed), each with its reason. The sc
 is killed / (all − equivalent); a timeout or a crash counts as killed, as mutmut
 counts it, and a mutant no test reaches counts as surviving.
 
+Of ``simulation.py`` only the point update and the projections are in scope
+(:data:`SIMULATION_SCOPE`); mutmut mutates the whole file, so run those methods by
+name (``mutmut run "fe_mpm.simulation.xǁSimulationǁ_convect__mutmut_*"``) and the
+others are left out of the count.
+
 Usage: ``mutmut run`` then ``./run python benchmarks/mutation_score.py [--survivors]``
-from the repository root (``--dir`` where ``mutants/`` lies elsewhere). Not a test.
+from the repository root (``--dir`` where ``mutants/`` lies elsewhere; several
+folders merge, a later folder's result replacing an earlier one's). Not a test.
 """
 
 from __future__ import annotations
@@ -28,6 +34,19 @@ KILLED = {1, 3, 36, -24, 24, 152, 255, -11, -9, 37}
 SURVIVED = {0}
 NO_TESTS = {5, 33}
 
+#: The methods of ``Simulation`` in scope: the point update and the projections.
+SIMULATION_SCOPE = (
+    "_convect", "_project_to_grid", "_second_moments", "_mass_weighted_projection",
+    "_initial_guess", "_nodal_shares", "_pressure_volume", "_consistent_initial_acceleration",
+)
+
+
+def in_scope(name: str) -> bool:
+    """False for the mutants of ``simulation.py`` outside :data:`SIMULATION_SCOPE`."""
+    if not name.startswith("fe_mpm.simulation."):
+        return True
+    return any(f"ǁSimulationǁ{method}__mutmut_" in name for method in SIMULATION_SCOPE)
+
 
 def equivalents(path: Path) -> list[tuple[str, str]]:
     """The (pattern, reason) pairs of the equivalents file; ``#`` starts the reason."""
@@ -39,23 +58,45 @@ def equivalents(path: Path) -> list[tuple[str, str]]:
     return pairs
 
 
-def outcomes(mutants: Path) -> dict[str, int | None]:
-    """Exit code by mutant name, over every ``.meta`` file under ``mutants``."""
-    codes = {}
-    for meta in mutants.rglob("*.meta"):
-        codes |= json.loads(meta.read_text())["exit_code_by_key"]
-    return codes
+def outcomes(folders: list[Path]) -> dict[str, int | None]:
+    """Exit code by mutant name, over every ``.meta`` file under each ``folder/mutants``.
+
+    The last folder must hold the current code. An earlier folder's result counts
+    only where its function is unchanged (the same hash in mutmut's ``.meta``): a
+    change renumbers a function's mutants. A later result replaces an earlier one;
+    a mutant a folder did not run (None) keeps the earlier result.
+    """
+    def read(folder: Path) -> dict[str, tuple[int | None, str | None]]:
+        found = {}
+        for meta in (folder / "mutants").rglob("*.meta"):
+            data = json.loads(meta.read_text())
+            for name, code in data["exit_code_by_key"].items():
+                function = name.rsplit(".", 1)[1].split("__mutmut_")[0]
+                found[name] = (code, data["hash_by_function_name"].get(function))
+        return found
+
+    current = read(folders[-1])
+    codes: dict[str, int | None] = {}
+    for folder in folders[:-1]:
+        for name, (code, digest) in read(folder).items():
+            if code is not None and name in current and digest == current[name][1]:
+                codes[name] = code
+    for name, (code, _) in current.items():
+        if code is not None or name not in codes:
+            codes[name] = code
+    return {name: code for name, code in codes.items() if in_scope(name)}
 
 
 def main() -> None:
     """Print the score per module and in all."""
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--dir", type=Path, default=ROOT, help="folder holding mutants/")
+    p.add_argument("--dir", type=Path, nargs="+", default=[ROOT],
+                   help="folders holding mutants/, oldest first")
     p.add_argument("--equivalents", type=Path, default=ROOT / "docs/mutation_equivalents.txt")
     p.add_argument("--survivors", action="store_true", help="list the surviving mutants")
     args = p.parse_args()
     patterns = equivalents(args.equivalents)
-    codes = outcomes(args.dir / "mutants")
+    codes = outcomes(args.dir)
     counts: dict[str, Counter] = defaultdict(Counter)
     survivors, unused = [], {pattern for pattern, _ in patterns}
     for name, code in sorted(codes.items()):

@@ -37,5 +37,8 @@ import fe_mpm  # noqa: E402, F401
 
 
 def pytest_collection_modifyitems(items):
-    """Slow tests first (a stable sort keeps the order within each group)."""
-    items.sort(key=lambda item: item.get_closest_marker("slow") is None)
+    """Slow tests first under xdist, so the workers start on the long runs; last in
+    one process, so that ``-x`` (mutmut's runs) stops at the first failing short test.
+    A stable sort keeps the order within each group."""
+    slow_first = "PYTEST_XDIST_WORKER" in os.environ
+    items.sort(key=lambda item: (item.get_closest_marker("slow") is None) == slow_first)

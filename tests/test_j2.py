@@ -142,3 +142,14 @@ def test_yield_function_is_the_deviatoric_norm_against_the_hardened_radius():
     f = law.yield_function(tau, alpha)
     assert f[:2] == pytest.approx([0.0, 0.0], abs=1e-14)
     assert f[2] == pytest.approx(np.sqrt(2.0) - np.sqrt(2 / 3) * 2.0, rel=1e-14)
+
+
+@pytest.mark.parametrize("J", [0.7, 1.3])
+def test_a_volume_change_alone_stays_elastic_at_the_bulk_law(J):
+    """F = J^{1/3} I has no deviator: the point stays elastic, with the volumetric
+    Kirchhoff stress τ = K J (J − 1) I of the law U(J) = K (J − 1)²/2, whatever σ_Y."""
+    mat = fe_mpm.J2Plasticity(**STEEL)
+    driver = MaterialDriver(mat, n=1)
+    tau = driver.step(J ** (1.0 / 3.0) * np.eye(3)[None])
+    assert driver.history["plastic_strain"][0] == 0.0
+    assert tau[0] == pytest.approx(mat.bulk_modulus * J * (J - 1.0) * np.eye(3), rel=1e-12, abs=1e-9)
