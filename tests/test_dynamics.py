@@ -183,6 +183,26 @@ def test_lumped_mass_is_the_row_sum_of_the_consistent_mass():
     assert not np.allclose(diagonals["consistent"], diagonals["lumped"])
 
 
+def test_initial_acceleration_is_gravity_on_free_nodes_and_zero_on_the_support():
+    """A stress-free block on a fixed base, lumped mass: M a₀ = f_ext row by row gives
+    a₀ = g on every free node and 0 on the base, so a point's start acceleration is
+    g times the share of its free nodes, Σ_{I free} N_I(x_p)."""
+    mesh = rectangle_mesh((0, 0), (1, 1), (4, 4))
+    points = fe_mpm.seed(mesh, per_cell=3, density=2.0)
+    base = fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))
+    sim = fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1e3, 0.3, 2.0), dynamic=True,
+                            mass="lumped", dirichlet=[base], body_force=(0.0, -G))
+    dt = 0.01
+    forms, layout, R, _, bcs = sim.prepare_step(dt)
+    sim._consistent_initial_acceleration(forms, layout, R, bcs, dt)
+    vertices = mesh.geometry.x[mesh.geometry.dofmaps[0][layout.cell], 1]
+    free_share = np.where(np.isclose(vertices, 0.0), 0.0,
+                          sim.tracker.barycentric(points.x, layout.cell)).sum(axis=1)
+    assert free_share.min() < 0.5, "want points next to the base"
+    assert np.allclose(points.acceleration[:, 0], 0.0, rtol=0, atol=1e-12 * G)
+    assert np.allclose(points.acceleration[:, 1], -G * free_share, rtol=1e-12, atol=0)
+
+
 @pytest.mark.parametrize("mass", ["consistent", "lumped"])
 def test_damped_free_flight_follows_the_trapezoidal_rule(mass):
     """M a = −α M v for a rigid body: the trapezoidal rule gives exactly

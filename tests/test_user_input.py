@@ -5,6 +5,7 @@ import pytest
 
 import fe_mpm
 from fe_mpm import scenes
+from fe_mpm.materials.state import HistoryField
 from fe_mpm.meshes import rectangle_mesh
 
 RHO, G = 2000.0, 9.81
@@ -136,3 +137,12 @@ def test_seed_refuses_rules_with_negative_weights_or_points_on_faces(per_cell):
                                   dolfinx.mesh.CellType.tetrahedron)
     with pytest.raises(ValueError, match=r"per_cell must be one of \[1, 4, 24, 57"):
         fe_mpm.seed(box, per_cell)
+
+
+def test_a_history_field_declared_with_an_integer_is_stored_as_floats():
+    """``HistoryField((), 0)`` in a user's law: the points' history is float64, so a
+    plastic strain of 0.25 is not truncated to 0 when written back."""
+    values = HistoryField((), 0).initial_values(3)
+    values[1] = 0.25
+    assert values.dtype == np.float64 and values[1] == 0.25
+    assert HistoryField((2, 2), np.eye(2, dtype=int)).initial_values(2).dtype == np.float64
