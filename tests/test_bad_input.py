@@ -185,6 +185,17 @@ def test_law_parameters_are_checked(make, error, match):
         make()
 
 
+@pytest.mark.parametrize("law", [
+    lambda rho: fe_mpm.NeoHookean(1.0, 0.3, density=rho),
+    lambda rho: fe_mpm.J2Plasticity(1.0, 0.3, 1.0, density=rho),
+    lambda rho: fe_mpm.MohrCoulomb(1.0, 0.3, 1.0, 30.0, density=rho),
+])
+def test_every_law_takes_a_positive_density_and_refuses_zero(law):
+    assert law(0.5).density == 0.5
+    with pytest.raises(ValueError, match=r": density must lie in \(0, inf\]"):
+        law(0.0)
+
+
 def test_laws_keep_the_checked_floats():
     """A law stores floats, not the numpy scalars (or anything else) it was given."""
     laws = [
