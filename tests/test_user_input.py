@@ -7,6 +7,7 @@ import fe_mpm
 from fe_mpm import scenes
 from fe_mpm.materials.state import HistoryField
 from fe_mpm.meshes import rectangle_mesh
+from fe_mpm.packing import PointExpression
 
 RHO, G = 2000.0, 9.81
 
@@ -146,3 +147,34 @@ def test_a_history_field_declared_with_an_integer_is_stored_as_floats():
     values[1] = 0.25
     assert values.dtype == np.float64 and values[1] == 0.25
     assert HistoryField((2, 2), np.eye(2, dtype=int)).initial_values(2).dtype == np.float64
+
+
+@pytest.mark.parametrize("poison, match", [
+    ("nan", r"non-finite state at 2 material point\(s\) in step 1 \(t = 1\); first: point 3 at "),
+    ("inverted", r"det\(ΔF\) <= 0 at point 3 \(x = .*\) in step 1 \(t = 1\): the step inverts"),
+])
+def test_a_bad_point_update_stops_the_step_naming_the_point(monkeypatch, poison, match):
+    """The update the grid hands back is checked before any point moves: a NaN (or a
+    ΔF with det ≤ 0) at points 3 and 5 stops the step naming point 3, and the points
+    keep their positions, deformation and volumes."""
+    mesh = _mesh()
+    points = fe_mpm.seed(mesh, per_cell=3)
+    sim = fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1e7, 0.3, density=RHO),
+                            body_force=(0.0, -G), dirichlet=[_base()])
+    before = [points.x.copy(), points.F.copy(), points.volume.copy()]
+    evaluate = PointExpression.evaluate
+
+    def poisoned(self, layout):
+        values = evaluate(self, layout)
+        if self is sim._current[0].update:
+            if poison == "nan":
+                values[[3, 5], -1] = np.nan
+            else:  # ΔF = diag(−1, 1), columns g .. g + g² of the update
+                values[[3, 5], 2:6] = [-1.0, 0.0, 0.0, 1.0]
+        return values
+
+    monkeypatch.setattr(PointExpression, "evaluate", poisoned)
+    with pytest.raises(fe_mpm.ConvergenceError, match=match):
+        sim.step(1.0)
+    for now, then in zip([points.x, points.F, points.volume], before):
+        assert np.array_equal(now, then)
