@@ -81,6 +81,28 @@ def test_free_flight_through_several_cells_in_one_step():
     assert np.all(sim.tracker.barycentric(points.x, found).min(axis=1) > -1e-12)
 
 
+def test_a_block_of_a_law_with_history_falls_freely():
+    """J2 (history: b̄ᵉ and α, carried through the point update) in free fall: Newmark
+    integrates a constant acceleration exactly, so a = g, v = g t and x − x0 = ½ g t²;
+    the history keeps its shapes and its virgin values."""
+    mesh = rectangle_mesh((0, 0), (1, 2), (10, 20))
+    centroids = mesh.geometry.x[mesh.geometry.dofmaps[0]][:, :, :2].mean(axis=1)
+    cells = np.flatnonzero((centroids[:, 1] > 1.2) & (centroids[:, 1] < 1.8)
+                           & (centroids[:, 0] > 0.2) & (centroids[:, 0] < 0.8))
+    points = fe_mpm.seed(mesh, per_cell=3, cells=cells)
+    law = fe_mpm.J2Plasticity(1e4, 0.3, yield_stress=10.0, density=100.0)
+    sim = fe_mpm.Simulation(mesh, points, law, dynamic=True, body_force=(0.0, -G))
+    x0, t, n = points.x.copy(), 0.15, points.x.shape[0]
+    sim.run(t_end=t, n_steps=3, progress=False)
+    assert np.allclose(points.acceleration, (0.0, -G), rtol=0, atol=1e-9 * G)
+    assert np.allclose(points.velocity, (0.0, -G * t), rtol=0, atol=1e-9 * G * t)
+    assert np.allclose(points.x - x0, (0.0, -0.5 * G * t**2), rtol=0, atol=1e-9)
+    assert points.history["be_bar"].shape == (n, 3, 3)
+    assert points.history["plastic_strain"].shape == (n,)
+    assert np.allclose(points.history["be_bar"], np.eye(3), rtol=0, atol=1e-12)
+    assert np.all(points.history["plastic_strain"] == 0.0)
+
+
 def vibrating_bar(ny=16, steps_per_period=50, periods=5, mass="consistent", damping=0.0,
                   formulation="u", nu=0.0):
     """First mode of a fixed-free bar with side rollers (uniaxial strain), started

@@ -99,6 +99,22 @@ def test_force_test_verdicts():
     assert empty(None, 0, (0.0, 0.0, 1e-300)) == Reason.ITERATING
 
 
+def test_the_pressure_rows_are_judged_against_the_nodal_volumes():
+    """‖V‖ of the pressure rows: each point's volume shared among its cell's nodes by
+    N_I(x_p). With seed's symmetric 3-point rule, equal volumes |K|/3, every node of a
+    cell gets |K|/3 from it: V_I = Σ_{K ∋ I} |K|/3, from the mesh alone."""
+    sim, points = _block(fe_mpm.NeoHookean(1e6, 0.3, density=RHO), formulation="up")
+    _, layout, *_ = sim.prepare_step(1.0)
+    mesh = sim.mesh
+    mesh.topology.create_connectivity(0, 2)
+    vertex_cells = mesh.topology.connectivity(0, 2)
+    V = np.array([sim.tracker.volumes[vertex_cells.links(v)].sum() / 3.0
+                  for v in range(mesh.topology.index_map(0).size_local)])
+    assert sim._pressure_volume(layout) == pytest.approx(np.linalg.norm(V), rel=1e-12)
+    u_only, _ = _block(fe_mpm.NeoHookean(1e6, 0.3, density=RHO))
+    assert u_only._pressure_volume(u_only.prepare_step(1.0)[1]) == 0.0
+
+
 def test_petsc_step_length_test_cannot_end_a_solve():
     """With snes_stol = 1 PETSc's own test would accept the first update whatever the
     residual; fe-mpm's test ignores it and iterates to ‖R‖ ≤ 1e-10 S."""
