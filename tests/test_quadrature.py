@@ -20,7 +20,14 @@ from fe_mpm.forms import displacement, inertia, mixed_up
 from fe_mpm.formulations import collapse
 from fe_mpm.materials import NeoHookean
 from fe_mpm.meshes import rectangle_mesh
-from fe_mpm.quadrature import OCCUPIED, MaterialPointQuadrature, SlotLayout, bucket, slot_count
+from fe_mpm.quadrature import (
+    OCCUPIED,
+    SLOT_BUCKETS,
+    MaterialPointQuadrature,
+    SlotLayout,
+    bucket,
+    slot_count,
+)
 from fe_mpm.tracker import Tracker
 
 RTOL = 1e-12
@@ -165,6 +172,11 @@ def test_slot_count_balances_empty_slots_against_entities():
     # no point anywhere: keep the current count, or 1
     assert slot_count(np.zeros(3, dtype=int)) == 1 and slot_count(np.array([], dtype=int)) == 1
     assert slot_count(np.zeros(3, dtype=int), current=4) == 4
+    # more points in a cell than the largest bucket: refused, naming the limit
+    too_many = SLOT_BUCKETS[-1] + 1
+    with pytest.raises(ValueError, match=f"{too_many} material points in one cell exceeds the "
+                                         f"supported {SLOT_BUCKETS[-1]}; refine the background"):
+        bucket(too_many)
 
 
 def _p2_basis(V, cell, x):
