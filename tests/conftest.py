@@ -10,8 +10,9 @@
   neither level reorders floating-point operations (no ``-ffast-math``).
 - fe_mpm is imported first: the dolfinx-solver-real wheel must be imported before
   dolfinx, petsc4py and mpi4py, and fe_mpm takes care of that.
-- Tests marked ``slow`` are collected first, so that the workers start on them and
-  the short ones fill in around them.
+- Test order (:func:`pytest_collection_modifyitems`): under xdist the ``slow``
+  tests first, so that the workers start on them and the short ones fill in around
+  them; in one process last; under mutmut shortest first.
 """
 
 import atexit
@@ -38,7 +39,20 @@ import fe_mpm  # noqa: E402, F401
 
 def pytest_collection_modifyitems(items):
     """Slow tests first under xdist, so the workers start on the long runs; last in
-    one process, so that ``-x`` (mutmut's runs) stops at the first failing short test.
-    A stable sort keeps the order within each group."""
+    one process, so that ``-x`` stops at the first failing short test. A stable sort
+    keeps the order within each group. Under mutmut, shortest first by the durations
+    it recorded: a mutant is killed by its quickest failing test."""
+    durations = _mutmut_durations()
+    if durations is not None:
+        items.sort(key=lambda item: durations.get(item.nodeid, 0.0))
+        return
     slow_first = "PYTEST_XDIST_WORKER" in os.environ
     items.sort(key=lambda item: (item.get_closest_marker("slow") is None) == slow_first)
+
+
+def _mutmut_durations() -> dict[str, float] | None:
+    """Seconds per test id from mutmut's stats, while it runs a mutant; else None."""
+    stats = Path("mutmut-stats.json")  # mutmut runs the tests from its mutants/ folder
+    if "__mutmut_" not in os.environ.get("MUTANT_UNDER_TEST", "") or not stats.exists():
+        return None
+    return json.loads(stats.read_text())["duration_by_test"]
