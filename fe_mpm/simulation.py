@@ -198,14 +198,14 @@ class _SlotForms:
             self.penalty_stiffness = qb.function((g,), "penalty")
             self.boundary_traction = qb.function((g,), "boundary_traction")
             R += penalty.penalty(du, w, qb, self.gap, self.penalty_stiffness,
-                                 self.boundary_traction)
-            self.du_at_boundary = PointExpression(qb.at_points(du), qb)
+                                 self.boundary_traction, deg)
+            self.du_at_boundary = PointExpression(qb.at_points(du, deg), qb)
         rules = {OCCUPIED: q, BOUNDARY_POINTS: self.q_boundary}
         # The loads alone, for the Newton test's force scale.
         loads = loads_form.external_work(w, q, self.density, sim._body_force,
                                          sim._traction_terms, deg)
         if nslot_boundary:
-            point_loads = qb.sum(ufl.dot(self.boundary_traction, qb.at_points(w)))
+            point_loads = qb.sum(ufl.dot(self.boundary_traction, qb.at_points(w, deg)))
             loads = point_loads if loads is None else loads + point_loads
         self.loads = None if loads is None else StepForm(loads, mesh, sim._traction_facets, rules)
         self.lumping = q.function((g, g), "second_moment") if sim.mass == "lumped" else None

@@ -16,7 +16,7 @@ from layouts import random_points
 
 from fe_mpm._dolfinx import dolfinx
 from fe_mpm.assembly import StepForm
-from fe_mpm.forms import displacement, inertia, mixed_up
+from fe_mpm.forms import displacement, inertia, mixed_up, penalty
 from fe_mpm.formulations import collapse
 from fe_mpm.materials import NeoHookean
 from fe_mpm.meshes import rectangle_mesh
@@ -305,5 +305,34 @@ def test_inertia_equals_particle_sum(dim, lumped):
             R_bf[nodes] += m * N[:, None] * a_nodes[nodes]
         else:
             R_bf[nodes] += m * np.outer(N, N @ a_nodes[nodes])
+    R_bf = R_bf.ravel()
+    assert np.linalg.norm(R_mp - R_bf) <= RTOL * np.linalg.norm(R_bf)
+
+
+@pytest.mark.parametrize("degree", [1, 2])
+def test_boundary_point_penalty_equals_particle_sum(degree):
+    """The penalty and traction of boundary points, Σ_b w_b (β∘(g_b + Δu(x_b)) − t_b)·δu(x_b),
+    against a loop over the points, on P1 and on Taylor–Hood's P2 displacement (read
+    at the points with its curvature, not as if it were linear)."""
+    dim = 2
+    rng, mesh, pts, layout, q = _setup(dim, seed=5)
+    V = dolfinx.fem.functionspace(mesh, ("Lagrange", degree, (dim,)))
+    du = dolfinx.fem.Function(V)
+    du.x.array[:] = rng.uniform(-0.1, 0.1, du.x.array.size)
+    gap, beta, t = (rng.uniform(-1.0, 1.0, (len(pts), dim)) for _ in range(3))
+    fields = []
+    for name, values in (("gap", gap), ("penalty", beta), ("traction", t)):
+        fields.append(q.function((dim,), name))
+        q.pack(fields[-1], layout, values)
+    R = penalty.penalty(du, ufl.TestFunction(V), q, *fields, u_degree=degree)
+    R_mp = _assemble(R, mesh, layout, q)
+
+    basis = _p2_basis if degree == 2 else _p1_basis
+    U = du.x.array.reshape(-1, dim)
+    R_bf = np.zeros_like(R_mp).reshape(-1, dim)
+    for k in range(len(pts)):
+        nodes, N, _ = basis(V, layout.cell[k], pts.x[k])
+        force = beta[k] * (gap[k] + N @ U[nodes]) - t[k]
+        R_bf[nodes] += pts.volume[k] * np.outer(N, force)
     R_bf = R_bf.ravel()
     assert np.linalg.norm(R_mp - R_bf) <= RTOL * np.linalg.norm(R_bf)

@@ -26,16 +26,18 @@ def penalty(
     gap: ufl.Coefficient,
     stiffness: ufl.Coefficient,
     traction: ufl.Coefficient,
+    u_degree: int = 1,
 ) -> ufl.Form:
     """The residual of the boundary points: penalty minus the tractions they carry.
 
     Args:
-        du: Grid displacement increment (P1).
+        du: Grid displacement increment, of degree ``u_degree``.
         w: Displacement test function.
         q: Quadrature of the boundary points (its scale carries w_b).
         gap: Slot field g_b (g,), m.
         stiffness: Slot field β P_b as a vector (g,): β on constrained components, 0 else (Pa/m).
         traction: Slot field t_b (g,), Pa; zero on penalty points.
+        u_degree: Polynomial degree of the displacement (1, or 2 for Taylor–Hood).
     """
-    mismatch = gap + q.at_points(du)
-    return q.sum(ufl.dot(ufl.elem_mult(stiffness, mismatch) - traction, q.at_points(w)))
+    mismatch = gap + q.at_points(du, u_degree)
+    return q.sum(ufl.dot(ufl.elem_mult(stiffness, mismatch) - traction, q.at_points(w, u_degree)))
