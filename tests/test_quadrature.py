@@ -142,6 +142,10 @@ def test_slot_layout_numbers_points_within_cells():
     assert layout.entities.tolist() == [0, 1, 3]
     assert layout.max_count == 3 and layout.nslot == 3
     assert bucket(3) == 3 and bucket(5) == 6 and bucket(13) == 16
+    # one point per cell: one slot, one entity per cell
+    single = SlotLayout.from_cells(np.array([4, 2, 7], dtype=np.int32))
+    assert single.nslot == 1 and single.slot.tolist() == [0, 0, 0]
+    assert single.entities.tolist() == [2, 4, 7]
 
 
 def test_no_points_give_an_empty_layout():
