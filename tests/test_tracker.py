@@ -42,6 +42,19 @@ def test_walk_from_far_cells_finds_the_containing_cell(dim):
     assert np.array_equal(walked, cells) or np.all(_inside(mesh, x, walked))
 
 
+@pytest.mark.parametrize("dim", [2, 3])
+def test_cell_neighbours_are_mutual_and_minus_one_exactly_on_exterior_facets(dim):
+    """The walk's map: the cell across the facet opposite each local vertex. Every
+    exterior facet reads −1, and no other entry; every other pair reads both ways."""
+    mesh = rectangle_mesh(np.zeros(dim), np.ones(dim), (4, 3) if dim == 2 else (3, 2, 2))
+    neighbours = Tracker(mesh).neighbours
+    mesh.topology.create_connectivity(dim - 1, dim)
+    exterior = dolfinx.mesh.exterior_facet_indices(mesh.topology).size
+    assert np.sum(neighbours == -1) == exterior and neighbours.min() == -1
+    for c, d in zip(*np.nonzero(neighbours >= 0)):
+        assert c in neighbours[neighbours[c, d]]
+
+
 def test_points_on_vertices_and_facets_are_located():
     mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (4, 4))
     tracker = Tracker(mesh)
