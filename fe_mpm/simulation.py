@@ -656,6 +656,14 @@ class Simulation:
         if not t_new > self.t:
             raise ValueError(f"Simulation.step: t_new must exceed the current time {self.t}")
         k = self.step_number + 1
+        if k == 2 and self.spec.u_degree == 2:
+            warnings.warn(
+                f"Simulation: {self.formulation!r} beyond its first step is not yet "
+                "trustworthy: points away from their Gauss positions do not integrate "
+                "the gradients of the P2 shape functions exactly, and a homogeneous "
+                "stress then leaves spurious nodal forces (the patch test fails; README, "
+                "'P2/P1 once the points have moved'). Use 'up' for runs of many steps.",
+                skip_file_prefixes=_PACKAGE)
         forms, layout, R, J, bcs = self.prepare_step(t_new, rebin=rebin)
         dt = t_new - self.t
         if self._newmark is not None and self.step_number == 0:

@@ -1,6 +1,7 @@
 """What Simulation refuses or reports on a user's scene, instead of a silently wrong answer."""
 
 import re
+import warnings
 
 import numpy as np
 import pytest
@@ -182,3 +183,17 @@ def test_a_bad_point_update_stops_the_step_naming_the_point(monkeypatch, poison,
         sim.step(1.0)
     for now, then in zip([points.x, points.F, points.volume], before):
         assert np.array_equal(now, then)
+
+
+def test_taylor_hood_warns_from_its_second_step():
+    """P2/P1 fails the patch test once the points leave their Gauss positions (README):
+    its first step is silent, the second says so."""
+    mesh = _mesh()
+    sim = fe_mpm.Simulation(mesh, fe_mpm.seed(mesh, per_cell=3),
+                            fe_mpm.NeoHookean(1e7, 0.3, density=RHO), "up-p2p1",
+                            body_force=(0.0, -G), dirichlet=[_base()])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        sim.step(0.5)
+    with pytest.warns(UserWarning, match=r"'up-p2p1' beyond its first step is not yet trustworthy"):
+        sim.step(1.0)
