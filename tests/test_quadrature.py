@@ -171,6 +171,8 @@ def test_slot_count_balances_empty_slots_against_entities():
     assert slot_count(np.r_[np.full(99, 1), 2]) == 1  # one cell crossed into: no recompile
     assert slot_count(mixed, current=4) == 4
     assert slot_count(mixed, current=12) == 3
+    # two points a cell: 2 slots cost 4 a cell, 3 slots 5, exactly a fifth more: switch
+    assert slot_count(np.full(4, 2), current=3) == 2
     # one cell of 5: one entity of 6 slots (8 in cost) beats 2 of 3 (10), 5 of 1 (15)
     assert slot_count(np.array([5])) == 6 and slot_count(np.array([0, 5, 0])) == 6
     # no point anywhere: keep the current count, or 1
