@@ -134,6 +134,14 @@ def test_neo_hookean_residual_equals_particle_sum(dim, nslot):
     assert np.linalg.norm(R_mp - R_bf) <= RTOL * np.linalg.norm(R_bf)
 
 
+def test_fields_of_degree_other_than_1_or_2_are_refused_by_name():
+    _, mesh, _, _, q = _setup(2)
+    u = dolfinx.fem.Function(dolfinx.fem.functionspace(mesh, ("Lagrange", 3)))
+    for method in (q.at_points, q.grad_at_points):
+        with pytest.raises(ValueError, match=rf"{method.__name__}: degree must be 1 or 2, got 3"):
+            method(u, 3)
+
+
 def test_slot_layout_numbers_points_within_cells():
     cells = np.array([3, 1, 3, 3, 0, 1], dtype=np.int32)
     layout = SlotLayout.from_cells(cells)
