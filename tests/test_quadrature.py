@@ -142,6 +142,15 @@ def test_fields_of_degree_other_than_1_or_2_are_refused_by_name():
             method(u, 3)
 
 
+def test_a_layout_for_another_slot_count_is_refused_naming_both():
+    _, mesh, pts, layout, q = _setup(2)
+    other = SlotLayout.from_cells(layout.cell, layout.nslot + 1)
+    tracker = Tracker(mesh)
+    with pytest.raises(ValueError, match=rf"layout has {other.nslot} slots per entity, "
+                                         rf"the rule {q.nslot}"):
+        q.pack_geometry(pts.x, pts.volume, other, tracker.centroids, tracker.volumes)
+
+
 def test_slot_layout_numbers_points_within_cells():
     cells = np.array([3, 1, 3, 3, 0, 1], dtype=np.int32)
     layout = SlotLayout.from_cells(cells)
