@@ -97,6 +97,10 @@ def main() -> None:
     args = p.parse_args()
     patterns = equivalents(args.equivalents)
     codes = outcomes(args.dir)
+    if not codes:
+        where = ", ".join(str(d / "mutants") for d in args.dir)
+        raise SystemExit(f"no mutmut results under {where}: run `mutmut run` there first "
+                         "(see docs/verification.md)")
     counts: dict[str, Counter] = defaultdict(Counter)
     survivors, unused = [], {pattern for pattern, _ in patterns}
     for name, code in sorted(codes.items()):
