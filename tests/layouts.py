@@ -29,3 +29,11 @@ def random_points(mesh, rng, counts, fill=True, F_spread=0.0):
     F = np.eye(gdim) + F_spread * rng.uniform(-1, 1, size=(cells.size, gdim, gdim))
     pts = MaterialPoints(x=x, volume=volume, mass=volume * rng.uniform(0.5, 2.0, cells.size), F=F)
     return pts, cells
+
+
+def embed_3d(F):
+    """3x3 deformation gradients of (..., g, g) ones: plane strain puts F_33 = 1."""
+    F = np.asarray(F)
+    F3 = np.broadcast_to(np.eye(3), (*F.shape[:-2], 3, 3)).copy()
+    F3[..., : F.shape[-2], : F.shape[-1]] = F
+    return F3

@@ -17,6 +17,7 @@ import itertools
 import numpy as np
 import pytest
 import ufl
+from layouts import embed_3d
 from test_taylor import _simulation
 
 import fe_mpm
@@ -336,8 +337,7 @@ def test_history_of_a_plastic_step_is_consistent_with_its_stress():
     f = law.yield_function(result.tau)
     assert f[0] < -0.5 * SOIL["cohesion"]
     assert np.allclose(f[1:], 0.0, atol=1e-9 * SOIL["cohesion"])
-    F3 = np.tile(np.eye(3), (3, 1, 1))
-    F3[:, :2, :2] = dF
+    F3 = embed_3d(dF)
     trial = 0.5 * np.log(np.linalg.eigvalsh(F3 @ np.swapaxes(F3, 1, 2)))
     elastic = 0.5 * np.log(np.linalg.eigvalsh(result.history["be"]))
     # εᵉ of the returned stress: the Hencky law, τ_A = λ tr εᵉ + 2μ εᵉ_A, inverted

@@ -9,7 +9,7 @@ linear field is the exact discrete solution, and every point must carry
 
 import numpy as np
 import pytest
-from layouts import random_points
+from layouts import embed_3d, random_points
 
 import fe_mpm
 from fe_mpm.meshes import rectangle_mesh
@@ -21,8 +21,7 @@ F_BAR = {
 
 
 def neo_hookean_cauchy_3d(mat, F):
-    F3 = np.eye(3)
-    F3[: F.shape[0], : F.shape[1]] = F
+    F3 = embed_3d(F)
     J = np.linalg.det(F3)
     return (mat.lmbda * np.log(J) * np.eye(3) + mat.mu * (F3 @ F3.T - np.eye(3))) / J
 

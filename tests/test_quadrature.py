@@ -12,7 +12,7 @@ import dolfinx.fem.petsc  # noqa: F401
 import numpy as np
 import pytest
 import ufl
-from layouts import random_points
+from layouts import embed_3d, random_points
 
 from fe_mpm._dolfinx import dolfinx
 from fe_mpm.assembly import StepForm
@@ -228,12 +228,6 @@ def _p2_basis(V, cell, x):
     return nodes, monomials(x) @ C, C.T @ monomial_gradients(x)
 
 
-def _embed_3d(F):
-    F3 = np.eye(3)
-    F3[: F.shape[0], : F.shape[1]] = F
-    return F3
-
-
 @pytest.mark.parametrize("dim", [2, 3])
 def test_taylor_hood_up_residual_and_stress_equal_particle_sums(dim):
     """P2/P1 u-p: the residual under a body force, and the output Cauchy stress of a
@@ -275,7 +269,7 @@ def test_taylor_hood_up_residual_and_stress_equal_particle_sums(dim):
         nodes, N2, dN2 = _p2_basis(V2, layout.cell[k], pts.x[k])
         pdofs, N1, _ = _p1_basis(Q1, layout.cell[k], pts.x[k])
         dF = np.eye(dim) + U[nodes].T @ dN2
-        F3 = _embed_3d(dF @ pts.F[k])
+        F3 = embed_3d(dF @ pts.F[k])
         J = np.linalg.det(F3)
         J_all.append(J)
         p_k = N1 @ P[pdofs]
