@@ -1,6 +1,7 @@
 """Run a demo script as a user does and read its JSON summary."""
 
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -11,8 +12,10 @@ DEMOS = Path(__file__).resolve().parents[1] / "demos"
 def run_demo(name: str, *args: str, cwd) -> str:
     """Standard output of ``python demos/<name> <args>``; fails the test on a non-zero exit."""
     # As in the suite (pyproject.toml), a RuntimeWarning (overflow, 0/0) fails the demo.
+    # The demos compile at -O1, the in-process tests at -O0 (conftest.py).
+    env = {**os.environ, "XDG_CONFIG_HOME": os.environ["FE_MPM_DEMO_JIT_CONFIG"]}
     out = subprocess.run([sys.executable, "-W", "error::RuntimeWarning", str(DEMOS / name),
-                          *args], cwd=cwd,
+                          *args], cwd=cwd, env=env,
                          capture_output=True, text=True, timeout=600)
     assert out.returncode == 0, out.stderr[-3000:]
     return out.stdout
