@@ -30,6 +30,7 @@ from fe_mpm.materials.principal_return import (
     PLANE,
     mohr_coulomb_return,
 )
+from fe_mpm.materials.spectral import spectral_decomposition
 from fe_mpm.meshes import rectangle_mesh
 from fe_mpm.verification import rates, taylor_remainders
 
@@ -209,6 +210,40 @@ def test_virgin_tangent_is_linear_elasticity():
     C = lam * np.einsum("ij,kl->ijkl", I, I) + mat.mu * (
         np.einsum("ik,jl->ijkl", I, I) + np.einsum("il,jk->ijkl", I, I))
     assert np.allclose(D, C, rtol=0, atol=1e-10 * mat.E)
+
+
+
+def _plane_tensors(n: int) -> np.ndarray:
+    """Symmetric positive tensors (n, 3, 3) with the third axis principal; every 5th is
+    I (three equal eigenvalues), every 5th + 1 has b_33 equal to an in-plane eigenvalue,
+    and b_33 falls above, between and below the in-plane pair."""
+    rng = np.random.default_rng(11)
+    F = np.tile(np.eye(3), (n, 1, 1))
+    F[:, :2, :2] += 0.3 * rng.normal(size=(n, 2, 2))
+    F[:, 2, 2] = 1.0 + 0.4 * rng.normal(size=n)
+    b = F @ np.swapaxes(F, 1, 2)
+    b[::5] = np.eye(3)
+    b[1::5, :2, :2] = np.diag([2.0, 0.5])
+    b[1::5, 2, 2] = 0.5
+    return b
+
+
+def test_plane_spectral_decomposition_is_lapacks_in_closed_form():
+    """Plane-strain tensors take the closed form; it must give eigh's eigenvalues in
+    descending order with an orthonormal basis that rebuilds the tensor."""
+    b = _plane_tensors(400)
+    x, Q = spectral_decomposition(b)
+    reference = np.linalg.eigvalsh(b)[:, ::-1]
+    assert np.abs(x - reference).max() < 1e-14 * np.abs(reference).max()
+    assert np.all(np.diff(x, axis=1) <= 0.0)
+    assert np.abs(np.swapaxes(Q, 1, 2) @ Q - np.eye(3)).max() < 1e-15
+    assert np.abs((Q * x[:, None, :]) @ np.swapaxes(Q, 1, 2) - b).max() < 1e-14 * np.abs(b).max()
+    assert np.all(np.sort(np.abs(Q[:, 2]), axis=1) == [0.0, 0.0, 1.0])  # e_3 stays principal
+    # an out-of-plane coupling takes LAPACK's general path, with the same contract
+    b[:, 0, 2] = b[:, 2, 0] = 0.1
+    x, Q = spectral_decomposition(b)
+    assert np.abs(x - np.linalg.eigvalsh(b)[:, ::-1]).max() < 1e-14 * np.abs(b).max()
+    assert np.abs((Q * x[:, None, :]) @ np.swapaxes(Q, 1, 2) - b).max() < 1e-14 * np.abs(b).max()
 
 
 TAYLOR_EPS = (2e-5, 1e-5, 5e-6, 2.5e-6)
