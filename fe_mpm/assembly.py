@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 import ufl
 
-from fe_mpm._dolfinx import dolfinx
+from fe_mpm._dolfinx import FormFactory, dolfinx
 from fe_mpm.packing import BoundForm, coefficient_columns
 from fe_mpm.quadrature import BOUNDARY_POINTS, OCCUPIED, MaterialPointQuadrature, SlotLayout
 
@@ -50,8 +50,9 @@ class StepForm:
         self.columns, self.width = coefficient_columns(form, self.compiled.ufcx_form)
         arguments = sorted(form.arguments(), key=lambda a: a.number())
         self.spaces = [a.ufl_function_space() for a in arguments]
-        self.coefficients = {c: c for c in form.coefficients()}
-        self.constants = {c: c for c in ufl.algorithms.analysis.extract_constants(form)}
+        self._factory = FormFactory(
+            self.compiled, self.spaces, mesh, {c: c for c in form.coefficients()},
+            {c: c for c in ufl.algorithms.analysis.extract_constants(form)})
         self.quadratures = quadratures or {}
         self.dynamic = dynamic or set()
         tdim = mesh.topology.dim
@@ -88,6 +89,4 @@ class StepForm:
                                 for i, c in sorted(cells.items())],
             IntegralType.exterior_facet: list(self._facets),
         }
-        return dolfinx.fem.create_form(
-            self.compiled, self.spaces, self.mesh, subdomains, self.coefficients, self.constants
-        )
+        return self._factory(subdomains)
