@@ -239,11 +239,14 @@ def test_plane_spectral_decomposition_is_lapacks_in_closed_form():
     assert np.abs(np.swapaxes(Q, 1, 2) @ Q - np.eye(3)).max() < 1e-15
     assert np.abs((Q * x[:, None, :]) @ np.swapaxes(Q, 1, 2) - b).max() < 1e-14 * np.abs(b).max()
     assert np.all(np.sort(np.abs(Q[:, 2]), axis=1) == [0.0, 0.0, 1.0])  # e_3 stays principal
-    # an out-of-plane coupling takes LAPACK's general path, with the same contract
-    b[:, 0, 2] = b[:, 2, 0] = 0.1
+    # an out-of-plane coupling takes LAPACK's general path, with the same contract; like
+    # eigh, the decomposition reads the lower triangle, so a coupling there alone counts
+    b[:, 2, 0] = 0.1
     x, Q = spectral_decomposition(b)
     assert np.abs(x - np.linalg.eigvalsh(b)[:, ::-1]).max() < 1e-14 * np.abs(b).max()
-    assert np.abs((Q * x[:, None, :]) @ np.swapaxes(Q, 1, 2) - b).max() < 1e-14 * np.abs(b).max()
+    symmetric = np.tril(b) + np.swapaxes(np.tril(b, -1), 1, 2)
+    rebuilt = (Q * x[:, None, :]) @ np.swapaxes(Q, 1, 2)
+    assert np.abs(rebuilt - symmetric).max() < 1e-14 * np.abs(b).max()
 
 
 TAYLOR_EPS = (2e-5, 1e-5, 5e-6, 2.5e-6)
