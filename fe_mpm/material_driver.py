@@ -25,6 +25,7 @@ import ufl
 
 from fe_mpm._dolfinx import dolfinx
 from fe_mpm.materials import PointState, embed_3d
+from fe_mpm.materials.protocol import PointwiseLaw
 
 
 class MaterialDriver:
@@ -42,7 +43,7 @@ class MaterialDriver:
         self.F = np.tile(np.eye(g), (n, 1, 1))
         self.history = {name: h.initial_values(n) for name, h in material.history.items()}
         # A pointwise law is its own numpy driver: no UFL to evaluate.
-        self._pointwise = hasattr(material, "return_map")
+        self._pointwise = isinstance(material, PointwiseLaw)
         if self._pointwise:
             return
         cell = "triangle" if gdim == 2 else "tetrahedron"

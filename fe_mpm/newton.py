@@ -87,9 +87,6 @@ LINEAR_SOLVERS = {
     },
 }
 
-#: What a run uses unless told otherwise: Newton with the direct solver.
-DEFAULT_PETSC_OPTIONS = {**NEWTON_OPTIONS, **_DIRECT}
-
 _REASONS = {v: k for k, v in vars(PETSc.SNES.ConvergedReason).items() if isinstance(v, int)}
 
 

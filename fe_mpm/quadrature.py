@@ -152,7 +152,6 @@ class MaterialPointQuadrature:
         self.mesh = mesh
         self.nslot = nslot
         cell = basix.CellType[mesh.topology.cell_name()]
-        tdim = mesh.topology.dim
         self._ref_volume = basix.cell.volume(cell)
         centroid = basix.geometry(cell).mean(axis=0)
         self.points = np.tile(centroid, (nslot, 1))  # reference slot points, (nslot, tdim)
@@ -172,7 +171,6 @@ class MaterialPointQuadrature:
         self.values: dict[dolfinx.fem.Function, np.ndarray] = {}
         self.offset = self.function((gdim,), "offset")  # d = x_p - x_slot (m)
         self.scale = self.function((), "volume_scale")  # V_p / (w_s |det J|)
-        self._tdim = tdim
 
     def element(self, value_shape: tuple[int, ...] = ()) -> basix.ufl._ElementBase:
         """Quadrature element on the slot rule with the given value shape."""

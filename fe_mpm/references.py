@@ -32,9 +32,6 @@ COOK_THESIS_UP_NOSTAB = {
     0.499: {2: 0.0788, 4: 0.1157, 8: 0.1821, 16: 0.2356, 32: 0.2606, 64: 0.2702},
 }
 
-#: Converged reference values quoted by the thesis (compressible, quasi-incompressible).
-COOK_CONVERGED = {0.33: 0.323, 0.499: 0.275}
-
 #: Small-strain Taylor-Hood FEM on n = 128 and its extrapolated limit, ν = 0.499
 #: (shared/notes/benchmark_refs.md): 0.2775 at n = 128, ~0.278 in the limit.
 COOK_FINE_FEM_0499 = 0.2775

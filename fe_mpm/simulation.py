@@ -43,6 +43,7 @@ from fe_mpm.forms import loads as loads_form
 from fe_mpm.formulations import FORMULATIONS, GridFields, collapse, constrained_space
 from fe_mpm.io import ParticleWriter
 from fe_mpm.materials import Linearisation, PointState, ReturnMapResult
+from fe_mpm.materials.protocol import Law, MixedLaw, PointwiseLaw, missing_members
 from fe_mpm.newton import NewtonSolver
 from fe_mpm.packing import PointExpression
 from fe_mpm.particles import MaterialPoints, simplex_cell_type
@@ -108,7 +109,7 @@ def _take_density(material, points: MaterialPoints) -> None:
     The mass of a point is what body forces and inertia use; the law's
     ``density`` only fills it in when :func:`~fe_mpm.seed` was given none.
     """
-    rho = getattr(material, "density", None)
+    rho = material.density
     if rho is None:
         return
     reference_volume = points.volume / np.linalg.det(points.F)
@@ -166,7 +167,7 @@ class _SlotForms:
                         for name, h in material.history.items()}
         # A pointwise law (numpy return map) enters the forms through its
         # linearisation at the current iterate, refreshed before every residual.
-        self.pointwise = hasattr(material, "return_map")
+        self.pointwise = isinstance(material, PointwiseLaw)
         self.linearisation = None
         dynamic = set()  # slot fields that change during Newton
         if self.pointwise:
@@ -280,8 +281,8 @@ class Simulation:
             ``t -> float``; constant 1 if None (e.g. ``lambda t: t`` to ramp
             self-weight over static load steps).
         facet_tags: Facet tags for ``Dirichlet``/``Traction`` given by tag.
-        petsc_options: Overrides of :data:`fe_mpm.newton.DEFAULT_PETSC_OPTIONS` (or of
-            the iterative solver's, :data:`fe_mpm.newton.LINEAR_SOLVERS`).
+        petsc_options: Overrides of the Newton options (:data:`fe_mpm.newton.NEWTON_OPTIONS`)
+            and of the linear solver's (:data:`fe_mpm.newton.LINEAR_SOLVERS`).
         points_leaving: ``"raise"`` (default) stops when points leave the grid;
             ``"drop"`` removes them with a warning and counts them in ``dropped``.
         output_dir: Folder for ParaView output (``particles.pvd`` and ``grid.bp``);
@@ -377,16 +378,22 @@ class Simulation:
             raise ValueError(
                 f"Simulation: points are {points.gdim}D but the mesh is {mesh.geometry.dim}D"
             )
+        missing = missing_members(material, Law)
+        if missing:
+            raise TypeError(
+                f"Simulation: material {type(material).__name__} is not a law: it lacks "
+                f"{', '.join(missing)} (fe_mpm.materials.protocol.Law says what a law provides)")
         self.mesh = mesh
         self.points = points
         self.material = material
         _take_density(material, points)
         self.formulation = formulation
         self.spec = FORMULATIONS[formulation]
-        if self.spec.pressure and not hasattr(material, "kirchhoff_deviatoric"):
+        if self.spec.pressure and not isinstance(material, MixedLaw):
             raise ValueError(
                 f"Simulation: formulation {formulation!r} needs a material with a "
-                "deviatoric response (kirchhoff_deviatoric) and a bulk_modulus"
+                "deviatoric response (kirchhoff_deviatoric, see "
+                "fe_mpm.materials.protocol.MixedLaw)"
             )
         check_formulation = getattr(material, "check_formulation", None)
         if check_formulation is not None:

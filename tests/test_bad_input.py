@@ -36,6 +36,33 @@ def test_unknown_formulation():
         fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1.0, 0.3), formulation="uu")
 
 
+
+class _HalfALaw:
+    """A user's law that forgot its moduli and history: not a fe_mpm.materials.Law."""
+
+    density = None
+
+    def kirchhoff(self, F, state=None):
+        return F - F.T
+
+
+def test_an_object_that_is_not_a_law_is_refused_naming_what_it_lacks():
+    mesh, points = _scene()
+    with pytest.raises(TypeError, match=r"material _HalfALaw is not a law: it lacks mu, "
+                                        r"bulk_modulus, history, updated_history \(fe_mpm"):
+        fe_mpm.Simulation(mesh, points, _HalfALaw())
+
+
+def test_the_laws_keep_their_contract():
+    laws = [fe_mpm.NeoHookean(1.0, 0.3), fe_mpm.J2Plasticity(E=1.0, nu=0.3, yield_stress=0.01),
+            fe_mpm.MohrCoulomb(E=1.0, nu=0.3, cohesion=0.01, friction_angle=30.0)]
+    kinds = [[isinstance(law, kind) for kind in (fe_mpm.materials.Law, fe_mpm.materials.MixedLaw,
+                                                   fe_mpm.materials.PointwiseLaw)]
+             for law in laws]
+    assert kinds == [[True, True, False], [True, True, False], [True, True, True]]
+    assert not isinstance(_HalfALaw(), fe_mpm.materials.Law)
+
+
 def test_taylor_hood_needs_enough_points_per_cell():
     mesh, points = _scene()  # one point per cell
     sim = fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1.0, 0.3), formulation="up-p2p1")

@@ -5,31 +5,32 @@ with ``F_33 = 1``) and the point's :class:`PointState` to the Kirchhoff stress
 ``τ = J σ`` (Pa, same shape as ``F``), in UFL, so that the residual and its
 consistent tangent come from one expression (``ufl.derivative``). Laws with
 internal variables list them in ``history`` and give their values at t_{n+1}
-through ``updated_history``. Every law has:
-
-- ``kirchhoff(F, state)`` (u form) and ``kirchhoff_deviatoric(F, state)`` (u-p
-  form, where the pressure is a field);
-- ``mu``, ``bulk_modulus`` (Pa) and ``density`` (kg/m³);
-- ``history`` (name → :class:`HistoryField`) and ``updated_history(F, state)``.
-
-Laws integrated in principal space (:class:`MohrCoulomb`) run their return map
-in numpy instead: they have ``return_map(dF, history)``, and their UFL stress is
-the linearisation at the current Newton iterate (:mod:`.linearised`).
+through ``updated_history``. :mod:`.protocol` states the contract:
+:class:`~.protocol.Law` (``kirchhoff``, ``mu``, ``bulk_modulus``, ``density``,
+``history``, ``updated_history``), :class:`~.protocol.MixedLaw` for the u-p
+formulations (``kirchhoff_deviatoric``: the pressure is a field), and
+:class:`~.protocol.PointwiseLaw` for laws integrated in principal space
+(:class:`MohrCoulomb`), whose ``return_map(dF, history)`` runs in numpy and whose UFL
+stress is the linearisation at the current Newton iterate (:mod:`.linearised`).
 """
 
 from fe_mpm.materials.elastic import NeoHookean, embed_3d, in_plane
 from fe_mpm.materials.j2 import J2Plasticity
 from fe_mpm.materials.linearised import Linearisation, ReturnMapResult
 from fe_mpm.materials.mohr_coulomb import MohrCoulomb
+from fe_mpm.materials.protocol import Law, MixedLaw, PointwiseLaw
 from fe_mpm.materials.state import HistoryField, PointState
 
 __all__ = [
     "HistoryField",
     "J2Plasticity",
+    "Law",
     "Linearisation",
+    "MixedLaw",
     "MohrCoulomb",
     "NeoHookean",
     "PointState",
+    "PointwiseLaw",
     "ReturnMapResult",
     "embed_3d",
     "in_plane",

@@ -34,8 +34,6 @@ import numpy as np
 
 #: Region codes returned by :func:`mohr_coulomb_return`.
 ELASTIC, PLANE, LINE_1, LINE_2, APEX = 0, 1, 2, 3, 4
-REGION_NAMES = {ELASTIC: "elastic", PLANE: "plane", LINE_1: "line 1 (τ1 = τ2)",
-                LINE_2: "line 2 (τ2 = τ3)", APEX: "apex"}
 
 
 @dataclass(frozen=True)

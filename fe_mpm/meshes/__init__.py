@@ -30,7 +30,6 @@ from fe_mpm.meshes.cook import (
     body_cells,
     cook_membrane,
 )
-from fe_mpm.meshes.disk import disk
 from fe_mpm.meshes.facet_points import facet_points
 from fe_mpm.meshes.footing import (
     FOOTING_BASE,
@@ -73,7 +72,6 @@ __all__ = [
     "COOK_LOADED",
     "COOK_POINT_A",
     "cook_membrane",
-    "disk",
     "FOOTING_BASE",
     "FOOTING_FAR_SIDE",
     "FOOTING_MARGIN",

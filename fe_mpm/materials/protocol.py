@@ -1,0 +1,86 @@
+"""What a constitutive law provides: the contract between a law and the simulation.
+
+:class:`Law` is what every law has; the simulation checks it when it is built and
+names whatever is missing. Two optional parts extend it:
+
+- :class:`MixedLaw`, for the u-p formulations, where the pressure is a grid field
+  and the law gives only the deviatoric stress;
+- :class:`PointwiseLaw`, for laws integrated in principal space whose return map
+  runs in numpy (:class:`~fe_mpm.materials.MohrCoulomb`): the forms then see the
+  law's linearisation at the current Newton iterate
+  (:mod:`fe_mpm.materials.linearised`).
+
+A new law (Drucker–Prager, Matsuoka–Nakai) implements :class:`Law`, and
+:class:`PointwiseLaw` if its return map is not written in UFL. The protocols are
+``runtime_checkable``: ``isinstance(law, PointwiseLaw)`` asks whether the members
+exist, not whether their signatures match.
+"""
+
+from __future__ import annotations
+
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+import ufl
+
+from fe_mpm.materials.linearised import ReturnMapResult
+from fe_mpm.materials.state import HistoryField, PointState
+
+
+@runtime_checkable
+class Law(Protocol):
+    """A constitutive law of the material points.
+
+    Attributes:
+        mu: Shear modulus μ (Pa): the scale of the PPP stabilisation.
+        bulk_modulus: Bulk modulus K (Pa): the volumetric law of the u-p forms.
+        density: Mass density ρ₀ (kg/m³), or None to take it from the points.
+    """
+
+    mu: float
+    bulk_modulus: float
+    density: float | None
+
+    @property
+    def history(self) -> dict[str, HistoryField]:
+        """The internal variables, name -> shape, initial value and meaning."""
+
+    def kirchhoff(self, F: ufl.core.expr.Expr, state: PointState | None) -> ufl.core.expr.Expr:
+        """Kirchhoff stress τ = J σ (Pa), shape of ``F`` (g x g), in UFL."""
+
+    def updated_history(self, F: ufl.core.expr.Expr, state: PointState) -> dict:
+        """The internal variables at t_{n+1} as UFL expressions, name -> value."""
+
+
+@runtime_checkable
+class MixedLaw(Law, Protocol):
+    """A law the mixed u-p formulations can use: the pressure is their field."""
+
+    def kirchhoff_deviatoric(
+        self, F: ufl.core.expr.Expr, state: PointState | None
+    ) -> ufl.core.expr.Expr:
+        """Isochoric Kirchhoff stress dev τ (Pa), shape of ``F``, in UFL."""
+
+
+@runtime_checkable
+class PointwiseLaw(Law, Protocol):
+    """A law whose return map runs in numpy, point by point."""
+
+    def return_map(self, dF: np.ndarray, history: dict[str, np.ndarray]) -> ReturnMapResult:
+        """Stress, tangent and history at t_{n+1} for the step increments ``dF`` (n, g, g)."""
+
+
+def missing_members(law: object, protocol: type) -> list[str]:
+    """The members of ``protocol`` that ``law`` lacks, in the protocol's order."""
+    return [name for name in _members(protocol) if not hasattr(law, name)]
+
+
+def _members(protocol: type) -> list[str]:
+    names: list[str] = []
+    for cls in reversed(protocol.__mro__):
+        if cls is object or cls is Protocol or not getattr(cls, "_is_protocol", False):
+            continue
+        for name in (*getattr(cls, "__annotations__", {}), *vars(cls)):
+            if not name.startswith("_") and name not in names:
+                names.append(name)
+    return names
