@@ -40,6 +40,7 @@ import numpy as np
 import fe_mpm
 from fe_mpm import meshes
 from fe_mpm.diagnostics import contiguous_front
+from fe_mpm.plotting import pyplot
 from fe_mpm.references import lube_height, lube_runout, lube_time
 
 
@@ -164,38 +165,36 @@ print(f"  kinetic energy at the end {energy[-1]:.3g} J/m (peak {energy.max():.3g
       f"Newton iterations per step: max {max(iterations)}, mean {np.mean(iterations):.2f}")
 
 if not args.no_output:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = pyplot()  # None without matplotlib (the plots extra)
     out = Path(args.output)
     np.savetxt(out / "front.csv", np.column_stack([t, front, height, energy]), delimiter=",",
                header="t,front,height,kinetic_energy", comments="")
-    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 3.6))
-    ax1.plot(t / time_law, front / runout_law, label=f"fe-mpm, a = {a:g}")
-    ax1.axhline(1.0, color="k", ls="--", lw=1, label="Lube et al. d∞")
-    ax1.set_xlabel("T = t / (3.3 √(h_i/g))")
-    ax1.set_ylabel("d / d∞ (Lube et al.)")
-    ax1.legend()
     # The deposit: the highest point in each column of cell width.
     bins = np.arange(0.0, points.x[:, 0].max() + args.h, args.h)
     which = np.digitize(points.x[:, 0], bins)
     top = np.array([points.x[which == k, 1].max() if np.any(which == k) else 0.0
                     for k in range(1, bins.size)])
-    ax2.fill_between(bins[:-1], top, step="post", alpha=0.5, label="deposit")
-    ax2.plot([0, d_i, d_i], [h_i, h_i, 0], "k:", label="initial column")
-    ax2.plot([runout_law], [0], "kv", label="Lube et al. d∞")
-    ax2.plot([0], [height_law], "k>", label="Lube et al. h∞")
-    ax2.set_xlabel("x (m)")
-    ax2.set_ylabel("y (m)")
-    ax2.set_aspect("equal")
-    ax2.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(out / "collapse.png", dpi=120)
+    if plt is not None:
+        fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 3.6))
+        ax1.plot(t / time_law, front / runout_law, label=f"fe-mpm, a = {a:g}")
+        ax1.axhline(1.0, color="k", ls="--", lw=1, label="Lube et al. d∞")
+        ax1.set_xlabel("T = t / (3.3 √(h_i/g))")
+        ax1.set_ylabel("d / d∞ (Lube et al.)")
+        ax1.legend()
+        ax2.fill_between(bins[:-1], top, step="post", alpha=0.5, label="deposit")
+        ax2.plot([0, d_i, d_i], [h_i, h_i, 0], "k:", label="initial column")
+        ax2.plot([runout_law], [0], "kv", label="Lube et al. d∞")
+        ax2.plot([0], [height_law], "k>", label="Lube et al. h∞")
+        ax2.set_xlabel("x (m)")
+        ax2.set_ylabel("y (m)")
+        ax2.set_aspect("equal")
+        ax2.legend(fontsize=7)
+        fig.tight_layout()
+        fig.savefig(out / "collapse.png", dpi=120)
     np.savetxt(out / "deposit.csv", np.column_stack([bins[:-1], top]), delimiter=",",
                header="x,surface_height", comments="")
-    print(f"  wrote {out}/particles.pvd, front.csv, deposit.csv and collapse.png")
+    print(f"  wrote {out}/particles.pvd, front.csv, deposit.csv"
+          + (" and collapse.png" if plt is not None else ""))
 
 if args.json:
     print(json.dumps({

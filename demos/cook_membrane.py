@@ -46,6 +46,7 @@ import numpy as np
 
 import fe_mpm
 from fe_mpm import meshes
+from fe_mpm.plotting import pyplot
 from fe_mpm.references import cook_reference
 
 
@@ -161,12 +162,8 @@ if not args.no_output:
     np.savetxt(args.output / "load_deflection.csv", history, delimiter=",",
                header="load_factor,u_A_y", comments="")
     print(f"  ParaView: {args.output / 'particles.pvd'} (points), {args.output / 'grid.bp'} (grid)")
-    if args.steps > 1:
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-
+    plt = pyplot() if args.steps > 1 else None  # None without matplotlib (plots extra)
+    if plt is not None:
         fig, ax = plt.subplots(figsize=(4.5, 3.2))
         ax.plot(history[:, 1], history[:, 0] * load[1] * 16, "o-")
         ax.set_xlabel("vertical displacement of A")

@@ -9,11 +9,14 @@ from pathlib import Path
 DEMOS = Path(__file__).resolve().parents[1] / "demos"
 
 
-def run_demo(name: str, *args: str, cwd) -> str:
-    """Standard output of ``python demos/<name> <args>``; fails the test on a non-zero exit."""
+def run_demo(name: str, *args: str, cwd, env: dict | None = None) -> str:
+    """Standard output of ``python demos/<name> <args>``; fails the test on a non-zero exit.
+
+    ``env`` adds to the environment the demo inherits.
+    """
     # As in the suite (pyproject.toml), a RuntimeWarning (overflow, 0/0) fails the demo.
     # The demos compile at -O1, the in-process tests at -O0 (conftest.py).
-    env = {**os.environ, "XDG_CONFIG_HOME": os.environ["FE_MPM_DEMO_JIT_CONFIG"]}
+    env = {**os.environ, "XDG_CONFIG_HOME": os.environ["FE_MPM_DEMO_JIT_CONFIG"], **(env or {})}
     out = subprocess.run([sys.executable, "-W", "error::RuntimeWarning", str(DEMOS / name),
                           *args], cwd=cwd, env=env,
                          capture_output=True, text=True, timeout=600)

@@ -43,6 +43,21 @@ def test_cook_membrane_writes_paraview_series(tmp_path):
     assert (out / "load_deflection.png").stat().st_size > 1000
 
 
+
+def test_demos_run_without_matplotlib(tmp_path):
+    """Plots are an extra: without matplotlib a demo still writes its CSV files, says
+    which plot it left out, and exits 0."""
+    shadow = tmp_path / "shadow" / "matplotlib"
+    shadow.mkdir(parents=True)
+    (shadow / "__init__.py").write_text('raise ImportError("no matplotlib here")\n')
+    out = tmp_path / "out"
+    stdout = run_demo("cook_membrane.py", "--n", "4", "--steps", "3", "--output", str(out),
+                      cwd=tmp_path, env={"PYTHONPATH": str(shadow.parent)})
+    assert "matplotlib is not installed, so no plot: pip install 'fe-mpm[plots]'" in stdout
+    assert (out / "load_deflection.csv").exists()
+    assert not (out / "load_deflection.png").exists()
+
+
 def test_elastic_column_json_contract(tmp_path):
     static = _last_json(run_demo("elastic_column.py", "--ny", "16", "--json", cwd=tmp_path))
     for key in ("error", "wall_time_s", "steps", "n_particles"):
@@ -68,7 +83,7 @@ def test_tension_test_json_contract_and_plastic_output_and_two_runs_agree(tmp_pa
     runs, frames = [], []
     for k in range(2):
         out = tmp_path / f"out{k}"
-        stdout = run_demo("tension_test.py", "--formulation", "up", "--steps", "10", "--json",
+        stdout = run_demo("tension_plate.py", "--formulation", "up", "--steps", "10", "--json",
                           "--output", str(out), cwd=tmp_path)
         runs.append(_last_json(stdout))
         frames.append(meshio.read(sorted(out.glob("particles_*.vtu"))[-1]).point_data)

@@ -1,6 +1,6 @@
 """J2 plasticity in whole simulations: the plane-strain tension test and Cook's membrane.
 
-Tension test (Iaconeta 2019 §5.4.2; data assumed as in demos/tension_test.py):
+Tension test (Iaconeta 2019 §5.4.2; data assumed as in demos/tension_plate.py):
 the limit load per unit thickness is (2/√3) σ_Y W in plane strain.
 """
 
