@@ -36,8 +36,7 @@ NO_TESTS = {5, 33}
 
 #: The methods of ``Simulation`` in scope: the point update and the projections.
 SIMULATION_SCOPE = (
-    "_convect", "_project_to_grid", "_second_moments", "_mass_weighted_projection",
-    "_initial_guess", "_nodal_shares", "_pressure_volume", "_consistent_initial_acceleration",
+    "_convect", "_initial_guess", "_pressure_volume", "_consistent_initial_acceleration",
 )
 
 

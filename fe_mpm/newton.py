@@ -90,6 +90,25 @@ LINEAR_SOLVERS = {
 _REASONS = {v: k for k, v in vars(PETSc.SNES.ConvergedReason).items() if isinstance(v, int)}
 
 
+
+def with_petsc_options(prefix: str, options: dict, configure) -> None:
+    """Call ``configure()`` with ``options`` under ``prefix`` in PETSc's database, then drop them.
+
+    ``configure`` is e.g. ``ksp.setFromOptions``; removing the options afterwards means
+    that no solver ever sees another's.
+    """
+    opts = PETSc.Options()
+    opts.prefixPush(prefix)
+    for k, v in options.items():
+        opts[k] = v
+    try:
+        configure()
+    finally:
+        for k in options:
+            del opts[k]
+        opts.prefixPop()
+
+
 @dataclass
 class NewtonResult:
     """Outcome of one Newton solve.
@@ -355,16 +374,7 @@ class NewtonSolver:
 
     def _with_options(self, configure) -> None:
         """Call ``configure()`` with this solver's options in PETSc's database, then remove them."""
-        opts = PETSc.Options()
-        opts.prefixPush(self._prefix)
-        for k, v in self._options.items():
-            opts[k] = v
-        try:
-            configure()
-        finally:
-            for k in self._options:
-                del opts[k]
-            opts.prefixPop()
+        with_petsc_options(self._prefix, self._options, configure)
 
     def _fresh_ksp(self) -> None:
         """Give SNES a new linear solver, so no set-up survives from an older active set."""

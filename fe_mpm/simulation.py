@@ -20,8 +20,6 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from petsc4py import PETSc
-
 import dolfinx.fem.petsc
 import numpy as np
 import ufl
@@ -37,6 +35,7 @@ from fe_mpm.boundary import (
 )
 from fe_mpm.boundary_points import BoundaryPoints
 from fe_mpm.checks import check_choice, check_finite, check_range
+from fe_mpm.dynamics import NewmarkDynamics
 from fe_mpm.errors import ConvergenceError, PointsOutsideError
 from fe_mpm.forms import displacement, inertia, mixed_up, penalty
 from fe_mpm.forms import loads as loads_form
@@ -55,6 +54,7 @@ from fe_mpm.quadrature import (
     slot_count,
 )
 from fe_mpm.tracker import Tracker
+from fe_mpm.transfer import mass_weighted_projection, nodal_sum_norm, second_moments
 
 # Warnings point at the first caller outside the package, however deep they arise.
 _PACKAGE = (str(Path(__file__).parent),)
@@ -418,25 +418,16 @@ class Simulation:
         self.fallback_line_search = fallback_line_search
         self.fallback_hold_cells = bool(fallback_hold_cells)
         self._cells_of_last_step: np.ndarray | None = None
-        self._newmark = None
+        self.dynamics: NewmarkDynamics | None = None
+        self._newmark = None  # the Newmark fields and constants the forms read
         if self.dynamic:
             if self.spec.u_degree != 1:
                 raise ValueError(
                     f"Simulation: dynamic analysis needs a P1 displacement; formulation "
                     f"{formulation!r} is P{self.spec.u_degree}"
                 )
-            # The grid velocity/acceleration live on the displacement space itself.
-            if self.spec.pressure:
-                V1, self._u_dofs = collapse(self.fields.W.sub(0))
-            else:
-                V1, self._u_dofs = self.fields.W, np.arange(self.fields.w.x.array.size)
-            self._newmark = inertia.NewmarkData(
-                v_n=dolfinx.fem.Function(V1, name="v_n"),
-                a_n=dolfinx.fem.Function(V1, name="a_n"),
-                c_a=dolfinx.fem.Constant(mesh, 0.0),
-                c_v=dolfinx.fem.Constant(mesh, 0.0),
-                damping=dolfinx.fem.Constant(mesh, float(damping)),
-            )
+            self.dynamics = NewmarkDynamics(self.fields, damping, linear_solver, petsc_options)
+            self._newmark = self.dynamics.data
         elif damping:
             raise ValueError("Simulation: damping needs dynamic=True")
         elif mass != "consistent":
@@ -673,7 +664,7 @@ class Simulation:
                 skip_file_prefixes=_PACKAGE)
         forms, layout, R, J, bcs = self.prepare_step(t_new, rebin=rebin)
         dt = t_new - self.t
-        if self._newmark is not None and self.step_number == 0:
+        if self.dynamics is not None and self.step_number == 0:
             self._consistent_initial_acceleration(forms, layout, R, bcs, dt)
         self._initial_guess(layout)
         hooks = {}
@@ -759,7 +750,8 @@ class Simulation:
         for name, h in self.material.history.items():
             q.pack(forms.history[name], layout, pts.history[name], empty=h.initial)
         if forms.lumping is not None:
-            q.pack(forms.lumping, layout, self._second_moments(layout))
+            vertices = self.mesh.geometry.x[self.mesh.geometry.dofmaps[0][layout.cell], :self.gdim]
+            q.pack(forms.lumping, layout, second_moments(vertices, pts.x, self._bary(layout)))
         if self._ppp is not None:
             volume = np.bincount(layout.cell, weights=pts.volume, minlength=self.tracker.num_cells)
             q.pack_cell_field(self._ppp.fill, layout, volume / self.tracker.volumes)
@@ -769,8 +761,9 @@ class Simulation:
         J = forms.jacobian.bind(layout, boundary)
         self._step_loads = None if forms.loads is None else forms.loads.bind(layout, boundary)
         bcs = self._boundary_conditions(layout, self.t, t_new)
-        if self._newmark is not None:
-            self._project_to_grid(layout, t_new - self.t)
+        if self.dynamics is not None:
+            self.dynamics.project(layout.cell, self._bary(layout), pts.mass, pts.velocity,
+                                  pts.acceleration, t_new - self.t)
         self._add_time("packing", t0)
         self._current = (forms, layout)
         self._refreshed = None  # new points and history: no return map is current
@@ -988,106 +981,32 @@ class Simulation:
         pins = self.fields.pin_unsupported(layout.occupied)
         return [bc for _, _, bc in self._dirichlet] + pins
 
-    def _project_to_grid(self, layout: SlotLayout, dt: float) -> None:
-        """Project the particles' velocity and acceleration to the nodes (Eqs. 2.6–2.9).
-
-        Mass weighted: ``ṽ_I = Σ_p N_I m_p v_p / Σ_p N_I m_p``, likewise ã; and set
-        Newmark's coefficients for a step of length ``dt``.
-        """
-        nm, pts = self._newmark, self.points
-        both = np.hstack([pts.velocity, pts.acceleration])
-        nodal, self.grid_mass = self._mass_weighted_projection(nm.v_n.function_space, layout, both)
-        g = self.gdim
-        nm.v_n.x.array.reshape(-1, g)[:] = nodal[:, :g]
-        nm.a_n.x.array.reshape(-1, g)[:] = nodal[:, g:]
-        nm.c_a.value = 4.0 / dt**2
-        nm.c_v.value = 2.0 / dt
-
-    def _second_moments(self, layout: SlotLayout) -> np.ndarray:
-        """``C_p = Σ_I N_I(x_p) (x_I − x_p)⊗(x_I − x_p)`` of every point, (n, g, g) in m²."""
-        g, pts = self.gdim, self.points
-        vertices = self.mesh.geometry.x[self.mesh.geometry.dofmaps[0][layout.cell], :g]
-        r = vertices - pts.x[:, None, :]
-        bary = self.tracker.barycentric(pts.x, layout.cell)
-        return np.einsum("pv,pvi,pvj->pij", bary, r, r)
-
-    def _mass_weighted_projection(
-        self, space: dolfinx.fem.FunctionSpace, layout: SlotLayout, values: np.ndarray
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """``Σ_p N_I(x_p) m_p v_p / Σ_p N_I(x_p) m_p`` on the nodes of a P1 space.
-
-        Args:
-            space: A P1 space (its local dofs follow the cell's vertices, like the
-                barycentric coordinates).
-            layout: The points' cells.
-            values: Per-point values, shape ``(n, k)``.
-
-        Returns:
-            Nodal values ``(nodes, k)`` (zero where no point reaches) and the nodal
-            masses ``Σ_p N_I m_p`` ``(nodes,)``.
-        """
-        nodes, weights, n = self._nodal_shares(space, layout, self.points.mass)
-        mass = np.bincount(nodes, weights=weights, minlength=n)
-        repeated = np.repeat(values, space.dofmap.list.shape[1], axis=0)
-        moment = np.stack([np.bincount(nodes, weights=weights * repeated[:, c], minlength=n)
-                           for c in range(values.shape[1])], axis=1)
-        nodal = np.divide(moment, mass[:, None], out=np.zeros_like(moment),
-                          where=mass[:, None] > 0)
-        return nodal, mass
+    def _bary(self, layout: SlotLayout) -> np.ndarray:
+        """The points' barycentric coordinates in their cells of ``layout`` (n, g + 1)."""
+        return self.tracker.barycentric(self.points.x, layout.cell)
 
     def _consistent_initial_acceleration(
-        self, forms: _SlotForms, layout: SlotLayout, R: dolfinx.fem.Form, bcs: list, dt: float
+        self, forms: _SlotForms, layout: SlotLayout, R, bcs: list, dt: float
     ) -> None:
-        """Particle accelerations in equilibrium at the start: ``M a₀ = f_ext − f_int − α_R M v₀``.
+        """Start the points from accelerations in equilibrium with the loads; project them.
 
-        Starting Newmark's trapezoidal rule from a₀ = 0 instead leaves the velocity
-        lagging by ``Δt/2`` times the true acceleration for the whole run (a
-        first-order error in Δt). The displacement dofs the step's ``bcs`` constrain
-        (Dirichlet and unsupported nodes) get a₀ = 0.
+        See :meth:`~fe_mpm.dynamics.NewmarkDynamics.initial_acceleration`.
+        The displacement dofs the step's ``bcs`` constrain (Dirichlet and unsupported
+        nodes) get a₀ = 0.
         """
-        nm = self._newmark
-        # With Δu = 0 and c_a = c_v = 0 the Newmark velocity is −ṽ and the acceleration
-        # −ã; so ã = 0 and the damping coefficient negated leave f_int − f_ext + α_R M ṽ.
-        saved = (nm.c_a.value.copy(), nm.c_v.value.copy(), nm.damping.value.copy())
-        nm.c_a.value, nm.c_v.value, nm.damping.value = 0.0, 0.0, -saved[2]
-        nm.a_n.x.array[:] = 0.0
-        self._initial_guess(layout)  # Δu = 0 (and the projected pressure)
-        self.refresh_material(tangent=False)
-        b = R.assemble_vector()
-        nm.c_a.value, nm.c_v.value, nm.damping.value = saved
-        V1 = nm.a_n.function_space
-        g = self.gdim
-        rhs = dolfinx.fem.Function(V1)
-        rhs.x.array[:] = -b[self._u_dofs]
+        def residual_at_rest() -> np.ndarray:
+            self._initial_guess(layout)  # Δu = 0 (and the projected pressure)
+            self.refresh_material(tangent=False)
+            return R.assemble_vector()
+
         constrained = np.zeros(self.w.x.array.size, dtype=bool)
         for bc in bcs:
             constrained[bc.dof_indices()[0]] = True
-        fixed = constrained[self._u_dofs]
-        # The pattern of all cells (explicit zeros where empty) keeps every diagonal
-        # entry for the constraint rows below.
-        all_cells = np.arange(self.tracker.num_cells, dtype=np.int32)
-        M = dolfinx.fem.petsc.assemble_matrix(forms.mass_matrix.bind_cells(all_cells))
-        M.assemble()
-        forms.mass_matrix.bind(layout).assemble_matrix(M)
-        rows = np.flatnonzero(fixed).astype(np.int32)
-        rhs.x.array[rows] = 0.0
-        M.zeroRowsColumns(rows, 1.0)
-        a0 = dolfinx.fem.Function(V1)
-        ksp = PETSc.KSP().create(self.mesh.comm)
-        ksp.setOperators(M)
-        ksp.setType("preonly")
-        ksp.getPC().setType("lu")
-        ksp.getPC().setFactorSolverType("mumps")
-        ksp.solve(rhs.x.petsc_vec, a0.x.petsc_vec)
-        a0.x.scatter_forward()
-        ksp.destroy()
-        M.destroy()
-        nodes = V1.dofmap.list[layout.cell]
-        bary = self.tracker.barycentric(self.points.x, layout.cell)
-        self.points.acceleration = np.einsum(
-            "pv,pvg->pg", bary, a0.x.array.reshape(-1, g)[nodes]
-        )
-        self._project_to_grid(layout, dt)
+        pts, bary = self.points, self._bary(layout)
+        pts.acceleration = self.dynamics.initial_acceleration(
+            residual_at_rest, forms.mass_matrix, np.arange(self.tracker.num_cells, dtype=np.int32),
+            layout, constrained, layout.cell, bary)
+        self.dynamics.project(layout.cell, bary, pts.mass, pts.velocity, pts.acceleration, dt)
 
     def _reaction_forces(self, R: dolfinx.fem.Form) -> dict[str, np.ndarray]:
         """The force each requested boundary exerts on the body.
@@ -1111,23 +1030,9 @@ class Simulation:
         if not self.spec.pressure:
             return
         p_p = -np.trace(self.points.stress, axis1=1, axis2=2) / 3.0
-        nodal, _ = self._mass_weighted_projection(self.fields.Q[0], layout, p_p[:, None])
+        nodal, _ = mass_weighted_projection(self.fields.Q[0], layout.cell, self._bary(layout),
+                                            self.points.mass, p_p[:, None])
         self.fields.set_pressure(nodal[:, 0])
-
-    def _nodal_shares(
-        self, space: dolfinx.fem.FunctionSpace, layout: SlotLayout, weights: np.ndarray
-    ) -> tuple[np.ndarray, np.ndarray, int]:
-        """Each point's ``N_I(x_p) w_p`` with its node I in a P1 space, for ``np.bincount``.
-
-        The space's local dofs follow the cell's vertices, like the barycentric coordinates.
-
-        Returns:
-            ``(nodes, shares, n)``: node and share of every (point, vertex) pair, both
-            flat ``(n_points * (g + 1),)``, and the number of nodes (owned and ghost).
-        """
-        nodes = space.dofmap.list[layout.cell].ravel()
-        shares = (self.tracker.barycentric(self.points.x, layout.cell) * weights[:, None]).ravel()
-        return nodes, shares, space.dofmap.index_map.size_local + space.dofmap.index_map.num_ghosts
 
     def _pressure_volume(self, layout: SlotLayout) -> float:
         """‖V‖: the norm of the points' volumes gathered on the pressure nodes (m³; m² in 2D).
@@ -1136,8 +1041,8 @@ class Simulation:
         """
         if not self.spec.pressure:
             return 0.0
-        nodes, shares, n = self._nodal_shares(self.fields.Q[0], layout, self.points.volume)
-        return float(np.linalg.norm(np.bincount(nodes, weights=shares, minlength=n)))
+        return nodal_sum_norm(self.fields.Q[0], layout.cell, self._bary(layout),
+                              self.points.volume)
 
     def _check_supports(self, layout: SlotLayout) -> None:
         """Refuse a static model whose supports leave a rigid translation free.
@@ -1208,7 +1113,7 @@ class Simulation:
         dF = values[:, g : g + g * g].reshape(-1, g, g)
         sigma = values[:, g + g * g : g + g * g + 9].reshape(-1, 3, 3)
         det_dF = np.linalg.det(dF)
-        if self._newmark is None:
+        if self.dynamics is None:
             cells_moved = np.linalg.norm(du_p, axis=1) / self.tracker.sizes[layout.cell]
             far = int(np.argmax(cells_moved))
             if cells_moved[far] > self.max_step_cells:
@@ -1231,9 +1136,9 @@ class Simulation:
         pts.F = dF @ pts.F
         pts.volume *= det_dF
         pts.stress = sigma
-        if self._newmark is not None:
+        if self.dynamics is not None:
             a_new = values[:, g + g * g + 9 : 2 * g + g * g + 9]
-            pts.velocity += 0.5 * dt * (pts.acceleration + a_new)  # Eq. 2.16
+            pts.velocity = self.dynamics.updated_velocity(pts.velocity, pts.acceleration, a_new, dt)
             pts.acceleration = a_new
         for name, columns in forms.history_columns.items():
             pts.history[name] = values[:, columns].reshape(pts.history[name].shape)

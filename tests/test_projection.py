@@ -4,6 +4,7 @@ import numpy as np
 
 import fe_mpm
 from fe_mpm.meshes import rectangle_mesh
+from fe_mpm.transfer import mass_weighted_projection
 
 
 def _shape_values(V, cell, x):
@@ -25,8 +26,9 @@ def test_mass_weighted_projection_weights_each_point_by_its_mass():
     values = np.column_stack([np.sin(4 * points.x[:, 0]), points.x[:, 1] ** 2,
                               rng.standard_normal(len(points))])
     layout = sim._track()
-    V = sim._newmark.v_n.function_space
-    nodal, mass = sim._mass_weighted_projection(V, layout, values)
+    V = sim.dynamics.space
+    bary = sim.tracker.barycentric(points.x, layout.cell)
+    nodal, mass = mass_weighted_projection(V, layout.cell, bary, points.mass, values)
     nodes = V.dofmap.index_map.size_local + V.dofmap.index_map.num_ghosts
     expected_mass, moment = np.zeros(nodes), np.zeros((nodes, 3))
     for p, cell in enumerate(layout.cell):

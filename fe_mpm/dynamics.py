@@ -1,0 +1,164 @@
+"""Implicit Newmark dynamics of the points (trapezoidal rule, β = 1/4, γ = 1/2).
+
+Iaconeta (2019) §2.3. Each step projects the points' velocity and acceleration
+to the grid (mass weighted, Eqs. 2.6–2.9), sets Newmark's coefficients for the
+step length, and after the solve updates the points' velocities (Eq. 2.16). The
+first step starts from accelerations in equilibrium with the initial loads.
+The weak-form terms are in :mod:`fe_mpm.forms.inertia`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from petsc4py import PETSc
+
+import numpy as np
+
+from fe_mpm._dolfinx import dolfinx
+from fe_mpm.errors import ConvergenceError
+from fe_mpm.forms import inertia
+from fe_mpm.formulations import GridFields, collapse
+from fe_mpm.newton import LINEAR_SOLVERS, with_petsc_options
+from fe_mpm.transfer import mass_weighted_projection
+
+
+class NewmarkDynamics:
+    """The grid state of Newmark's rule and the transfers that feed it.
+
+    Args:
+        fields: The grid unknowns; the displacement must be P1.
+        damping: Mass-proportional Rayleigh coefficient α_R (1/s), ≥ 0.
+        linear_solver: ``"direct"`` or ``"iterative"``, as for Newton: the mass
+            system of the initial acceleration is solved the same way.
+        petsc_options: The user's PETSc overrides; those for the linear solver (all but
+            ``snes_*``) apply to the mass system too.
+
+    Attributes:
+        data: The Newmark fields and constants the forms read.
+        u_dofs: The displacement dofs within the grid unknown ``w``.
+        grid_mass: Nodal masses ``Σ_p N_I m_p`` of the last projection (kg), or None.
+    """
+
+    #: PETSc options prefix of the mass system (``-fe_mpm_mass_ksp_view`` works).
+    PREFIX = "fe_mpm_mass_"
+
+    def __init__(self, fields: GridFields, damping: float, linear_solver: str = "direct",
+                 petsc_options: dict | None = None):
+        mesh = fields.W.mesh
+        # The grid velocity/acceleration live on the displacement space itself.
+        if fields.spec.pressure:
+            V1, self.u_dofs = collapse(fields.W.sub(0))
+        else:
+            V1, self.u_dofs = fields.W, np.arange(fields.w.x.array.size)
+        self.data = inertia.NewmarkData(
+            v_n=dolfinx.fem.Function(V1, name="v_n"),
+            a_n=dolfinx.fem.Function(V1, name="a_n"),
+            c_a=dolfinx.fem.Constant(mesh, 0.0),
+            c_v=dolfinx.fem.Constant(mesh, 0.0),
+            damping=dolfinx.fem.Constant(mesh, float(damping)),
+        )
+        self.grid_mass: np.ndarray | None = None
+        self._solver_options = {
+            **LINEAR_SOLVERS[linear_solver, False],
+            **{k: v for k, v in (petsc_options or {}).items() if not k.startswith("snes_")},
+        }
+
+    @property
+    def space(self) -> dolfinx.fem.FunctionSpace:
+        """The P1 vector space of the grid velocity and acceleration."""
+        return self.data.v_n.function_space
+
+    def project(self, cells: np.ndarray, bary: np.ndarray, mass: np.ndarray,
+                velocity: np.ndarray, acceleration: np.ndarray, dt: float) -> None:
+        """Project the points' velocity and acceleration to the nodes and set Δt.
+
+        Mass weighted: ``ṽ_I = Σ_p N_I m_p v_p / Σ_p N_I m_p``, likewise ã; and
+        Newmark's coefficients ``4/Δt²`` and ``2/Δt`` for a step of length ``dt`` (s).
+
+        Args:
+            cells: The points' cells (n,).
+            bary: Their barycentric coordinates there (n, g + 1).
+            mass: The points' masses (n,) in kg.
+            velocity: The points' velocities (n, g) at t_n, m/s.
+            acceleration: The points' accelerations (n, g) at t_n, m/s².
+            dt: The step length (s), > 0.
+        """
+        g = velocity.shape[1]
+        both = np.hstack([velocity, acceleration])
+        nodal, self.grid_mass = mass_weighted_projection(self.space, cells, bary, mass, both)
+        self.data.v_n.x.array.reshape(-1, g)[:] = nodal[:, :g]
+        self.data.a_n.x.array.reshape(-1, g)[:] = nodal[:, g:]
+        self.data.c_a.value = 4.0 / dt**2
+        self.data.c_v.value = 2.0 / dt
+
+    def initial_acceleration(
+        self, residual_at_rest: Callable[[], np.ndarray], mass_matrix, all_cells: np.ndarray,
+        layout, constrained: np.ndarray, cells: np.ndarray, bary: np.ndarray,
+    ) -> np.ndarray:
+        """Point accelerations in equilibrium at the start: ``M a₀ = f_ext − f_int − α_R M v₀``.
+
+        Starting Newmark's rule from a₀ = 0 instead leaves the velocity lagging by
+        ``Δt/2`` times the true acceleration for the whole run (a first-order error
+        in Δt).
+
+        Args:
+            residual_at_rest: Assembles the step's residual (over the whole unknown
+                ``w``) at Δu = 0; called here with the Newmark terms reduced to
+                ``α_R M ṽ`` (no ã, and the damping sign flipped), so that it returns
+                ``f_int − f_ext + α_R M ṽ``.
+            mass_matrix: The step's mass form (:class:`~fe_mpm.assembly.StepForm`).
+            all_cells: Every cell of the grid, for the matrix's sparsity pattern.
+            layout: The step's slot layout, to bind the mass form.
+            constrained: Which dofs of ``w`` the step's conditions fix (bool): they
+                get a₀ = 0.
+            cells: The points' cells (n,).
+            bary: Their barycentric coordinates there (n, g + 1).
+
+        Returns:
+            The points' accelerations (n, g) in m/s².
+        """
+        nm = self.data
+        # With Δu = 0 and c_a = c_v = 0 the Newmark velocity is −ṽ and the acceleration
+        # −ã; so ã = 0 and the damping coefficient negated leave f_int − f_ext + α_R M ṽ.
+        saved = (nm.c_a.value.copy(), nm.c_v.value.copy(), nm.damping.value.copy())
+        nm.c_a.value, nm.c_v.value, nm.damping.value = 0.0, 0.0, -saved[2]
+        nm.a_n.x.array[:] = 0.0
+        try:
+            b = residual_at_rest()
+        finally:
+            nm.c_a.value, nm.c_v.value, nm.damping.value = saved
+        rhs = dolfinx.fem.Function(self.space)
+        rhs.x.array[:] = -b[self.u_dofs]
+        # The pattern of all cells (explicit zeros where empty) keeps every diagonal
+        # entry for the constraint rows below.
+        M = dolfinx.fem.petsc.assemble_matrix(mass_matrix.bind_cells(all_cells))
+        M.assemble()
+        mass_matrix.bind(layout).assemble_matrix(M)
+        rows = np.flatnonzero(constrained[self.u_dofs]).astype(np.int32)
+        rhs.x.array[rows] = 0.0
+        M.zeroRowsColumns(rows, 1.0)
+        a0 = dolfinx.fem.Function(self.space)
+        ksp = PETSc.KSP().create(M.comm)
+        try:
+            ksp.setOperators(M)
+            ksp.setOptionsPrefix(self.PREFIX)
+            with_petsc_options(self.PREFIX, self._solver_options, ksp.setFromOptions)
+            ksp.solve(rhs.x.petsc_vec, a0.x.petsc_vec)
+            if ksp.getConvergedReason() < 0:
+                raise ConvergenceError(
+                    "step 1: the mass system of the initial acceleration did not converge "
+                    f"(KSP reason {ksp.getConvergedReason()}); nothing was updated")
+        finally:
+            ksp.destroy()
+            M.destroy()
+        a0.x.scatter_forward()
+        g = self.space.dofmap.bs
+        nodes = self.space.dofmap.list[cells]
+        return np.einsum("pv,pvg->pg", bary, a0.x.array.reshape(-1, g)[nodes])
+
+    @staticmethod
+    def updated_velocity(velocity: np.ndarray, acceleration: np.ndarray,
+                         new_acceleration: np.ndarray, dt: float) -> np.ndarray:
+        """``v_{n+1} = v_n + Δt (a_n + a_{n+1}) / 2`` (Eq. 2.16), (n, g) in m/s."""
+        return velocity + 0.5 * dt * (acceleration + new_acceleration)

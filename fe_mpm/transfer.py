@@ -1,0 +1,84 @@
+"""Point → grid transfer: sums of point values on the nodes of a P1 space.
+
+Every function takes the points' cells and their barycentric coordinates there
+(``Tracker.barycentric``), which are the P1 shape functions ``N_I(x_p)`` of the
+cell's vertices in the order of the space's local dofs. Nodal sums are taken with
+``np.bincount``, one pass per value column.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from fe_mpm._dolfinx import dolfinx
+
+
+def nodal_shares(
+    space: dolfinx.fem.FunctionSpace, cells: np.ndarray, bary: np.ndarray, weights: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, int]:
+    """Each point's ``N_I(x_p) w_p`` with its node I, for ``np.bincount``.
+
+    Args:
+        space: A P1 space (its local dofs follow the cell's vertices).
+        cells: The points' cells (n,).
+        bary: Their barycentric coordinates there (n, g + 1).
+        weights: A weight per point (n,), e.g. its mass.
+
+    Returns:
+        ``(nodes, shares, n)``: node and share of every (point, vertex) pair, both
+        flat ``(n_points * (g + 1),)``, and the number of nodes (owned and ghost).
+    """
+    nodes = space.dofmap.list[cells].ravel()
+    shares = (bary * weights[:, None]).ravel()
+    return nodes, shares, space.dofmap.index_map.size_local + space.dofmap.index_map.num_ghosts
+
+
+def mass_weighted_projection(
+    space: dolfinx.fem.FunctionSpace, cells: np.ndarray, bary: np.ndarray, mass: np.ndarray,
+    values: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """``Σ_p N_I(x_p) m_p v_p / Σ_p N_I(x_p) m_p`` on the nodes of a P1 space.
+
+    Args:
+        space: A P1 space (its local dofs follow the cell's vertices).
+        cells: The points' cells (n,).
+        bary: Their barycentric coordinates there (n, g + 1).
+        mass: The points' masses (n,) in kg.
+        values: Per-point values, shape ``(n, k)``.
+
+    Returns:
+        Nodal values ``(nodes, k)`` (zero where no point reaches) and the nodal
+        masses ``Σ_p N_I m_p`` ``(nodes,)``.
+    """
+    nodes, weights, n = nodal_shares(space, cells, bary, mass)
+    nodal_mass = np.bincount(nodes, weights=weights, minlength=n)
+    repeated = np.repeat(values, space.dofmap.list.shape[1], axis=0)
+    moment = np.stack([np.bincount(nodes, weights=weights * repeated[:, c], minlength=n)
+                       for c in range(values.shape[1])], axis=1)
+    nodal = np.divide(moment, nodal_mass[:, None], out=np.zeros_like(moment),
+                      where=nodal_mass[:, None] > 0)
+    return nodal, nodal_mass
+
+
+def nodal_sum_norm(
+    space: dolfinx.fem.FunctionSpace, cells: np.ndarray, bary: np.ndarray, weights: np.ndarray
+) -> float:
+    """``‖Σ_p N_I(x_p) w_p‖``: the norm of the weights gathered on the nodes.
+
+    With the points' volumes on the pressure nodes, the scale of the pressure rows
+    in Newton's test (m³; m² in 2D).
+    """
+    nodes, shares, n = nodal_shares(space, cells, bary, weights)
+    return float(np.linalg.norm(np.bincount(nodes, weights=shares, minlength=n)))
+
+
+def second_moments(vertices: np.ndarray, x: np.ndarray, bary: np.ndarray) -> np.ndarray:
+    """``C_p = Σ_I N_I(x_p) (x_I − x_p)⊗(x_I − x_p)`` of every point, (n, g, g) in m².
+
+    Args:
+        vertices: The vertices of each point's cell (n, g + 1, g) in m.
+        x: The points' positions (n, g) in m.
+        bary: Their barycentric coordinates (n, g + 1).
+    """
+    r = vertices - x[:, None, :]
+    return np.einsum("pv,pvi,pvj->pij", bary, r, r)
