@@ -31,7 +31,6 @@ from fe_mpm.boundary import (
     PointDirichlet,
     PointTraction,
     Traction,
-    boundary_facets,
 )
 from fe_mpm.boundary_points import BoundaryPoints
 from fe_mpm.checks import check_choice, check_finite, check_range
@@ -39,7 +38,8 @@ from fe_mpm.dynamics import NewmarkDynamics
 from fe_mpm.errors import ConvergenceError, PointsOutsideError
 from fe_mpm.forms import displacement, inertia, mixed_up, penalty
 from fe_mpm.forms import loads as loads_form
-from fe_mpm.formulations import FORMULATIONS, GridFields, collapse, constrained_space
+from fe_mpm.formulations import FORMULATIONS, GridFields, collapse
+from fe_mpm.grid_conditions import GridConditions
 from fe_mpm.io import ParticleWriter
 from fe_mpm.materials import Linearisation, PointState, ReturnMapResult
 from fe_mpm.materials.protocol import Law, MixedLaw, PointwiseLaw, missing_members
@@ -128,29 +128,6 @@ def _take_density(material, points: MaterialPoints) -> None:
             "zones of different densities, or the law's density alone.")
 
 
-def _facet_node_weights(
-    mesh: dolfinx.mesh.Mesh, facets: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """The grid nodes of ``facets`` and each one's share of a uniform load on them.
-
-    A P1 node of a simplex facet carries 1/g of the facet's measure.
-
-    Returns:
-        ``(nodes, weights)``: geometry node indices (k,) and their shares (k,), summing to 1.
-    """
-    g = mesh.geometry.dim
-    nodes_of = dolfinx.mesh.entities_to_geometry(mesh, g - 1, facets)  # (nf, g)
-    X = mesh.geometry.x[:, :g][nodes_of]
-    edges = X[:, 1:] - X[:, :1]
-    if g == 2:
-        measure = np.linalg.norm(edges[:, 0], axis=1)
-    else:
-        measure = 0.5 * np.linalg.norm(np.cross(edges[:, 0], edges[:, 1]), axis=1)
-    nodes, index = np.unique(nodes_of, return_inverse=True)
-    weights = np.bincount(index.ravel(), weights=np.repeat(measure / g, g), minlength=nodes.size)
-    return nodes, weights / weights.sum()
-
-
 class _SlotForms:
     """Everything that depends on the slot count: quadrature, data fields, compiled forms."""
 
@@ -183,13 +160,13 @@ class _SlotForms:
             w, q_test = ufl.TestFunctions(fields.W)
             R = mixed_up.residual(
                 du, p, w, q_test, q, self.F_n, self.density, material, sim._ppp,
-                sim._body_force, sim._traction_terms, u_degree=deg, state=state,
+                sim.conditions.body_force, sim.conditions.traction_terms, u_degree=deg, state=state,
             )
         else:
             w = ufl.TestFunction(fields.W)
             R = displacement.residual(
                 du, w, q, self.F_n, self.density, lambda F: material.kirchhoff(F, state),
-                sim._body_force, sim._traction_terms,
+                sim.conditions.body_force, sim.conditions.traction_terms,
             )
         self.q_boundary = None
         if nslot_boundary:
@@ -203,12 +180,14 @@ class _SlotForms:
             self.du_at_boundary = PointExpression(qb.at_points(du, deg), qb)
         rules = {OCCUPIED: q, BOUNDARY_POINTS: self.q_boundary}
         # The loads alone, for the Newton test's force scale.
-        loads = loads_form.external_work(w, q, self.density, sim._body_force,
-                                         sim._traction_terms, deg)
+        conditions = sim.conditions
+        loads = loads_form.external_work(w, q, self.density, conditions.body_force,
+                                         conditions.traction_terms, deg)
         if nslot_boundary:
             point_loads = qb.sum(ufl.dot(self.boundary_traction, qb.at_points(w, deg)))
             loads = point_loads if loads is None else loads + point_loads
-        self.loads = None if loads is None else StepForm(loads, mesh, sim._traction_facets, rules)
+        facets = conditions.traction_facets
+        self.loads = None if loads is None else StepForm(loads, mesh, facets, rules)
         self.lumping = q.function((g, g), "second_moment") if sim.mass == "lumped" else None
         if sim._newmark is not None:
             R += inertia.inertia(du, w, q, self.density, sim._newmark, self.lumping)
@@ -219,8 +198,8 @@ class _SlotForms:
                 quadratures=rules,
             )
         J = ufl.derivative(R, fields.w, ufl.TrialFunction(fields.W))
-        self.residual = StepForm(R, mesh, sim._traction_facets, rules, dynamic)
-        self.jacobian = StepForm(J, mesh, sim._traction_facets, rules, dynamic)
+        self.residual = StepForm(R, mesh, facets, rules, dynamic)
+        self.jacobian = StepForm(J, mesh, facets, rules, dynamic)
         # Per-point values after convergence: Δu_p, ΔF_p, the 3x3 Cauchy stress,
         # the acceleration (dynamics) and the material's history at t_{n+1}.
         F = dF * self.F_n
@@ -436,55 +415,9 @@ class Simulation:
         fdim = tdim - 1
         mesh.topology.create_connectivity(fdim, tdim)
 
-        self._dirichlet = []  # (spec, value Function, DirichletBC)
-        self._dirichlet_nodes = []  # grid nodes of each condition's facets, for _check_supports
-        for spec in dirichlet:
-            facets = boundary_facets(mesh, spec.where, facet_tags)
-            if spec.component is not None:
-                check_range("Dirichlet", "component", spec.component, lo=0, hi=g - 1)
-            target, is_sub = constrained_space(self.fields.U, spec.component)
-            if is_sub:
-                collapsed, _ = target.collapse()
-                value = dolfinx.fem.Function(collapsed)
-                dofs = dolfinx.fem.locate_dofs_topological((target, collapsed), fdim, facets)
-                bc = dolfinx.fem.dirichletbc(value, dofs, target)
-            else:
-                value = dolfinx.fem.Function(target)
-                dofs = dolfinx.fem.locate_dofs_topological(target, fdim, facets)
-                bc = dolfinx.fem.dirichletbc(value, dofs)
-            self._dirichlet.append((spec, value, bc))
-            self._dirichlet_nodes.append(
-                np.unique(dolfinx.mesh.entities_to_geometry(mesh, fdim, facets)))
-
-        self._tractions = []  # (spec, Constant)
-        self._traction_facets: dict[int, np.ndarray] = {}
-        self._traction_vertices: dict[int, np.ndarray] = {}  # grid nodes of the loaded facets
-        self._traction_weights: dict[int, np.ndarray] = {}  # each node's share of the load
-        self._lost_load: dict[int, float] = {}  # share of each traction lost in this step
-        self._warned_share: dict[int, float] = {}  # largest share warned about so far
-        self._warned_tractions: set[int | str] = set()  # warn once per load
-        self._traction_terms = []  # (Constant, ds(i)); the test function comes later
-        ds = ufl.Measure("ds", domain=mesh)
-        for i, spec in enumerate(tractions, start=1):
-            if len(spec.value) != g:
-                raise ValueError(f"Traction: value must have {g} components, got {len(spec.value)}")
-            value = dolfinx.fem.Constant(mesh, np.zeros(g))
-            self._traction_facets[i] = boundary_facets(mesh, spec.where, facet_tags)
-            self._traction_vertices[i], self._traction_weights[i] = _facet_node_weights(
-                mesh, self._traction_facets[i])
-            self._traction_terms.append((value, ds(i)))
-            self._tractions.append((spec, value))
-
-        self._reactions = {}  # name -> W dofs of each displacement component
-        for name, where in (reactions or {}).items():
-            facets = boundary_facets(mesh, where, facet_tags)
-            comps = []
-            for c in range(g):
-                sub_c = self.fields.U.sub(c)
-                collapsed, _ = sub_c.collapse()
-                dofs = dolfinx.fem.locate_dofs_topological((sub_c, collapsed), fdim, facets)
-                comps.append(np.asarray(dofs[0], dtype=np.int32))
-            self._reactions[name] = comps
+        self.conditions = GridConditions(self.fields, dirichlet, tractions, body_force,
+                                         body_force_scale, reactions, facet_tags)
+        self._warned_tractions: set[str] = set()  # boundary-point loads warned about
 
         conditions = [*point_dirichlet, *point_tractions]
         self._boundary_points = BoundaryPoints(conditions, g) if conditions else None
@@ -504,16 +437,6 @@ class Simulation:
                               metadata={"quadrature_degree": 2})
             alpha = mixed_up.effective_alpha(ppp_alpha, g)
             self._ppp = mixed_up.PPPData(alpha, centroid, fill, dx2)
-
-        self._body_force = None
-        if body_force is not None:
-            if len(body_force) != g:
-                raise ValueError(f"Simulation: body_force must have {g} components")
-            for c, value in enumerate(body_force):
-                check_range("Simulation", f"body_force[{c}]", value)
-            self._body_force = dolfinx.fem.Constant(mesh, np.asarray(body_force, dtype=float))
-            self._body_force_value = np.asarray(body_force, dtype=float)
-        self._body_force_scale = body_force_scale
 
         self._forms: dict[tuple[int, int], _SlotForms] = {}  # by slots of points, boundary
         self._refreshed: dict | None = None  # the iterate of the last return map
@@ -693,7 +616,7 @@ class Simulation:
             )
 
         self.refresh_material(tangent=False)  # the converged iterate's, for reactions and history
-        reactions = self._reaction_forces(R)
+        reactions = self.conditions.reactions(R.assemble_vector)
         t0 = time.perf_counter()
         self._convect(forms, layout, step=k, t=t_new, dt=dt)  # may still reject the step
         reactions.update(self._convect_boundary_points(forms, t_new))
@@ -710,7 +633,7 @@ class Simulation:
             reactions=reactions, held_points=self._held_points,
             converged_reason=result.reason, force_scale=result.force_scale,
             relative_residual=result.relative_residual,
-            lost_load={f"Traction {i - 1}": share for i, share in self._lost_load.items()
+            lost_load={f"Traction {i - 1}": share for i, share in self.conditions.lost_load.items()
                        if share > 0},
         )
         self.history.append(report)
@@ -734,7 +657,7 @@ class Simulation:
         self._check_points_per_cell(layout)
         if self.step_number == 0 and not self.dynamic:
             self._check_supports(layout)
-        self._check_loaded_facets(layout, t_new)
+        self.conditions.check_loaded_facets(layout.occupied, t_new)
 
         t0 = time.perf_counter()
         boundary = self._locate_boundary_points(layout, t_new)
@@ -760,7 +683,7 @@ class Simulation:
         R = forms.residual.bind(layout, boundary)
         J = forms.jacobian.bind(layout, boundary)
         self._step_loads = None if forms.loads is None else forms.loads.bind(layout, boundary)
-        bcs = self._boundary_conditions(layout, self.t, t_new)
+        bcs = self.conditions.impose(layout.occupied, self.t, t_new)
         if self.dynamics is not None:
             self.dynamics.project(layout.cell, self._bary(layout), pts.mass, pts.velocity,
                                   pts.acceleration, t_new - self.t)
@@ -839,29 +762,6 @@ class Simulation:
         self._add_time("tracking", t0)
         self._nslot = slot_count(np.bincount(cells), self._nslot)
         return SlotLayout.from_cells(cells, self._nslot)
-
-    def _check_loaded_facets(self, layout: SlotLayout, t_new: float) -> None:
-        """Warn when a grid traction's nodes have no material: their load acts on nothing.
-
-        Nodes that no point reaches are pinned, so the load the facets put there is lost.
-        """
-        if not self._traction_vertices:
-            return
-        active = np.zeros(self.mesh.geometry.x.shape[0], dtype=bool)
-        active[self.mesh.geometry.dofmaps[0][layout.occupied]] = True
-        for i, nodes in self._traction_vertices.items():
-            idle = ~active[nodes]
-            share = float(self._traction_weights[i][idle].sum())
-            self._lost_load[i] = share
-            # Warn whenever the lost share reaches a new high (by a point of 0.5 %).
-            if share > self._warned_share.get(i, 0.0) + 0.005:
-                self._warned_share[i] = share
-                warnings.warn(
-                    f"Traction {i - 1}: {idle.sum()} of its {nodes.size} grid nodes carry no "
-                    f"material at the step to t = {t_new:g}, so {100 * share:.1f} % of its "
-                    "load is lost (StepReport.lost_load). A grid traction stays on the grid; "
-                    "use PointTraction for a load that follows the body.",
-                    skip_file_prefixes=_PACKAGE)
 
     def _hinge_diagnosis(self, layout: SlotLayout) -> str:
         """Explain a singular tangent by occupied cells hinged to the rest at one node.
@@ -960,27 +860,6 @@ class Simulation:
             )
         return self._newton
 
-    def _boundary_conditions(self, layout: SlotLayout, t_old: float, t_new: float) -> list:
-        for spec, value, _ in self._dirichlet:
-            if spec.profile is not None:
-                value.interpolate(lambda x: spec.profile(x, t_new) - spec.profile(x, t_old))
-                if not np.all(np.isfinite(value.x.array)):
-                    raise ValueError(f"Dirichlet: profile(x, t) is not finite everywhere "
-                                     f"at t = {t_old:g} or {t_new:g}")
-            else:
-                increment = spec.at(t_new) - spec.at(t_old)
-                bs = value.function_space.dofmap.bs
-                value.x.array.reshape(-1, bs)[:] = increment.reshape(-1)[:bs]
-        for spec, value in self._tractions:
-            value.value = spec.at(t_new)
-        if self._body_force is not None and self._body_force_scale is not None:
-            factor = check_range("Simulation", f"body_force_scale(t = {t_new:g})",
-                                 self._body_force_scale(t_new))
-            self._body_force.value = self._body_force_value * factor
-        # Grid dofs no material point reaches get no equation: pin them.
-        pins = self.fields.pin_unsupported(layout.occupied)
-        return [bc for _, _, bc in self._dirichlet] + pins
-
     def _bary(self, layout: SlotLayout) -> np.ndarray:
         """The points' barycentric coordinates in their cells of ``layout`` (n, g + 1)."""
         return self.tracker.barycentric(self.points.x, layout.cell)
@@ -1007,18 +886,6 @@ class Simulation:
             residual_at_rest, forms.mass_matrix, np.arange(self.tracker.num_cells, dtype=np.int32),
             layout, constrained, layout.cell, bary)
         self.dynamics.project(layout.cell, bary, pts.mass, pts.velocity, pts.acceleration, dt)
-
-    def _reaction_forces(self, R: dolfinx.fem.Form) -> dict[str, np.ndarray]:
-        """The force each requested boundary exerts on the body.
-
-        It is the sum of the residual (internal − external + inertial forces) over
-        the boundary's dofs.
-        """
-        if not self._reactions:
-            return {}
-        b = R.assemble_vector()
-        return {name: np.array([b[dofs].sum() for dofs in comps])
-                for name, comps in self._reactions.items()}
 
     def _initial_guess(self, layout: SlotLayout) -> None:
         """Δu = 0, and the pressure projected from the points (thesis Eq. 5.20).
@@ -1052,15 +919,9 @@ class Simulation:
         only where they reach material: nodes outside the occupied cells are pinned.
         A model with no loads and no conditions at all is left alone: it stays at rest.
         """
-        if not (self._dirichlet or self._tractions or self._boundary_points
-                or self._body_force is not None):
+        if not (self.conditions.loads_or_supports or self._boundary_points is not None):
             return
-        occupied_nodes = np.zeros(self.mesh.geometry.x.shape[0], dtype=bool)
-        occupied_nodes[self.mesh.geometry.dofmaps[0][layout.occupied]] = True
-        held = np.zeros(self.gdim, dtype=bool)
-        for (spec, _, _), nodes in zip(self._dirichlet, self._dirichlet_nodes, strict=True):
-            if np.any(occupied_nodes[nodes]):
-                held[slice(None) if spec.component is None else spec.component] = True
+        held = self.conditions.held_components(layout.occupied)
         pp = self._boundary_points
         if pp is not None:
             for condition in pp.conditions:

@@ -61,7 +61,7 @@ def test_taylor_test_detects_an_inconsistent_jacobian():
     ufl_R = forms.residual.ufl_form
     # A Jacobian of a different residual: the same form with the stress scaled by 1.01.
     wrong = ufl.derivative(1.01 * ufl_R, sim.w, ufl.TrialFunction(sim.fields.W))
-    J_wrong = StepForm(wrong, sim.mesh, sim._traction_facets,
+    J_wrong = StepForm(wrong, sim.mesh, sim.conditions.traction_facets,
                        quadratures={OCCUPIED: forms.q}).bind(layout)
     sim.w.x.array[:] = rng.uniform(-0.02, 0.02, sim.w.x.array.size)
     d = rng.uniform(-1.0, 1.0, sim.w.x.array.size)

@@ -1,0 +1,232 @@
+"""The conditions a step imposes on the grid: displacements, tractions, body force.
+
+They stay on the grid while the body moves through it, unlike the boundary
+points of :mod:`fe_mpm.boundary_points`. :class:`GridConditions` sets them up
+once and, for each step, gives the Dirichlet increments, the loads at the new
+time, the warning when a traction's nodes carry no material, and the reaction
+forces of named boundaries.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Callable, Sequence
+from pathlib import Path
+
+import numpy as np
+import ufl
+
+from fe_mpm._dolfinx import dolfinx
+from fe_mpm.boundary import Dirichlet, Traction, boundary_facets
+from fe_mpm.checks import check_range
+from fe_mpm.formulations import GridFields, constrained_space
+
+_PACKAGE = (str(Path(__file__).parent),)
+
+#: A traction's lost share is warned about again when it grows by this much.
+LOST_LOAD_WARNING_STEP = 0.005
+
+
+def facet_node_weights(
+    mesh: dolfinx.mesh.Mesh, facets: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The grid nodes of ``facets`` and each one's share of a uniform load on them.
+
+    A P1 node of a simplex facet carries 1/g of the facet's measure.
+
+    Returns:
+        ``(nodes, weights)``: geometry node indices (k,) and their shares (k,), summing to 1.
+    """
+    g = mesh.geometry.dim
+    nodes_of = dolfinx.mesh.entities_to_geometry(mesh, g - 1, facets)  # (nf, g)
+    X = mesh.geometry.x[:, :g][nodes_of]
+    edges = X[:, 1:] - X[:, :1]
+    if g == 2:
+        measure = np.linalg.norm(edges[:, 0], axis=1)
+    else:
+        measure = 0.5 * np.linalg.norm(np.cross(edges[:, 0], edges[:, 1]), axis=1)
+    nodes, index = np.unique(nodes_of, return_inverse=True)
+    weights = np.bincount(index.ravel(), weights=np.repeat(measure / g, g), minlength=nodes.size)
+    return nodes, weights / weights.sum()
+
+
+class GridConditions:
+    """Dirichlet conditions, tractions, body force and reaction boundaries of a grid.
+
+    Args:
+        fields: The grid unknowns.
+        dirichlet: Prescribed grid displacements.
+        tractions: Surface tractions on grid facets.
+        body_force: Body force per unit mass (m/s², length g), or None.
+        body_force_scale: Its load factor ``t -> float``; constant 1 if None.
+        reactions: Boundaries whose reaction force is wanted, name -> tag or marker.
+        facet_tags: Facet tags for conditions given by tag.
+
+    Attributes:
+        traction_terms: ``(value, ds(i))`` pairs for the weak forms (Pa).
+        traction_facets: Subdomain id i -> the exterior facets of traction i − 1.
+        body_force: The body force as a Constant the forms read, or None.
+        lost_load: Traction id -> the share of its load whose nodes carried no
+            material at the last step.
+    """
+
+    def __init__(
+        self,
+        fields: GridFields,
+        dirichlet: Sequence[Dirichlet] = (),
+        tractions: Sequence[Traction] = (),
+        body_force: Sequence[float] | None = None,
+        body_force_scale: Callable[[float], float] | None = None,
+        reactions: dict[str, int | Callable] | None = None,
+        facet_tags: dolfinx.mesh.MeshTags | None = None,
+    ):
+        mesh = fields.W.mesh
+        self.mesh, self.fields = mesh, fields
+        g, fdim = mesh.geometry.dim, mesh.topology.dim - 1
+        mesh.topology.create_connectivity(fdim, fdim + 1)
+
+        self.dirichlet = []  # (spec, value Function, DirichletBC)
+        self.dirichlet_nodes = []  # grid nodes of each condition's facets
+        for spec in dirichlet:
+            facets = boundary_facets(mesh, spec.where, facet_tags)
+            if spec.component is not None:
+                check_range("Dirichlet", "component", spec.component, lo=0, hi=g - 1)
+            self.dirichlet.append((spec, *self._dirichlet_bc(spec.component, facets)))
+            self.dirichlet_nodes.append(
+                np.unique(dolfinx.mesh.entities_to_geometry(mesh, fdim, facets)))
+
+        self.tractions = []  # (spec, Constant)
+        self.traction_terms = []
+        self.traction_facets: dict[int, np.ndarray] = {}
+        self._traction_nodes: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+        self.lost_load: dict[int, float] = {}
+        self._warned_share: dict[int, float] = {}  # the largest share warned about so far
+        ds = ufl.Measure("ds", domain=mesh)
+        for i, spec in enumerate(tractions, start=1):
+            if len(spec.value) != g:
+                raise ValueError(f"Traction: value must have {g} components, got {len(spec.value)}")
+            value = dolfinx.fem.Constant(mesh, np.zeros(g))
+            self.traction_facets[i] = boundary_facets(mesh, spec.where, facet_tags)
+            self._traction_nodes[i] = facet_node_weights(mesh, self.traction_facets[i])
+            self.traction_terms.append((value, ds(i)))
+            self.tractions.append((spec, value))
+
+        self.reaction_dofs = {}  # name -> W dofs of each displacement component
+        for name, where in (reactions or {}).items():
+            facets = boundary_facets(mesh, where, facet_tags)
+            comps = []
+            for c in range(g):
+                sub_c = fields.U.sub(c)
+                collapsed, _ = sub_c.collapse()
+                dofs = dolfinx.fem.locate_dofs_topological((sub_c, collapsed), fdim, facets)
+                comps.append(np.asarray(dofs[0], dtype=np.int32))
+            self.reaction_dofs[name] = comps
+
+        self.body_force = None
+        if body_force is not None:
+            if len(body_force) != g:
+                raise ValueError(f"Simulation: body_force must have {g} components")
+            for c, value in enumerate(body_force):
+                check_range("Simulation", f"body_force[{c}]", value)
+            self._body_force_value = np.asarray(body_force, dtype=float)
+            self.body_force = dolfinx.fem.Constant(mesh, self._body_force_value.copy())
+        self._body_force_scale = body_force_scale
+
+    def _dirichlet_bc(self, component: int | None, facets: np.ndarray):
+        """The value Function of a condition and its DirichletBC on ``facets``."""
+        fdim = self.mesh.topology.dim - 1
+        target, is_sub = constrained_space(self.fields.U, component)
+        if is_sub:
+            collapsed, _ = target.collapse()
+            value = dolfinx.fem.Function(collapsed)
+            dofs = dolfinx.fem.locate_dofs_topological((target, collapsed), fdim, facets)
+            return value, dolfinx.fem.dirichletbc(value, dofs, target)
+        value = dolfinx.fem.Function(target)
+        dofs = dolfinx.fem.locate_dofs_topological(target, fdim, facets)
+        return value, dolfinx.fem.dirichletbc(value, dofs)
+
+    @property
+    def loads_or_supports(self) -> bool:
+        """Whether any condition or load acts on the grid."""
+        return bool(self.dirichlet or self.tractions or self.body_force is not None)
+
+    def impose(self, occupied: np.ndarray, t_old: float, t_new: float) -> list:
+        """The step's boundary conditions, with the loads set to their values at ``t_new``.
+
+        Args:
+            occupied: The cells that hold material points: grid dofs no point reaches
+                get no equation, so they are pinned.
+            t_old: The time the step starts from (s).
+            t_new: The time it ends at (s).
+
+        Returns:
+            The Dirichlet conditions on the increment t_old → t_new, then the pins.
+        """
+        for spec, value, _ in self.dirichlet:
+            if spec.profile is not None:
+                value.interpolate(lambda x: spec.profile(x, t_new) - spec.profile(x, t_old))
+                if not np.all(np.isfinite(value.x.array)):
+                    raise ValueError(f"Dirichlet: profile(x, t) is not finite everywhere "
+                                     f"at t = {t_old:g} or {t_new:g}")
+            else:
+                increment = spec.at(t_new) - spec.at(t_old)
+                bs = value.function_space.dofmap.bs
+                value.x.array.reshape(-1, bs)[:] = increment.reshape(-1)[:bs]
+        for spec, value in self.tractions:
+            value.value = spec.at(t_new)
+        if self.body_force is not None and self._body_force_scale is not None:
+            factor = check_range("Simulation", f"body_force_scale(t = {t_new:g})",
+                                 self._body_force_scale(t_new))
+            self.body_force.value = self._body_force_value * factor
+        pins = self.fields.pin_unsupported(occupied)
+        return [bc for _, _, bc in self.dirichlet] + pins
+
+    def held_components(self, occupied: np.ndarray) -> np.ndarray:
+        """Which displacement components (g,) some Dirichlet condition holds at material.
+
+        A condition counts only where it touches a node of an ``occupied`` cell: nodes
+        outside the material are pinned anyway.
+        """
+        occupied_nodes = np.zeros(self.mesh.geometry.x.shape[0], dtype=bool)
+        occupied_nodes[self.mesh.geometry.dofmaps[0][occupied]] = True
+        held = np.zeros(self.mesh.geometry.dim, dtype=bool)
+        for (spec, _, _), nodes in zip(self.dirichlet, self.dirichlet_nodes, strict=True):
+            if np.any(occupied_nodes[nodes]):
+                held[slice(None) if spec.component is None else spec.component] = True
+        return held
+
+    def check_loaded_facets(self, occupied: np.ndarray, t_new: float) -> None:
+        """Warn when a grid traction's nodes have no material: their load acts on nothing.
+
+        Nodes that no point reaches are pinned, so the load the facets put there is lost;
+        :attr:`lost_load` records the share.
+        """
+        if not self._traction_nodes:
+            return
+        active = np.zeros(self.mesh.geometry.x.shape[0], dtype=bool)
+        active[self.mesh.geometry.dofmaps[0][occupied]] = True
+        for i, (nodes, weights) in self._traction_nodes.items():
+            idle = ~active[nodes]
+            share = float(weights[idle].sum())
+            self.lost_load[i] = share
+            if share > self._warned_share.get(i, 0.0) + LOST_LOAD_WARNING_STEP:
+                self._warned_share[i] = share
+                warnings.warn(
+                    f"Traction {i - 1}: {idle.sum()} of its {nodes.size} grid nodes carry no "
+                    f"material at the step to t = {t_new:g}, so {100 * share:.1f} % of its "
+                    "load is lost (StepReport.lost_load). A grid traction stays on the grid; "
+                    "use PointTraction for a load that follows the body.",
+                    skip_file_prefixes=_PACKAGE)
+
+    def reactions(self, residual: Callable[[], np.ndarray]) -> dict[str, np.ndarray]:
+        """The force (g,) each named boundary exerts on the body, in N (N/m in 2D).
+
+        It is the sum of the residual (internal − external + inertial forces) over the
+        boundary's dofs; ``residual`` assembles it, and is called only if a boundary
+        is named.
+        """
+        if not self.reaction_dofs:
+            return {}
+        b = residual()
+        return {name: np.array([b[dofs].sum() for dofs in comps])
+                for name, comps in self.reaction_dofs.items()}
