@@ -53,6 +53,7 @@ from fe_mpm.quadrature import (
     SlotLayout,
     slot_count,
 )
+from fe_mpm.retry import RetryLadder, StepLength
 from fe_mpm.tracker import Tracker
 from fe_mpm.transfer import mass_weighted_projection, nodal_sum_norm, second_moments
 
@@ -394,8 +395,7 @@ class Simulation:
         self.fields = GridFields(mesh, self.spec)
         self.dynamic = bool(dynamic)
         self.min_step = min_step
-        self.fallback_line_search = fallback_line_search
-        self.fallback_hold_cells = bool(fallback_hold_cells)
+        self.ladder = RetryLadder(fallback_line_search, bool(fallback_hold_cells))
         self._cells_of_last_step: np.ndarray | None = None
         self.dynamics: NewmarkDynamics | None = None
         self._newmark = None  # the Newmark fields and constants the forms read
@@ -500,10 +500,10 @@ class Simulation:
 
         In a static analysis ``t`` is a pseudo-time that only drives the loads
         and the prescribed displacements. When Newton fails, the step is retried
-        with ``fallback_line_search``, then with the points held in their last
-        cells (``fallback_hold_cells``), and then halved, and grown back (doubling,
-        up to the nominal step) after two successes. Below ``min_step`` the run
-        stops with the last failure's message.
+        as :mod:`fe_mpm.retry` lists (:attr:`ladder`: ``fallback_line_search``, then
+        the points held in their last cells, ``fallback_hold_cells``), then halved,
+        and grown back (doubling, up to the nominal step) after two successes. Below
+        ``min_step`` the run stops with the last failure's message.
         ``on_step(report)`` is called after every accepted step, with the points
         updated (e.g. to record a front position).
         """
@@ -511,7 +511,7 @@ class Simulation:
         check_range("Simulation.run", "t_end", t_end, lo=self.t, lo_open=True)
         nominal = (t_end - self.t) / int(n_steps)
         floor = self.min_step if self.min_step is not None else nominal / 1024
-        dt, successes = nominal, 0
+        length = StepLength(nominal, floor)
         bar = None
         if progress:
             from tqdm.auto import tqdm
@@ -522,26 +522,22 @@ class Simulation:
             self._write_output(force=True)  # the initial state as the t = 0 frame
         try:
             while t_end - self.t > 1e-12 * nominal:
-                t_new = min(self.t + dt, t_end)
+                t_new = min(self.t + length.dt, t_end)
                 if t_end - t_new < 1e-9 * nominal:
                     t_new = t_end
                 try:
                     report = self._step_with_fallbacks(t_new)
                 except ConvergenceError as err:
-                    dt /= 2
-                    successes = 0
-                    if dt < floor:
+                    if not length.cut():
                         raise ConvergenceError(
-                            f"{err} The step was cut to {2 * dt:.3g} without success, and the "
-                            f"floor is min_step = {floor:.3g}."
+                            f"{err} The step was cut to {2 * length.dt:.3g} without success, "
+                            f"and the floor is min_step = {floor:.3g}."
                         ) from None
                     continue
                 reports.append(report)
                 if on_step is not None:
                     on_step(report)
-                successes += 1
-                if dt < nominal and successes >= 2:
-                    dt, successes = min(2 * dt, nominal), 0
+                length.accepted()
                 if bar is not None:
                     bar.set_postfix(t=f"{report.t:.4g}", newton=report.newton_iterations)
                     bar.update(report.dt / nominal)
@@ -552,13 +548,15 @@ class Simulation:
         return reports
 
     def _step_with_fallbacks(self, t_new: float) -> StepReport:
-        """:meth:`step`, and once more without re-binning if it fails (static runs)."""
-        try:
-            return self.step(t_new)
-        except ConvergenceError:
-            if not self.fallback_hold_cells or self._cells_of_last_step is None or self.dynamic:
-                raise
-            return self.step(t_new, rebin=False)
+        """:meth:`step` with each placement of :attr:`ladder` until one succeeds."""
+        can_hold = self._cells_of_last_step is not None and not self.dynamic
+        placements = self.ladder.placements(can_hold)
+        for rebin in placements[:-1]:
+            try:
+                return self.step(t_new, rebin=rebin)
+            except ConvergenceError:
+                pass
+        return self.step(t_new, rebin=placements[-1])
 
     def step(self, t_new: float, rebin: bool = True) -> StepReport:
         """Take one implicit step from the current time to ``t_new``.
@@ -597,14 +595,17 @@ class Simulation:
         hooks["loads"] = self._step_loads
         hooks["pressure_volume"] = self._pressure_volume(layout)
         solver = self._newton_solver(forms)
-        result = solver.solve(R, J, bcs, **hooks)
-        fallback = self.fallback_line_search
-        if not result.converged and fallback not in (None, solver.line_search):
-            self._initial_guess(layout)
-            retry = solver.solve(R, J, bcs, **hooks, line_search=fallback)
-            retry.residual_norms = result.residual_norms + retry.residual_norms
-            retry.iterations += result.iterations
-            result = retry
+        result = None
+        for search in self.ladder.line_searches(solver.line_search):
+            if result is not None:  # a retry from the same start
+                self._initial_guess(layout)
+            attempt = solver.solve(R, J, bcs, **hooks, line_search=search)
+            if result is not None:
+                attempt.residual_norms = result.residual_norms + attempt.residual_norms
+                attempt.iterations += result.iterations
+            result = attempt
+            if result.converged:
+                break
         if not result.converged or not np.all(np.isfinite(self.w.x.array)):
             norms = ", ".join(f"{r:.3e}" for r in result.residual_norms)
             raise ConvergenceError(

@@ -1,0 +1,102 @@
+"""What :meth:`Simulation.run <fe_mpm.Simulation.run>` does when Newton fails a step.
+
+At one step length it makes up to four attempts, in this order (:meth:`RetryLadder.attempts`):
+
+1. the points re-binned into the cells they now lie in, Newton as configured
+   (full steps by default);
+2. the same, with the fallback line search (``"bt"`` by default), from the same
+   start;
+3. in a static run, every point held in the cell it was in during the last step
+   (``Simulation.step(rebin=False)``), Newton as configured;
+4. held, with the fallback line search.
+
+Attempts 1–2 and 3–4 share their set-up (tracking, packing), so a step's report
+counts the Newton iterations of both attempts of the set-up that converged. When
+all attempts fail the step is halved (:class:`StepLength`), and it grows back by
+doubling, up to the nominal length, after two successes; below the floor the run
+stops with the last failure's message.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+#: Successes in a row after which a cut step length doubles again.
+SUCCESSES_TO_GROW = 2
+
+
+@dataclass(frozen=True)
+class Attempt:
+    """One way to take a step.
+
+    Attributes:
+        rebin: Re-bin the points into the cells they lie in (False: hold each in the
+            cell of the last step).
+        line_search: The SNES line search, or None for the solver's configured one.
+    """
+
+    rebin: bool
+    line_search: str | None
+
+
+@dataclass(frozen=True)
+class RetryLadder:
+    """The attempts at one step length, in order.
+
+    Args:
+        fallback_line_search: Line search of the retry from the same start, or None.
+        hold_cells: Whether a static step is retried with the points held.
+    """
+
+    fallback_line_search: str | None = "bt"
+    hold_cells: bool = True
+
+    def placements(self, can_hold: bool) -> list[bool]:
+        """Re-bin (True), then hold (False) where allowed: each is one set-up of the step.
+
+        Args:
+            can_hold: Whether holding the points is possible: a static run that has
+                taken a step before.
+        """
+        return [True, False] if self.hold_cells and can_hold else [True]
+
+    def line_searches(self, configured: str) -> list[str | None]:
+        """Newton's own line search (None), then the fallback, tried from the same start.
+
+        Args:
+            configured: Newton's configured line search; a fallback equal to it adds
+                no attempt.
+        """
+        if self.fallback_line_search in (None, configured):
+            return [None]
+        return [None, self.fallback_line_search]
+
+    def attempts(self, configured: str, can_hold: bool) -> list[Attempt]:
+        """Every attempt at one step length, in order (see the module's docstring)."""
+        return [Attempt(rebin, search) for rebin in self.placements(can_hold)
+                for search in self.line_searches(configured)]
+
+
+class StepLength:
+    """The step length of a run: halved after a failure, doubled back after successes.
+
+    Args:
+        nominal: The run's step length (s or pseudo-time), > 0.
+        floor: The shortest step allowed (same unit).
+    """
+
+    def __init__(self, nominal: float, floor: float):
+        self.nominal, self.floor = nominal, floor
+        self.dt, self._successes = nominal, 0
+
+    def cut(self) -> bool:
+        """Halve the step after a failure; False if it then falls below the floor."""
+        self.dt /= 2
+        self._successes = 0
+        return self.dt >= self.floor
+
+    def accepted(self) -> None:
+        """Count a success; after enough of them in a row a cut step doubles again."""
+        self._successes += 1
+        if self.dt < self.nominal and self._successes >= SUCCESSES_TO_GROW:
+            self.dt, self._successes = min(2 * self.dt, self.nominal), 0
