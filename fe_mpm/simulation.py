@@ -25,7 +25,6 @@ import numpy as np
 import ufl
 
 from fe_mpm._dolfinx import dolfinx
-from fe_mpm.assembly import StepForm
 from fe_mpm.boundary import (
     Dirichlet,
     PointDirichlet,
@@ -36,24 +35,21 @@ from fe_mpm.boundary_points import BoundaryPoints
 from fe_mpm.checks import check_choice, check_finite, check_range
 from fe_mpm.dynamics import NewmarkDynamics
 from fe_mpm.errors import ConvergenceError, PointsOutsideError
-from fe_mpm.forms import displacement, inertia, mixed_up, penalty
-from fe_mpm.forms import loads as loads_form
+from fe_mpm.forms import mixed_up
 from fe_mpm.formulations import FORMULATIONS, GridFields, collapse
 from fe_mpm.grid_conditions import GridConditions
 from fe_mpm.io import ParticleWriter
-from fe_mpm.materials import Linearisation, PointState, ReturnMapResult
-from fe_mpm.materials.protocol import Law, MixedLaw, PointwiseLaw, missing_members
+from fe_mpm.materials import Linearisation, ReturnMapResult
+from fe_mpm.materials.protocol import Law, MixedLaw, missing_members
 from fe_mpm.newton import NewtonSolver
-from fe_mpm.packing import PointExpression
 from fe_mpm.particles import MaterialPoints, simplex_cell_type
 from fe_mpm.quadrature import (
-    BOUNDARY_POINTS,
     OCCUPIED,
-    MaterialPointQuadrature,
     SlotLayout,
     slot_count,
 )
 from fe_mpm.retry import RetryLadder, StepLength
+from fe_mpm.step_forms import StepForms
 from fe_mpm.tracker import Tracker
 from fe_mpm.transfer import mass_weighted_projection, nodal_sum_norm, second_moments
 
@@ -127,101 +123,6 @@ def _take_density(material, points: MaterialPoints) -> None:
             f"{rho_points[first]:g} kg/m³ (point {first}; from seed(..., density=...) or "
             "their masses). Give the density in one place: seed(..., density=...) for "
             "zones of different densities, or the law's density alone.")
-
-
-class _SlotForms:
-    """Everything that depends on the slot count: quadrature, data fields, compiled forms."""
-
-    def __init__(self, sim: Simulation, nslot: int, nslot_boundary: int = 0):
-        mesh, g = sim.mesh, sim.gdim
-        spec, fields, material = sim.spec, sim.fields, sim.material
-        deg = spec.u_degree
-        self.q = q = MaterialPointQuadrature(mesh, nslot)
-        self.F_n = q.function((g, g), "F_n", empty=np.eye(g))
-        self.density = q.function((), "density")
-        du, p = fields.du, fields.p
-        dF = ufl.Identity(g) + q.grad_at_points(du, deg)
-        self.history = {name: q.function(h.shape, name, empty=h.initial)
-                        for name, h in material.history.items()}
-        # A pointwise law (numpy return map) enters the forms through its
-        # linearisation at the current iterate, refreshed before every residual.
-        self.pointwise = isinstance(material, PointwiseLaw)
-        self.linearisation = None
-        dynamic = set()  # slot fields that change during Newton
-        if self.pointwise:
-            lin = self.linearisation = Linearisation(
-                q.function((3, 3), "tau_k"), q.function((9 * g * g,), "tangent_k"),
-                q.function((g, g), "dF_k", empty=np.eye(g)), g,
-            )
-            dynamic = {lin.tau, lin.tangent, lin.dF}
-            self.dF_at_points = PointExpression(
-                ufl.as_vector([dF[i, j] for i in range(g) for j in range(g)]), q)
-        state = PointState(dF, self.history, self.linearisation)
-        if spec.pressure:
-            w, q_test = ufl.TestFunctions(fields.W)
-            R = mixed_up.residual(
-                du, p, w, q_test, q, self.F_n, self.density, material, sim._ppp,
-                sim.conditions.body_force, sim.conditions.traction_terms, u_degree=deg, state=state,
-            )
-        else:
-            w = ufl.TestFunction(fields.W)
-            R = displacement.residual(
-                du, w, q, self.F_n, self.density, lambda F: material.kirchhoff(F, state),
-                sim.conditions.body_force, sim.conditions.traction_terms,
-            )
-        self.q_boundary = None
-        if nslot_boundary:
-            # Boundary points with a prescribed displacement (penalty), their own rule.
-            qb = self.q_boundary = MaterialPointQuadrature(mesh, nslot_boundary, BOUNDARY_POINTS)
-            self.gap = qb.function((g,), "gap")
-            self.penalty_stiffness = qb.function((g,), "penalty")
-            self.boundary_traction = qb.function((g,), "boundary_traction")
-            R += penalty.penalty(du, w, qb, self.gap, self.penalty_stiffness,
-                                 self.boundary_traction, deg)
-            self.du_at_boundary = PointExpression(qb.at_points(du, deg), qb)
-        rules = {OCCUPIED: q, BOUNDARY_POINTS: self.q_boundary}
-        # The loads alone, for the Newton test's force scale.
-        conditions = sim.conditions
-        loads = loads_form.external_work(w, q, self.density, conditions.body_force,
-                                         conditions.traction_terms, deg)
-        if nslot_boundary:
-            point_loads = qb.sum(ufl.dot(self.boundary_traction, qb.at_points(w, deg)))
-            loads = point_loads if loads is None else loads + point_loads
-        facets = conditions.traction_facets
-        self.loads = None if loads is None else StepForm(loads, mesh, facets, rules)
-        self.lumping = q.function((g, g), "second_moment") if sim.mass == "lumped" else None
-        if sim._newmark is not None:
-            R += inertia.inertia(du, w, q, self.density, sim._newmark, self.lumping)
-            V1 = sim._newmark.a_n.function_space
-            a, v = ufl.TrialFunction(V1), ufl.TestFunction(V1)
-            self.mass_matrix = StepForm(
-                inertia.mass_product(a, v, q, self.density, self.lumping), mesh,
-                quadratures=rules,
-            )
-        J = ufl.derivative(R, fields.w, ufl.TrialFunction(fields.W))
-        self.residual = StepForm(R, mesh, facets, rules, dynamic)
-        self.jacobian = StepForm(J, mesh, facets, rules, dynamic)
-        # Per-point values after convergence: Δu_p, ΔF_p, the 3x3 Cauchy stress,
-        # the acceleration (dynamics) and the material's history at t_{n+1}.
-        F = dF * self.F_n
-        if spec.pressure:
-            sigma = mixed_up.cauchy_stress_3d(material, F, q.at_points(p), state)
-        else:
-            sigma = displacement.cauchy_stress_3d(lambda F3: material.kirchhoff(F3, state), F)
-        du_p = q.at_points(du, deg)
-        values = [du_p[i] for i in range(g)]
-        values += [dF[i, j] for i in range(g) for j in range(g)]
-        values += [sigma[i, j] for i in range(3) for j in range(3)]
-        if sim._newmark is not None:
-            a_p = q.at_points(inertia.acceleration(du, sim._newmark))
-            values += [a_p[i] for i in range(g)]
-        self.history_columns = {}
-        for name, value in material.updated_history(F, state).items():
-            start = len(values)
-            shape = ufl.shape(value)
-            values += [value[idx] for idx in np.ndindex(*shape)] if shape else [value]
-            self.history_columns[name] = slice(start, len(values))
-        self.update = PointExpression(ufl.as_vector(values), q)
 
 
 class Simulation:
@@ -438,7 +339,7 @@ class Simulation:
             alpha = mixed_up.effective_alpha(ppp_alpha, g)
             self._ppp = mixed_up.PPPData(alpha, centroid, fill, dx2)
 
-        self._forms: dict[tuple[int, int], _SlotForms] = {}  # by slots of points, boundary
+        self._forms: dict[tuple[int, int], StepForms] = {}  # by slots of points, boundary
         self._refreshed: dict | None = None  # the iterate of the last return map
         self._nslot = self._nslot_boundary = None  # slots per entity, kept while they suit
         self._newton: NewtonSolver | None = None
@@ -786,8 +687,10 @@ class Simulation:
             "into otherwise empty cells; a coarser grid or a dynamic analysis avoids it. "
         )
 
-    def _compile(self, nslot: int, nslot_boundary: int) -> _SlotForms:
-        forms = _SlotForms(self, nslot, nslot_boundary)
+    def _compile(self, nslot: int, nslot_boundary: int) -> StepForms:
+        forms = StepForms(self.fields, self.spec, self.material, nslot, nslot_boundary,
+                          conditions=self.conditions, ppp=self._ppp, newmark=self._newmark,
+                          lumped=self.mass == "lumped")
         self._forms[(nslot, nslot_boundary)] = forms
         return forms
 
@@ -828,7 +731,7 @@ class Simulation:
         self._boundary_layout = SlotLayout.from_cells(cells, self._nslot_boundary)
         return self._boundary_layout
 
-    def _pack_boundary_points(self, forms: _SlotForms, layout: SlotLayout, t_new: float) -> None:
+    def _pack_boundary_points(self, forms: StepForms, layout: SlotLayout, t_new: float) -> None:
         pp, active, qb = self._boundary_points, self._boundary_active, forms.q_boundary
         qb.pack_geometry(pp.x[active], pp.weight[active], layout, self.tracker.centroids,
                          self.tracker.volumes)
@@ -837,7 +740,7 @@ class Simulation:
         qb.pack(forms.penalty_stiffness, layout, pp.stiffness[active])
         qb.pack(forms.boundary_traction, layout, pp.tractions(t_new)[active])
 
-    def _convect_boundary_points(self, forms: _SlotForms, t_new: float) -> dict[str, np.ndarray]:
+    def _convect_boundary_points(self, forms: StepForms, t_new: float) -> dict[str, np.ndarray]:
         """Move the penalty points with the grid solution; return each condition's force."""
         pp = self._boundary_points
         if pp is None:
@@ -849,7 +752,7 @@ class Simulation:
         pp.x[~active] = pp.targets(t_new)[~active]  # outside the material: follow the target
         return forces
 
-    def _newton_solver(self, forms: _SlotForms) -> NewtonSolver:
+    def _newton_solver(self, forms: StepForms) -> NewtonSolver:
         if self._newton is None:
             all_cells = np.arange(self.tracker.num_cells, dtype=np.int32)
             self._newton = NewtonSolver(
@@ -866,7 +769,7 @@ class Simulation:
         return self.tracker.barycentric(self.points.x, layout.cell)
 
     def _consistent_initial_acceleration(
-        self, forms: _SlotForms, layout: SlotLayout, R, bcs: list, dt: float
+        self, forms: StepForms, layout: SlotLayout, R, bcs: list, dt: float
     ) -> None:
         """Start the points from accelerations in equilibrium with the loads; project them.
 
@@ -961,7 +864,7 @@ class Simulation:
             "unknowns; use the 'up' (P1) formulation or more points per cell.")
 
     def _convect(
-        self, forms: _SlotForms, layout: SlotLayout, step: int, t: float, dt: float
+        self, forms: StepForms, layout: SlotLayout, step: int, t: float, dt: float
     ) -> None:
         g = self.gdim
         values = forms.update.evaluate(layout)
@@ -971,9 +874,8 @@ class Simulation:
                 f"non-finite state at {bad.size} material point(s) in step {step} (t = {t:g}); "
                 f"first: point {bad[0]} at x = {self.points.x[bad[0]]}. Nothing was updated."
             )
-        du_p = values[:, :g]
-        dF = values[:, g : g + g * g].reshape(-1, g, g)
-        sigma = values[:, g + g * g : g + g * g + 9].reshape(-1, 3, 3)
+        new = forms.update_layout.decode(values)
+        du_p, dF = new.du, new.dF
         det_dF = np.linalg.det(dF)
         if self.dynamics is None:
             cells_moved = np.linalg.norm(du_p, axis=1) / self.tracker.sizes[layout.cell]
@@ -997,13 +899,13 @@ class Simulation:
         pts.x += du_p
         pts.F = dF @ pts.F
         pts.volume *= det_dF
-        pts.stress = sigma
+        pts.stress = new.stress
         if self.dynamics is not None:
-            a_new = values[:, g + g * g + 9 : 2 * g + g * g + 9]
-            pts.velocity = self.dynamics.updated_velocity(pts.velocity, pts.acceleration, a_new, dt)
-            pts.acceleration = a_new
-        for name, columns in forms.history_columns.items():
-            pts.history[name] = values[:, columns].reshape(pts.history[name].shape)
+            pts.velocity = self.dynamics.updated_velocity(pts.velocity, pts.acceleration,
+                                                          new.acceleration, dt)
+            pts.acceleration = new.acceleration
+        for name, value in new.history.items():
+            pts.history[name] = value.reshape(pts.history[name].shape)
         if forms.pointwise:
             pts.history.update(self._last_return.history)
 

@@ -123,7 +123,7 @@ def test_elastoplastic_step_residual_and_jacobian_are_consistent(formulation):
     pts.history["plastic_strain"][:] = rng.uniform(0, 0.1, len(pts))
     forms, layout, R, J, _ = sim.prepare_step(1.0)
     sim.w.x.array[:] = rng.uniform(-0.02, 0.02, sim.w.x.array.size)
-    plastic = forms.update.evaluate(layout)[:, forms.history_columns["plastic_strain"]]
+    plastic = forms.update.evaluate(layout)[:, forms.update_layout.columns["plastic_strain"]]
     assert np.all(plastic[:, 0] > pts.history["plastic_strain"])  # all points yield
     d = rng.uniform(-1.0, 1.0, sim.w.x.array.size)
     r0, r1 = taylor_remainders(R, J, sim.w, d, EPS)

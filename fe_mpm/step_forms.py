@@ -1,0 +1,211 @@
+"""The compiled forms of a step, and the per-point update they give after it.
+
+Everything here depends on the slot count (points per entity, see
+:mod:`fe_mpm.quadrature`), so a simulation keeps one :class:`StepForms` per slot
+count it meets: the quadrature and its slot fields, the residual and Jacobian, the
+loads alone (for Newton's force scale), the mass matrix (dynamics), and the update
+expression that evaluates every point's new state once Newton has converged.
+:class:`UpdateLayout` says where each value sits in that expression's output; it
+both builds and reads it, so the order is written down once.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import ufl
+
+from fe_mpm.assembly import StepForm
+from fe_mpm.forms import displacement, inertia, mixed_up, penalty
+from fe_mpm.forms import loads as loads_form
+from fe_mpm.formulations import FormulationSpec, GridFields
+from fe_mpm.grid_conditions import GridConditions
+from fe_mpm.materials import Linearisation, PointState
+from fe_mpm.materials.protocol import PointwiseLaw
+from fe_mpm.packing import PointExpression
+from fe_mpm.quadrature import BOUNDARY_POINTS, OCCUPIED, MaterialPointQuadrature
+
+
+@dataclass(frozen=True)
+class PointUpdate:
+    """Every point's new state from a converged step (n points, g dimensions).
+
+    Attributes:
+        du: Displacement increment Δu_p (n, g) in m.
+        dF: Deformation gradient increment ΔF_p (n, g, g).
+        stress: Cauchy stress at t_{n+1} (n, 3, 3) in Pa, σ_33 included in 2D.
+        acceleration: Acceleration at t_{n+1} (n, g) in m/s², or None (static).
+        history: The law's internal variables at t_{n+1}, name -> (n, size) columns.
+    """
+
+    du: np.ndarray
+    dF: np.ndarray
+    stress: np.ndarray
+    acceleration: np.ndarray | None
+    history: dict[str, np.ndarray]
+
+
+class UpdateLayout:
+    """The columns of the update vector: Δu_p, ΔF_p, σ (3x3), [a_p], then the history.
+
+    Args:
+        g: Geometric dimension.
+        dynamic: Whether the acceleration is part of it.
+        history_shapes: The law's internal variables at t_{n+1}, name -> value shape.
+    """
+
+    def __init__(self, g: int, dynamic: bool, history_shapes: dict[str, tuple[int, ...]]):
+        self.g, self.dynamic = g, dynamic
+        self.history_shapes = dict(history_shapes)
+        sizes = [("du", g), ("dF", g * g), ("stress", 9)]
+        sizes += [("acceleration", g)] if dynamic else []
+        sizes += [(name, int(np.prod(shape))) for name, shape in self.history_shapes.items()]
+        self.columns: dict[str, slice] = {}
+        start = 0
+        for name, size in sizes:
+            self.columns[name] = slice(start, start + size)
+            start += size
+        self.width = start
+
+    def vector(self, du, dF, stress, acceleration, history: dict) -> ufl.core.expr.Expr:
+        """The UFL vector of the update, its entries in this layout's order."""
+        g = self.g
+        values = [du[i] for i in range(g)]
+        values += [dF[i, j] for i in range(g) for j in range(g)]
+        values += [stress[i, j] for i in range(3) for j in range(3)]
+        if self.dynamic:
+            values += [acceleration[i] for i in range(g)]
+        for name, shape in self.history_shapes.items():
+            value = history[name]
+            values += [value[idx] for idx in np.ndindex(*shape)] if shape else [value]
+        return ufl.as_vector(values)
+
+    def decode(self, values: np.ndarray) -> PointUpdate:
+        """The point update from the evaluated vector ``values`` (n, width)."""
+        g, col = self.g, self.columns
+        return PointUpdate(
+            du=values[:, col["du"]],
+            dF=values[:, col["dF"]].reshape(-1, g, g),
+            stress=values[:, col["stress"]].reshape(-1, 3, 3),
+            acceleration=values[:, col["acceleration"]] if self.dynamic else None,
+            history={name: values[:, col[name]] for name in self.history_shapes},
+        )
+
+
+class StepForms:
+    """Everything that depends on the slot count: quadrature, slot fields, compiled forms.
+
+    Args:
+        fields: The grid unknowns.
+        spec: The formulation.
+        material: The law.
+        nslot: Slots per entity of the material points.
+        nslot_boundary: Slots per entity of the boundary points (0: none).
+        conditions: The grid's loads (body force, tractions).
+        ppp: PPP data (u-p), or None.
+        newmark: Newmark's fields and constants (dynamics), or None.
+        lumped: Whether the mass matrix is lumped (dynamics).
+    """
+
+    def __init__(self, fields: GridFields, spec: FormulationSpec, material, nslot: int,
+                 nslot_boundary: int = 0, *, conditions: GridConditions,
+                 ppp: mixed_up.PPPData | None = None,
+                 newmark: inertia.NewmarkData | None = None, lumped: bool = False):
+        mesh, g = fields.W.mesh, fields.W.mesh.geometry.dim
+        self.spec, self.material, self.newmark = spec, material, newmark
+        self.q = q = MaterialPointQuadrature(mesh, nslot)
+        self.F_n = q.function((g, g), "F_n", empty=np.eye(g))
+        self.density = q.function((), "density")
+        self.history = {name: q.function(h.shape, name, empty=h.initial)
+                        for name, h in material.history.items()}
+        self.dF = ufl.Identity(g) + q.grad_at_points(fields.du, spec.u_degree)
+        # A pointwise law (numpy return map) enters the forms through its
+        # linearisation at the current iterate, refreshed before every residual.
+        self.pointwise = isinstance(material, PointwiseLaw)
+        self.linearisation, dynamic = None, set()  # slot fields that change during Newton
+        if self.pointwise:
+            lin = self.linearisation = Linearisation(
+                q.function((3, 3), "tau_k"), q.function((9 * g * g,), "tangent_k"),
+                q.function((g, g), "dF_k", empty=np.eye(g)), g)
+            dynamic = {lin.tau, lin.tangent, lin.dF}
+            self.dF_at_points = PointExpression(
+                ufl.as_vector([self.dF[i, j] for i in range(g) for j in range(g)]), q)
+        self.state = PointState(self.dF, self.history, self.linearisation)
+        w = ufl.TestFunctions(fields.W)[0] if spec.pressure else ufl.TestFunction(fields.W)
+        R = self._residual(fields, conditions, ppp)
+        self.q_boundary = None
+        if nslot_boundary:
+            R += self._boundary_points(fields, w, nslot_boundary)
+        rules = {OCCUPIED: q, BOUNDARY_POINTS: self.q_boundary}
+        facets = conditions.traction_facets
+        loads = self._loads(w, conditions)  # alone, for the Newton test's force scale
+        self.loads = None if loads is None else StepForm(loads, mesh, facets, rules)
+        self.lumping = q.function((g, g), "second_moment") if lumped else None
+        if newmark is not None:
+            R += inertia.inertia(fields.du, w, q, self.density, newmark, self.lumping)
+            V1 = newmark.a_n.function_space
+            a, v = ufl.TrialFunction(V1), ufl.TestFunction(V1)
+            self.mass_matrix = StepForm(
+                inertia.mass_product(a, v, q, self.density, self.lumping), mesh,
+                quadratures=rules)
+        J = ufl.derivative(R, fields.w, ufl.TrialFunction(fields.W))
+        self.residual = StepForm(R, mesh, facets, rules, dynamic)
+        self.jacobian = StepForm(J, mesh, facets, rules, dynamic)
+        self.update_layout, self.update = self._update(fields)
+
+    def _residual(self, fields: GridFields, conditions: GridConditions,
+                  ppp: mixed_up.PPPData | None) -> ufl.Form:
+        """The static residual of the material points and the grid's loads."""
+        q, material, state, deg = self.q, self.material, self.state, self.spec.u_degree
+        if self.spec.pressure:
+            w, q_test = ufl.TestFunctions(fields.W)
+            return mixed_up.residual(
+                fields.du, fields.p, w, q_test, q, self.F_n, self.density, material, ppp,
+                conditions.body_force, conditions.traction_terms, u_degree=deg, state=state)
+        return displacement.residual(
+            fields.du, ufl.TestFunction(fields.W), q, self.F_n, self.density,
+            lambda F: material.kirchhoff(F, state), conditions.body_force,
+            conditions.traction_terms)
+
+    def _boundary_points(self, fields: GridFields, w, nslot: int) -> ufl.Form:
+        """The penalty and point loads of the boundary points, on their own rule."""
+        mesh, deg = fields.W.mesh, self.spec.u_degree
+        g = mesh.geometry.dim
+        qb = self.q_boundary = MaterialPointQuadrature(mesh, nslot, BOUNDARY_POINTS)
+        self.gap = qb.function((g,), "gap")
+        self.penalty_stiffness = qb.function((g,), "penalty")
+        self.boundary_traction = qb.function((g,), "boundary_traction")
+        self.du_at_boundary = PointExpression(qb.at_points(fields.du, deg), qb)
+        return penalty.penalty(fields.du, w, qb, self.gap, self.penalty_stiffness,
+                               self.boundary_traction, deg)
+
+    def _loads(self, w, conditions: GridConditions) -> ufl.Form | None:
+        """The external work of the body force, the tractions and the point loads."""
+        deg = self.spec.u_degree
+        loads = loads_form.external_work(w, self.q, self.density, conditions.body_force,
+                                         conditions.traction_terms, deg)
+        if self.q_boundary is not None:
+            qb = self.q_boundary
+            point_loads = qb.sum(ufl.dot(self.boundary_traction, qb.at_points(w, deg)))
+            loads = point_loads if loads is None else loads + point_loads
+        return loads
+
+    def _update(self, fields: GridFields) -> tuple[UpdateLayout, PointExpression]:
+        """Δu_p, ΔF_p, the 3x3 Cauchy stress, [a_p] and the history at t_{n+1}, per point."""
+        q, material, state, g = self.q, self.material, self.state, fields.W.mesh.geometry.dim
+        F = self.dF * self.F_n
+        if self.spec.pressure:
+            sigma = mixed_up.cauchy_stress_3d(material, F, q.at_points(fields.p), state)
+        else:
+            sigma = displacement.cauchy_stress_3d(lambda F3: material.kirchhoff(F3, state), F)
+        acceleration = None
+        if self.newmark is not None:
+            acceleration = q.at_points(inertia.acceleration(fields.du, self.newmark))
+        history = material.updated_history(F, state)
+        layout = UpdateLayout(g, self.newmark is not None,
+                              {name: ufl.shape(value) for name, value in history.items()})
+        du_p = q.at_points(fields.du, self.spec.u_degree)
+        return layout, PointExpression(layout.vector(du_p, self.dF, sigma, acceleration,
+                                                     history), q)
+
