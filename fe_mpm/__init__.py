@@ -22,7 +22,8 @@ from fe_mpm.boundary import Dirichlet, PointDirichlet, PointTraction, Traction
 from fe_mpm.errors import ConvergenceError, PointsOutsideError
 from fe_mpm.materials import J2Plasticity, MohrCoulomb, NeoHookean
 from fe_mpm.particles import MaterialPoints, merge, seed
-from fe_mpm.simulation import Simulation, StepReport
+from fe_mpm.report import StepReport
+from fe_mpm.simulation import Simulation
 
 __version__ = "0.1.0"
 

@@ -17,7 +17,6 @@ from __future__ import annotations
 import time
 import warnings
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import dolfinx.fem.petsc
@@ -36,18 +35,19 @@ from fe_mpm.checks import check_choice, check_finite, check_range
 from fe_mpm.dynamics import NewmarkDynamics
 from fe_mpm.errors import ConvergenceError, PointsOutsideError
 from fe_mpm.forms import mixed_up
-from fe_mpm.formulations import FORMULATIONS, GridFields, collapse
+from fe_mpm.formulations import FORMULATIONS, GridFields
 from fe_mpm.grid_conditions import GridConditions
-from fe_mpm.io import ParticleWriter
 from fe_mpm.materials import Linearisation, ReturnMapResult
 from fe_mpm.materials.protocol import Law, MixedLaw, missing_members
 from fe_mpm.newton import NewtonSolver
+from fe_mpm.output import SimulationOutput
 from fe_mpm.particles import MaterialPoints, simplex_cell_type
 from fe_mpm.quadrature import (
     OCCUPIED,
     SlotLayout,
     slot_count,
 )
+from fe_mpm.report import StepReport
 from fe_mpm.retry import RetryLadder, StepLength
 from fe_mpm.step_forms import StepForms
 from fe_mpm.tracker import Tracker
@@ -55,49 +55,6 @@ from fe_mpm.transfer import mass_weighted_projection, nodal_sum_norm, second_mom
 
 # Warnings point at the first caller outside the package, however deep they arise.
 _PACKAGE = (str(Path(__file__).parent),)
-
-
-@dataclass
-class StepReport:
-    """What one step did.
-
-    Attributes:
-        step: Step number, from 1.
-        t: Time at the end of the step (s, or pseudo-time in static runs).
-        newton_iterations: Newton iterations of the step.
-        residual_norms: ‖R‖ at each Newton iterate.
-        markers: Position of every marker at ``t``, name -> array (g,).
-        nslot: Slots per entity in the step (a cell with k points is ceil(k/nslot) entities).
-        occupied_cells: Number of cells holding points.
-        dt: Length of the step (s).
-        reactions: Force each requested boundary exerts on the body, name -> (g,)
-            (N, per unit thickness in 2D).
-        held_points: Points integrated in their last step's cell instead of the
-            one they are in (nonzero only in a step retried without re-binning).
-        converged_reason: Why Newton stopped, e.g. ``"‖R‖ = 2.1e-13 of the force
-            scale 1.962e+04"`` (see :class:`fe_mpm.newton.ForceTest`).
-        force_scale: The forces in play at the last iterate, S = max(‖f_ext‖,
-            ‖f_int‖) (N; N/m in 2D).
-        relative_residual: The last ‖R‖ over ``force_scale``.
-        lost_load: Share of each grid ``Traction``'s load that acts on nodes with
-            no material, so it is lost (``"Traction 0"`` -> share in [0, 1]);
-            only tractions that lose some.
-    """
-
-    step: int
-    t: float
-    newton_iterations: int
-    residual_norms: list[float]
-    markers: dict[str, np.ndarray] = field(default_factory=dict)
-    nslot: int = 0
-    occupied_cells: int = 0
-    dt: float = 0.0
-    reactions: dict[str, np.ndarray] = field(default_factory=dict)
-    held_points: int = 0
-    converged_reason: str = ""
-    force_scale: float = 0.0
-    relative_residual: float = 0.0
-    lost_load: dict[str, float] = field(default_factory=dict)
 
 
 def _take_density(material, points: MaterialPoints) -> None:
@@ -346,21 +303,8 @@ class Simulation:
         self._markers: dict[str, tuple[np.ndarray, int]] = {}  # name -> (x, host point)
         self._add_time("setup", t0)
 
-        self._particle_writer = self._grid_writer = self._pressure_writer = None
-        self._written_step = -1
-        self.output_every = int(output_every)
-        if output_dir is not None:
-            self.output_dir = Path(output_dir)
-            self._particle_writer = ParticleWriter(self.output_dir)
-            self._grid_out = self._grid_output_functions()
-            self._grid_writer = dolfinx.io.VTXWriter(
-                mesh.comm, self.output_dir / "grid.bp", self._grid_out[:1], engine="BP4"
-            )
-            if len(self._grid_out) > 1:
-                self._pressure_writer = dolfinx.io.VTXWriter(
-                    mesh.comm, self.output_dir / "grid_pressure.bp", self._grid_out[1:],
-                    engine="BP4",
-                )
+        self.output = None if output_dir is None else SimulationOutput(
+            output_dir, self.fields, output_every)
 
         # Locate the points once now, so a bad initial layout fails at set-up.
         self._track()
@@ -910,30 +854,11 @@ class Simulation:
             pts.history.update(self._last_return.history)
 
     def _write_output(self, force: bool = False) -> None:
-        if self._particle_writer is None or self.step_number == self._written_step:
+        if self.output is None:
             return
-        if not force and self.step_number % self.output_every:
-            return
-        self._written_step = self.step_number
         t0 = time.perf_counter()
-        self._particle_writer.write(self.t, self.points)
-        for out, sub_index in zip(self._grid_out, self._grid_maps):
-            out.x.array[:] = self.w.x.array[sub_index]
-        self._grid_writer.write(self.t)
-        if self._pressure_writer is not None:
-            self._pressure_writer.write(self.t)
-        self._add_time("output", t0)
-
-    def _grid_output_functions(self) -> list[dolfinx.fem.Function]:
-        """Collapsed copies of Δu (and p) for VTX output, with their dofs in ``w``."""
-        W = self.fields.W
-        if not self.spec.pressure:
-            self._grid_maps = [slice(None)]
-            return [dolfinx.fem.Function(W, name="du")]
-        U, u_map = collapse(W.sub(0))
-        Q, p_map = self.fields.Q
-        self._grid_maps = [u_map, p_map]
-        return [dolfinx.fem.Function(U, name="du"), dolfinx.fem.Function(Q, name="p")]
+        if self.output.write(self.step_number, self.t, self.points, force=force):
+            self._add_time("output", t0)
 
     @property
     def w(self) -> dolfinx.fem.Function:
@@ -945,10 +870,8 @@ class Simulation:
 
     def close(self) -> None:
         """Close output files and free PETSc objects."""
-        for writer in (self._grid_writer, self._pressure_writer):
-            if writer is not None:
-                writer.close()
-        self._grid_writer = self._pressure_writer = None
+        if self.output is not None:
+            self.output.close()
         if self._newton is not None:
             self._newton.destroy()
             self._newton = None

@@ -1,0 +1,70 @@
+"""What a run writes for ParaView: the points at every written step, and the grid's.
+
+``particles.pvd`` holds the material points (positions, stress, pressure, F,
+volume, history; :class:`~fe_mpm.io.ParticleWriter`), ``grid.bp`` the grid
+displacement increment of the step and, for the mixed forms, ``grid_pressure.bp``
+the grid pressure (ADIOS2 files that ParaView opens with its VTX reader).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from fe_mpm._dolfinx import dolfinx
+from fe_mpm.formulations import GridFields, collapse
+from fe_mpm.io import ParticleWriter
+from fe_mpm.particles import MaterialPoints
+
+
+class SimulationOutput:
+    """The files of one run, written every ``every`` steps and at the ends.
+
+    Args:
+        folder: Where to write (created if missing).
+        fields: The grid unknowns: Δu, or (Δu, p).
+        every: Write every this many steps, ≥ 1.
+    """
+
+    def __init__(self, folder: str | Path, fields: GridFields, every: int = 1):
+        self.folder, self.fields, self.every = Path(folder), fields, int(every)
+        self._written_step = -1
+        self._points = ParticleWriter(self.folder)
+        self._grid, self._maps = self._grid_functions()
+        comm = fields.W.mesh.comm
+        self._writers = [dolfinx.io.VTXWriter(comm, self.folder / "grid.bp", self._grid[:1],
+                                              engine="BP4")]
+        if len(self._grid) > 1:
+            self._writers.append(dolfinx.io.VTXWriter(
+                comm, self.folder / "grid_pressure.bp", self._grid[1:], engine="BP4"))
+
+    def _grid_functions(self) -> tuple[list[dolfinx.fem.Function], list]:
+        """Collapsed copies of Δu (and p) for VTX output, with their dofs in ``w``."""
+        W = self.fields.W
+        if not self.fields.spec.pressure:
+            return [dolfinx.fem.Function(W, name="du")], [slice(None)]
+        U, u_map = collapse(W.sub(0))
+        Q, p_map = self.fields.Q
+        return [dolfinx.fem.Function(U, name="du"), dolfinx.fem.Function(Q, name="p")], \
+            [u_map, p_map]
+
+    def write(self, step: int, t: float, points: MaterialPoints, force: bool = False) -> bool:
+        """Write the state after ``step`` at time ``t`` if it is due; True if written.
+
+        A step is written once, when it is a multiple of ``every`` or ``force`` is set
+        (the first and the last frame of a run).
+        """
+        if step == self._written_step or (not force and step % self.every):
+            return False
+        self._written_step = step
+        self._points.write(t, points)
+        for out, dofs in zip(self._grid, self._maps, strict=True):
+            out.x.array[:] = self.fields.w.x.array[dofs]
+        for writer in self._writers:
+            writer.write(t)
+        return True
+
+    def close(self) -> None:
+        """Close the grid files (the points' series is complete after every write)."""
+        for writer in self._writers:
+            writer.close()
+        self._writers = []
