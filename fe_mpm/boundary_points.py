@@ -1,13 +1,20 @@
-"""The boundary points of every PointDirichlet and PointTraction, all together."""
+"""Every PointDirichlet and PointTraction point, all together, and their part in a step."""
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
+from pathlib import Path
 
 import numpy as np
 
 from fe_mpm.boundary import PointDirichlet, PointTraction
 from fe_mpm.checks import check_range
+from fe_mpm.errors import PointsOutsideError
+from fe_mpm.quadrature import SlotLayout, slot_count
+from fe_mpm.tracker import Tracker
+
+_PACKAGE = (str(Path(__file__).parent),)
 
 
 class BoundaryPoints:
@@ -95,3 +102,80 @@ class BoundaryPoints:
             self.tractions(t)[active] - self.stiffness[active] * mismatch)
         return {c.name: per_point[self.owner[active] == i].sum(axis=0)
                 for i, c in enumerate(self.conditions)}
+
+
+class BoundaryPointStep:
+    """The boundary points within a step: located, packed, and moved with the solution.
+
+    Only the points in (or within half a cell of) occupied cells take part; the
+    others (e.g. a footing point above the soil) follow their target until material
+    reaches them.
+
+    Args:
+        points: All boundary points of the simulation.
+        tracker: The grid's point locator.
+    """
+
+    def __init__(self, points: BoundaryPoints, tracker: Tracker):
+        self.points, self.tracker = points, tracker
+        self.layout: SlotLayout | None = None
+        self._nslot: int | None = None  # slots per entity, kept while they suit
+        self._active = np.zeros(len(points), dtype=bool)
+        self._gap = np.zeros((0, points.x.shape[1]))
+        self._warned = False
+
+    def locate(self, occupied_cells: np.ndarray, t_new: float) -> SlotLayout:
+        """Slot layout of the boundary points that lie in occupied cells.
+
+        A traction point out of the material has nothing to load, which is worth a
+        warning (once per run).
+
+        Raises:
+            PointsOutsideError: A boundary point lies outside the grid.
+        """
+        pp, tracker = self.points, self.tracker
+        cells = tracker.locate(pp.x)
+        if np.any(cells < 0):
+            first = np.flatnonzero(cells < 0)[0]
+            raise PointsOutsideError(
+                f"boundary point {first} of {type(pp.conditions[pp.owner[first]]).__name__} "
+                f"{pp.conditions[pp.owner[first]].name!r} at x = {pp.x[first]} is outside the grid "
+                f"(step to t = {t_new:g})")
+        occupied = np.zeros(tracker.num_cells, dtype=bool)
+        occupied[occupied_cells] = True
+        # The body's surface lies between its points, often in a cell whose points
+        # have moved on: read the field of an occupied neighbour, up to half a cell out.
+        cells = tracker.snap_to(pp.x, cells, occupied, tol=0.5)
+        self._active = cells >= 0
+        idle = ~self._active & pp.loaded
+        if np.any(idle) and not self._warned:
+            self._warned = True
+            first = np.flatnonzero(idle)[0]
+            warnings.warn(
+                f"{idle.sum()} point(s) of PointTraction "
+                f"{pp.conditions[pp.owner[first]].name!r} lie in no occupied cell at the step "
+                f"to t = {t_new:g} (first at x = {pp.x[first]}); their load is not applied.",
+                skip_file_prefixes=_PACKAGE)
+        cells = cells[self._active]
+        self._nslot = slot_count(np.bincount(cells), self._nslot)
+        self.layout = SlotLayout.from_cells(cells, self._nslot)
+        return self.layout
+
+    def pack(self, forms, t_new: float) -> None:
+        """Their positions, gaps, penalties and tractions into the step's slot fields."""
+        pp, active, qb, layout = self.points, self._active, forms.q_boundary, self.layout
+        qb.pack_geometry(pp.x[active], pp.weight[active], layout, self.tracker.centroids,
+                         self.tracker.volumes)
+        self._gap = pp.x[active] - pp.targets(t_new)[active]
+        qb.pack(forms.gap, layout, self._gap)
+        qb.pack(forms.penalty_stiffness, layout, pp.stiffness[active])
+        qb.pack(forms.boundary_traction, layout, pp.tractions(t_new)[active])
+
+    def convect(self, forms, t_new: float) -> dict[str, np.ndarray]:
+        """Move the points with the grid solution; return each condition's force (g,)."""
+        pp, active = self.points, self._active
+        du = forms.du_at_boundary.evaluate(self.layout)
+        forces = pp.forces(self._gap + du, active, t_new)
+        pp.x[active] += du
+        pp.x[~active] = pp.targets(t_new)[~active]  # outside the material: follow the target
+        return forces

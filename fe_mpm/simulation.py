@@ -30,7 +30,7 @@ from fe_mpm.boundary import (
     PointTraction,
     Traction,
 )
-from fe_mpm.boundary_points import BoundaryPoints
+from fe_mpm.boundary_points import BoundaryPoints, BoundaryPointStep
 from fe_mpm.checks import check_choice, check_finite, check_range
 from fe_mpm.dynamics import NewmarkDynamics
 from fe_mpm.errors import ConvergenceError, PointsOutsideError
@@ -275,11 +275,11 @@ class Simulation:
 
         self.conditions = GridConditions(self.fields, dirichlet, tractions, body_force,
                                          body_force_scale, reactions, facet_tags)
-        self._warned_tractions: set[str] = set()  # boundary-point loads warned about
 
         conditions = [*point_dirichlet, *point_tractions]
         self._boundary_points = BoundaryPoints(conditions, g) if conditions else None
-        self._boundary_layout = None
+        self._boundary = (None if self._boundary_points is None
+                          else BoundaryPointStep(self._boundary_points, self.tracker))
 
         self._ppp = None
         if self.spec.ppp:
@@ -298,7 +298,7 @@ class Simulation:
 
         self._forms: dict[tuple[int, int], StepForms] = {}  # by slots of points, boundary
         self._refreshed: dict | None = None  # the iterate of the last return map
-        self._nslot = self._nslot_boundary = None  # slots per entity, kept while they suit
+        self._nslot = None  # slots per entity, kept while they suit
         self._newton: NewtonSolver | None = None
         self._markers: dict[str, tuple[np.ndarray, int]] = {}  # name -> (x, host point)
         self._add_time("setup", t0)
@@ -465,7 +465,8 @@ class Simulation:
         reactions = self.conditions.reactions(R.assemble_vector)
         t0 = time.perf_counter()
         self._convect(forms, layout, step=k, t=t_new, dt=dt)  # may still reject the step
-        reactions.update(self._convect_boundary_points(forms, t_new))
+        if self._boundary is not None:
+            reactions.update(self._boundary.convect(forms, t_new))
         self._add_time("update", t0)
 
         self._cells_of_last_step = layout.cell.copy()
@@ -506,7 +507,7 @@ class Simulation:
         self.conditions.check_loaded_facets(layout.occupied, t_new)
 
         t0 = time.perf_counter()
-        boundary = self._locate_boundary_points(layout, t_new)
+        boundary = None if self._boundary is None else self._boundary.locate(layout.occupied, t_new)
         nslot_b = boundary.nslot if boundary is not None else 0
         forms = self._forms.get((layout.nslot, nslot_b)) or self._compile(layout.nslot, nslot_b)
         self._add_time("compile", t0)
@@ -525,7 +526,7 @@ class Simulation:
             volume = np.bincount(layout.cell, weights=pts.volume, minlength=self.tracker.num_cells)
             q.pack_cell_field(self._ppp.fill, layout, volume / self.tracker.volumes)
         if boundary is not None:
-            self._pack_boundary_points(forms, boundary, t_new)
+            self._boundary.pack(forms, t_new)
         R = forms.residual.bind(layout, boundary)
         J = forms.jacobian.bind(layout, boundary)
         self._step_loads = None if forms.loads is None else forms.loads.bind(layout, boundary)
@@ -637,64 +638,6 @@ class Simulation:
                           lumped=self.mass == "lumped")
         self._forms[(nslot, nslot_boundary)] = forms
         return forms
-
-    def _locate_boundary_points(self, layout: SlotLayout, t_new: float) -> SlotLayout | None:
-        """Slot layout of the boundary points that lie in occupied cells.
-
-        The others (e.g. a footing point above the soil) take no part in the step
-        and follow their target until material reaches them. A traction point out
-        of the material has nothing to load, which is worth a warning.
-        """
-        pp = self._boundary_points
-        if pp is None:
-            return None
-        cells = self.tracker.locate(pp.x)
-        if np.any(cells < 0):
-            first = np.flatnonzero(cells < 0)[0]
-            raise PointsOutsideError(
-                f"boundary point {first} of {type(pp.conditions[pp.owner[first]]).__name__} "
-                f"{pp.conditions[pp.owner[first]].name!r} at x = {pp.x[first]} is outside the grid "
-                f"(step to t = {t_new:g})")
-        occupied = np.zeros(self.tracker.num_cells, dtype=bool)
-        occupied[layout.occupied] = True
-        # The body's surface lies between its points, often in a cell whose points
-        # have moved on: read the field of an occupied neighbour, up to half a cell out.
-        cells = self.tracker.snap_to(pp.x, cells, occupied, tol=0.5)
-        self._boundary_active = cells >= 0
-        idle = ~self._boundary_active & pp.loaded
-        if np.any(idle) and "points" not in self._warned_tractions:
-            self._warned_tractions.add("points")
-            first = np.flatnonzero(idle)[0]
-            warnings.warn(
-                f"{idle.sum()} point(s) of PointTraction "
-                f"{pp.conditions[pp.owner[first]].name!r} lie in no occupied cell at the step "
-                f"to t = {t_new:g} (first at x = {pp.x[first]}); their load is not applied.",
-                skip_file_prefixes=_PACKAGE)
-        cells = cells[self._boundary_active]
-        self._nslot_boundary = slot_count(np.bincount(cells), self._nslot_boundary)
-        self._boundary_layout = SlotLayout.from_cells(cells, self._nslot_boundary)
-        return self._boundary_layout
-
-    def _pack_boundary_points(self, forms: StepForms, layout: SlotLayout, t_new: float) -> None:
-        pp, active, qb = self._boundary_points, self._boundary_active, forms.q_boundary
-        qb.pack_geometry(pp.x[active], pp.weight[active], layout, self.tracker.centroids,
-                         self.tracker.volumes)
-        self._boundary_gap = pp.x[active] - pp.targets(t_new)[active]
-        qb.pack(forms.gap, layout, self._boundary_gap)
-        qb.pack(forms.penalty_stiffness, layout, pp.stiffness[active])
-        qb.pack(forms.boundary_traction, layout, pp.tractions(t_new)[active])
-
-    def _convect_boundary_points(self, forms: StepForms, t_new: float) -> dict[str, np.ndarray]:
-        """Move the penalty points with the grid solution; return each condition's force."""
-        pp = self._boundary_points
-        if pp is None:
-            return {}
-        active = self._boundary_active
-        du = forms.du_at_boundary.evaluate(self._boundary_layout)
-        forces = pp.forces(self._boundary_gap + du, active, t_new)
-        pp.x[active] += du
-        pp.x[~active] = pp.targets(t_new)[~active]  # outside the material: follow the target
-        return forces
 
     def _newton_solver(self, forms: StepForms) -> NewtonSolver:
         if self._newton is None:
