@@ -45,12 +45,12 @@ from fe_mpm.particles import MaterialPoints, simplex_cell_type
 from fe_mpm.quadrature import (
     OCCUPIED,
     SlotLayout,
-    slot_count,
 )
 from fe_mpm.report import StepReport
 from fe_mpm.retry import RetryLadder, StepLength
 from fe_mpm.step_forms import StepForms
 from fe_mpm.tracker import Tracker
+from fe_mpm.tracking import PointTracking, check_points_per_cell, hinge_diagnosis
 from fe_mpm.transfer import mass_weighted_projection, nodal_sum_norm, second_moments
 
 # Warnings point at the first caller outside the package, however deep they arise.
@@ -240,16 +240,15 @@ class Simulation:
         for name, h in material.history.items():
             if name not in points.history:
                 points.history[name] = h.initial_values(len(points))
-        self.points_leaving = points_leaving
         self.petsc_options = petsc_options
         self.timings: dict[str, float] = {}
         self.history: list[StepReport] = []
-        self.dropped = 0
         self.t = 0.0
         self.step_number = 0
 
         t0 = time.perf_counter()
         self.tracker = Tracker(mesh)
+        self.tracking = PointTracking(self.tracker, points_leaving)
         self.fields = GridFields(mesh, self.spec)
         self.dynamic = bool(dynamic)
         self.min_step = min_step
@@ -298,7 +297,6 @@ class Simulation:
 
         self._forms: dict[tuple[int, int], StepForms] = {}  # by slots of points, boundary
         self._refreshed: dict | None = None  # the iterate of the last return map
-        self._nslot = None  # slots per entity, kept while they suit
         self._newton: NewtonSolver | None = None
         self._markers: dict[str, tuple[np.ndarray, int]] = {}  # name -> (x, host point)
         self._add_time("setup", t0)
@@ -453,11 +451,12 @@ class Simulation:
                 break
         if not result.converged or not np.all(np.isfinite(self.w.x.array)):
             norms = ", ".join(f"{r:.3e}" for r in result.residual_norms)
+            hinges = hinge_diagnosis(self.mesh, layout, self.tracker.centroids)
             raise ConvergenceError(
                 f"Newton failed in step {k} (t = {self.t:g} -> {t_new:g}) after "
                 f"{result.iterations} iterations: {result.reason}; ‖R‖ history: [{norms}] "
                 f"against the force scale {result.force_scale:.3e} (accepted: ‖R‖ <= "
-                f"{result.tolerance:.3e}). {self._hinge_diagnosis(layout)}"
+                f"{result.tolerance:.3e}). {hinges}"
                 "Points were not updated and nothing was written for this step."
             )
 
@@ -477,7 +476,7 @@ class Simulation:
             residual_norms=result.residual_norms,
             markers={name: xm.copy() for name, (xm, _) in self._markers.items()},
             nslot=forms.q.nslot, occupied_cells=layout.occupied.size, dt=dt,
-            reactions=reactions, held_points=self._held_points,
+            reactions=reactions, held_points=self.tracking.held_points,
             converged_reason=result.reason, force_scale=result.force_scale,
             relative_residual=result.relative_residual,
             lost_load={f"Traction {i - 1}": share for i, share in self.conditions.lost_load.items()
@@ -501,7 +500,8 @@ class Simulation:
         """
         layout = self._track(step=self.step_number + 1, t=t_new,
                              hold=None if rebin else self._cells_of_last_step)
-        self._check_points_per_cell(layout)
+        check_points_per_cell(layout, self.spec.min_points_per_cell, self.formulation,
+                              self.step_number, self.tracker.centroids)
         if self.step_number == 0 and not self.dynamic:
             self._check_supports(layout)
         self.conditions.check_loaded_facets(layout.occupied, t_new)
@@ -576,61 +576,9 @@ class Simulation:
 
     def _track(self, step: int = 0, t: float = 0.0, hold: np.ndarray | None = None) -> SlotLayout:
         t0 = time.perf_counter()
-        pts = self.points
-        cells = self.tracker.locate(pts.x, pts.cell)
-        if hold is not None and hold.size == cells.size and np.all(cells >= 0):
-            near = self.tracker.barycentric(pts.x, hold).min(axis=1) >= -0.5
-            held = np.where(near, hold, cells).astype(np.int32)
-            self._held_points = int(np.count_nonzero(held != cells))
-            cells = held
-        else:
-            self._held_points = 0
-        outside = np.flatnonzero(cells < 0)
-        if outside.size:
-            where = f"step {step} (t = {t:g})" if step else "set-up"
-            first = outside[0]
-            msg = (f"{outside.size} material point(s) left the grid at {where}; first: "
-                   f"point {first} at x = {pts.x[first]}")
-            if self.points_leaving == "raise":
-                raise PointsOutsideError(msg + ". Pass points_leaving='drop' to remove them.")
-            warnings.warn(msg + "; dropped.", skip_file_prefixes=_PACKAGE)
-            keep = cells >= 0
-            new_index = np.cumsum(keep) - 1
-            for name, (xm, host) in self._markers.items():
-                if not keep[host]:
-                    raise PointsOutsideError(f"the host point of marker {name!r} left the grid")
-                self._markers[name] = (xm, int(new_index[host]))
-            pts.keep(keep)
-            cells = cells[keep]
-            self.dropped += outside.size
-            if len(pts) == 0:
-                raise PointsOutsideError(f"all material points have left the grid at {where}")
-        pts.cell = cells
+        layout = self.tracking.track(self.points, self._markers, step, t, hold)
         self._add_time("tracking", t0)
-        self._nslot = slot_count(np.bincount(cells), self._nslot)
-        return SlotLayout.from_cells(cells, self._nslot)
-
-    def _hinge_diagnosis(self, layout: SlotLayout) -> str:
-        """Explain a singular tangent by occupied cells hinged to the rest at one node.
-
-        A P1 simplex has a constant strain whatever number of points it holds, so
-        an occupied cell that shares at most one node with the other occupied
-        cells can rotate freely about it: a mechanism of quasi-static MPM that
-        appears when points cross into empty cells.
-        """
-        nodes = self.mesh.geometry.dofmaps[0][layout.occupied]
-        uses = np.bincount(nodes.ravel())
-        shared = (uses[nodes] > 1).sum(axis=1)
-        hinged = layout.occupied[shared <= 1]
-        if hinged.size == 0:
-            return ""
-        where = self.tracker.centroids[hinged[0]]
-        return (
-            f"{hinged.size} occupied cell(s) share at most one node with the rest of the "
-            f"material (first near x = {where}); such a cell can swing about that node, so "
-            "the static tangent is singular there. This typically follows points crossing "
-            "into otherwise empty cells; a coarser grid or a dynamic analysis avoids it. "
-        )
+        return layout
 
     def _compile(self, nslot: int, nslot_boundary: int) -> StepForms:
         forms = StepForms(self.fields, self.spec, self.material, nslot, nslot_boundary,
@@ -727,29 +675,6 @@ class Simulation:
                 "occupied cell. The tangent would be singular (a rigid-body mode). Add a "
                 "support, or pass dynamic=True.")
 
-    def _check_points_per_cell(self, layout: SlotLayout) -> None:
-        need = self.spec.min_points_per_cell
-        if need <= 1:
-            return
-        counts = np.bincount(layout.cell)[layout.occupied]
-        if counts.min() >= need:
-            return
-        few = int(np.sum(counts < need))
-        worst = layout.occupied[np.argmin(counts)]
-        message = (
-            f"formulation {self.formulation!r} needs at least {need} material points in "
-            f"every occupied cell, but {few} cell(s) hold fewer (e.g. cell {worst} near x = "
-            f"{self.tracker.centroids[worst]} holds {counts.min()}): the quadratic "
-            "displacement then has strain modes no point sees."
-        )
-        if self.step_number == 0:  # the seeded layout: a set-up error
-            raise ValueError(f"Simulation: {message} Seed more points per cell.")
-        # Points moved there. A step may still converge on the singular tangent, to
-        # a wrong answer (Cook's membrane over 20 steps: 0.17 for 1.30), so stop.
-        raise ConvergenceError(
-            f"step {self.step_number + 1}: {message} The points no longer support the "
-            "unknowns; use the 'up' (P1) formulation or more points per cell.")
-
     def _convect(
         self, forms: StepForms, layout: SlotLayout, step: int, t: float, dt: float
     ) -> None:
@@ -802,6 +727,11 @@ class Simulation:
         t0 = time.perf_counter()
         if self.output.write(self.step_number, self.t, self.points, force=force):
             self._add_time("output", t0)
+
+    @property
+    def dropped(self) -> int:
+        """Points removed so far because they left the grid (``points_leaving="drop"``)."""
+        return self.tracking.dropped
 
     @property
     def w(self) -> dolfinx.fem.Function:

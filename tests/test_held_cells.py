@@ -37,9 +37,9 @@ def test_held_points_read_their_old_cells_field_extended_exactly():
         return values[:, :2], values[:, 2:6].reshape(-1, 2, 2)
 
     du_held, dF_held = point_values(rebin=False)
-    assert sim._held_points > 0.5 * len(sim.points)
+    assert sim.tracking.held_points > 0.5 * len(sim.points)
     du_own, dF_own = point_values(rebin=True)
-    assert sim._held_points == 0
+    assert sim.tracking.held_points == 0
     exact = a + sim.points.x @ B.T
     assert np.abs(du_held - exact).max() < 1e-14
     assert np.abs(du_own - exact).max() < 1e-14

@@ -126,11 +126,11 @@ def test_splitting_cells_into_entities_changes_nothing(monkeypatch):
     split into three entities of 2 slots: PPP is a cell term, so it must count each
     cell once however many copies the cell has (its fill is packed on the first copy
     only). The answers agree to round-off."""
-    import fe_mpm.simulation
+    import fe_mpm.tracking
 
     tips = {}
     for nslot in (6, 2):
-        monkeypatch.setattr(fe_mpm.simulation, "slot_count", lambda counts, current, n=nslot: n)
+        monkeypatch.setattr(fe_mpm.tracking, "slot_count", lambda counts, current, n=nslot: n)
         sim = scenes.cook_membrane(8, 0.499, "up", per_cell=6)  # not cook(): it is cached
         (report,) = sim.run(progress=False)
         assert report.nslot == nslot

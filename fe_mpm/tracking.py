@@ -1,0 +1,146 @@
+"""The first phase of a step: which cell each point is in, and what that layout allows.
+
+:class:`PointTracking` finds every point's cell (or holds it in last step's cell
+when a step is retried that way, see :mod:`fe_mpm.retry`), removes or refuses the
+points that left the grid, and lays the points out in slots
+(:class:`~fe_mpm.quadrature.SlotLayout`). The checks below read a layout: enough
+points per cell for P2/P1, and occupied cells hinged to the rest at one node.
+"""
+
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+from fe_mpm._dolfinx import dolfinx
+from fe_mpm.errors import ConvergenceError, PointsOutsideError
+from fe_mpm.particles import MaterialPoints
+from fe_mpm.quadrature import SlotLayout, slot_count
+from fe_mpm.tracker import Tracker
+
+_PACKAGE = (str(Path(__file__).parent),)
+
+#: A held point may lie this far outside its old cell (the least barycentric coordinate).
+HOLD_REACH = 0.5
+
+
+class PointTracking:
+    """Locates the points at every step and lays them out in slots.
+
+    Args:
+        tracker: The grid's point locator.
+        points_leaving: ``"raise"`` or ``"drop"`` for points that leave the grid.
+
+    Attributes:
+        held_points: Points held in last step's cell at the last tracking.
+        dropped: Points removed so far (``points_leaving="drop"``).
+    """
+
+    def __init__(self, tracker: Tracker, points_leaving: str = "raise"):
+        self.tracker, self.points_leaving = tracker, points_leaving
+        self.held_points = 0
+        self.dropped = 0
+        self._nslot: int | None = None  # slots per entity, kept while they suit
+
+    def track(self, points: MaterialPoints, markers: dict, step: int = 0, t: float = 0.0,
+              hold: np.ndarray | None = None) -> SlotLayout:
+        """Find each point's cell (``points.cell``) and return their slot layout.
+
+        Args:
+            points: The material points; those that left the grid are removed when
+                ``points_leaving="drop"``.
+            markers: name -> (position, host point); hosts are renumbered after a drop.
+            step: The step about to be taken (0: set-up), for messages.
+            t: Its end time, for messages.
+            hold: Last step's cells: each point stays in its old cell if it lies
+                within :data:`HOLD_REACH` of it.
+        """
+        cells = self.tracker.locate(points.x, points.cell)
+        self.held_points = 0
+        if hold is not None and hold.size == cells.size and np.all(cells >= 0):
+            near = self.tracker.barycentric(points.x, hold).min(axis=1) >= -HOLD_REACH
+            held = np.where(near, hold, cells).astype(np.int32)
+            self.held_points = int(np.count_nonzero(held != cells))
+            cells = held
+        outside = np.flatnonzero(cells < 0)
+        if outside.size:
+            cells = self._drop(points, markers, cells, outside,
+                               f"step {step} (t = {t:g})" if step else "set-up")
+        points.cell = cells
+        self._nslot = slot_count(np.bincount(cells), self._nslot)
+        return SlotLayout.from_cells(cells, self._nslot)
+
+    def _drop(self, points: MaterialPoints, markers: dict, cells: np.ndarray,
+              outside: np.ndarray, where: str) -> np.ndarray:
+        """Refuse, or remove with a warning, the points outside the grid; the kept cells."""
+        first = outside[0]
+        msg = (f"{outside.size} material point(s) left the grid at {where}; first: "
+               f"point {first} at x = {points.x[first]}")
+        if self.points_leaving == "raise":
+            raise PointsOutsideError(msg + ". Pass points_leaving='drop' to remove them.")
+        warnings.warn(msg + "; dropped.", skip_file_prefixes=_PACKAGE)
+        keep = cells >= 0
+        new_index = np.cumsum(keep) - 1
+        for name, (xm, host) in markers.items():
+            if not keep[host]:
+                raise PointsOutsideError(f"the host point of marker {name!r} left the grid")
+            markers[name] = (xm, int(new_index[host]))
+        points.keep(keep)
+        self.dropped += outside.size
+        if len(points) == 0:
+            raise PointsOutsideError(f"all material points have left the grid at {where}")
+        return cells[keep]
+
+
+def check_points_per_cell(layout: SlotLayout, need: int, formulation: str, step_number: int,
+                          centroids: np.ndarray) -> None:
+    """Refuse a layout with fewer than ``need`` points in an occupied cell (P2/P1).
+
+    Raises:
+        ValueError: At set-up (``step_number`` 0): seed more points.
+        ConvergenceError: Later, when points moved that way: a step may still converge on
+            the singular tangent, to a wrong answer (Cook's membrane over 20 steps: 0.17
+            for 1.30), so the run stops.
+    """
+    if need <= 1:
+        return
+    counts = np.bincount(layout.cell)[layout.occupied]
+    if counts.min() >= need:
+        return
+    few = int(np.sum(counts < need))
+    worst = layout.occupied[np.argmin(counts)]
+    message = (
+        f"formulation {formulation!r} needs at least {need} material points in "
+        f"every occupied cell, but {few} cell(s) hold fewer (e.g. cell {worst} near x = "
+        f"{centroids[worst]} holds {counts.min()}): the quadratic "
+        "displacement then has strain modes no point sees."
+    )
+    if step_number == 0:
+        raise ValueError(f"Simulation: {message} Seed more points per cell.")
+    raise ConvergenceError(
+        f"step {step_number + 1}: {message} The points no longer support the "
+        "unknowns; use the 'up' (P1) formulation or more points per cell.")
+
+
+def hinge_diagnosis(mesh: dolfinx.mesh.Mesh, layout: SlotLayout, centroids: np.ndarray) -> str:
+    """Explain a singular tangent by occupied cells hinged to the rest at one node.
+
+    A P1 simplex has a constant strain whatever number of points it holds, so an
+    occupied cell that shares at most one node with the other occupied cells can
+    rotate freely about it: a mechanism of quasi-static MPM that appears when points
+    cross into empty cells. Returns "" when no cell is hinged.
+    """
+    nodes = mesh.geometry.dofmaps[0][layout.occupied]
+    uses = np.bincount(nodes.ravel())
+    shared = (uses[nodes] > 1).sum(axis=1)
+    hinged = layout.occupied[shared <= 1]
+    if hinged.size == 0:
+        return ""
+    return (
+        f"{hinged.size} occupied cell(s) share at most one node with the rest of the "
+        f"material (first near x = {centroids[hinged[0]]}); such a cell can swing about that "
+        "node, so the static tangent is singular there. This typically follows points "
+        "crossing into otherwise empty cells; a coarser grid or a dynamic analysis avoids it. "
+    )
