@@ -360,3 +360,49 @@ def test_failed_steps_are_cut_and_leave_no_trace():
 def test_step_cutting_stops_at_the_floor_with_a_message():
     with pytest.raises(fe_mpm.ConvergenceError, match="cut to .* floor is min_step"):
         _stretched_block(max_it=1, n_steps=1)
+
+
+def test_initial_acceleration_with_the_consistent_mass_solves_the_free_rows_alone():
+    """Consistent mass couples a supported node to its neighbours: a₀ must come from the
+    free rows alone, M_ff a_f = f_f with a = 0 on the base, not from the whole matrix.
+    The stress-free block's loads are f = M g (the body force is m_p N_I g)."""
+    mesh = rectangle_mesh((0, 0), (1, 1), (3, 3))
+    points = fe_mpm.seed(mesh, per_cell=3, density=2.0)
+    base = fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))
+    sim = fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1e3, 0.3, 2.0), dynamic=True,
+                            dirichlet=[base], body_force=(0.0, -G))
+    dt = 0.01
+    forms, layout, R, _, bcs = sim.prepare_step(dt)
+    sim._consistent_initial_acceleration(forms, layout, R, bcs, dt)
+    M = forms.mass_matrix.bind(layout).assemble_matrix()
+    M.assemble()
+    A = M.convert("dense").getDenseArray()
+    gravity = np.tile([0.0, -G], A.shape[0] // 2)
+    fixed = np.zeros(A.shape[0], dtype=bool)
+    for bc in bcs:
+        fixed[bc.dof_indices()[0]] = True
+    assert 0 < fixed.sum() < fixed.size
+    a = np.zeros(A.shape[0])
+    free = ~fixed
+    a[free] = np.linalg.solve(A[np.ix_(free, free)], (A @ gravity)[free])
+    nodes = sim.dynamics.space.dofmap.list[layout.cell]
+    bary = sim.tracker.barycentric(points.x, layout.cell)
+    expected = np.einsum("pv,pvg->pg", bary, a.reshape(-1, 2)[nodes])
+    assert np.allclose(points.acceleration, expected, rtol=0, atol=1e-10 * G)
+    assert np.abs(a[free] - gravity[free]).max() > 1e-3 * G  # the coupling matters
+
+
+def test_a_mass_system_that_does_not_converge_stops_the_run_naming_it():
+    mesh = rectangle_mesh((0, 0), (1, 1), (3, 3))
+    points = fe_mpm.seed(mesh, per_cell=3, density=2.0)
+    sim = fe_mpm.Simulation(
+        mesh, points, fe_mpm.NeoHookean(1e3, 0.3, 2.0), dynamic=True,
+        dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))], body_force=(0.0, -G),
+        linear_solver="iterative", petsc_options={"ksp_max_it": 1, "pc_type": "none"},
+        min_step=0.005)
+    with pytest.raises(fe_mpm.ConvergenceError,
+                       match=r"step 1: the mass system of the initial acceleration did not "
+                             r"converge \(KSP reason -3\); nothing was updated"):
+        sim.run(0.01, 1, progress=False)
+    assert sim.step_number == 0
+

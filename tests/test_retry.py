@@ -36,6 +36,7 @@ def test_the_step_halves_to_its_floor_and_doubles_back_after_two_successes():
     length.accepted()
     assert length.dt == 0.5
     length.accepted()
+    assert length.dt == 0.5  # growing resets the count: two more successes are needed
     length.accepted()
     assert length.dt == 1.0
     length.accepted()
