@@ -2,19 +2,15 @@
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Sequence
-from pathlib import Path
 
 import numpy as np
 
 from fe_mpm.boundary import PointDirichlet, PointTraction
 from fe_mpm.checks import check_range
-from fe_mpm.errors import PointsOutsideError
+from fe_mpm.errors import PointsOutsideError, warn
 from fe_mpm.quadrature import SlotLayout, slot_count
 from fe_mpm.tracker import Tracker
-
-_PACKAGE = (str(Path(__file__).parent),)
 
 
 class BoundaryPoints:
@@ -151,11 +147,10 @@ class BoundaryPointStep:
         if np.any(idle) and not self._warned:
             self._warned = True
             first = np.flatnonzero(idle)[0]
-            warnings.warn(
+            warn(
                 f"{idle.sum()} point(s) of PointTraction "
                 f"{pp.conditions[pp.owner[first]].name!r} lie in no occupied cell at the step "
-                f"to t = {t_new:g} (first at x = {pp.x[first]}); their load is not applied.",
-                skip_file_prefixes=_PACKAGE)
+                f"to t = {t_new:g} (first at x = {pp.x[first]}); their load is not applied.")
         cells = cells[self._active]
         self._nslot = slot_count(np.bincount(cells), self._nslot)
         self.layout = SlotLayout.from_cells(cells, self._nslot)

@@ -9,9 +9,7 @@ forces of named boundaries.
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Callable, Sequence
-from pathlib import Path
 
 import numpy as np
 import ufl
@@ -19,9 +17,8 @@ import ufl
 from fe_mpm._dolfinx import dolfinx
 from fe_mpm.boundary import Dirichlet, Traction, boundary_facets
 from fe_mpm.checks import check_range
+from fe_mpm.errors import warn
 from fe_mpm.formulations import GridFields, constrained_space
-
-_PACKAGE = (str(Path(__file__).parent),)
 
 #: A traction's lost share is warned about again when it grows by this much.
 LOST_LOAD_WARNING_STEP = 0.005
@@ -211,12 +208,11 @@ class GridConditions:
             self.lost_load[i] = share
             if share > self._warned_share.get(i, 0.0) + LOST_LOAD_WARNING_STEP:
                 self._warned_share[i] = share
-                warnings.warn(
+                warn(
                     f"Traction {i - 1}: {idle.sum()} of its {nodes.size} grid nodes carry no "
                     f"material at the step to t = {t_new:g}, so {100 * share:.1f} % of its "
                     "load is lost (StepReport.lost_load). A grid traction stays on the grid; "
-                    "use PointTraction for a load that follows the body.",
-                    skip_file_prefixes=_PACKAGE)
+                    "use PointTraction for a load that follows the body.")
 
     def reactions(self, residual: Callable[[], np.ndarray]) -> dict[str, np.ndarray]:
         """The force (g,) each named boundary exerts on the body, in N (N/m in 2D).

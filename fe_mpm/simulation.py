@@ -15,7 +15,6 @@ Each step:
 from __future__ import annotations
 
 import time
-import warnings
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
@@ -33,7 +32,7 @@ from fe_mpm.boundary import (
 from fe_mpm.boundary_points import BoundaryPoints, BoundaryPointStep
 from fe_mpm.checks import check_choice, check_finite, check_range
 from fe_mpm.dynamics import NewmarkDynamics
-from fe_mpm.errors import ConvergenceError, PointsOutsideError
+from fe_mpm.errors import ConvergenceError, PointsOutsideError, warn
 from fe_mpm.forms import mixed_up
 from fe_mpm.formulations import FORMULATIONS, GridFields
 from fe_mpm.grid_conditions import GridConditions
@@ -52,9 +51,6 @@ from fe_mpm.step_forms import StepForms
 from fe_mpm.tracker import Tracker
 from fe_mpm.tracking import PointTracking, check_points_per_cell, hinge_diagnosis
 from fe_mpm.transfer import mass_weighted_projection, nodal_sum_norm, second_moments
-
-# Warnings point at the first caller outside the package, however deep they arise.
-_PACKAGE = (str(Path(__file__).parent),)
 
 
 def _take_density(material, points: MaterialPoints) -> None:
@@ -419,13 +415,12 @@ class Simulation:
             raise ValueError(f"Simulation.step: t_new must exceed the current time {self.t}")
         k = self.step_number + 1
         if k == 2 and self.spec.u_degree == 2:
-            warnings.warn(
+            warn(
                 f"Simulation: {self.formulation!r} beyond its first step is not yet "
                 "trustworthy: points away from their Gauss positions do not integrate "
                 "the gradients of the P2 shape functions exactly, and a homogeneous "
                 "stress then leaves spurious nodal forces (the patch test fails; README, "
-                "'P2/P1 once the points have moved'). Use 'up' for runs of many steps.",
-                skip_file_prefixes=_PACKAGE)
+                "'P2/P1 once the points have moved'). Use 'up' for runs of many steps.")
         forms, layout, R, J, bcs = self.prepare_step(t_new, rebin=rebin)
         dt = t_new - self.t
         if self.dynamics is not None and self.step_number == 0:

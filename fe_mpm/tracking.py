@@ -9,18 +9,13 @@ points per cell for P2/P1, and occupied cells hinged to the rest at one node.
 
 from __future__ import annotations
 
-import warnings
-from pathlib import Path
-
 import numpy as np
 
 from fe_mpm._dolfinx import dolfinx
-from fe_mpm.errors import ConvergenceError, PointsOutsideError
+from fe_mpm.errors import ConvergenceError, PointsOutsideError, warn
 from fe_mpm.particles import MaterialPoints
 from fe_mpm.quadrature import SlotLayout, slot_count
 from fe_mpm.tracker import Tracker
-
-_PACKAGE = (str(Path(__file__).parent),)
 
 #: A held point may lie this far outside its old cell (the least barycentric coordinate).
 HOLD_REACH = 0.5
@@ -80,7 +75,7 @@ class PointTracking:
                f"point {first} at x = {points.x[first]}")
         if self.points_leaving == "raise":
             raise PointsOutsideError(msg + ". Pass points_leaving='drop' to remove them.")
-        warnings.warn(msg + "; dropped.", skip_file_prefixes=_PACKAGE)
+        warn(msg + "; dropped.")
         keep = cells >= 0
         new_index = np.cumsum(keep) - 1
         for name, (xm, host) in markers.items():

@@ -74,8 +74,10 @@ def test_grid_traction_left_behind_by_the_body_warns():
     """Under ten times the load the tip rises off the loaded grid edge: its top node is
     pinned from t = 0.2 and the load there would vanish silently."""
     sim = scenes.cook_membrane(16, 0.499, "up", traction=10 / 16, margin=16)
-    with pytest.warns(UserWarning, match=r"Traction 0: 1 of its 17 grid nodes .* PointTraction"):
+    with pytest.warns(UserWarning, match=r"Traction 0: 1 of its 17 grid nodes .* PointTraction"
+                      ) as record:
         sim.run(1.0, 20, progress=False)
+    assert {w.filename for w in record} == {__file__}  # the user's line, however deep
 
 
 @pytest.mark.slow

@@ -195,5 +195,7 @@ def test_taylor_hood_warns_from_its_second_step():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         sim.step(0.5)
-    with pytest.warns(UserWarning, match=r"'up-p2p1' beyond its first step is not yet trustworthy"):
+    with pytest.warns(UserWarning, match=r"'up-p2p1' beyond its first step is not yet trustworthy"
+                      ) as record:
         sim.step(1.0)
+    assert record[0].filename == __file__  # the user's line, not fe_mpm's
