@@ -251,7 +251,6 @@ class Simulation:
         self.ladder = RetryLadder(fallback_line_search, bool(fallback_hold_cells))
         self._cells_of_last_step: np.ndarray | None = None
         self.dynamics: NewmarkDynamics | None = None
-        self._newmark = None  # the Newmark fields and constants the forms read
         if self.dynamic:
             if self.spec.u_degree != 1:
                 raise ValueError(
@@ -259,15 +258,11 @@ class Simulation:
                     f"{formulation!r} is P{self.spec.u_degree}"
                 )
             self.dynamics = NewmarkDynamics(self.fields, damping, linear_solver, petsc_options)
-            self._newmark = self.dynamics.data
         elif damping:
             raise ValueError("Simulation: damping needs dynamic=True")
         elif mass != "consistent":
             raise ValueError("Simulation: mass='lumped' needs dynamic=True")
         self.mass = mass
-        fdim = tdim - 1
-        mesh.topology.create_connectivity(fdim, tdim)
-
         self.conditions = GridConditions(self.fields, dirichlet, tractions, body_force,
                                          body_force_scale, reactions, facet_tags)
 
@@ -576,8 +571,9 @@ class Simulation:
         return layout
 
     def _compile(self, nslot: int, nslot_boundary: int) -> StepForms:
+        newmark = None if self.dynamics is None else self.dynamics.data
         forms = StepForms(self.fields, self.spec, self.material, nslot, nslot_boundary,
-                          conditions=self.conditions, ppp=self._ppp, newmark=self._newmark,
+                          conditions=self.conditions, ppp=self._ppp, newmark=newmark,
                           lumped=self.mass == "lumped")
         self._forms[(nslot, nslot_boundary)] = forms
         return forms
