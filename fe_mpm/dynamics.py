@@ -46,6 +46,7 @@ class NewmarkDynamics:
     def __init__(self, fields: GridFields, damping: float, linear_solver: str = "direct",
                  petsc_options: dict | None = None):
         mesh = fields.W.mesh
+        self.n_unknowns = fields.w.x.array.size
         # The grid velocity/acceleration live on the displacement space itself.
         if fields.spec.pressure:
             V1, self.u_dofs = collapse(fields.W.sub(0))
@@ -93,8 +94,8 @@ class NewmarkDynamics:
         self.data.c_v.value = 2.0 / dt
 
     def initial_acceleration(
-        self, residual_at_rest: Callable[[], np.ndarray], mass_matrix, all_cells: np.ndarray,
-        layout, constrained: np.ndarray, cells: np.ndarray, bary: np.ndarray,
+        self, residual_at_rest: Callable[[], np.ndarray], mass_matrix, layout,
+        constrained: np.ndarray, bary: np.ndarray,
     ) -> np.ndarray:
         """Point accelerations in equilibrium at the start: ``M a₀ = f_ext − f_int − α_R M v₀``.
 
@@ -108,12 +109,11 @@ class NewmarkDynamics:
                 ``α_R M ṽ`` (no ã, and the damping sign flipped), so that it returns
                 ``f_int − f_ext + α_R M ṽ``.
             mass_matrix: The step's mass form (:class:`~fe_mpm.assembly.StepForm`).
-            all_cells: Every cell of the grid, for the matrix's sparsity pattern.
-            layout: The step's slot layout, to bind the mass form.
+            layout: The step's slot layout, to bind the mass form; ``layout.cell``
+                holds the points' cells (n,).
             constrained: Which dofs of ``w`` the step's conditions fix (bool): they
                 get a₀ = 0.
-            cells: The points' cells (n,).
-            bary: Their barycentric coordinates there (n, g + 1).
+            bary: The points' barycentric coordinates in their cells (n, g + 1).
 
         Returns:
             The points' accelerations (n, g) in m/s².
@@ -132,6 +132,8 @@ class NewmarkDynamics:
         rhs.x.array[:] = -b[self.u_dofs]
         # The pattern of all cells (explicit zeros where empty) keeps every diagonal
         # entry for the constraint rows below.
+        all_cells = np.arange(self.space.mesh.topology.index_map(
+            self.space.mesh.topology.dim).size_local, dtype=np.int32)
         M = dolfinx.fem.petsc.assemble_matrix(mass_matrix.bind_cells(all_cells))
         M.assemble()
         mass_matrix.bind(layout).assemble_matrix(M)
@@ -154,8 +156,23 @@ class NewmarkDynamics:
             M.destroy()
         a0.x.scatter_forward()
         g = self.space.dofmap.bs
-        nodes = self.space.dofmap.list[cells]
+        nodes = self.space.dofmap.list[layout.cell]
         return np.einsum("pv,pvg->pg", bary, a0.x.array.reshape(-1, g)[nodes])
+
+    def start(self, residual_at_rest: Callable[[], np.ndarray], mass_matrix, layout,
+              bcs: list, bary: np.ndarray, points, dt: float) -> None:
+        """Give the points accelerations in equilibrium with the loads and project them.
+
+        See :meth:`initial_acceleration`; the dofs of ``w`` that the step's ``bcs``
+        constrain (Dirichlet and unsupported nodes) get a₀ = 0. ``points`` are the
+        material points, whose acceleration is set; ``dt`` is the first step's length (s).
+        """
+        constrained = np.zeros(self.n_unknowns, dtype=bool)
+        for bc in bcs:
+            constrained[bc.dof_indices()[0]] = True
+        points.acceleration = self.initial_acceleration(
+            residual_at_rest, mass_matrix, layout, constrained, bary)
+        self.project(layout.cell, bary, points.mass, points.velocity, points.acceleration, dt)
 
     @staticmethod
     def updated_velocity(velocity: np.ndarray, acceleration: np.ndarray,

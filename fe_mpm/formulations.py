@@ -19,6 +19,7 @@ import numpy as np
 import ufl
 
 from fe_mpm._dolfinx import dolfinx
+from fe_mpm.transfer import mass_weighted_projection, nodal_sum_norm
 
 
 @dataclass(frozen=True)
@@ -31,6 +32,15 @@ class FormulationSpec:
     ppp: bool
     #: Fewest material points an occupied cell may hold (rank of the P2 strain).
     min_points_per_cell: int = 1
+
+    def multi_step_warning(self) -> str:
+        """Why a P2 displacement is not yet trustworthy beyond its first step."""
+        return (
+            f"Simulation: {self.name!r} beyond its first step is not yet "
+            "trustworthy: points away from their Gauss positions do not integrate "
+            "the gradients of the P2 shape functions exactly, and a homogeneous "
+            "stress then leaves spurious nodal forces (the patch test fails; README, "
+            "'P2/P1 once the points have moved'). Use 'up' for runs of many steps.")
 
 
 FORMULATIONS = {
@@ -88,6 +98,34 @@ class GridFields:
             supported[collapsed.dofmap.list[occupied].ravel()] = True
             bcs.append(dolfinx.fem.dirichletbc(zero, to_parent[~supported], sub))
         return bcs
+
+    def start_from_rest(self, cells: np.ndarray, bary: np.ndarray, mass: np.ndarray,
+                        stress: np.ndarray) -> None:
+        """Newton's start: Δu = 0, and the pressure projected from the points (Eq. 5.20).
+
+        ``p_I = Σ_p N_I(x_p) m_p p_p / Σ_p N_I(x_p) m_p``, mass weighted, with the
+        point pressure ``p_p = −tr(σ_p)/3`` of the last step.
+
+        Args:
+            cells: The points' cells (n,).
+            bary: Their barycentric coordinates there (n, g + 1).
+            mass: Their masses (n,) in kg.
+            stress: Their Cauchy stresses (n, 3, 3) in Pa.
+        """
+        self.w.x.array[:] = 0.0
+        if self.spec.pressure:
+            p_p = -np.trace(stress, axis1=1, axis2=2) / 3.0
+            nodal, _ = mass_weighted_projection(self.Q[0], cells, bary, mass, p_p[:, None])
+            self.set_pressure(nodal[:, 0])
+
+    def pressure_volume(self, cells: np.ndarray, bary: np.ndarray, volume: np.ndarray) -> float:
+        """‖V‖: the points' volumes (n,) gathered on the pressure nodes (m³; m² in 2D).
+
+        The scale of the pressure rows in the Newton test (0 without pressure).
+        """
+        if not self.spec.pressure:
+            return 0.0
+        return nodal_sum_norm(self.Q[0], cells, bary, volume)
 
     def set_pressure(self, values: np.ndarray) -> None:
         """Write nodal pressures (P1 dof order of :attr:`Q`) into ``w``."""

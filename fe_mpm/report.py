@@ -6,6 +6,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from fe_mpm._dolfinx import dolfinx
+from fe_mpm.errors import ConvergenceError
+from fe_mpm.newton import NewtonResult
+from fe_mpm.quadrature import SlotLayout
+from fe_mpm.tracking import hinge_diagnosis
+
 
 @dataclass
 class StepReport:
@@ -48,3 +54,41 @@ class StepReport:
     force_scale: float = 0.0
     relative_residual: float = 0.0
     lost_load: dict[str, float] = field(default_factory=dict)
+
+    @classmethod
+    def of_step(cls, step: int, t: float, dt: float, result: NewtonResult, nslot: int,
+                layout: SlotLayout, reactions: dict[str, np.ndarray],
+                markers: dict[str, np.ndarray], held_points: int,
+                lost_load: dict[int, float]) -> StepReport:
+        """The report of an accepted step from what its phases returned.
+
+        ``lost_load`` is keyed by the grid tractions' facet-tag values, i + 1 for
+        ``Traction i`` (:attr:`GridConditions.lost_load`); only shares > 0 are kept.
+        """
+        return cls(
+            step=step, t=t, newton_iterations=result.iterations,
+            residual_norms=result.residual_norms, markers=markers, nslot=nslot,
+            occupied_cells=layout.occupied.size, dt=dt, reactions=reactions,
+            held_points=held_points, converged_reason=result.reason,
+            force_scale=result.force_scale, relative_residual=result.relative_residual,
+            lost_load={f"Traction {i - 1}": share for i, share in lost_load.items()
+                       if share > 0},
+        )
+
+
+def newton_failure(result: NewtonResult, step: int, t_old: float, t_new: float,
+                   mesh: dolfinx.mesh.Mesh, layout: SlotLayout,
+                   centroids: np.ndarray) -> ConvergenceError:
+    """The error of a step whose Newton solves all failed.
+
+    It gives the residual history, the accepted bound, and the hinged cells that
+    explain a singular tangent, if any.
+    """
+    norms = ", ".join(f"{r:.3e}" for r in result.residual_norms)
+    hinges = hinge_diagnosis(mesh, layout, centroids)
+    return ConvergenceError(
+        f"Newton failed in step {step} (t = {t_old:g} -> {t_new:g}) after "
+        f"{result.iterations} iterations: {result.reason}; ‖R‖ history: [{norms}] "
+        f"against the force scale {result.force_scale:.3e} (accepted: ‖R‖ <= "
+        f"{result.tolerance:.3e}). {hinges}"
+        "Points were not updated and nothing was written for this step.")

@@ -19,7 +19,10 @@ stops with the last failure's message.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
+
+from fe_mpm.newton import NewtonResult
 
 #: Successes in a row after which a cut step length doubles again.
 SUCCESSES_TO_GROW = 2
@@ -70,6 +73,29 @@ class RetryLadder:
         if self.fallback_line_search in (None, configured):
             return [None]
         return [None, self.fallback_line_search]
+
+    def solve(self, newton: Callable[[str | None], NewtonResult], configured: str) -> NewtonResult:
+        """Newton with each line search of :meth:`line_searches` until one converges.
+
+        Args:
+            newton: Solves the step from its start with the given line search (None:
+                the configured one).
+            configured: Newton's configured line search.
+
+        Returns:
+            The last attempt's result, with the iterations and ‖R‖ history of all
+            attempts.
+        """
+        result = None
+        for search in self.line_searches(configured):
+            attempt = newton(search)
+            if result is not None:
+                attempt.residual_norms = result.residual_norms + attempt.residual_norms
+                attempt.iterations += result.iterations
+            result = attempt
+            if result.converged:
+                break
+        return result
 
     def attempts(self, configured: str, can_hold: bool) -> list[Attempt]:
         """Every attempt at one step length, in order (see the module's docstring)."""

@@ -1,15 +1,22 @@
 """The implicit MPM step and time loop (Iaconeta 2019, Algorithm 1), in one place.
 
-Each step:
+:meth:`Simulation.step` takes one step as the thesis's Algorithm 1 does; each
+phase lives in the module that owns its state:
 
-1. **Track**: locate every material point in the (undeformed) grid.
-2. **Pack**: number the points of each cell into entities and slots and write
-   their data (offset, volume, F_n, density) as the slot fields' values.
-3. **Solve**: Newton for the grid displacement increment Δu, assembling only
-   the occupied cells; grid nodes with no material support are pinned.
-4. **Convect**: evaluate Δu, ΔF and the stress at the points and update
-   ``x += Δu``, ``F = ΔF F_n``, ``V = det(ΔF) V_n``. The grid is reset simply by
-   never moving it.
+=====================  ===============================================================
+phase                  module
+=====================  ===============================================================
+track                  :mod:`fe_mpm.tracking`: each point's cell, the slot layout
+lay out and pack       :mod:`fe_mpm.step_forms`: the compiled forms of a slot count;
+                       the points' data written as the slot fields' values
+impose                 :mod:`fe_mpm.grid_conditions` (grid Dirichlet increments,
+                       tractions, body force, reactions) and
+                       :mod:`fe_mpm.boundary_points` (penalty points)
+project (dynamics)     :mod:`fe_mpm.dynamics` with :mod:`fe_mpm.transfer`
+solve                  :mod:`fe_mpm.newton`, retried as :mod:`fe_mpm.retry` lists
+update the points      :mod:`fe_mpm.point_update`; the grid is reset by never moving it
+report and write       :mod:`fe_mpm.report`, :mod:`fe_mpm.output`
+=====================  ===============================================================
 """
 
 from __future__ import annotations
@@ -18,64 +25,41 @@ import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
-import dolfinx.fem.petsc
 import numpy as np
-import ufl
 
 from fe_mpm._dolfinx import dolfinx
-from fe_mpm.boundary import (
-    Dirichlet,
-    PointDirichlet,
-    PointTraction,
-    Traction,
-)
+from fe_mpm.boundary import Dirichlet, PointDirichlet, PointTraction, Traction
 from fe_mpm.boundary_points import BoundaryPoints, BoundaryPointStep
-from fe_mpm.checks import check_choice, check_finite, check_range
+from fe_mpm.checks import check_finite, check_range
 from fe_mpm.dynamics import NewmarkDynamics
 from fe_mpm.errors import ConvergenceError, PointsOutsideError, warn
-from fe_mpm.forms import mixed_up
+from fe_mpm.forms.mixed_up import PPPData
 from fe_mpm.formulations import FORMULATIONS, GridFields
 from fe_mpm.grid_conditions import GridConditions
-from fe_mpm.materials import Linearisation, ReturnMapResult
-from fe_mpm.materials.protocol import Law, MixedLaw, missing_members
-from fe_mpm.newton import NewtonSolver
-from fe_mpm.output import SimulationOutput
-from fe_mpm.particles import MaterialPoints, simplex_cell_type
-from fe_mpm.quadrature import (
-    OCCUPIED,
-    SlotLayout,
+from fe_mpm.markers import Markers
+from fe_mpm.materials import ReturnMapResult
+from fe_mpm.model_checks import (
+    check_grid_and_points,
+    check_law,
+    check_options,
+    check_supports,
+    take_density,
 )
-from fe_mpm.report import StepReport
+from fe_mpm.newton import NewtonResult, NewtonSolver
+from fe_mpm.output import SimulationOutput
+from fe_mpm.particles import MaterialPoints
+from fe_mpm.point_update import apply_update, checked_update
+from fe_mpm.quadrature import SlotLayout
+from fe_mpm.report import StepReport, newton_failure
 from fe_mpm.retry import RetryLadder, StepLength
-from fe_mpm.step_forms import StepForms
+from fe_mpm.step_forms import ReturnMapAtIterate, StepForms, StepInProgress
 from fe_mpm.tracker import Tracker
-from fe_mpm.tracking import PointTracking, check_points_per_cell, hinge_diagnosis
-from fe_mpm.transfer import mass_weighted_projection, nodal_sum_norm, second_moments
+from fe_mpm.tracking import PointTracking, check_points_per_cell
 
-
-def _take_density(material, points: MaterialPoints) -> None:
-    """Give the points the law's density, or check that theirs agrees with it.
-
-    The mass of a point is what body forces and inertia use; the law's
-    ``density`` only fills it in when :func:`~fe_mpm.seed` was given none.
-    """
-    rho = material.density
-    if rho is None:
-        return
-    reference_volume = points.volume / np.linalg.det(points.F)
-    if not points.density_given:
-        points.mass = rho * reference_volume
-        points.density_given = True
-        return
-    rho_points = points.mass / reference_volume
-    off = np.abs(rho_points - rho) > 1e-9 * rho
-    if np.any(off):
-        first = np.flatnonzero(off)[0]
-        raise ValueError(
-            f"Simulation: the material's density {rho:g} kg/m³ differs from the points' "
-            f"{rho_points[first]:g} kg/m³ (point {first}; from seed(..., density=...) or "
-            "their masses). Give the density in one place: seed(..., density=...) for "
-            "zones of different densities, or the law's density alone.")
+#: A run ends when less than this fraction of its nominal step is left to ``t_end``.
+END_OF_RUN = 1e-12
+#: A last step shorter than this fraction of the nominal step is merged into the one before.
+MERGE_LAST_STEP = 1e-9
 
 
 class Simulation:
@@ -183,120 +167,51 @@ class Simulation:
         linear_solver: str = "direct",
         max_step_cells: float = 10.0,
     ):
-        if mesh.comm.size > 1:
-            # Every rank constructs the simulation, so every rank stops here: no hang.
-            raise NotImplementedError(
-                f"Simulation: fe-mpm runs on one MPI rank for now, and this mesh is "
-                f"distributed over {mesh.comm.size}. Run without mpiexec, or build the "
-                "mesh on MPI.COMM_SELF to run independent serial simulations per rank.")
-        check_choice("Simulation", "formulation", formulation, tuple(FORMULATIONS))
-        self.max_step_cells = check_range("Simulation", "max_step_cells", max_step_cells,
-                                          lo=0.0, lo_open=True)
-        check_range("Simulation", "ppp_alpha", ppp_alpha, lo=0.0)
-        check_range("Simulation", "damping", damping, lo=0.0)
-        check_choice("Simulation", "mass", mass, ("consistent", "lumped"))
-        check_choice("Simulation", "points_leaving", points_leaving, ("raise", "drop"))
-        if fallback_line_search is not None:
-            check_choice("Simulation", "fallback_line_search", fallback_line_search,
-                         ("basic", "bt", "l2", "cp"))
-        check_range("Simulation", "output_every", output_every, lo=1)
-        check_choice("Simulation", "linear_solver", linear_solver, ("direct", "iterative"))
-        self.linear_solver = linear_solver
-        tdim = mesh.topology.dim
-        if mesh.topology.index_map(tdim).size_global == 0:
-            raise ValueError("Simulation: the mesh is empty (it has no cells)")
-        simplex_cell_type(mesh)
-        if len(points) == 0:
-            raise ValueError("Simulation: there are no material points")
-        if points.gdim != mesh.geometry.dim:
-            raise ValueError(
-                f"Simulation: points are {points.gdim}D but the mesh is {mesh.geometry.dim}D"
-            )
-        missing = missing_members(material, Law)
-        if missing:
-            raise TypeError(
-                f"Simulation: material {type(material).__name__} is not a law: it lacks "
-                f"{', '.join(missing)} (fe_mpm.materials.protocol.Law says what a law provides)")
-        self.mesh = mesh
-        self.points = points
-        self.material = material
-        _take_density(material, points)
-        self.formulation = formulation
+        check_grid_and_points(mesh, points)
+        check_options(formulation=formulation, max_step_cells=max_step_cells,
+                      ppp_alpha=ppp_alpha, damping=damping, mass=mass,
+                      points_leaving=points_leaving, fallback_line_search=fallback_line_search,
+                      output_every=output_every, linear_solver=linear_solver, dynamic=dynamic)
         self.spec = FORMULATIONS[formulation]
-        if self.spec.pressure and not isinstance(material, MixedLaw):
-            raise ValueError(
-                f"Simulation: formulation {formulation!r} needs a material with a "
-                "deviatoric response (kirchhoff_deviatoric, see "
-                "fe_mpm.materials.protocol.MixedLaw)"
-            )
-        check_formulation = getattr(material, "check_formulation", None)
-        if check_formulation is not None:
-            check_formulation(self.spec.pressure)
-        self.gdim = g = mesh.geometry.dim
+        check_law(material, self.spec, formulation)
+        take_density(material, points)
         for name, h in material.history.items():
-            if name not in points.history:
-                points.history[name] = h.initial_values(len(points))
-        self.petsc_options = petsc_options
+            points.history.setdefault(name, h.initial_values(len(points)))
+        self.mesh, self.points, self.material = mesh, points, material
+        self.formulation = formulation
+        self.gdim = mesh.geometry.dim
+        self.petsc_options, self.linear_solver = petsc_options, linear_solver
+        self.max_step_cells, self.min_step, self.mass = max_step_cells, min_step, mass
+        self.dynamic = bool(dynamic)
         self.timings: dict[str, float] = {}
         self.history: list[StepReport] = []
-        self.t = 0.0
-        self.step_number = 0
+        self.t, self.step_number = 0.0, 0
 
         t0 = time.perf_counter()
         self.tracker = Tracker(mesh)
         self.tracking = PointTracking(self.tracker, points_leaving)
         self.fields = GridFields(mesh, self.spec)
-        self.dynamic = bool(dynamic)
-        self.min_step = min_step
         self.ladder = RetryLadder(fallback_line_search, bool(fallback_hold_cells))
-        self._cells_of_last_step: np.ndarray | None = None
-        self.dynamics: NewmarkDynamics | None = None
-        if self.dynamic:
-            if self.spec.u_degree != 1:
-                raise ValueError(
-                    f"Simulation: dynamic analysis needs a P1 displacement; formulation "
-                    f"{formulation!r} is P{self.spec.u_degree}"
-                )
-            self.dynamics = NewmarkDynamics(self.fields, damping, linear_solver, petsc_options)
-        elif damping:
-            raise ValueError("Simulation: damping needs dynamic=True")
-        elif mass != "consistent":
-            raise ValueError("Simulation: mass='lumped' needs dynamic=True")
-        self.mass = mass
+        self.dynamics = (NewmarkDynamics(self.fields, damping, linear_solver, petsc_options)
+                         if self.dynamic else None)
         self.conditions = GridConditions(self.fields, dirichlet, tractions, body_force,
                                          body_force_scale, reactions, facet_tags)
-
-        conditions = [*point_dirichlet, *point_tractions]
-        self._boundary_points = BoundaryPoints(conditions, g) if conditions else None
+        point_conditions = [*point_dirichlet, *point_tractions]
+        self._boundary_points = (BoundaryPoints(point_conditions, self.gdim)
+                                 if point_conditions else None)
         self._boundary = (None if self._boundary_points is None
                           else BoundaryPointStep(self._boundary_points, self.tracker))
-
-        self._ppp = None
-        if self.spec.ppp:
-            dg0 = dolfinx.fem.functionspace(mesh, ("DG", 0))
-            dg0_vec = dolfinx.fem.functionspace(mesh, ("DG", 0, (g,)))
-            centroid = dolfinx.fem.Function(dg0_vec, name="centroid")
-            cells = np.arange(self.tracker.num_cells)
-            centroid.x.array.reshape(-1, g)[dg0_vec.dofmap.list[cells, 0]] = self.tracker.centroids
-            fill = dolfinx.fem.Function(dg0, name="fill")
-            # In the material-point subdomain, so one kernel does both; the fill
-            # is packed per entity (zero on a cell's copies), so each cell counts once.
-            dx2 = ufl.Measure("dx", domain=mesh, subdomain_id=OCCUPIED,
-                              metadata={"quadrature_degree": 2})
-            alpha = mixed_up.effective_alpha(ppp_alpha, g)
-            self._ppp = mixed_up.PPPData(alpha, centroid, fill, dx2)
-
+        self._ppp = (PPPData.on_grid(mesh, self.tracker.centroids, ppp_alpha)
+                     if self.spec.ppp else None)
         self._forms: dict[tuple[int, int], StepForms] = {}  # by slots of points, boundary
-        self._refreshed: dict | None = None  # the iterate of the last return map
+        self._current: StepInProgress | None = None
+        self._cells_of_last_step: np.ndarray | None = None
         self._newton: NewtonSolver | None = None
-        self._markers: dict[str, tuple[np.ndarray, int]] = {}  # name -> (x, host point)
+        self.markers = Markers()
         self._add_time("setup", t0)
-
         self.output = None if output_dir is None else SimulationOutput(
             output_dir, self.fields, output_every)
-
-        # Locate the points once now, so a bad initial layout fails at set-up.
-        self._track()
+        self._track()  # once now, so a bad initial layout fails at set-up
 
     # -- public API ------------------------------------------------------------
 
@@ -304,23 +219,19 @@ class Simulation:
         """Follow a point that moves with the body but carries no volume or mass.
 
         The marker is attached to the material point nearest to it and moves
-        with that point's affine motion, ``x_m += Δu_p + (ΔF_p − I)(x_m − x_p)``:
-        the grid increment of the host's cell, extended linearly to the marker.
-        A marker on a vertex of its host's cell therefore moves exactly with
-        that grid node in a step, and never reads an empty cell. Read it from
-        ``history[k].markers[name]`` or :meth:`marker`.
+        with that point's affine motion, ``x_m += Δu_p + (ΔF_p − I)(x_m − x_p)``
+        (:mod:`fe_mpm.markers`). A marker on a vertex of its host's cell therefore
+        moves exactly with that grid node in a step, and never reads an empty
+        cell. Read it from ``history[k].markers[name]`` or :meth:`marker`.
         """
-        # A copy: the marker moves, the caller's array must not.
-        xm = check_finite("Simulation.add_marker", f"x of marker {name!r}", x).reshape(
-            self.gdim).copy()
+        xm = check_finite("Simulation.add_marker", f"x of marker {name!r}", x).reshape(self.gdim)
         if self.tracker.locate(xm[None, :])[0] < 0:
             raise PointsOutsideError(f"marker {name!r} at {xm} is outside the grid")
-        host = int(np.argmin(np.linalg.norm(self.points.x - xm, axis=1)))
-        self._markers[name] = (xm, host)
+        self.markers.add(name, xm, self.points.x)
 
     def marker(self, name: str) -> np.ndarray:
         """Current position of a marker, shape (g,)."""
-        return self._markers[name][0].copy()
+        return self.markers.position(name)
 
     def run(
         self,
@@ -355,9 +266,9 @@ class Simulation:
         if self.step_number == 0:
             self._write_output(force=True)  # the initial state as the t = 0 frame
         try:
-            while t_end - self.t > 1e-12 * nominal:
+            while t_end - self.t > END_OF_RUN * nominal:
                 t_new = min(self.t + length.dt, t_end)
-                if t_end - t_new < 1e-9 * nominal:
+                if t_end - t_new < MERGE_LAST_STEP * nominal:
                     t_new = t_end
                 try:
                     report = self._step_with_fallbacks(t_new)
@@ -365,8 +276,7 @@ class Simulation:
                     if not length.cut():
                         raise ConvergenceError(
                             f"{err} The step was cut to {2 * length.dt:.3g} without success, "
-                            f"and the floor is min_step = {floor:.3g}."
-                        ) from None
+                            f"and the floor is min_step = {floor:.3g}.") from None
                     continue
                 reports.append(report)
                 if on_step is not None:
@@ -393,7 +303,7 @@ class Simulation:
         return self.step(t_new, rebin=placements[-1])
 
     def step(self, t_new: float, rebin: bool = True) -> StepReport:
-        """Take one implicit step from the current time to ``t_new``.
+        """Take one implicit step from the current time to ``t_new`` (Algorithm 1).
 
         With ``rebin=False`` every point stays in the cell it was in during the
         last step, as long as it lies within half a cell of it (its barycentric
@@ -408,70 +318,31 @@ class Simulation:
         """
         if not t_new > self.t:
             raise ValueError(f"Simulation.step: t_new must exceed the current time {self.t}")
-        k = self.step_number + 1
+        k, dt = self.step_number + 1, t_new - self.t
         if k == 2 and self.spec.u_degree == 2:
-            warn(
-                f"Simulation: {self.formulation!r} beyond its first step is not yet "
-                "trustworthy: points away from their Gauss positions do not integrate "
-                "the gradients of the P2 shape functions exactly, and a homogeneous "
-                "stress then leaves spurious nodal forces (the patch test fails; README, "
-                "'P2/P1 once the points have moved'). Use 'up' for runs of many steps.")
+            warn(self.spec.multi_step_warning())
+        # Track, lay out, pack, impose (and project, in dynamics).
         forms, layout, R, J, bcs = self.prepare_step(t_new, rebin=rebin)
-        dt = t_new - self.t
-        if self.dynamics is not None and self.step_number == 0:
+        if self.dynamics is not None and k == 1:
             self._consistent_initial_acceleration(forms, layout, R, bcs, dt)
-        self._initial_guess(layout)
-        hooks = {}
-        if forms.pointwise:
-            hooks = {"before_residual": lambda: self.refresh_material(tangent=False),
-                     "before_jacobian": self.refresh_material}
-        hooks["loads"] = self._step_loads
-        hooks["pressure_volume"] = self._pressure_volume(layout)
-        solver = self._newton_solver(forms)
-        result = None
-        for search in self.ladder.line_searches(solver.line_search):
-            if result is not None:  # a retry from the same start
-                self._initial_guess(layout)
-            attempt = solver.solve(R, J, bcs, **hooks, line_search=search)
-            if result is not None:
-                attempt.residual_norms = result.residual_norms + attempt.residual_norms
-                attempt.iterations += result.iterations
-            result = attempt
-            if result.converged:
-                break
+        # Solve: Newton on the grid, from Δu = 0.
+        result = self._solve(forms, layout, R, J, bcs)
         if not result.converged or not np.all(np.isfinite(self.w.x.array)):
-            norms = ", ".join(f"{r:.3e}" for r in result.residual_norms)
-            hinges = hinge_diagnosis(self.mesh, layout, self.tracker.centroids)
-            raise ConvergenceError(
-                f"Newton failed in step {k} (t = {self.t:g} -> {t_new:g}) after "
-                f"{result.iterations} iterations: {result.reason}; ‖R‖ history: [{norms}] "
-                f"against the force scale {result.force_scale:.3e} (accepted: ‖R‖ <= "
-                f"{result.tolerance:.3e}). {hinges}"
-                "Points were not updated and nothing was written for this step."
-            )
-
+            raise newton_failure(result, k, self.t, t_new, self.mesh, layout,
+                                 self.tracker.centroids)
         self.refresh_material(tangent=False)  # the converged iterate's, for reactions and history
         reactions = self.conditions.reactions(R.assemble_vector)
+        # Update the points (which may still reject the step); the grid is reset.
         t0 = time.perf_counter()
-        self._convect(forms, layout, step=k, t=t_new, dt=dt)  # may still reject the step
+        self._update_points(forms, layout, k, t_new, dt)
         if self._boundary is not None:
             reactions.update(self._boundary.convect(forms, t_new))
         self._add_time("update", t0)
-
         self._cells_of_last_step = layout.cell.copy()
-        self.t = t_new
-        self.step_number = k
-        report = StepReport(
-            step=k, t=t_new, newton_iterations=result.iterations,
-            residual_norms=result.residual_norms,
-            markers={name: xm.copy() for name, (xm, _) in self._markers.items()},
-            nslot=forms.q.nslot, occupied_cells=layout.occupied.size, dt=dt,
-            reactions=reactions, held_points=self.tracking.held_points,
-            converged_reason=result.reason, force_scale=result.force_scale,
-            relative_residual=result.relative_residual,
-            lost_load={f"Traction {i - 1}": share for i, share in self.conditions.lost_load.items()
-                       if share > 0},
-        )
+        self.t, self.step_number = t_new, k
+        report = StepReport.of_step(k, t_new, dt, result, forms.q.nslot, layout, reactions,
+                                    self.markers.positions(), self.tracking.held_points,
+                                    self.conditions.lost_load)
         self.history.append(report)
         self._write_output()
         return report
@@ -503,18 +374,9 @@ class Simulation:
         self._add_time("compile", t0)
 
         t0 = time.perf_counter()
-        q, pts = forms.q, self.points
-        q.pack_geometry(pts.x, pts.volume, layout, self.tracker.centroids, self.tracker.volumes)
-        q.pack(forms.F_n, layout, pts.F, empty=np.eye(self.gdim))
-        q.pack(forms.density, layout, pts.density)
-        for name, h in self.material.history.items():
-            q.pack(forms.history[name], layout, pts.history[name], empty=h.initial)
-        if forms.lumping is not None:
-            vertices = self.mesh.geometry.x[self.mesh.geometry.dofmaps[0][layout.cell], :self.gdim]
-            q.pack(forms.lumping, layout, second_moments(vertices, pts.x, self._bary(layout)))
-        if self._ppp is not None:
-            volume = np.bincount(layout.cell, weights=pts.volume, minlength=self.tracker.num_cells)
-            q.pack_cell_field(self._ppp.fill, layout, volume / self.tracker.volumes)
+        pts = self.points
+        bary = self.tracker.barycentric(pts.x, layout.cell)
+        forms.pack(layout, pts, self.tracker, bary)
         if boundary is not None:
             self._boundary.pack(forms, t_new)
         R = forms.residual.bind(layout, boundary)
@@ -522,11 +384,12 @@ class Simulation:
         self._step_loads = None if forms.loads is None else forms.loads.bind(layout, boundary)
         bcs = self.conditions.impose(layout.occupied, self.t, t_new)
         if self.dynamics is not None:
-            self.dynamics.project(layout.cell, self._bary(layout), pts.mass, pts.velocity,
+            self.dynamics.project(layout.cell, bary, pts.mass, pts.velocity,
                                   pts.acceleration, t_new - self.t)
         self._add_time("packing", t0)
-        self._current = (forms, layout)
-        self._refreshed = None  # new points and history: no return map is current
+        return_map = (ReturnMapAtIterate(forms, layout, pts, self.w) if forms.pointwise
+                      else None)
+        self._current = StepInProgress(forms, layout, bary, return_map)
         return forms, layout, R, J, bcs
 
     def refresh_material(self, tangent: bool = True) -> ReturnMapResult | None:
@@ -540,35 +403,26 @@ class Simulation:
         At an iterate already evaluated nothing is recomputed.
         Returns the return map's result, or None for laws written in UFL.
         """
-        forms, layout = self._current
-        if not forms.pointwise:
+        if self._current.return_map is None:
             return None
         t0 = time.perf_counter()
-        g, q, lin = self.gdim, forms.q, forms.linearisation
-        done = self._refreshed
-        if done is None or not np.array_equal(done["w"], self.w.x.array):
-            dF = forms.dF_at_points.evaluate(layout).reshape(-1, g, g)
-            result = self.material.return_map(dF, self.points.history)
-            q.pack(lin.tau, layout, result.tau)
-            q.pack(lin.dF, layout, dF, empty=np.eye(g))
-            # The residual reads D_k only times ΔF − ΔF_k = 0: an old one must not
-            # linger (it may belong to another step's entities), none is needed.
-            q.values.pop(lin.tangent, None)
-            done = self._refreshed = {"w": self.w.x.array.copy(), "tangent": False}
-            self._last_return = result
-        if tangent and not done["tangent"]:
-            q.pack(lin.tangent, layout, Linearisation.flat_tangent(self._last_return.tangent))
-            done["tangent"] = True
+        result = self._current.return_map.refresh(tangent)
         self._add_time("return_map", t0)
-        return self._last_return
+        return result
 
     # -- the phases of a step --------------------------------------------------
 
     def _track(self, step: int = 0, t: float = 0.0, hold: np.ndarray | None = None) -> SlotLayout:
         t0 = time.perf_counter()
-        layout = self.tracking.track(self.points, self._markers, step, t, hold)
+        layout = self.tracking.track(self.points, self.markers, step, t, hold)
         self._add_time("tracking", t0)
         return layout
+
+    def _check_supports(self, layout: SlotLayout) -> None:
+        """A static model's supports stop every rigid translation (:func:`check_supports`)."""
+        point_conditions = [] if self._boundary_points is None else self._boundary_points.conditions
+        if self.conditions.loads_or_supports or point_conditions:
+            check_supports(self.conditions.held_components(layout.occupied), point_conditions)
 
     def _compile(self, nslot: int, nslot_boundary: int) -> StepForms:
         newmark = None if self.dynamics is None else self.dynamics.data
@@ -577,6 +431,20 @@ class Simulation:
                           lumped=self.mass == "lumped")
         self._forms[(nslot, nslot_boundary)] = forms
         return forms
+
+    def _solve(self, forms: StepForms, layout: SlotLayout, R, J, bcs: list) -> NewtonResult:
+        """Newton from Δu = 0 with each line search of :attr:`ladder` until one converges."""
+        hooks = {"loads": self._step_loads, "pressure_volume": self._pressure_volume(layout)}
+        if forms.pointwise:
+            hooks |= {"before_residual": lambda: self.refresh_material(tangent=False),
+                      "before_jacobian": self.refresh_material}
+        solver = self._newton_solver(forms)
+
+        def attempt(search: str | None) -> NewtonResult:
+            self._initial_guess(layout)
+            return solver.solve(R, J, bcs, **hooks, line_search=search)
+
+        return self.ladder.solve(attempt, solver.line_search)
 
     def _newton_solver(self, forms: StepForms) -> NewtonSolver:
         if self._newton is None:
@@ -591,126 +459,42 @@ class Simulation:
         return self._newton
 
     def _bary(self, layout: SlotLayout) -> np.ndarray:
-        """The points' barycentric coordinates in their cells of ``layout`` (n, g + 1)."""
+        """The points' barycentric coordinates in the cells of ``layout`` (n, g + 1)."""
+        current = self._current
+        if current is not None and current.layout is layout:
+            return current.bary
         return self.tracker.barycentric(self.points.x, layout.cell)
 
     def _consistent_initial_acceleration(
         self, forms: StepForms, layout: SlotLayout, R, bcs: list, dt: float
     ) -> None:
-        """Start the points from accelerations in equilibrium with the loads; project them.
-
-        See :meth:`~fe_mpm.dynamics.NewmarkDynamics.initial_acceleration`.
-        The displacement dofs the step's ``bcs`` constrain (Dirichlet and unsupported
-        nodes) get a₀ = 0.
-        """
+        """Start from accelerations in equilibrium (:meth:`NewmarkDynamics.start`)."""
         def residual_at_rest() -> np.ndarray:
-            self._initial_guess(layout)  # Δu = 0 (and the projected pressure)
+            self._initial_guess(layout)
             self.refresh_material(tangent=False)
             return R.assemble_vector()
 
-        constrained = np.zeros(self.w.x.array.size, dtype=bool)
-        for bc in bcs:
-            constrained[bc.dof_indices()[0]] = True
-        pts, bary = self.points, self._bary(layout)
-        pts.acceleration = self.dynamics.initial_acceleration(
-            residual_at_rest, forms.mass_matrix, np.arange(self.tracker.num_cells, dtype=np.int32),
-            layout, constrained, layout.cell, bary)
-        self.dynamics.project(layout.cell, bary, pts.mass, pts.velocity, pts.acceleration, dt)
+        self.dynamics.start(residual_at_rest, forms.mass_matrix, layout, bcs, self._bary(layout),
+                            self.points, dt)
 
     def _initial_guess(self, layout: SlotLayout) -> None:
-        """Δu = 0, and the pressure projected from the points (thesis Eq. 5.20).
-
-        ``p_I = Σ_p N_I(x_p) m_p p_p / Σ_p N_I(x_p) m_p``, mass weighted, with the
-        particle pressure ``p_p = −tr(σ_p)/3`` of the last step.
-        """
-        self.w.x.array[:] = 0.0
-        if not self.spec.pressure:
-            return
-        p_p = -np.trace(self.points.stress, axis1=1, axis2=2) / 3.0
-        nodal, _ = mass_weighted_projection(self.fields.Q[0], layout.cell, self._bary(layout),
-                                            self.points.mass, p_p[:, None])
-        self.fields.set_pressure(nodal[:, 0])
+        """Δu = 0 and the projected pressure (:meth:`GridFields.start_from_rest`)."""
+        pts = self.points
+        self.fields.start_from_rest(layout.cell, self._bary(layout), pts.mass, pts.stress)
 
     def _pressure_volume(self, layout: SlotLayout) -> float:
-        """‖V‖: the norm of the points' volumes gathered on the pressure nodes (m³; m² in 2D).
+        """‖V‖ of the pressure rows (:meth:`GridFields.pressure_volume`)."""
+        return self.fields.pressure_volume(layout.cell, self._bary(layout), self.points.volume)
 
-        The scale of the pressure rows in the Newton test (0 without pressure).
-        """
-        if not self.spec.pressure:
-            return 0.0
-        return nodal_sum_norm(self.fields.Q[0], layout.cell, self._bary(layout),
-                              self.points.volume)
-
-    def _check_supports(self, layout: SlotLayout) -> None:
-        """Refuse a static model whose supports leave a rigid translation free.
-
-        Without inertia, a body that nothing holds in some direction has a singular
-        tangent (a rigid-body mode): Newton would fail with no hint. Supports count
-        only where they reach material: nodes outside the occupied cells are pinned.
-        A model with no loads and no conditions at all is left alone: it stays at rest.
-        """
-        if not (self.conditions.loads_or_supports or self._boundary_points is not None):
-            return
-        held = self.conditions.held_components(layout.occupied)
-        pp = self._boundary_points
-        if pp is not None:
-            for condition in pp.conditions:
-                if isinstance(condition, PointDirichlet):
-                    held[list(condition.components or range(self.gdim))] = True
-        if not held.all():
-            free = ", ".join("xyz"[c] for c in np.flatnonzero(~held))
-            raise ValueError(
-                f"Simulation: a static model needs supports that stop every rigid "
-                f"translation, but nothing holds the material in {free}: no Dirichlet "
-                "condition (or PointDirichlet) on that component touches a node of an "
-                "occupied cell. The tangent would be singular (a rigid-body mode). Add a "
-                "support, or pass dynamic=True.")
-
-    def _convect(
-        self, forms: StepForms, layout: SlotLayout, step: int, t: float, dt: float
-    ) -> None:
-        g = self.gdim
-        values = forms.update.evaluate(layout)
-        if not np.all(np.isfinite(values)):
-            bad = np.flatnonzero(~np.all(np.isfinite(values), axis=1))
-            raise ConvergenceError(
-                f"non-finite state at {bad.size} material point(s) in step {step} (t = {t:g}); "
-                f"first: point {bad[0]} at x = {self.points.x[bad[0]]}. Nothing was updated."
-            )
-        new = forms.update_layout.decode(values)
-        du_p, dF = new.du, new.dF
-        det_dF = np.linalg.det(dF)
-        if self.dynamics is None:
-            cells_moved = np.linalg.norm(du_p, axis=1) / self.tracker.sizes[layout.cell]
-            far = int(np.argmax(cells_moved))
-            if cells_moved[far] > self.max_step_cells:
-                raise ConvergenceError(
-                    f"point {far} (x = {self.points.x[far]}) would move "
-                    f"{cells_moved[far]:.3g} cell sizes ({np.linalg.norm(du_p[far]):.3g} m) in "
-                    f"static step {step} (t = {t:g}), more than max_step_cells = "
-                    f"{self.max_step_cells:g}: a grid value blew up (e.g. at a node with "
-                    "almost no material). Nothing was updated.")
-        if np.any(det_dF <= 0):
-            bad = np.flatnonzero(det_dF <= 0)[0]
-            raise ConvergenceError(
-                f"det(ΔF) <= 0 at point {bad} (x = {self.points.x[bad]}) in step {step} "
-                f"(t = {t:g}): the step inverts material; take smaller steps."
-            )
-        pts = self.points
-        for xm, host in self._markers.values():
-            xm += du_p[host] + (dF[host] - np.eye(g)) @ (xm - pts.x[host])
-        pts.x += du_p
-        pts.F = dF @ pts.F
-        pts.volume *= det_dF
-        pts.stress = new.stress
-        if self.dynamics is not None:
-            pts.velocity = self.dynamics.updated_velocity(pts.velocity, pts.acceleration,
-                                                          new.acceleration, dt)
-            pts.acceleration = new.acceleration
-        for name, value in new.history.items():
-            pts.history[name] = value.reshape(pts.history[name].shape)
-        if forms.pointwise:
-            pts.history.update(self._last_return.history)
+    def _update_points(self, forms: StepForms, layout: SlotLayout, step: int, t: float,
+                       dt: float) -> None:
+        """The points take the converged state (:mod:`fe_mpm.point_update`)."""
+        new = checked_update(forms.update.evaluate(layout), forms.update_layout, self.points,
+                             self.tracker.sizes[layout.cell],
+                             None if self.dynamic else self.max_step_cells, step, t)
+        return_map = self._current.return_map
+        apply_update(self.points, new, self.markers, self.dynamics, dt,
+                     None if return_map is None else return_map.result.history)
 
     def _write_output(self, force: bool = False) -> None:
         if self.output is None:

@@ -16,15 +16,19 @@ from dataclasses import dataclass
 import numpy as np
 import ufl
 
+from fe_mpm._dolfinx import dolfinx
 from fe_mpm.assembly import StepForm
 from fe_mpm.forms import displacement, inertia, mixed_up, penalty
 from fe_mpm.forms import loads as loads_form
 from fe_mpm.formulations import FormulationSpec, GridFields
 from fe_mpm.grid_conditions import GridConditions
-from fe_mpm.materials import Linearisation, PointState
+from fe_mpm.materials import Linearisation, PointState, ReturnMapResult
 from fe_mpm.materials.protocol import PointwiseLaw
 from fe_mpm.packing import PointExpression
-from fe_mpm.quadrature import BOUNDARY_POINTS, OCCUPIED, MaterialPointQuadrature
+from fe_mpm.particles import MaterialPoints
+from fe_mpm.quadrature import BOUNDARY_POINTS, OCCUPIED, MaterialPointQuadrature, SlotLayout
+from fe_mpm.tracker import Tracker
+from fe_mpm.transfer import second_moments
 
 
 @dataclass(frozen=True)
@@ -113,7 +117,8 @@ class StepForms:
                  ppp: mixed_up.PPPData | None = None,
                  newmark: inertia.NewmarkData | None = None, lumped: bool = False):
         mesh, g = fields.W.mesh, fields.W.mesh.geometry.dim
-        self.spec, self.material, self.newmark = spec, material, newmark
+        self.mesh, self.spec, self.material, self.newmark = mesh, spec, material, newmark
+        self.ppp = ppp
         self.q = q = MaterialPointQuadrature(mesh, nslot)
         self.F_n = q.function((g, g), "F_n", empty=np.eye(g))
         self.density = q.function((), "density")
@@ -153,6 +158,32 @@ class StepForms:
         self.residual = StepForm(R, mesh, facets, rules, dynamic)
         self.jacobian = StepForm(J, mesh, facets, rules, dynamic)
         self.update_layout, self.update = self._update(fields)
+
+    def pack(self, layout: SlotLayout, points: MaterialPoints, tracker: Tracker,
+             bary: np.ndarray) -> None:
+        """Write the points' data at t_n into the slot fields of ``layout``.
+
+        Position, volume, ``F_n``, density and history; the second moments of a
+        lumped mass; and the PPP fill of each cell (volume of its points over its own).
+
+        Args:
+            layout: The step's slot layout.
+            points: The material points at t_n.
+            tracker: The grid's cell geometry (centroids, volumes).
+            bary: The points' barycentric coordinates in their cells (n, g + 1).
+        """
+        q, g = self.q, points.gdim
+        q.pack_geometry(points.x, points.volume, layout, tracker.centroids, tracker.volumes)
+        q.pack(self.F_n, layout, points.F, empty=np.eye(g))
+        q.pack(self.density, layout, points.density)
+        for name, h in self.material.history.items():
+            q.pack(self.history[name], layout, points.history[name], empty=h.initial)
+        if self.lumping is not None:
+            vertices = self.mesh.geometry.x[self.mesh.geometry.dofmaps[0][layout.cell], :g]
+            q.pack(self.lumping, layout, second_moments(vertices, points.x, bary))
+        if self.ppp is not None:
+            volume = np.bincount(layout.cell, weights=points.volume, minlength=tracker.num_cells)
+            q.pack_cell_field(self.ppp.fill, layout, volume / tracker.volumes)
 
     def _residual(self, fields: GridFields, conditions: GridConditions,
                   ppp: mixed_up.PPPData | None) -> ufl.Form:
@@ -209,3 +240,61 @@ class StepForms:
         return layout, PointExpression(layout.vector(du_p, self.dF, sigma, acceleration,
                                                      history), q)
 
+
+
+class ReturnMapAtIterate:
+    """A pointwise law's return map at the current grid unknown, evaluated once per iterate.
+
+    The law's stress, ΔF and (on request) tangent at the points go into the slot
+    fields of the forms' linearisation, so the next residual (and Jacobian)
+    assembled are the law's own at this iterate. One per step: its points and
+    history are those of t_n.
+
+    Args:
+        forms: The step's forms (a pointwise law's).
+        layout: The step's slot layout.
+        points: The material points at t_n (their history is read).
+        w: The grid unknown.
+    """
+
+    def __init__(self, forms: StepForms, layout: SlotLayout, points: MaterialPoints,
+                 w: dolfinx.fem.Function):
+        self.forms, self.layout, self.points, self.w = forms, layout, points, w
+        self.result: ReturnMapResult | None = None  # at the iterate self._at
+        self._at: np.ndarray | None = None
+        self._has_tangent = False
+
+    def refresh(self, tangent: bool = True) -> ReturnMapResult:
+        """Evaluate the return map at ``w`` unless done at this iterate; pack it."""
+        forms, layout = self.forms, self.layout
+        g, q, lin = self.points.gdim, forms.q, forms.linearisation
+        if self._at is None or not np.array_equal(self._at, self.w.x.array):
+            dF = forms.dF_at_points.evaluate(layout).reshape(-1, g, g)
+            self.result = forms.material.return_map(dF, self.points.history)
+            q.pack(lin.tau, layout, self.result.tau)
+            q.pack(lin.dF, layout, dF, empty=np.eye(g))
+            # The residual reads D_k only times ΔF − ΔF_k = 0: an old one must not
+            # linger (it may belong to another step's entities), none is needed.
+            q.values.pop(lin.tangent, None)
+            self._at, self._has_tangent = self.w.x.array.copy(), False
+        if tangent and not self._has_tangent:
+            q.pack(lin.tangent, layout, Linearisation.flat_tangent(self.result.tangent))
+            self._has_tangent = True
+        return self.result
+
+
+@dataclass
+class StepInProgress:
+    """What the phases of the step being taken share (set by :meth:`Simulation.prepare_step`).
+
+    Attributes:
+        forms: The compiled forms of the step's slot count.
+        layout: The points' slot layout.
+        bary: The points' barycentric coordinates in their cells (n, g + 1).
+        return_map: A pointwise law's return map at the current iterate, or None.
+    """
+
+    forms: StepForms
+    layout: SlotLayout
+    bary: np.ndarray
+    return_map: ReturnMapAtIterate | None

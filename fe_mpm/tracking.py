@@ -13,6 +13,7 @@ import numpy as np
 
 from fe_mpm._dolfinx import dolfinx
 from fe_mpm.errors import ConvergenceError, PointsOutsideError, warn
+from fe_mpm.markers import Markers
 from fe_mpm.particles import MaterialPoints
 from fe_mpm.quadrature import SlotLayout, slot_count
 from fe_mpm.tracker import Tracker
@@ -39,14 +40,14 @@ class PointTracking:
         self.dropped = 0
         self._nslot: int | None = None  # slots per entity, kept while they suit
 
-    def track(self, points: MaterialPoints, markers: dict, step: int = 0, t: float = 0.0,
+    def track(self, points: MaterialPoints, markers: Markers, step: int = 0, t: float = 0.0,
               hold: np.ndarray | None = None) -> SlotLayout:
         """Find each point's cell (``points.cell``) and return their slot layout.
 
         Args:
             points: The material points; those that left the grid are removed when
                 ``points_leaving="drop"``.
-            markers: name -> (position, host point); hosts are renumbered after a drop.
+            markers: The markers; their hosts are renumbered after a drop.
             step: The step about to be taken (0: set-up), for messages.
             t: Its end time, for messages.
             hold: Last step's cells: each point stays in its old cell if it lies
@@ -67,7 +68,7 @@ class PointTracking:
         self._nslot = slot_count(np.bincount(cells), self._nslot)
         return SlotLayout.from_cells(cells, self._nslot)
 
-    def _drop(self, points: MaterialPoints, markers: dict, cells: np.ndarray,
+    def _drop(self, points: MaterialPoints, markers: Markers, cells: np.ndarray,
               outside: np.ndarray, where: str) -> np.ndarray:
         """Refuse, or remove with a warning, the points outside the grid; the kept cells."""
         first = outside[0]
@@ -77,11 +78,7 @@ class PointTracking:
             raise PointsOutsideError(msg + ". Pass points_leaving='drop' to remove them.")
         warn(msg + "; dropped.")
         keep = cells >= 0
-        new_index = np.cumsum(keep) - 1
-        for name, (xm, host) in markers.items():
-            if not keep[host]:
-                raise PointsOutsideError(f"the host point of marker {name!r} left the grid")
-            markers[name] = (xm, int(new_index[host]))
+        markers.keep_hosts(keep)
         points.keep(keep)
         self.dropped += outside.size
         if len(points) == 0:

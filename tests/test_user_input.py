@@ -171,7 +171,7 @@ def test_a_bad_point_update_stops_the_step_naming_the_point(monkeypatch, poison,
 
     def poisoned(self, layout):
         values = evaluate(self, layout)
-        if self is sim._current[0].update:
+        if self is sim._current.forms.update:
             if poison == "nan":
                 values[[3, 5], -1] = np.nan
             else:  # ΔF = diag(0 or −1, 1), columns g .. g + g² of the update

@@ -46,11 +46,13 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+import numpy as np
 import ufl
 
+from fe_mpm._dolfinx import dolfinx
 from fe_mpm.forms.loads import external_work
 from fe_mpm.materials import embed_3d
-from fe_mpm.quadrature import MaterialPointQuadrature
+from fe_mpm.quadrature import OCCUPIED, MaterialPointQuadrature
 
 #: Kratos MPM's factor on the PPP α, by geometric dimension.
 KRATOS_PPP_FACTOR = {2: 8.0, 3: 10.0}
@@ -76,6 +78,22 @@ class PPPData:
     centroid: ufl.Coefficient
     fill: ufl.Coefficient
     dx: ufl.Measure
+
+    @classmethod
+    def on_grid(cls, mesh, centroids: np.ndarray, alpha: float) -> PPPData:
+        """The PPP data of a grid with cell centroids (cells, g) in m, thesis α ≥ 0."""
+        g = mesh.geometry.dim
+        dg0 = dolfinx.fem.functionspace(mesh, ("DG", 0))
+        dg0_vec = dolfinx.fem.functionspace(mesh, ("DG", 0, (g,)))
+        centroid = dolfinx.fem.Function(dg0_vec, name="centroid")
+        cells = np.arange(centroids.shape[0])
+        centroid.x.array.reshape(-1, g)[dg0_vec.dofmap.list[cells, 0]] = centroids
+        fill = dolfinx.fem.Function(dg0, name="fill")
+        # In the material-point subdomain, so one kernel does both; the fill
+        # is packed per entity (zero on a cell's copies), so each cell counts once.
+        dx2 = ufl.Measure("dx", domain=mesh, subdomain_id=OCCUPIED,
+                          metadata={"quadrature_degree": 2})
+        return cls(effective_alpha(alpha, g), centroid, fill, dx2)
 
 
 def stress_parts(material, F: ufl.core.expr.Expr, p: ufl.core.expr.Expr, state=None):

@@ -1,0 +1,57 @@
+"""Markers: points that move with the body but carry no volume or mass.
+
+A marker follows its host, the material point nearest to it when it was added,
+with the host's affine motion in every step: the grid increment of the host's
+cell, extended linearly to the marker. Demos measure displacements this way
+(Cook's point A), because a marker never reads an empty cell.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from fe_mpm.errors import PointsOutsideError
+
+
+class Markers:
+    """Named markers, each a position (g,) in m and the index of its host point."""
+
+    def __init__(self):
+        self._entries: dict[str, tuple[np.ndarray, int]] = {}
+
+    def add(self, name: str, x: np.ndarray, points_x: np.ndarray) -> None:
+        """Add a marker at ``x`` (g,), hosted by the nearest of the points ``points_x`` (n, g)."""
+        host = int(np.argmin(np.linalg.norm(points_x - x, axis=1)))
+        self._entries[name] = (x.copy(), host)  # a copy: the caller's array must not move
+
+    def position(self, name: str) -> np.ndarray:
+        """Current position of the marker ``name``, a copy, shape (g,)."""
+        return self._entries[name][0].copy()
+
+    def positions(self) -> dict[str, np.ndarray]:
+        """Every marker's position, name -> copy (g,)."""
+        return {name: xm.copy() for name, (xm, _) in self._entries.items()}
+
+    def move(self, points_x: np.ndarray, du: np.ndarray, dF: np.ndarray) -> None:
+        """``x_m += Δu_p + (ΔF_p − I)(x_m − x_p)`` with p the host, before the points move.
+
+        Args:
+            points_x: The points' positions at the start of the step (n, g) in m.
+            du: Their displacement increments (n, g) in m.
+            dF: Their deformation gradient increments (n, g, g).
+        """
+        identity = np.eye(points_x.shape[1])
+        for xm, host in self._entries.values():
+            xm += du[host] + (dF[host] - identity) @ (xm - points_x[host])
+
+    def keep_hosts(self, keep: np.ndarray) -> None:
+        """Renumber the hosts after the points where ``keep`` (n,) is False are removed.
+
+        Raises:
+            PointsOutsideError: A marker's host is among the removed points.
+        """
+        new_index = np.cumsum(keep) - 1
+        for name, (xm, host) in self._entries.items():
+            if not keep[host]:
+                raise PointsOutsideError(f"the host point of marker {name!r} left the grid")
+            self._entries[name] = (xm, int(new_index[host]))

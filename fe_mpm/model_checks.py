@@ -1,0 +1,143 @@
+"""What a model must satisfy before its first step, each check with a message that says why.
+
+:class:`~fe_mpm.Simulation` runs these at set-up (and :func:`check_supports` at the
+first static step, once it knows which cells hold material): the options in their
+ranges, a grid and points that fit each other, a law that provides what the
+formulation needs, one density, and supports that stop every rigid translation.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from fe_mpm._dolfinx import dolfinx
+from fe_mpm.boundary import PointDirichlet
+from fe_mpm.checks import check_choice, check_range
+from fe_mpm.formulations import FORMULATIONS, FormulationSpec
+from fe_mpm.materials.protocol import Law, MixedLaw, missing_members
+from fe_mpm.particles import MaterialPoints, simplex_cell_type
+
+#: Relative mismatch between the law's density and the points' that counts as a conflict.
+DENSITY_RTOL = 1e-9
+
+#: The SNES line searches a failed step may be retried with.
+LINE_SEARCHES = ("basic", "bt", "l2", "cp")
+
+
+def check_options(
+    *, formulation: str, max_step_cells: float, ppp_alpha: float, damping: float, mass: str,
+    points_leaving: str, fallback_line_search: str | None, output_every: int,
+    linear_solver: str, dynamic: bool,
+) -> None:
+    """Refuse an option outside its range, naming it and the valid range."""
+    check_choice("Simulation", "formulation", formulation, tuple(FORMULATIONS))
+    check_range("Simulation", "max_step_cells", max_step_cells, lo=0.0, lo_open=True)
+    check_range("Simulation", "ppp_alpha", ppp_alpha, lo=0.0)
+    check_range("Simulation", "damping", damping, lo=0.0)
+    check_choice("Simulation", "mass", mass, ("consistent", "lumped"))
+    check_choice("Simulation", "points_leaving", points_leaving, ("raise", "drop"))
+    if fallback_line_search is not None:
+        check_choice("Simulation", "fallback_line_search", fallback_line_search, LINE_SEARCHES)
+    check_range("Simulation", "output_every", output_every, lo=1)
+    check_choice("Simulation", "linear_solver", linear_solver, ("direct", "iterative"))
+    spec = FORMULATIONS[formulation]
+    if dynamic and spec.u_degree != 1:
+        raise ValueError(
+            f"Simulation: dynamic analysis needs a P1 displacement; formulation "
+            f"{formulation!r} is P{spec.u_degree}")
+    if not dynamic and damping:
+        raise ValueError("Simulation: damping needs dynamic=True")
+    if not dynamic and mass != "consistent":
+        raise ValueError("Simulation: mass='lumped' needs dynamic=True")
+
+
+def check_grid_and_points(mesh: dolfinx.mesh.Mesh, points: MaterialPoints) -> None:
+    """One serial rank, a non-empty simplex grid, and points of its dimension."""
+    if mesh.comm.size > 1:
+        # Every rank constructs the simulation, so every rank stops here: no hang.
+        raise NotImplementedError(
+            f"Simulation: fe-mpm runs on one MPI rank for now, and this mesh is "
+            f"distributed over {mesh.comm.size}. Run without mpiexec, or build the "
+            "mesh on MPI.COMM_SELF to run independent serial simulations per rank.")
+    if mesh.topology.index_map(mesh.topology.dim).size_global == 0:
+        raise ValueError("Simulation: the mesh is empty (it has no cells)")
+    simplex_cell_type(mesh)
+    if len(points) == 0:
+        raise ValueError("Simulation: there are no material points")
+    if points.gdim != mesh.geometry.dim:
+        raise ValueError(
+            f"Simulation: points are {points.gdim}D but the mesh is {mesh.geometry.dim}D")
+
+
+def check_law(material, spec: FormulationSpec, formulation: str) -> None:
+    """Refuse a law that lacks what the law protocol or the formulation asks for.
+
+    Every law is a :class:`~fe_mpm.materials.protocol.Law`; the mixed forms need a
+    deviatoric response (:class:`~fe_mpm.materials.protocol.MixedLaw`).
+    """
+    missing = missing_members(material, Law)
+    if missing:
+        raise TypeError(
+            f"Simulation: material {type(material).__name__} is not a law: it lacks "
+            f"{', '.join(missing)} (fe_mpm.materials.protocol.Law says what a law provides)")
+    if spec.pressure and not isinstance(material, MixedLaw):
+        raise ValueError(
+            f"Simulation: formulation {formulation!r} needs a material with a "
+            "deviatoric response (kirchhoff_deviatoric, see "
+            "fe_mpm.materials.protocol.MixedLaw)")
+    check_formulation = getattr(material, "check_formulation", None)
+    if check_formulation is not None:
+        check_formulation(spec.pressure)
+
+
+def take_density(material, points: MaterialPoints) -> None:
+    """Give the points the law's density, or check that theirs agrees with it.
+
+    The mass of a point is what body forces and inertia use; the law's
+    ``density`` only fills it in when :func:`~fe_mpm.seed` was given none.
+    """
+    rho = material.density
+    if rho is None:
+        return
+    reference_volume = points.volume / np.linalg.det(points.F)
+    if not points.density_given:
+        points.mass = rho * reference_volume
+        points.density_given = True
+        return
+    rho_points = points.mass / reference_volume
+    off = np.abs(rho_points - rho) > DENSITY_RTOL * rho
+    if np.any(off):
+        first = np.flatnonzero(off)[0]
+        raise ValueError(
+            f"Simulation: the material's density {rho:g} kg/m³ differs from the points' "
+            f"{rho_points[first]:g} kg/m³ (point {first}; from seed(..., density=...) or "
+            "their masses). Give the density in one place: seed(..., density=...) for "
+            "zones of different densities, or the law's density alone.")
+
+
+def check_supports(held: np.ndarray, point_conditions: list) -> None:
+    """Refuse a static model whose supports leave a rigid translation free.
+
+    Without inertia, a body that nothing holds in some direction has a singular
+    tangent (a rigid-body mode): Newton would fail with no hint. Supports count
+    only where they reach material: nodes outside the occupied cells are pinned.
+    (A model with no loads and no conditions at all stays at rest: it needs no check.)
+
+    Args:
+        held: Per component (g,), whether a grid Dirichlet condition holds it on a
+            node of an occupied cell (:meth:`GridConditions.held_components`).
+        point_conditions: The boundary points' conditions (``PointDirichlet`` hold
+            their components too).
+    """
+    held = held.copy()
+    for condition in point_conditions:
+        if isinstance(condition, PointDirichlet):
+            held[list(condition.components or range(held.size))] = True
+    if not held.all():
+        free = ", ".join("xyz"[c] for c in np.flatnonzero(~held))
+        raise ValueError(
+            f"Simulation: a static model needs supports that stop every rigid "
+            f"translation, but nothing holds the material in {free}: no Dirichlet "
+            "condition (or PointDirichlet) on that component touches a node of an "
+            "occupied cell. The tangent would be singular (a rigid-body mode). Add a "
+            "support, or pass dynamic=True.")

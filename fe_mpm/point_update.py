@@ -1,0 +1,96 @@
+"""The last phase of a step: the points take their new state from the converged grid.
+
+:func:`checked_update` decodes the update vector (:class:`~fe_mpm.step_forms.UpdateLayout`)
+and refuses a state that is not physical before anything moves; :func:`apply_update`
+then moves the points and markers and sets ``F``, ``V``, the stress, the velocity
+and acceleration (dynamics) and the history (thesis Algorithm 1, the update of the
+material points; the grid is reset simply by never moving it).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from fe_mpm.dynamics import NewmarkDynamics
+from fe_mpm.errors import ConvergenceError
+from fe_mpm.markers import Markers
+from fe_mpm.particles import MaterialPoints
+from fe_mpm.step_forms import PointUpdate, UpdateLayout
+
+
+def checked_update(
+    values: np.ndarray, layout: UpdateLayout, points: MaterialPoints, cell_sizes: np.ndarray,
+    max_step_cells: float | None, step: int, t: float,
+) -> PointUpdate:
+    """The points' new state from the evaluated update vector, once it passes the checks.
+
+    Args:
+        values: The update vector at every point (n, ``layout.width``).
+        layout: Its columns.
+        points: The points at the start of the step (not changed here).
+        cell_sizes: The size of each point's cell (n,) in m.
+        max_step_cells: The farthest a point may move, in sizes of its cell; None:
+            no limit (dynamics).
+        step: The step's number, for messages.
+        t: Its end time, for messages.
+
+    Raises:
+        ConvergenceError: A value is not finite, a point moves farther than
+            ``max_step_cells``, or ``det ΔF <= 0``; the message names the first point.
+    """
+    if not np.all(np.isfinite(values)):
+        bad = np.flatnonzero(~np.all(np.isfinite(values), axis=1))
+        raise ConvergenceError(
+            f"non-finite state at {bad.size} material point(s) in step {step} (t = {t:g}); "
+            f"first: point {bad[0]} at x = {points.x[bad[0]]}. Nothing was updated.")
+    new = layout.decode(values)
+    if max_step_cells is not None:
+        cells_moved = np.linalg.norm(new.du, axis=1) / cell_sizes
+        far = int(np.argmax(cells_moved))
+        if cells_moved[far] > max_step_cells:
+            raise ConvergenceError(
+                f"point {far} (x = {points.x[far]}) would move "
+                f"{cells_moved[far]:.3g} cell sizes ({np.linalg.norm(new.du[far]):.3g} m) in "
+                f"static step {step} (t = {t:g}), more than max_step_cells = "
+                f"{max_step_cells:g}: a grid value blew up (e.g. at a node with "
+                "almost no material). Nothing was updated.")
+    det_dF = np.linalg.det(new.dF)
+    if np.any(det_dF <= 0):
+        bad = np.flatnonzero(det_dF <= 0)[0]
+        raise ConvergenceError(
+            f"det(ΔF) <= 0 at point {bad} (x = {points.x[bad]}) in step {step} "
+            f"(t = {t:g}): the step inverts material; take smaller steps.")
+    return new
+
+
+def apply_update(
+    points: MaterialPoints, new: PointUpdate, markers: Markers,
+    dynamics: NewmarkDynamics | None, dt: float, return_map_history: dict | None = None,
+) -> None:
+    """Move the points and markers and give the points their state at t_{n+1}.
+
+    ``x += Δu``, ``F = ΔF F_n``, ``V = det(ΔF) V_n``, σ from the update, and in
+    dynamics Newmark's velocity from the two accelerations.
+
+    Args:
+        points: The material points, updated in place.
+        new: Their new state (:func:`checked_update`).
+        markers: Moved with their hosts.
+        dynamics: Newmark's rule, or None (static).
+        dt: The step length (s).
+        return_map_history: A pointwise law's history at the converged iterate; it
+            replaces the update's (the law, not UFL, computed it).
+    """
+    markers.move(points.x, new.du, new.dF)
+    points.x += new.du
+    points.F = new.dF @ points.F
+    points.volume *= np.linalg.det(new.dF)
+    points.stress = new.stress
+    if dynamics is not None:
+        points.velocity = dynamics.updated_velocity(points.velocity, points.acceleration,
+                                                    new.acceleration, dt)
+        points.acceleration = new.acceleration
+    for name, value in new.history.items():
+        points.history[name] = value.reshape(points.history[name].shape)
+    if return_map_history is not None:
+        points.history.update(return_map_history)
