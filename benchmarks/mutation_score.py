@@ -9,10 +9,11 @@ lists those by name (``fnmatch`` patterns allowed), each with its reason. The sc
 is killed / (all − equivalent); a timeout or a crash counts as killed, as mutmut
 counts it, and a mutant no test reaches counts as surviving.
 
-Of ``simulation.py`` only the point update and the projections are in scope
-(:data:`SIMULATION_SCOPE`); mutmut mutates the whole file, so run those methods by
-name (``mutmut run "fe_mpm.simulation.xǁSimulationǁ_convect__mutmut_*"``) and the
-others are left out of the count.
+Of ``formulations.py`` only Newton's start and the pressure rows' scale are in
+scope (:data:`FORMULATIONS_SCOPE`); mutmut mutates the whole file, so run those
+methods by name (``mutmut run "fe_mpm.formulations.xǁGridFieldsǁstart_from_rest__mutmut_*"``)
+and the others are left out of the count. (Until the redesign these were methods of
+``Simulation``, as was the point update, now ``point_update.py``.)
 
 Usage: ``mutmut run`` then ``./run python benchmarks/mutation_score.py [--survivors]``
 from the repository root (``--dir`` where ``mutants/`` lies elsewhere; several
@@ -34,10 +35,8 @@ KILLED = {1, 3, 36, -24, 24, 152, 255, -11, -9, 37}
 SURVIVED = {0}
 NO_TESTS = {5, 33}
 
-#: The methods of ``Simulation`` in scope: the point update and the projections.
-SIMULATION_SCOPE = (
-    "_convect", "_initial_guess", "_pressure_volume", "_consistent_initial_acceleration",
-)
+#: The methods of ``GridFields`` in scope: the projected pressure and the pressure scale.
+FORMULATIONS_SCOPE = ("start_from_rest", "pressure_volume")
 
 
 #: Of ``step_forms.py`` only the update vector's layout is in scope (the point update);
@@ -49,9 +48,9 @@ def in_scope(name: str) -> bool:
     """False for the mutants outside the scope: see the two scope tuples above."""
     if name.startswith("fe_mpm.step_forms."):
         return any(part in name for part in STEP_FORMS_SCOPE)
-    if not name.startswith("fe_mpm.simulation."):
+    if not name.startswith("fe_mpm.formulations."):
         return True
-    return any(f"ǁSimulationǁ{method}__mutmut_" in name for method in SIMULATION_SCOPE)
+    return any(f"ǁGridFieldsǁ{method}__mutmut_" in name for method in FORMULATIONS_SCOPE)
 
 
 def equivalents(path: Path) -> list[tuple[str, str]]:

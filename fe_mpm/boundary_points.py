@@ -120,6 +120,14 @@ class BoundaryPointStep:
         self._gap = np.zeros((0, points.x.shape[1]))
         self._warned = False
 
+    @classmethod
+    def of(cls, conditions: Sequence[PointDirichlet | PointTraction],
+           tracker: Tracker) -> BoundaryPointStep | None:
+        """The boundary points of ``conditions`` on the grid of ``tracker``; None if none."""
+        if not conditions:
+            return None
+        return cls(BoundaryPoints(conditions, tracker.mesh.geometry.dim), tracker)
+
     def locate(self, occupied_cells: np.ndarray, t_new: float) -> SlotLayout:
         """Slot layout of the boundary points that lie in occupied cells.
 

@@ -19,7 +19,7 @@ from fe_mpm._dolfinx import dolfinx
 from fe_mpm.errors import ConvergenceError
 from fe_mpm.forms import inertia
 from fe_mpm.formulations import GridFields, collapse
-from fe_mpm.newton import LINEAR_SOLVERS, with_petsc_options
+from fe_mpm.solver_options import LINEAR_SOLVERS, with_petsc_options
 from fe_mpm.transfer import mass_weighted_projection
 
 

@@ -24,22 +24,28 @@ DENSITY_RTOL = 1e-9
 LINE_SEARCHES = ("basic", "bt", "l2", "cp")
 
 
-def check_options(
-    *, formulation: str, max_step_cells: float, ppp_alpha: float, damping: float, mass: str,
-    points_leaving: str, fallback_line_search: str | None, output_every: int,
-    linear_solver: str, dynamic: bool,
-) -> None:
-    """Refuse an option outside its range, naming it and the valid range."""
+def check_choices(formulation: str, mass: str, points_leaving: str, linear_solver: str,
+                  fallback_line_search: str | None) -> None:
+    """Refuse an option that is not one of its choices, naming it and the choices."""
     check_choice("Simulation", "formulation", formulation, tuple(FORMULATIONS))
+    check_choice("Simulation", "mass", mass, ("consistent", "lumped"))
+    check_choice("Simulation", "points_leaving", points_leaving, ("raise", "drop"))
+    check_choice("Simulation", "linear_solver", linear_solver, ("direct", "iterative"))
+    if fallback_line_search is not None:
+        check_choice("Simulation", "fallback_line_search", fallback_line_search, LINE_SEARCHES)
+
+
+def check_ranges(max_step_cells: float, ppp_alpha: float, damping: float,
+                 output_every: int) -> None:
+    """Refuse a number outside its range, naming it and the range."""
     check_range("Simulation", "max_step_cells", max_step_cells, lo=0.0, lo_open=True)
     check_range("Simulation", "ppp_alpha", ppp_alpha, lo=0.0)
     check_range("Simulation", "damping", damping, lo=0.0)
-    check_choice("Simulation", "mass", mass, ("consistent", "lumped"))
-    check_choice("Simulation", "points_leaving", points_leaving, ("raise", "drop"))
-    if fallback_line_search is not None:
-        check_choice("Simulation", "fallback_line_search", fallback_line_search, LINE_SEARCHES)
     check_range("Simulation", "output_every", output_every, lo=1)
-    check_choice("Simulation", "linear_solver", linear_solver, ("direct", "iterative"))
+
+
+def check_dynamics(dynamic: bool, formulation: str, damping: float, mass: str) -> None:
+    """Dynamics needs a P1 displacement; damping and a lumped mass need dynamics."""
     spec = FORMULATIONS[formulation]
     if dynamic and spec.u_degree != 1:
         raise ValueError(

@@ -12,7 +12,6 @@ from __future__ import annotations
 import time
 import weakref
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
 
 from petsc4py import PETSc
 
@@ -20,220 +19,22 @@ import dolfinx.fem.petsc as fem_petsc
 import numpy as np
 
 from fe_mpm._dolfinx import dolfinx
+from fe_mpm.force_test import EPS, ROUND_OFF_FACTOR, ForceTest, NewtonResult
 from fe_mpm.formulations import collapse
 from fe_mpm.packing import BoundForm
+from fe_mpm.solver_options import (
+    LINEAR_SOLVERS,
+    NEWTON_OPTIONS,
+    rigid_body_modes,
+    with_petsc_options,
+)
 
-#: Full Newton (no line search); quadratic convergence is checked, not hoped for.
-#: SNES's own tests are replaced by :class:`ForceTest` (see there): ``snes_rtol``
-#: is its tolerance relative to the forces in play, ``snes_atol`` an absolute floor
-#: (N), and ``snes_max_it`` the iteration limit. ``snes_stol`` is not used: a small
-#: update says nothing about the residual when the tangent is singular.
-NEWTON_OPTIONS = {
-    "snes_type": "newtonls",
-    "snes_linesearch_type": "basic",
-    "snes_rtol": 1e-10,
-    "snes_atol": 0.0,
-    "snes_max_it": 25,
-    "snes_divergence_tolerance": "unlimited",
-}
-
-#: The residual of a converged iterate may be as large as the forces that a
-#: displacement error of ``ROUND_OFF_FACTOR`` machine epsilons of a cell would
-#: cause, ``ROUND_OFF_FACTOR ε h ‖diag K‖``: below that, ‖R‖ is round-off of the
-#: internal forces (computed from total deformations, about ε E |F| per point), not
-#: an equilibrium error. Measured floors where Newton stagnates: 0.015 to 0.2 times
-#: ε h ‖diag K‖ (Cook u, u-p, P2/P1 and J2; 2D and 3D gravity blocks with E from
-#: 1e7 to 1e9 Pa; the strip footing), so 10 leaves a margin of 50 or more.
-ROUND_OFF_FACTOR = 10.0
-
-#: MUMPS LU. PCREDISTRIBUTE drops the constrained rows (Dirichlet and the pinned
-#: dofs of empty cells) before MUMPS sees the matrix, so empty grid costs no
-#: factorisation time.
-_DIRECT = {
-    "ksp_type": "preonly",
-    "pc_type": "redistribute",
-    "redistribute_ksp_type": "preonly",
-    "redistribute_pc_type": "lu",
-    "redistribute_pc_factor_mat_solver_type": "mumps",
-}
-
-#: Krylov options shared by the iterative set-ups. The tolerance is tight enough
-#: that Newton's history matches the direct solver's; ``ksp_rtol = 1e-6`` is about
-#: 30 % faster with the same Newton iterations on the scaling benchmark's block.
-_KRYLOV = {"ksp_rtol": 1e-12, "ksp_atol": 1e-14, "ksp_max_it": 1000, "ksp_gmres_restart": 200}
-
-#: The linear solvers of ``Simulation(linear_solver=...)``, by name and by whether
-#: the unknown is mixed (u, p). ``petsc_options`` still override any entry.
-#:
-#: - ``"direct"``: MUMPS LU behind PCREDISTRIBUTE (the default).
-#: - ``"iterative"``: GMRES with smoothed-aggregation AMG (GAMG) given the rigid
-#:   body modes for u; for u-p a Schur-complement field split, GAMG on the
-#:   displacement block and Jacobi on PETSc's ``selfp`` Schur approximation.
-LINEAR_SOLVERS = {
-    ("direct", False): _DIRECT,
-    ("direct", True): _DIRECT,
-    ("iterative", False): {
-        "ksp_type": "gmres", **_KRYLOV, "pc_type": "gamg",
-    },
-    ("iterative", True): {
-        "ksp_type": "fgmres", **_KRYLOV, "pc_type": "fieldsplit",
-        "pc_fieldsplit_type": "schur",
-        "pc_fieldsplit_schur_fact_type": "full",
-        "pc_fieldsplit_schur_precondition": "selfp",
-        "fieldsplit_u_ksp_type": "preonly",
-        "fieldsplit_u_pc_type": "gamg",
-        "fieldsplit_p_ksp_type": "preonly",
-        "fieldsplit_p_pc_type": "jacobi",
-    },
-}
+__all__ = [
+    "LINEAR_SOLVERS", "NEWTON_OPTIONS", "ROUND_OFF_FACTOR", "ForceTest", "NewtonResult",
+    "NewtonSolver", "with_petsc_options",
+]
 
 _REASONS = {v: k for k, v in vars(PETSc.SNES.ConvergedReason).items() if isinstance(v, int)}
-
-
-
-def with_petsc_options(prefix: str, options: dict, configure) -> None:
-    """Call ``configure()`` with ``options`` under ``prefix`` in PETSc's database, then drop them.
-
-    ``configure`` is e.g. ``ksp.setFromOptions``; removing the options afterwards means
-    that no solver ever sees another's.
-    """
-    opts = PETSc.Options()
-    opts.prefixPush(prefix)
-    for k, v in options.items():
-        opts[k] = v
-    try:
-        configure()
-    finally:
-        for k in options:
-            del opts[k]
-        opts.prefixPop()
-
-
-@dataclass
-class NewtonResult:
-    """Outcome of one Newton solve.
-
-    Attributes:
-        converged: Whether the last iterate passed :class:`ForceTest`.
-        iterations: Newton iterations taken.
-        reason: Why the solve ended, in words (e.g. ``"‖R‖ = 3.1e-12 of the force
-            scale 1.234e+03"``), or PETSc's reason when it failed.
-        residual_norms: ‖R‖ at each iterate (displacement and pressure rows).
-        force_scale: The forces in play at the last iterate, S (N; N/m in 2D).
-        tolerance: The largest ‖R‖ accepted at the last iterate (N).
-    """
-
-    converged: bool
-    iterations: int
-    reason: str
-    residual_norms: list[float]
-    force_scale: float = 0.0
-    tolerance: float = 0.0
-
-    @property
-    def relative_residual(self) -> float:
-        """The last ‖R‖ over the force scale (inf when there are no forces)."""
-        final = self.residual_norms[-1] if self.residual_norms else np.inf
-        return final / self.force_scale if self.force_scale > 0 else np.inf
-
-
-class ForceTest:
-    r"""When a Newton iterate counts as converged: a residual small against the forces.
-
-    The relative test of PETSc, ‖R‖ ≤ rtol ‖R₀‖, compares a step with its own start.
-    Once the loads stop changing, ‖R₀‖ is only the imbalance left by re-binning,
-    and a converged step cannot reach rtol times it (Newton then fails on a body at
-    rest); and a step whose update was unusable can end on the step-length test
-    with ‖R‖ not fallen at all. Here an iterate is accepted only when
-
-    .. math::
-
-        \|R_u\| \le \max(\mathrm{rtol}\, S,\ \mathrm{atol},\ f_\varepsilon), \qquad
-        S = \max(\|f_{ext}\|, \|f_{int}\|),
-
-    over the displacement rows, where :math:`f_{ext}` are the loads (body forces and
-    tractions) and :math:`f_{int} = R + f_{ext}` everything else — stress
-    divergence, inertia, penalties — including the rows of supported dofs, whose
-    internal force is the reaction. :math:`f_\varepsilon =` ``ROUND_OFF_FACTOR`` ε h
-    ‖diag K‖ is the round-off floor: what a displacement error of 10 ε h (h the
-    largest cell size) would unbalance. The pressure rows of a mixed form (volume ×
-    strain) pass when :math:`\|R_p\| \le \max(\mathrm{rtol}, 1000 ε) \|V\|`, with
-    :math:`\|V\|` the norm of the nodal volumes: a volumetric strain error of rtol.
-    A step that starts in equilibrium passes at iteration 0.
-
-    Args:
-        rtol: Tolerance relative to the force scale (``snes_rtol``).
-        atol: Absolute floor (N), ``snes_atol``.
-        max_it: Iteration limit (``snes_max_it``).
-        length: Largest cell size h (m).
-    """
-
-    def __init__(self, rtol: float, atol: float, max_it: int, length: float):
-        self.rtol, self.atol, self.max_it, self.length = rtol, atol, max_it, length
-        self.loads = 0.0  # ‖f_ext‖ of the step
-        self.internal = 0.0  # ‖f_int‖ at the last residual
-        self.round_off = 0.0  # f_ε from the last tangent (kept across steps for iteration 0)
-        self.volume = 0.0  # ‖V‖ of the pressure nodes; 0 without pressure
-        self.pressure_norm = 0.0  # ‖R_p‖ at the last residual
-        self.displacement_norm = 0.0  # ‖R_u‖ at the last residual
-        self.verdict = ""
-        self.passed = False
-
-    @property
-    def scale(self) -> float:
-        """S = max(‖f_ext‖, ‖f_int‖) at the last residual (N)."""
-        return max(self.loads, self.internal)
-
-    @property
-    def tolerance(self) -> float:
-        """The largest ‖R_u‖ accepted at the last residual (N)."""
-        return max(self.rtol * self.scale, self.atol, self.round_off)
-
-    def __call__(self, snes, it: int, norms) -> int:
-        """SNES's convergence test: a ``PETSc.SNES.ConvergedReason`` for iterate ``it``."""
-        _, _, fnorm = norms
-        Reason = PETSc.SNES.ConvergedReason
-        if not np.isfinite(fnorm):
-            self.verdict = "non-finite residual"
-            return Reason.DIVERGED_FUNCTION_NANORINF
-        pressure_ok = self.pressure_norm <= max(self.rtol, 1e3 * _EPS) * self.volume
-        if self.displacement_norm <= self.tolerance and pressure_ok:
-            ratio = self.displacement_norm / self.scale if self.scale > 0 else 0.0
-            self.verdict = f"‖R‖ = {ratio:.2e} of the force scale {self.scale:.3e}"
-            self.passed = True
-            return Reason.CONVERGED_FNORM_ABS
-        if it >= self.max_it:
-            self.verdict = "DIVERGED_MAX_IT"
-            return Reason.DIVERGED_MAX_IT
-        return Reason.ITERATING
-
-
-_EPS = float(np.finfo(float).eps)
-
-
-def rigid_body_modes(V: dolfinx.fem.FunctionSpace, order: np.ndarray) -> PETSc.NullSpace:
-    """Translations and rotations of a blocked displacement space, as a PETSc null space.
-
-    Args:
-        V: A vector P1/P2 space (block size = geometric dimension 2 or 3).
-        order: Which of V's dofs each entry of the vectors holds (e.g. their
-            order inside a mixed unknown).
-    """
-    g = V.dofmap.index_map_bs
-    x = V.tabulate_dof_coordinates()[:, :g]  # one row per node
-    n_nodes = x.shape[0]
-    modes = [np.zeros((n_nodes, g)) for _ in range(3 if g == 2 else 6)]
-    for c in range(g):
-        modes[c][:, c] = 1.0
-    if g == 2:
-        modes[2][:, 0], modes[2][:, 1] = -x[:, 1], x[:, 0]
-    else:
-        for k, (i, j) in enumerate(((0, 1), (1, 2), (2, 0)), start=3):
-            modes[k][:, i], modes[k][:, j] = -x[:, j], x[:, i]
-    # GAMG wants them orthonormal.
-    basis = np.linalg.qr(np.column_stack([m.reshape(-1)[order] for m in modes]))[0]
-    vectors = [PETSc.Vec().createWithArray(column.copy()) for column in basis.T]
-    return PETSc.NullSpace().create(vectors=vectors)
 
 
 def _weak(method: Callable) -> Callable:
@@ -440,7 +241,7 @@ class NewtonSolver:
         self._J.assemble_matrix(A, self._bcs)
         A.getDiagonal(self._diagonal)
         diagonal = np.abs(self._diagonal.array_r[self._u_rows])
-        self.test.round_off = ROUND_OFF_FACTOR * _EPS * self.test.length * self._norm(diagonal)
+        self.test.round_off = ROUND_OFF_FACTOR * EPS * self.test.length * self._norm(diagonal)
         self._add_time("assembly", t0)
 
     def solve(

@@ -8,7 +8,7 @@ import numpy as np
 
 from fe_mpm._dolfinx import dolfinx
 from fe_mpm.errors import ConvergenceError
-from fe_mpm.newton import NewtonResult
+from fe_mpm.force_test import NewtonResult
 from fe_mpm.quadrature import SlotLayout
 from fe_mpm.tracking import hinge_diagnosis
 
@@ -56,24 +56,30 @@ class StepReport:
     lost_load: dict[str, float] = field(default_factory=dict)
 
     @classmethod
-    def of_step(cls, step: int, t: float, dt: float, result: NewtonResult, nslot: int,
-                layout: SlotLayout, reactions: dict[str, np.ndarray],
-                markers: dict[str, np.ndarray], held_points: int,
-                lost_load: dict[int, float]) -> StepReport:
-        """The report of an accepted step from what its phases returned.
+    def of_step(cls, step: int, t: float, result: NewtonResult, current, reactions: dict,
+                markers, tracking, conditions) -> StepReport:
+        """The report of an accepted step from what its phases hold.
 
-        ``lost_load`` is keyed by the grid tractions' facet-tag values, i + 1 for
-        ``Traction i`` (:attr:`GridConditions.lost_load`); only shares > 0 are kept.
+        Args:
+            step: The step's number.
+            t: Its end time.
+            result: Newton's result.
+            current: The step's :class:`~fe_mpm.step_forms.StepInProgress`.
+            reactions: The reaction forces, name -> (g,).
+            markers: The :class:`~fe_mpm.markers.Markers`, moved.
+            tracking: The :class:`~fe_mpm.tracking.PointTracking` (held points).
+            conditions: The :class:`~fe_mpm.grid_conditions.GridConditions`, whose
+                ``lost_load`` is keyed by the tractions' tags, i + 1 for ``Traction i``.
         """
+        lost = {f"Traction {i - 1}": share for i, share in conditions.lost_load.items()
+                if share > 0}
         return cls(
             step=step, t=t, newton_iterations=result.iterations,
-            residual_norms=result.residual_norms, markers=markers, nslot=nslot,
-            occupied_cells=layout.occupied.size, dt=dt, reactions=reactions,
-            held_points=held_points, converged_reason=result.reason,
-            force_scale=result.force_scale, relative_residual=result.relative_residual,
-            lost_load={f"Traction {i - 1}": share for i, share in lost_load.items()
-                       if share > 0},
-        )
+            residual_norms=result.residual_norms, markers=markers.positions(),
+            nslot=current.forms.q.nslot, occupied_cells=current.layout.occupied.size,
+            dt=current.dt, reactions=reactions, held_points=tracking.held_points,
+            converged_reason=result.reason, force_scale=result.force_scale,
+            relative_residual=result.relative_residual, lost_load=lost)
 
 
 def newton_failure(result: NewtonResult, step: int, t_old: float, t_new: float,
@@ -92,3 +98,25 @@ def newton_failure(result: NewtonResult, step: int, t_old: float, t_new: float,
         f"against the force scale {result.force_scale:.3e} (accepted: ‖R‖ <= "
         f"{result.tolerance:.3e}). {hinges}"
         "Points were not updated and nothing was written for this step.")
+
+
+class ProgressBar:
+    """A run's progress in steps (tqdm), or nothing when ``enabled`` is False."""
+
+    def __init__(self, n_steps: int, enabled: bool = True):
+        self._bar = None
+        if enabled:
+            from tqdm.auto import tqdm
+
+            self._bar = tqdm(total=n_steps, desc="fe-mpm", unit="step", leave=False)
+
+    def update(self, report: StepReport, nominal: float) -> None:
+        """Count ``report``'s step as its share of the nominal step length ``nominal``."""
+        if self._bar is not None:
+            self._bar.set_postfix(t=f"{report.t:.4g}", newton=report.newton_iterations)
+            self._bar.update(report.dt / nominal)
+
+    def close(self) -> None:
+        """Remove the bar."""
+        if self._bar is not None:
+            self._bar.close()

@@ -10,6 +10,18 @@ At one step length it makes up to four attempts, in this order (:meth:`RetryLadd
    (``Simulation.step(rebin=False)``), Newton as configured;
 4. held, with the fallback line search.
 
+Why both: full Newton steps can diverge from a poor start, and a backtracking
+search can crawl where full steps converge; on the strip footing each of the two
+alone stopped short of s/B = 2, on different grids, and together they reach it.
+Why hold: the points that crossed cells change the grid's discrete equilibrium at
+once, and on a perfectly plastic body that change can leave Newton with no nearby
+solution, however short the step. A held point stays in its old cell while it lies
+within half a cell of it (barycentric coordinates there all ≥ −1/2) and reads that
+cell's linear field extended beyond the cell: one more step as a finite element
+method with moving quadrature points would take; it is re-binned at the next step.
+Dynamic runs never hold: their mass projection would weigh held points by negative
+shape function values.
+
 Attempts 1–2 and 3–4 share their set-up (tracking, packing), so a step's report
 counts the Newton iterations of both attempts of the set-up that converged. When
 all attempts fail the step is halved (:class:`StepLength`), and it grows back by
@@ -21,8 +33,12 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TypeVar
 
-from fe_mpm.newton import NewtonResult
+from fe_mpm.errors import ConvergenceError
+from fe_mpm.force_test import NewtonResult
+
+T = TypeVar("T")
 
 #: Successes in a row after which a cut step length doubles again.
 SUCCESSES_TO_GROW = 2
@@ -74,6 +90,20 @@ class RetryLadder:
             return [None]
         return [None, self.fallback_line_search]
 
+    def take_step(self, step: Callable[[bool], T], can_hold: bool) -> T:
+        """``step(rebin)`` with each placement of :meth:`placements` until one succeeds.
+
+        Raises:
+            ConvergenceError: The last placement's failure.
+        """
+        placements = self.placements(can_hold)
+        for rebin in placements[:-1]:
+            try:
+                return step(rebin)
+            except ConvergenceError:
+                pass
+        return step(placements[-1])
+
     def solve(self, newton: Callable[[str | None], NewtonResult], configured: str) -> NewtonResult:
         """Newton with each line search of :meth:`line_searches` until one converges.
 
@@ -120,6 +150,18 @@ class StepLength:
         self.dt /= 2
         self._successes = 0
         return self.dt >= self.floor
+
+    def cut_after(self, failure: ConvergenceError) -> None:
+        """:meth:`cut` after ``failure``.
+
+        Raises:
+            ConvergenceError: The halved step falls below the floor; the message is
+                the failure's, and says so.
+        """
+        if not self.cut():
+            raise ConvergenceError(
+                f"{failure} The step was cut to {2 * self.dt:.3g} without success, "
+                f"and the floor is min_step = {self.floor:.3g}.") from None
 
     def accepted(self) -> None:
         """Count a success; after enough of them in a row a cut step doubles again."""

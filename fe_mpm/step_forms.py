@@ -24,7 +24,7 @@ from fe_mpm.formulations import FormulationSpec, GridFields
 from fe_mpm.grid_conditions import GridConditions
 from fe_mpm.materials import Linearisation, PointState, ReturnMapResult
 from fe_mpm.materials.protocol import PointwiseLaw
-from fe_mpm.packing import PointExpression
+from fe_mpm.packing import BoundForm, PointExpression
 from fe_mpm.particles import MaterialPoints
 from fe_mpm.quadrature import BOUNDARY_POINTS, OCCUPIED, MaterialPointQuadrature, SlotLayout
 from fe_mpm.tracker import Tracker
@@ -242,6 +242,35 @@ class StepForms:
 
 
 
+class FormsBySlotCount:
+    """The step forms of a simulation, compiled once for each slot count met.
+
+    Args:
+        fields: The grid unknowns.
+        spec: The formulation.
+        material: The law.
+        conditions: The grid's loads.
+        ppp: PPP data (u-p), or None.
+        dynamics: Newmark's rule, or None (static).
+        mass: ``"consistent"`` or ``"lumped"`` (dynamics).
+    """
+
+    def __init__(self, fields: GridFields, spec: FormulationSpec, material,
+                 conditions: GridConditions, ppp: mixed_up.PPPData | None, dynamics, mass: str):
+        self.fields, self.spec, self.material = fields, spec, material
+        self.options = dict(conditions=conditions, ppp=ppp, lumped=mass == "lumped",
+                            newmark=None if dynamics is None else dynamics.data)
+        self._forms: dict[tuple[int, int], StepForms] = {}
+
+    def get(self, nslot: int, nslot_boundary: int) -> StepForms:
+        """The forms for ``nslot`` slots per entity (``nslot_boundary`` of boundary points)."""
+        key = (nslot, nslot_boundary)
+        if key not in self._forms:
+            self._forms[key] = StepForms(self.fields, self.spec, self.material, *key,
+                                         **self.options)
+        return self._forms[key]
+
+
 class ReturnMapAtIterate:
     """A pointwise law's return map at the current grid unknown, evaluated once per iterate.
 
@@ -292,9 +321,13 @@ class StepInProgress:
         layout: The points' slot layout.
         bary: The points' barycentric coordinates in their cells (n, g + 1).
         return_map: A pointwise law's return map at the current iterate, or None.
+        loads: The external loads alone, bound to the step (Newton's force scale), or None.
+        dt: The step's length (s).
     """
 
     forms: StepForms
     layout: SlotLayout
     bary: np.ndarray
     return_map: ReturnMapAtIterate | None
+    loads: BoundForm | None
+    dt: float

@@ -13,6 +13,7 @@ import numpy as np
 
 from fe_mpm._dolfinx import dolfinx
 from fe_mpm.errors import ConvergenceError, PointsOutsideError, warn
+from fe_mpm.formulations import FormulationSpec
 from fe_mpm.markers import Markers
 from fe_mpm.particles import MaterialPoints
 from fe_mpm.quadrature import SlotLayout, slot_count
@@ -86,9 +87,12 @@ class PointTracking:
         return cells[keep]
 
 
-def check_points_per_cell(layout: SlotLayout, need: int, formulation: str, step_number: int,
+def check_points_per_cell(layout: SlotLayout, spec: FormulationSpec, step_number: int,
                           centroids: np.ndarray) -> None:
-    """Refuse a layout with fewer than ``need`` points in an occupied cell (P2/P1).
+    """Refuse a layout with fewer points in an occupied cell than the formulation needs.
+
+    ``spec.min_points_per_cell`` is 3 for P2/P1 (the rank of the P2 strain) and 1
+    otherwise; ``centroids`` (cells, g) locate the cell named in the message.
 
     Raises:
         ValueError: At set-up (``step_number`` 0): seed more points.
@@ -96,6 +100,7 @@ def check_points_per_cell(layout: SlotLayout, need: int, formulation: str, step_
             the singular tangent, to a wrong answer (Cook's membrane over 20 steps: 0.17
             for 1.30), so the run stops.
     """
+    need, formulation = spec.min_points_per_cell, spec.name
     if need <= 1:
         return
     counts = np.bincount(layout.cell)[layout.occupied]

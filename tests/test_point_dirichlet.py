@@ -70,7 +70,7 @@ def test_platen_gap_falls_like_one_over_the_penalty_and_does_not_accumulate():
     gaps = {}
     for beta in (1e3, 1e5):
         sim, _, reports = _platen_run(penalty=beta)
-        pp = sim._boundary_points
+        pp = sim._boundary.points
         gap = pp.x[:, 1] - pp.targets(sim.t)[:, 1]
         gaps[beta] = np.average(gap, weights=pp.weight)
         load = abs(reports[-1].reactions["platen"][1])
