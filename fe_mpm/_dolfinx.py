@@ -1,9 +1,17 @@
-"""Import DOLFINx the way every install route needs, and check its version.
+"""Import DOLFINx the way every install route needs, check its version, and adapt its internals.
 
 The PyPI wheel ``dolfinx-solver-real`` must be imported (``import
 dolfinx_solver``) before dolfinx, petsc4py or mpi4py so that its bundled PETSc
 and MPI libraries are the ones loaded. A conda or Spack install has no such
 module, which is fine. Every fe_mpm module imports dolfinx through here.
+
+fe-mpm packs the coefficients of its material-point kernels itself
+(:mod:`fe_mpm.packing`), which needs a few things DOLFINx keeps private: a form's
+integrals with their entities, the compiled kernels' coefficient order, and
+tabulating an expression with given coefficients. They are all below
+(:class:`FormFactory`, :func:`form_integrals`, :func:`original_coefficient_positions`,
+:func:`expression_kernel`, :func:`tabulate_expression`), so a DOLFINx upgrade
+touches this file alone.
 """
 
 from __future__ import annotations
@@ -21,6 +29,8 @@ except ImportError as err:  # pragma: no cover - depends on the machine
         "(PyPI wheel dolfinx-solver-real), or from conda-forge "
         "(`conda install -c conda-forge fenics-dolfinx=0.11`) or Spack."
     ) from err
+
+import numpy as np  # noqa: E402 - after the wheel's libraries are loaded
 
 REQUIRED = (0, 11)
 
@@ -83,3 +93,59 @@ class FormFactory:
         form = self._create(self._pointer, self._spaces, self._coefficients, self._constants,
                             ordered, [], self._mesh)
         return dolfinx.fem.Form(form, self._compiled.ufcx_form, self._compiled.code)
+
+
+def form_integrals(form: dolfinx.fem.Form) -> list[tuple[dolfinx.fem.IntegralType, int, int,
+                                                          np.ndarray]]:
+    """Every integral of ``form``: (type, index, subdomain id, its entities).
+
+    The entities are cells (n,) for cell integrals and (cell, local facet) pairs
+    (n, 2) for exterior facets, in the order DOLFINx's kernels run over them.
+    """
+    cpp = form._cpp_object
+    integrals = []
+    for kind in cpp.integral_types:
+        ids = _integral_ids(form.ufcx_form, kind)
+        for i in range(cpp.num_integrals(kind, 0)):
+            integrals.append((kind, i, ids[i], np.asarray(cpp.domains(kind, i))))
+    return integrals
+
+
+def _integral_ids(ufcx_form, integral_type) -> list[int]:
+    """Subdomain ids of a compiled form's integrals of one type, in DOLFINx's order."""
+    t = {dolfinx.fem.IntegralType.cell: 0, dolfinx.fem.IntegralType.exterior_facet: 1,
+         dolfinx.fem.IntegralType.interior_facet: 2}[integral_type]
+    offsets = ufcx_form.form_integral_offsets
+    return [ufcx_form.form_integral_ids[j] for j in range(offsets[t], offsets[t + 1])]
+
+
+def original_coefficient_positions(ufcx_object) -> list[int]:
+    """Where each coefficient of a compiled kernel sits among the UFL object's.
+
+    In the kernel's order; the kernel is a form's or an expression's.
+    """
+    return [ufcx_object.original_coefficient_positions[i]
+            for i in range(ufcx_object.num_coefficients)]
+
+
+def expression_kernel(expression: dolfinx.fem.Expression):
+    """The compiled (UFCx) kernel of a DOLFINx expression."""
+    return expression._ufcx_expression
+
+
+def tabulate_expression(expression: dolfinx.fem.Expression, coefficients: np.ndarray,
+                        mesh: dolfinx.mesh.Mesh, entities: np.ndarray,
+                        values: np.ndarray) -> None:
+    """Evaluate ``expression`` on ``entities`` with the packed ``coefficients``.
+
+    Args:
+        expression: The expression.
+        coefficients: Its coefficients packed per entity (entities, width).
+        mesh: The mesh.
+        entities: The cells to evaluate on (n,), repeats allowed.
+        values: Filled with the values, (n, points, value shape...).
+    """
+    cpp = expression._cpp_object
+    constants = dolfinx.cpp.fem.pack_constants(cpp)
+    dolfinx.cpp.fem.tabulate_expression(values, cpp, constants, coefficients, mesh._cpp_object,
+                                        entities)

@@ -20,10 +20,14 @@ import dolfinx.fem.petsc as fem_petsc
 import numpy as np
 import ufl
 
-from fe_mpm._dolfinx import dolfinx
-from fe_mpm.quadrature import MaterialPointQuadrature, SlotLayout
-
-_cpp = dolfinx.cpp
+from fe_mpm._dolfinx import (
+    dolfinx,
+    expression_kernel,
+    form_integrals,
+    original_coefficient_positions,
+    tabulate_expression,
+)
+from fe_mpm.quadrature import PER_ENTITY_FIELDS, SLOT_FIELDS, MaterialPointQuadrature, SlotLayout
 
 
 def coefficient_columns(ufl_object, ufcx_object) -> tuple[dict, int]:
@@ -34,8 +38,8 @@ def coefficient_columns(ufl_object, ufcx_object) -> tuple[dict, int]:
     """
     original = ufl.algorithms.extract_coefficients(ufl_object)
     columns, offset = {}, 0
-    for i in range(ufcx_object.num_coefficients):
-        c = original[ufcx_object.original_coefficient_positions[i]]
+    for position in original_coefficient_positions(ufcx_object):
+        c = original[position]
         dofmap = c.function_space.dofmap
         width = dofmap.dof_layout.num_dofs * dofmap.bs
         columns[c] = slice(offset, offset + width)
@@ -55,7 +59,7 @@ def gather(f: dolfinx.fem.Function, cells: np.ndarray) -> np.ndarray:
 
 def is_slot_field(c) -> bool:
     """Whether ``c`` is a slot field (made by :meth:`MaterialPointQuadrature.function`)."""
-    return getattr(c, "slot_rule", None) is not None
+    return c in SLOT_FIELDS
 
 
 def is_per_entity(c) -> bool:
@@ -64,7 +68,7 @@ def is_per_entity(c) -> bool:
     That is a slot field, or a cell field packed by
     :meth:`MaterialPointQuadrature.pack_cell_field`.
     """
-    return is_slot_field(c) or getattr(c, "per_entity", False)
+    return is_slot_field(c) or c in PER_ENTITY_FIELDS
 
 
 class _Kernel:
@@ -109,14 +113,10 @@ class BoundForm:
         self.form = form
         self._changing = [c for c in columns if not is_per_entity(c) or c in dynamic]
         self._kernels = {}
-        cpp = form._cpp_object
-        for t in cpp.integral_types:
-            ids = _integral_ids(form.ufcx_form, t)
-            for i in range(cpp.num_integrals(t, 0)):
-                entities = np.asarray(cpp.domains(t, i))
-                cells = entities if entities.ndim == 1 else entities[:, 0]
-                q = quadratures.get(ids[i]) if t == dolfinx.fem.IntegralType.cell else None
-                self._kernels[(t, i)] = _Kernel(columns, width, cells, q)
+        for kind, i, subdomain, entities in form_integrals(form):
+            cells = entities if entities.ndim == 1 else entities[:, 0]
+            q = quadratures.get(subdomain) if kind == dolfinx.fem.IntegralType.cell else None
+            self._kernels[(kind, i)] = _Kernel(columns, width, cells, q)
 
     def coefficients(self) -> dict:
         """The packed coefficients for DOLFINx's assemblers, current for this iterate."""
@@ -144,14 +144,6 @@ class BoundForm:
         return A
 
 
-def _integral_ids(ufcx_form, integral_type) -> list[int]:
-    """Subdomain ids of a compiled form's integrals of one type, in DOLFINx's order."""
-    t = {dolfinx.fem.IntegralType.cell: 0, dolfinx.fem.IntegralType.exterior_facet: 1,
-         dolfinx.fem.IntegralType.interior_facet: 2}[integral_type]
-    offsets = ufcx_form.form_integral_offsets
-    return [ufcx_form.form_integral_ids[j] for j in range(offsets[t], offsets[t + 1])]
-
-
 class PointExpression:
     """A UFL expression evaluated at the material points of a rule.
 
@@ -165,17 +157,13 @@ class PointExpression:
         self.quadrature = quadrature
         self.expression = dolfinx.fem.Expression(expression, quadrature.points)
         self._columns, self._width = coefficient_columns(
-            expression, self.expression._ufcx_expression)
+            expression, expression_kernel(self.expression))
         self._shape = self.expression.value_shape
 
     def evaluate(self, layout: SlotLayout) -> np.ndarray:
         """Values at every point of ``layout``, shape ``(n, value size)``."""
         q = self.quadrature
         kernel = _Kernel(self._columns, self._width, layout.entities, q)
-        coeffs = kernel.pack()
-        cpp = self.expression._cpp_object
-        mesh = q.mesh
         values = np.zeros((layout.num_entities, q.nslot, *self._shape))
-        _cpp.fem.tabulate_expression(values, cpp, _cpp.fem.pack_constants(cpp), coeffs,
-                                     mesh._cpp_object, layout.entities)
+        tabulate_expression(self.expression, kernel.pack(), q.mesh, layout.entities, values)
         return values.reshape(layout.num_entities, q.nslot, -1)[layout.entity, layout.slot]

@@ -24,6 +24,7 @@ coefficient arrays by :mod:`fe_mpm.packing`.
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
 
 import basix
@@ -45,6 +46,9 @@ BOUNDARY_POINTS = 2
 #: Cost of an entity, in slots, when choosing the slot count: the per-entity work
 #: of a kernel call (geometry, the dofs' gather and scatter) against a slot's.
 ENTITY_COST = 2.0
+#: A new slot count replaces the current one only if it costs at most this fraction
+#: of the current's: each change recompiles the step's forms.
+SLOT_CHANGE_SAVING = 0.8
 
 
 def bucket(count: int) -> int:
@@ -76,9 +80,17 @@ def slot_count(counts: np.ndarray, current: int | None = None) -> int:
 
     candidates = [b for b in SLOT_BUCKETS if b <= bucket(int(counts.max()))]
     best = min(candidates, key=cost)
-    if current is not None and cost(best) > 0.8 * cost(current):
+    if current is not None and cost(best) > SLOT_CHANGE_SAVING * cost(current):
         return current
     return best
+
+
+#: The slot fields, each with the rule that made it (:meth:`MaterialPointQuadrature.function`),
+#: and the cell fields packed per entity (:meth:`MaterialPointQuadrature.pack_cell_field`):
+#: :mod:`fe_mpm.packing` reads these, kept beside the DOLFINx Functions rather than as
+#: attributes set on them, and weakly, so a field dies with its forms.
+SLOT_FIELDS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+PER_ENTITY_FIELDS: weakref.WeakSet = weakref.WeakSet()
 
 
 @dataclass
@@ -195,7 +207,7 @@ class MaterialPointQuadrature:
         f = dolfinx.fem.Function(V, name=name)
         bs = V.dofmap.bs
         f.x.array.reshape(-1, bs)[:] = np.reshape(empty, (-1,))
-        f.slot_rule = self  # marks a slot field for fe_mpm.packing
+        SLOT_FIELDS[f] = self
         return f
 
     def sum(self, integrand: ufl.core.expr.Expr) -> ufl.Form:
@@ -258,7 +270,7 @@ class MaterialPointQuadrature:
         first = np.ones(entities.size, dtype=bool)
         first[1:] = entities[1:] != entities[:-1]  # entities are sorted by cell
         self.values[f] = np.where(first, values[entities], 0.0)[:, None]
-        f.per_entity = True  # packed from these values, not gathered per cell
+        PER_ENTITY_FIELDS.add(f)  # packed from these values, not gathered per cell
 
     def pack_geometry(
         self,
