@@ -12,6 +12,10 @@ from fe_mpm.errors import PointsOutsideError, warn
 from fe_mpm.quadrature import SlotLayout, slot_count
 from fe_mpm.tracker import Tracker
 
+#: A boundary point in an empty cell reads an occupied neighbour's field up to this
+#: far outside it (the least barycentric coordinate there): half a cell.
+SNAP_REACH = 0.5
+
 
 class BoundaryPoints:
     """Positions, weights, penalties and tractions of every boundary point, concatenated.
@@ -149,7 +153,7 @@ class BoundaryPointStep:
         occupied[occupied_cells] = True
         # The body's surface lies between its points, often in a cell whose points
         # have moved on: read the field of an occupied neighbour, up to half a cell out.
-        cells = tracker.snap_to(pp.x, cells, occupied, tol=0.5)
+        cells = tracker.snap_to(pp.x, cells, occupied, tol=SNAP_REACH)
         self._active = cells >= 0
         idle = ~self._active & pp.loaded
         if np.any(idle) and not self._warned:

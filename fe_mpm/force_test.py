@@ -25,6 +25,10 @@ ROUND_OFF_FACTOR = 10.0
 #: Machine epsilon of float64.
 EPS = float(np.finfo(float).eps)
 
+#: The pressure rows are in strain units times volume: they pass below
+#: ``max(rtol, PRESSURE_ROUND_OFF) ‖V‖``, this many ε being their round-off floor.
+PRESSURE_ROUND_OFF = 1e3 * EPS
+
 
 @dataclass
 class NewtonResult:
@@ -113,7 +117,7 @@ class ForceTest:
         if not np.isfinite(fnorm):
             self.verdict = "non-finite residual"
             return Reason.DIVERGED_FUNCTION_NANORINF
-        pressure_ok = self.pressure_norm <= max(self.rtol, 1e3 * EPS) * self.volume
+        pressure_ok = self.pressure_norm <= max(self.rtol, PRESSURE_ROUND_OFF) * self.volume
         if self.displacement_norm <= self.tolerance and pressure_ok:
             ratio = self.displacement_norm / self.scale if self.scale > 0 else 0.0
             self.verdict = f"‖R‖ = {ratio:.2e} of the force scale {self.scale:.3e}"
