@@ -16,7 +16,7 @@ import numpy as np
 #: The residual of a converged iterate may be as large as the forces that a
 #: displacement error of ``ROUND_OFF_FACTOR`` machine epsilons of a cell would
 #: cause, ``ROUND_OFF_FACTOR ε h ‖diag K‖``: below that, ‖R‖ is round-off of the
-#: internal forces (computed from total deformations, about ε E |F| per point), not
+#: internal forces (computed from total deformations, about ε E ‖F‖ per point), not
 #: an equilibrium error. Measured floors where Newton stagnates: 0.015 to 0.2 times
 #: ε h ‖diag K‖ (Cook u, u-p, P2/P1 and J2; 2D and 3D gravity blocks with E from
 #: 1e7 to 1e9 Pa; the strip footing), so 10 leaves a margin of 50 or more.

@@ -1,11 +1,13 @@
 """The grid unknowns of each formulation, and what the time loop needs from them.
 
-| name        | unknowns                 | stabilisation        |
-|-------------|--------------------------|----------------------|
-| ``u``       | Δu (P1)                  | none                 |
-| ``up``      | Δu (P1), p (P1)          | PPP (Dohrmann–Bochev)|
-| ``up-nostab``| Δu (P1), p (P1)         | none                 |
-| ``up-p2p1`` | Δu (P2), p (P1)          | none (Taylor–Hood)   |
+=============  ===============  =====================
+name           unknowns         stabilisation
+=============  ===============  =====================
+``u``          Δu (P1)          none
+``up``         Δu (P1), p (P1)  PPP (Dohrmann–Bochev)
+``up-nostab``  Δu (P1), p (P1)  none
+``up-p2p1``    Δu (P2), p (P1)  none (Taylor–Hood)
+=============  ===============  =====================
 
 The weak forms themselves live in :mod:`fe_mpm.forms`.
 """
@@ -39,8 +41,9 @@ class FormulationSpec:
             f"Simulation: {self.name!r} beyond its first step is not yet "
             "trustworthy: points away from their Gauss positions do not integrate "
             "the gradients of the P2 shape functions exactly, and a homogeneous "
-            "stress then leaves spurious nodal forces (the patch test fails; README, "
-            "'P2/P1 once the points have moved'). Use 'up' for runs of many steps.")
+            "stress then leaves spurious nodal forces (the patch test fails; see "
+            "docs/formulations.md, 'P2/P1 once the points have moved'). Use 'up' for "
+            "runs of many steps.")
 
 
 FORMULATIONS = {

@@ -245,7 +245,7 @@ class MaterialPointQuadrature:
         values: np.ndarray,
         empty: float | np.ndarray = 0.0,
     ) -> None:
-        """Set the slot data of ``f`` from per-point ``values`` (n, *value_shape).
+        """Set the slot data of ``f`` from per-point ``values`` ``(n, *value_shape)``.
 
         Empty slots carry zero weight but are still evaluated, so they get the
         harmless value ``empty`` (e.g. the identity for a deformation gradient,

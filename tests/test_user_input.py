@@ -186,7 +186,8 @@ def test_a_bad_point_update_stops_the_step_naming_the_point(monkeypatch, poison,
 
 
 def test_taylor_hood_warns_from_its_second_step():
-    """P2/P1 fails the patch test once the points leave their Gauss positions (README):
+    """P2/P1 fails the patch test once the points leave their Gauss positions
+    (docs/formulations.md):
     its first step is silent, the second says so."""
     mesh = _mesh()
     sim = fe_mpm.Simulation(mesh, fe_mpm.seed(mesh, per_cell=3),

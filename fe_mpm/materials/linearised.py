@@ -34,7 +34,7 @@ class ReturnMapResult:
         tau: Kirchhoff stress (n, 3, 3), Pa (τ₃₃ included in plane strain).
         derivative: Computes ∂τ_ij/∂ΔF_kl (n, 3, 3, g, g) in Pa; read it
             through :attr:`tangent`, which calls it once.
-        history: Internal variables at t_{n+1} by name, each (n, *shape).
+        history: Internal variables at t_{n+1} by name, each ``(n, *shape)``.
         region: Optional per-point label of the return taken (n,).
     """
 
