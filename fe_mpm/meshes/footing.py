@@ -34,6 +34,11 @@ FOOTING_SOIL = 2
 FOOTING_MARGIN = 3
 
 
+#: How far the refinement box reaches past the grid's left and top edges, as a
+#: fraction of the refined zone's size.
+BOX_REACH = 0.5
+
+
 def strip_footing(
     B: float = 1.0,
     *,
@@ -88,50 +93,67 @@ def strip_footing(
             above = occ.addRectangle(0.0, 0.0, 0.0, width, margin)
             out, _ = occ.fragment([(2, soil)], [(2, near), (2, above)])
             occ.synchronize()
-            tags = {FOOTING_SOIL_NEAR: [], FOOTING_SOIL: [], FOOTING_MARGIN: []}
-            for _, s in out:
-                x, y, _ = occ.getCenterOfMass(2, s)
-                if y > 0:
-                    tags[FOOTING_MARGIN].append(s)
-                elif x < near_width and y > -near_depth:
-                    tags[FOOTING_SOIL_NEAR].append(s)
-                else:
-                    tags[FOOTING_SOIL].append(s)
-            sides = {FOOTING_SYMMETRY: [], FOOTING_FAR_SIDE: [], FOOTING_BASE: []}
-            tol = 1e-6 * max(width, depth)  # OCC bounding boxes carry a small tolerance
-            for _, c in model.getEntities(1):
-                x, y, _ = occ.getCenterOfMass(1, c)
-                lo, hi = occ.getBoundingBox(1, c)[:3], occ.getBoundingBox(1, c)[3:]
-                if hi[0] - lo[0] < tol and abs(x) < tol:
-                    sides[FOOTING_SYMMETRY].append(c)
-                elif hi[0] - lo[0] < tol and abs(x - width) < tol:
-                    sides[FOOTING_FAR_SIDE].append(c)
-                elif hi[1] - lo[1] < tol and abs(y + depth) < tol:
-                    sides[FOOTING_BASE].append(c)
-            names = {FOOTING_SYMMETRY: "symmetry", FOOTING_FAR_SIDE: "far_side",
-                     FOOTING_BASE: "base"}
-            for tag, curves in sides.items():
-                model.addPhysicalGroup(1, curves, tag, name=names[tag])
-            cell_names = {FOOTING_SOIL_NEAR: "soil_near", FOOTING_SOIL: "soil",
-                          FOOTING_MARGIN: "margin"}
-            for tag, surfaces in tags.items():
-                model.addPhysicalGroup(2, surfaces, tag, name=cell_names[tag])
-            # h in the refined zone and the strip above it, growing to h_far away from it.
-            field = model.mesh.field
-            box = field.add("Box")
-            field.setNumber(box, "VIn", h)
-            field.setNumber(box, "VOut", h_far)
-            field.setNumber(box, "XMin", -1.0)
-            field.setNumber(box, "XMax", near_width)
-            field.setNumber(box, "YMin", -near_depth)
-            field.setNumber(box, "YMax", margin + 1.0)
-            field.setNumber(box, "Thickness", max(near_width, near_depth))
-            field.setAsBackgroundMesh(box)
-            model.mesh.setSize(model.getEntities(0), h_far)
-            gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
-            gmsh.option.setNumber("Mesh.MeshSizeFromPoints", 0)
+            _tag_regions(model, [s for _, s in out], near_width, near_depth)
+            _tag_sides(model, width, depth)
+            _refine_near_footing(model, near_width, near_depth, margin, h, h_far)
             model.mesh.generate(2)
         return to_dolfinx(model, gdim=2, comm=comm)
+
+
+def _tag_regions(model, surfaces: list[int], near_width: float, near_depth: float) -> None:
+    """Cell tags: the margin above the soil, the refined zone, the rest of the soil."""
+    tags = {FOOTING_SOIL_NEAR: [], FOOTING_SOIL: [], FOOTING_MARGIN: []}
+    for s in surfaces:
+        x, y, _ = model.occ.getCenterOfMass(2, s)
+        if y > 0:
+            tags[FOOTING_MARGIN].append(s)
+        elif x < near_width and y > -near_depth:
+            tags[FOOTING_SOIL_NEAR].append(s)
+        else:
+            tags[FOOTING_SOIL].append(s)
+    names = {FOOTING_SOIL_NEAR: "soil_near", FOOTING_SOIL: "soil", FOOTING_MARGIN: "margin"}
+    for tag, tagged in tags.items():
+        model.addPhysicalGroup(2, tagged, tag, name=names[tag])
+
+
+def _tag_sides(model, width: float, depth: float) -> None:
+    """Facet tags: the symmetry line x = 0, the far side x = width, the base y = −depth."""
+    occ = model.occ
+    sides = {FOOTING_SYMMETRY: [], FOOTING_FAR_SIDE: [], FOOTING_BASE: []}
+    tol = 1e-6 * max(width, depth)  # OCC bounding boxes carry a small tolerance
+    for _, c in model.getEntities(1):
+        x, y, _ = occ.getCenterOfMass(1, c)
+        lo, hi = occ.getBoundingBox(1, c)[:3], occ.getBoundingBox(1, c)[3:]
+        if hi[0] - lo[0] < tol and abs(x) < tol:
+            sides[FOOTING_SYMMETRY].append(c)
+        elif hi[0] - lo[0] < tol and abs(x - width) < tol:
+            sides[FOOTING_FAR_SIDE].append(c)
+        elif hi[1] - lo[1] < tol and abs(y + depth) < tol:
+            sides[FOOTING_BASE].append(c)
+    names = {FOOTING_SYMMETRY: "symmetry", FOOTING_FAR_SIDE: "far_side", FOOTING_BASE: "base"}
+    for tag, curves in sides.items():
+        model.addPhysicalGroup(1, curves, tag, name=names[tag])
+
+
+def _refine_near_footing(model, near_width: float, near_depth: float, margin: float,
+                         h: float, h_far: float) -> None:
+    """Cell size h in the refined zone and the strip above it, growing to h_far away."""
+    field = model.mesh.field
+    box = field.add("Box")
+    # The box reaches past the grid's left and top edges, so the whole strip above
+    # the zone and the symmetry line lie inside it (any reach > 0 gives the same grid).
+    reach = BOX_REACH * max(near_width, margin)
+    field.setNumber(box, "VIn", h)
+    field.setNumber(box, "VOut", h_far)
+    field.setNumber(box, "XMin", -reach)
+    field.setNumber(box, "XMax", near_width)
+    field.setNumber(box, "YMin", -near_depth)
+    field.setNumber(box, "YMax", margin + reach)
+    field.setNumber(box, "Thickness", max(near_width, near_depth))
+    field.setAsBackgroundMesh(box)
+    model.mesh.setSize(model.getEntities(0), h_far)
+    gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
+    gmsh.option.setNumber("Mesh.MeshSizeFromPoints", 0)
 
 
 def footing_points(B: float, n: int, thickness: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
