@@ -196,6 +196,37 @@ if not args.no_output:
     print(f"  wrote {out}/particles.pvd, front.csv, deposit.csv"
           + (" and collapse.png" if plt is not None else ""))
 
+# -
+
+# ## Check against the reference
+#
+# Lube et al.'s laws are empirical fits to experiments, and MPM with Mohr-Coulomb
+# reproduces them only so far: the thesis's own twelve runs (a = 1.2, 3, 5 and 7 on
+# three grids, Tables 6.2–6.4) lie up to +25.6 % from the run-out law (a = 1.2),
+# −13.7 % from the height law (a = 7) and +35.4 % from the duration law (a = 1.2).
+# Each quantity here must lie within those. The duration is `t_inf_cell`, the time
+# the front comes within one cell of d∞ (above: t∞ hinges on round-off). Measured,
+# in that order: at a = 3, −11.2 %, −3.8 %, −5.6 % (h = 0.015 m, 3 points per
+# triangle, α_R = 1.5: the test's scene) and +12.6 %, −3.5 %, −6.6 % (h = 0.01 m,
+# undamped); at a = 1.2 on h = 0.01 m, −8.3 %, −7.0 %, +5.9 % (α_R = 1.5) and
+# +0.1 %, −9.4 %, +2.7 % (undamped). The check covers the thesis's aspect ratios,
+# 1.2 ≤ a ≤ 7, outside the laws' transition 1.8 < a < 2.8.
+
+# +
+#: Largest relative errors that pass: the thesis's own largest, rounded up.
+TOLERANCES = {"runout": 0.26, "final_height": 0.14, "t_inf_cell": 0.36}
+
+if 1.2 <= a <= 7.0 and not 1.8 <= a <= 2.8:
+    passed = all(abs(errors[k]) <= tol for k, tol in TOLERANCES.items())
+    print(f"check: d∞ {100 * errors['runout']:+.1f} %, h∞ {100 * errors['final_height']:+.1f} %, "
+          f"t∞ (front within a cell of d∞) {100 * errors['t_inf_cell']:+.1f} % vs Lube et al. "
+          f"(a = {a:g}); tolerances ±{100 * TOLERANCES['runout']:.0f}, "
+          f"±{100 * TOLERANCES['final_height']:.0f}, ±{100 * TOLERANCES['t_inf_cell']:.0f} % "
+          f"(the thesis's largest): {'PASS' if passed else 'FAIL'}")
+else:
+    passed = True
+    print(f"check: the thesis's errors against Lube et al. are for a = 1.2 to 7 outside "
+          f"1.8–2.8, not a = {a:g}: not checked")
 if args.json:
     print(json.dumps({
         "aspect": a, "runout": runout, "final_height": final_height, "t_inf": t_inf,
@@ -204,6 +235,9 @@ if args.json:
         "t_inf_lube": time_law, "relative_errors": errors, "damping": args.damping,
         "n_particles": len(points), "steps": len(reports), "dt": args.dt,
         "newton_iterations_max": max(iterations), "dropped_points": sim.dropped,
-        "timings": sim.timings,
+        "timings": sim.timings, "check_passed": passed,
     }))
+if not passed:
+    sys.exit("column_collapse.py: the deposit is further from Lube et al.'s laws than the "
+             "thesis's own runs")
 # -

@@ -141,8 +141,10 @@ finally:
 u_A = sim.marker("A") - np.array(meshes.COOK_POINT_A)
 iterations = [r.newton_iterations for r in reports]
 wall = time.perf_counter() - START
-# The published numbers are for structured meshes with one point per triangle.
-kratos_setup = args.structured and args.mp_per_cell == 1
+# The published numbers are for structured meshes with one point per triangle, E = 70
+# and (UP+PPP) the PPP factor 1.
+kratos_setup = (args.structured and args.mp_per_cell == 1 and args.E == 70.0
+                and (args.formulation != "up" or args.ppp_alpha == 1.0))
 reference = cook_reference(args.formulation, args.nu, args.n) if kratos_setup else None
 
 print(f"Cook's membrane: n = {args.n} ({'structured' if args.structured else 'unstructured'}), "
@@ -173,24 +175,64 @@ if not args.no_output:
         fig.savefig(args.output / "load_deflection.png", dpi=120)
         print(f"  load-deflection curve: {args.output / 'load_deflection.png'}")
 
+summary = {
+    "tip_displacement_x": float(u_A[0]),
+    "tip_displacement_y": float(u_A[1]),
+    "newton_iterations": int(sum(iterations)),
+    "newton_iterations_per_step": iterations,
+    "wall_time_s": wall,
+    "n_particles": len(points),
+    "n": args.n,
+    "nu": args.nu,
+    "formulation": args.formulation,
+    "mp_per_cell": args.mp_per_cell,
+    "structured": args.structured,
+    "steps": args.steps,
+    "reference": None if reference is None else {"source": reference[0],
+                                                  "tip_displacement_y": reference[1]},
+    "timings_s": sim.timings,
+}
+# -
+
+# ## Check against the reference
+#
+# The demo exits with an error when u_A,y is further than `TOLERANCE` from the
+# published value for its set-up. Kratos's and the thesis's values carry four
+# decimals, up to 0.07 % of the smallest (0.0724). fe-mpm's one-step answers match
+# every Kratos value within 0.04 % and the thesis's compressible "UP no stab" column
+# within 0.1 % (0.45 % at n = 2); several load steps move u_A,y by under 0.1 %
+# (n = 4, 8, 16). A value exists only for Kratos's set-up (above) at a tabulated n
+# and ν. The thesis's quasi-incompressible "UP no stab" column is not checked: it
+# lies 0.3–2.9 % from ν = 0.499 and seems to have been run at another ν.
+
+# +
+#: Largest relative difference from the published u_A,y that passes (the suite's
+#: tolerance, tests/test_cook.py): seven times the tables' rounding.
+TOLERANCE = 0.005
+
+if reference is None:
+    not_checked = (f"no published u_A,y for formulation {args.formulation}, n = {args.n}, "
+                   f"ν = {args.nu}, E = {args.E:g}, "
+                   f"{'structured' if args.structured else 'unstructured'} grid, "
+                   f"{args.mp_per_cell} point(s) per triangle")
+elif args.formulation == "up-nostab" and args.nu != 0.33:
+    not_checked = "the thesis's quasi-incompressible UP no stab column fits another ν"
+else:
+    not_checked = None
+if not_checked:
+    passed, check_error = True, None
+    print(f"check: {not_checked}: not checked")
+else:
+    source, value = reference
+    check_error = float(abs(u_A[1] / value - 1))
+    passed = bool(check_error <= TOLERANCE)
+    print(f"check: u_A,y = {u_A[1]:.5f} vs {source} {value:.4f} (n = {args.n}, ν = {args.nu}): "
+          f"error {100 * check_error:.2f} % {'<=' if passed else '>'} {100 * TOLERANCE:.1f} % "
+          f"tolerance: {'PASS' if passed else 'FAIL'}")
 if args.json:
-    summary = {
-        "tip_displacement_x": float(u_A[0]),
-        "tip_displacement_y": float(u_A[1]),
-        "newton_iterations": int(sum(iterations)),
-        "newton_iterations_per_step": iterations,
-        "wall_time_s": wall,
-        "n_particles": len(points),
-        "n": args.n,
-        "nu": args.nu,
-        "formulation": args.formulation,
-        "mp_per_cell": args.mp_per_cell,
-        "structured": args.structured,
-        "steps": args.steps,
-        "reference": None if reference is None else {"source": reference[0],
-                                                      "tip_displacement_y": reference[1]},
-        "timings_s": sim.timings,
-    }
+    summary.update(check_error=check_error, check_passed=passed)
     sys.stdout.flush()
     print(json.dumps(summary))
+if not passed:
+    sys.exit(f"cook_membrane.py: u_A,y is {100 * check_error:.2f} % from {source}")
 # -

@@ -188,20 +188,42 @@ print(f"  largest ‖R‖/S of an accepted step {worst:.1e}; base reaction withi
       f"{balance:.1e} of the weight; wall time {wall:.0f} s")
 # -
 
-# ## Check
+# ## Check against the reference
 #
-# Every accepted step is in equilibrium (‖R‖ ≤ 1e-10 of the forces, the reaction
-# equal to the weight), and the knee lies within 25 % of the slip circle's factor:
-# a grid of 0.5 m and a static ramp locate failure to that, not better.
+# Every accepted step must be in equilibrium (‖R‖ ≤ 1e-10 of the forces, the base
+# reaction equal to the weight), and the knee must lie within 25 % of the slip
+# circle's factor: a static ramp in steps of 0.1 g on a grid of 0.5 m locates
+# failure to that, not better (measured: the knee at 0.90 g on h = 0.5 m, +8 %;
+# 1.00 g on h = 1 m, +20 %). A ramp that stops short of 1.25 × 0.83 g cannot show
+# a late knee, so the knee is then not checked.
 
 # +
-ok = worst <= 1e-10 and balance < 1e-8 and abs(knee / BISHOP_FACTOR - 1.0) < 0.25
+#: Knee against the slip circle's factor (relative).
+KNEE_TOLERANCE = 0.25
+#: Newton's ‖R‖/S of every accepted step, and the base reaction against the weight.
+RESIDUAL_TOLERANCE, BALANCE_TOLERANCE = 1e-10, 1e-8
+
+knee_error = abs(knee / BISHOP_FACTOR - 1.0)
+check_knee = args.g_max >= (1 + KNEE_TOLERANCE) * BISHOP_FACTOR
+balanced = worst <= RESIDUAL_TOLERANCE and balance <= BALANCE_TOLERANCE
+passed = bool(balanced and (knee_error <= KNEE_TOLERANCE or not check_knee))
+if check_knee:
+    knee_line = (f"knee {knee:.2f} g vs slip circle {BISHOP_FACTOR} g: error "
+                 f"{100 * knee_error:.0f} % {'<=' if knee_error <= KNEE_TOLERANCE else '>'} "
+                 f"{100 * KNEE_TOLERANCE:.0f} % tolerance")
+else:
+    knee_line = f"knee not checked (ramp to {args.g_max} g only)"
+print(f"check: {knee_line}; largest ‖R‖/S {worst:.1e} "
+      f"{'<=' if worst <= RESIDUAL_TOLERANCE else '>'} {RESIDUAL_TOLERANCE:g}; reaction off "
+      f"the weight by {balance:.1e} {'<=' if balance <= BALANCE_TOLERANCE else '>'} "
+      f"{BALANCE_TOLERANCE:g}: {'PASS' if passed else 'FAIL'}")
 if args.json:
     print(json.dumps({"knee": knee, "bishop": BISHOP_FACTOR, "reached": float(factor[-1]),
                       "steps": len(reports), "worst_relative_residual": worst,
                       "reaction_balance": balance, "n_particles": len(points),
                       "newton_iterations": [r.newton_iterations for r in reports],
                       "crest_moved": moved.tolist(), "load_factor": factor.tolist(),
-                      "wall_time_s": wall}))
-sys.exit(0 if ok else 1)
+                      "wall_time_s": wall, "check_passed": passed}))
+if not passed:
+    sys.exit("slope_gravity.py: the check against the slip circle failed")
 # -

@@ -162,6 +162,42 @@ if not args.no_output:
         print(f"  wrote {out}/particles.pvd (stress, pressure, plastic_strain), "
               "load_settlement.csv and .png")
 
+# -
+
+# ## Check against the reference
+#
+# On weightless Tresca soil the small-strain bearing capacity is q = (2 + π) c_u
+# (Prandtl; the same for a rough and a smooth footing, Hill). With E/c_u = 100 the
+# soil is soft: q/c_u passes 2 + π near s/B = 0.075, and the footing then embeds and
+# q keeps rising. The check takes the mean of q/c_u over the steps with
+# 0.08 ≤ s/B ≤ 0.1, where the capacity is mobilised but the footing has barely
+# embedded. Measured (u-p): +0.3 % on the thesis grid (h = 0.05 B, 10 mm steps, as
+# by default: still rising through 2 + π there), +4.5 % (rough) and +4.9 % (smooth)
+# on h = 0.1 B, +10.3 % and +11.2 % on the coarse grid (h = 0.2 B) the tests use.
+# The u form locks and overshoots by about 65 %. Softer soil (E/c_u < 100) reaches
+# 2 + π later, and a run with no step in the window cannot show it; those are not
+# checked.
+
+# +
+#: Window of settlements s/B over which q/c_u is averaged.
+WINDOW = (0.08, 0.1)
+#: Band for that mean over 2 + π: from 5 % below (the soil's elastic share on fine
+#: grids) to 15 % above (embedment and the coarse grid's overestimate).
+LOWER, UPPER = -0.05, 0.15
+
+in_window = (s_over_B >= WINDOW[0] - 1e-9) & (s_over_B <= WINDOW[1] + 1e-9)
+if args.E / args.cu < 100 or not in_window.any():
+    plateau, check_error, passed = None, None, True
+    print(f"check: 2 + π needs E/c_u ≥ 100 and steps with {WINDOW[0]} ≤ s/B ≤ {WINDOW[1]}: "
+          "not checked")
+else:
+    plateau = float(q_over_cu[in_window].mean())
+    check_error = plateau / (2 + np.pi) - 1
+    passed = bool(LOWER <= check_error <= UPPER)
+    print(f"check: mean q/c_u over {WINDOW[0]} ≤ s/B ≤ {WINDOW[1]} = {plateau:.3f} vs Prandtl "
+          f"2 + π = {2 + np.pi:.3f} ({args.formulation}): error {100 * check_error:+.1f} % "
+          f"{'within' if passed else 'outside'} [{100 * LOWER:+.0f} %, {100 * UPPER:+.0f} %]: "
+          f"{'PASS' if passed else 'FAIL'}")
 if args.json:
     print(json.dumps({
         "settlement_over_B": s_over_B.tolist(), "q_over_cu": q_over_cu.tolist(),
@@ -171,6 +207,9 @@ if args.json:
         "residual_norms": [r.residual_norms for r in reports],
         "sigma_yy_over_cu_range": [float(sigma_yy.min()), float(sigma_yy.max())],
         "stress_oscillation": float(oscillation), "formulation": args.formulation,
-        "timings": sim.timings,
+        "timings": sim.timings, "check_q_over_cu": plateau, "check_error": check_error,
+        "check_passed": passed,
     }))
+if not passed:
+    sys.exit(f"strip_footing.py: q/c_u near s/B = 0.1 is {100 * check_error:+.1f} % from 2 + π")
 # -
