@@ -12,7 +12,7 @@ import numpy as np
 
 from fe_mpm._dolfinx import dolfinx
 from fe_mpm.boundary import PointDirichlet
-from fe_mpm.checks import check_choice, check_range
+from fe_mpm.checks import check_choice, check_int, check_range
 from fe_mpm.formulations import FORMULATIONS, FormulationSpec
 from fe_mpm.materials.protocol import Law, MixedLaw, missing_members
 from fe_mpm.particles import MaterialPoints, simplex_cell_type
@@ -75,6 +75,19 @@ def check_grid_and_points(mesh: dolfinx.mesh.Mesh, points: MaterialPoints) -> No
             f"Simulation: points are {points.gdim}D but the mesh is {mesh.geometry.dim}D")
 
 
+def check_domains(point_domains: int, gdim: int, points_leaving: str) -> None:
+    """Point domains: m ≥ 1 sub-points per edge, in 2D, with every point kept."""
+    check_int("Simulation", "point_domains", point_domains, lo=1)
+    if point_domains > 1 and gdim != 2:
+        raise NotImplementedError(
+            "Simulation: point_domains > 1 works on triangles (2D) for now; in 3D use 1 "
+            "(standard MPM)")
+    if point_domains > 1 and points_leaving != "raise":
+        raise ValueError(
+            "Simulation: point_domains > 1 needs points_leaving='raise': a point whose "
+            "sub-points leave the grid cannot gather its step")
+
+
 def check_law(material, spec: FormulationSpec, formulation: str) -> None:
     """Refuse a law that lacks what the law protocol or the formulation asks for.
 
@@ -121,7 +134,7 @@ def take_density(material, points: MaterialPoints) -> None:
             "zones of different densities, or the law's density alone.")
 
 
-def check_supports(held: np.ndarray, point_conditions: list) -> None:
+def check_supports(conditions, boundary, occupied: np.ndarray) -> None:
     """Refuse a static model whose supports leave a rigid translation free.
 
     Without inertia, a body that nothing holds in some direction has a singular
@@ -130,12 +143,15 @@ def check_supports(held: np.ndarray, point_conditions: list) -> None:
     (A model with no loads and no conditions at all stays at rest: it needs no check.)
 
     Args:
-        held: Per component (g,), whether a grid Dirichlet condition holds it on a
-            node of an occupied cell (:meth:`GridConditions.held_components`).
-        point_conditions: The boundary points' conditions (``PointDirichlet`` hold
-            their components too).
+        conditions: The grid's :class:`~fe_mpm.grid_conditions.GridConditions`.
+        boundary: The :class:`~fe_mpm.boundary_points.BoundaryPointStep`, or None
+            (``PointDirichlet`` hold their components too).
+        occupied: The cells that hold material.
     """
-    held = held.copy()
+    point_conditions = [] if boundary is None else boundary.points.conditions
+    if not (conditions.loads_or_supports or point_conditions):
+        return
+    held = conditions.held_components(occupied).copy()
     for condition in point_conditions:
         if isinstance(condition, PointDirichlet):
             held[list(condition.components or range(held.size))] = True

@@ -27,6 +27,7 @@ from fe_mpm._dolfinx import dolfinx
 from fe_mpm.boundary import Dirichlet, PointDirichlet, PointTraction, Traction
 from fe_mpm.boundary_points import BoundaryPointStep
 from fe_mpm.checks import check_finite, check_range
+from fe_mpm.domains import PointDomains, step_with_domains
 from fe_mpm.dynamics import NewmarkDynamics
 from fe_mpm.errors import ConvergenceError, PointsOutsideError, warn
 from fe_mpm.forms.mixed_up import PPPData
@@ -116,6 +117,9 @@ class Simulation:
         max_step_cells: A static step that moves a point farther than this many sizes
             of its cell (> 0, default 10) is rejected and cut: a grid value blew up at
             a nearly unsupported node (:func:`fe_mpm.point_update.checked_update`).
+        point_domains: Sub-points per edge of each point's domain (2D): m > 1 spreads
+            a point's volume over the cells its domain covers (:mod:`fe_mpm.domains`);
+            1 (default) is standard MPM.
     """
 
     def __init__(
@@ -146,12 +150,14 @@ class Simulation:
         fallback_hold_cells: bool = True,
         linear_solver: str = "direct",
         max_step_cells: float = 10.0,
+        point_domains: int = 1,
     ):
         model_checks.check_grid_and_points(mesh, points)
         model_checks.check_choices(formulation, mass, points_leaving, linear_solver,
                                    fallback_line_search)
         model_checks.check_ranges(max_step_cells, ppp_alpha, damping, output_every)
         model_checks.check_dynamics(dynamic, formulation, damping, mass)
+        model_checks.check_domains(point_domains, points.gdim, points_leaving)
         self.spec = FORMULATIONS[formulation]
         model_checks.check_law(material, self.spec, formulation)
         model_checks.take_density(material, points)
@@ -177,10 +183,9 @@ class Simulation:
         self.conditions = GridConditions(self.fields, dirichlet, tractions, body_force,
                                          body_force_scale, reactions, facet_tags)
         self._boundary = BoundaryPointStep.of([*point_dirichlet, *point_tractions], self.tracker)
-        self._ppp = (
-            PPPData.on_grid(mesh, self.tracker.centroids, ppp_alpha) if self.spec.ppp else None)
-        self._forms = FormsBySlotCount(self.fields, self.spec, material, self.conditions,
-                                       self._ppp, self.dynamics, mass)
+        ppp = PPPData.on_grid(mesh, self.tracker.centroids, ppp_alpha) if self.spec.ppp else None
+        self._forms = FormsBySlotCount(self.fields, self.spec, material, self.conditions, ppp,
+                                       self.dynamics, mass)
         self._current: StepInProgress | None = None
         self._cells_of_last_step: np.ndarray | None = None
         self._newton: NewtonSolver | None = None
@@ -189,6 +194,7 @@ class Simulation:
             None if output_dir is None
             else SimulationOutput(output_dir, self.fields, output_every))
         self._track()  # once now, so a bad initial layout fails at set-up
+        self.domains = PointDomains.of(points, mesh, point_domains)
 
     # -- public API ------------------------------------------------------------
 
@@ -263,6 +269,8 @@ class Simulation:
         """
         if not t_new > self.t:
             raise ValueError(f"Simulation.step: t_new must exceed the current time {self.t}")
+        if self.domains is not None and not self.domains.active:
+            return step_with_domains(self, t_new, rebin)
         k, dt = self.step_number + 1, t_new - self.t
         if k == 2 and self.spec.u_degree == 2:
             warn(self.spec.multi_step_warning())
@@ -307,7 +315,7 @@ class Simulation:
                              hold=None if rebin else self._cells_of_last_step)
         check_points_per_cell(layout, self.spec, self.step_number, self.tracker.centroids)
         if self.step_number == 0 and not self.dynamic:
-            self._check_supports(layout)
+            model_checks.check_supports(self.conditions, self._boundary, layout.occupied)
         self.conditions.check_loaded_facets(layout.occupied, t_new)
 
         t0 = time.perf_counter()
@@ -355,12 +363,6 @@ class Simulation:
         self._add_time("tracking", t0)
         return layout
 
-    def _check_supports(self, layout: SlotLayout) -> None:
-        point_conditions = [] if self._boundary is None else self._boundary.points.conditions
-        if self.conditions.loads_or_supports or point_conditions:
-            held = self.conditions.held_components(layout.occupied)
-            model_checks.check_supports(held, point_conditions)
-
     def _solve(self, forms: StepForms, R, J, bcs: list) -> NewtonResult:
         """Newton from Δu = 0 with each line search of :attr:`ladder` until one converges."""
         current, pts = self._current, self.points
@@ -407,9 +409,8 @@ class Simulation:
         apply_update(pts, new, self.markers, self.dynamics, dt, rm and rm.result.history)
 
     def _write_output(self, force: bool = False) -> None:
-        t0 = time.perf_counter()
-        if self.output is not None and self.output.write(self.step_number, self.t, self.points,
-                                                         force=force):
+        t0, out = time.perf_counter(), self.output
+        if out is not None and out.write(self.step_number, self.t, self.points, force=force):
             self._add_time("output", t0)
 
     def _add_time(self, key: str, t0: float) -> None:
