@@ -1,0 +1,76 @@
+"""Cell-crossing error: Cook's membrane over many load steps, with and without point domains.
+
+Cook's membrane at 5 N (Neo-Hookean, u-p with PPP, a dead load on points that follow
+the body), 20 load steps, against the converged finite element answer: a Taylor–Hood
+(P2/P1) solve in one load step with three points per triangle (a degree-2 rule) on
+n = 16, 32, 64, extrapolated (geometric Richardson). One load step of the MPM is a
+finite element solve with the points as Gauss points; over 20 steps the points cross
+cells, and standard MPM drifts (issue 19). ``point_domains=m`` spreads each point's
+volume over the cells its domain covers (:mod:`fe_mpm.domains`).
+
+Usage: ``./run python benchmarks/cell_crossing.py [--quick] [--nu 0.499 0.33]``.
+Prints the tip displacement, its error against the converged answer and the wall time
+of every case. Not a test.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+from fe_mpm import scenes
+
+#: Total load on the right edge (N): large enough that points cross cells.
+LOAD = 5.0
+#: (label, points per cell, sub-points per domain edge; 1 = standard MPM).
+CASES = [
+    ("standard, 1 point", 1, 1),
+    ("standard, 3 points", 3, 1),
+    ("domains 3x3, 1 point", 1, 3),
+    ("domains 2x2, 3 points", 3, 2),
+]
+
+
+def tip(n: int, nu: float, formulation: str, per_cell: int, steps: int, m: int = 1,
+        load: str = "points") -> tuple[float, float]:
+    """Cook's tip displacement (m) and the wall time of the run (s)."""
+    t0 = time.perf_counter()
+    sim = scenes.cook_membrane(n, nu, formulation, per_cell=per_cell, traction=LOAD / 16,
+                               load=load, margin=n // 2, point_domains=m)
+    sim.run(1.0, steps, progress=False)
+    return scenes.tip_deflection(sim), time.perf_counter() - t0
+
+
+def converged_fem(nu: float, sizes=(16, 32, 64)) -> float:
+    """The Taylor–Hood finite element limit of the tip displacement (Richardson)."""
+    a, b, c = (tip(n, nu, "up-p2p1", 3, 1, load="grid")[0] for n in sizes)
+    ratio = (b - a) / (c - b)
+    return c + (c - b) / (ratio - 1)
+
+
+def main() -> None:
+    """Print the table."""
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--quick", action="store_true", help="n = 16 and 32 only")
+    p.add_argument("--nu", type=float, nargs="+", default=[0.499, 0.33])
+    p.add_argument("--steps", type=int, default=20)
+    args = p.parse_args()
+    sizes = (16, 32) if args.quick else (16, 32, 64)
+    for nu in args.nu:
+        limit = converged_fem(nu)
+        print(f"\nν = {nu}: converged Taylor–Hood FEM u_A,y = {limit:.4f} "
+              f"(P2/P1, 3 points per triangle, one step, n = 16, 32, 64, Richardson)")
+        print(f"{'case':<24}" + "".join(f"{'n = ' + str(n):>22}" for n in sizes))
+        one_step = [tip(n, nu, "up", 1, 1)[0] for n in sizes]
+        print(f"{'one step (FEM at n)':<24}" + "".join(
+            f"{u:>10.4f} {100 * (u / limit - 1):+6.1f} %    " for u in one_step))
+        for label, per_cell, m in CASES:
+            cells = []
+            for n in sizes:
+                u, wall = tip(n, nu, "up", per_cell, args.steps, m)
+                cells.append(f"{u:>10.4f} {100 * (u / limit - 1):+6.1f} % {wall:4.0f}s")
+            print(f"{label:<24}" + "".join(f"{c:>22}" for c in cells), flush=True)
+
+
+if __name__ == "__main__":
+    main()
