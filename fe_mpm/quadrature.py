@@ -85,11 +85,12 @@ def slot_count(counts: np.ndarray, current: int | None = None) -> int:
     return best
 
 
-#: The slot fields, each with the rule that made it (:meth:`MaterialPointQuadrature.function`),
-#: and the cell fields packed per entity (:meth:`MaterialPointQuadrature.pack_cell_field`):
-#: :mod:`fe_mpm.packing` reads these, kept beside the DOLFINx Functions rather than as
-#: attributes set on them, and weakly, so a field dies with its forms.
-SLOT_FIELDS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+#: The slot fields (:meth:`MaterialPointQuadrature.function`) and the cell fields packed
+#: per entity (:meth:`MaterialPointQuadrature.pack_cell_field`): :mod:`fe_mpm.packing`
+#: asks these, kept beside the DOLFINx Functions rather than as attributes set on them.
+#: Weak sets: a field dies with its forms. (Not a dict from field to rule: the rule holds
+#: its own fields, so no entry would ever die, nor any simulation with them.)
+SLOT_FIELDS: weakref.WeakSet = weakref.WeakSet()
 PER_ENTITY_FIELDS: weakref.WeakSet = weakref.WeakSet()
 
 
@@ -207,7 +208,7 @@ class MaterialPointQuadrature:
         f = dolfinx.fem.Function(V, name=name)
         bs = V.dofmap.bs
         f.x.array.reshape(-1, bs)[:] = np.reshape(empty, (-1,))
-        SLOT_FIELDS[f] = self
+        SLOT_FIELDS.add(f)
         return f
 
     def sum(self, integrand: ufl.core.expr.Expr) -> ufl.Form:

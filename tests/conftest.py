@@ -21,6 +21,7 @@ import atexit
 import json
 import os
 import shutil
+import sys
 import tempfile
 from pathlib import Path
 
@@ -44,6 +45,24 @@ if "FE_MPM_TEST_JIT_CONFIG" not in os.environ:
     os.environ["FE_MPM_DEMO_JIT_CONFIG"] = _jit_config("-O1")
 
 import fe_mpm  # noqa: E402, F401
+
+
+def _warnings_skip_mutmut_frames() -> None:
+    """Under mutmut a mutated function is called through its trampoline, a frame in
+    mutmut's own package between the user's line and fe_mpm's: fe_mpm's warnings skip
+    it too, so the tests that check a warning's line see the user's line, as a user
+    does. Outside mutmut (not imported) nothing changes. (The folder, not the file:
+    CPython matches a prefix against the file name less its last character.)"""
+    if "mutmut" not in sys.modules:
+        return
+    from mutmut.mutation import trampoline
+
+    import fe_mpm.errors
+
+    fe_mpm.errors._PACKAGE = (*fe_mpm.errors._PACKAGE, str(Path(trampoline.__file__).parent))
+
+
+_warnings_skip_mutmut_frames()
 
 
 def pytest_collection_modifyitems(items):

@@ -2,6 +2,8 @@
 
 import pytest
 
+from fe_mpm.errors import ConvergenceError
+from fe_mpm.force_test import NewtonResult
 from fe_mpm.retry import Attempt, RetryLadder, StepLength
 
 
@@ -44,3 +46,43 @@ def test_the_step_halves_to_its_floor_and_doubles_back_after_two_successes():
     assert length.dt == 1.0  # never beyond the nominal step
     assert length.cut() and length.cut()  # 0.5, then the floor itself
     assert not length.cut()  # 0.125 < 0.25
+
+
+def _newton(outcomes):
+    """A stand-in for Newton: the i-th call converges or not after the given iterations,
+    with ‖R‖ = 10, 1, ... per iteration; it records the line search it was given."""
+    calls = []
+
+    def solve(search):
+        converged, iterations = outcomes[len(calls)]
+        calls.append(search)
+        norms = [10.0 ** -k for k in range(-1, iterations)]
+        return NewtonResult(converged, iterations, "stand-in", norms)
+
+    return solve, calls
+
+
+def test_solve_tries_the_fallback_line_search_and_counts_both_attempts():
+    """Newton as configured fails after 3 iterations, the fallback converges after 2: the
+    result is the second one, with 5 iterations and the ‖R‖ history of both (4 + 3
+    entries) in order. A fallback equal to the configured search is not tried again."""
+    newton, calls = _newton([(False, 3), (True, 2)])
+    result = RetryLadder("bt", True).solve(newton, "basic")
+    assert calls == [None, "bt"]
+    assert result.converged and result.iterations == 5
+    assert result.residual_norms == [10.0, 1.0, 0.1, 0.01, 10.0, 1.0, 0.1]
+    newton, calls = _newton([(False, 3), (True, 2)])
+    result = RetryLadder("bt", True).solve(newton, "bt")
+    assert calls == [None] and not result.converged and result.iterations == 3
+
+
+def test_cut_after_a_failure_names_the_last_step_length_and_the_floor():
+    """0.5 ≥ floor 0.3 is tried; the next cut, to 0.25, is below it: the failure's message
+    goes on with the step length that failed last (0.5) and the floor."""
+    length = StepLength(nominal=1.0, floor=0.3)
+    length.cut_after(ConvergenceError("Newton failed."))
+    assert length.dt == 0.5
+    with pytest.raises(ConvergenceError) as info:
+        length.cut_after(ConvergenceError("Newton failed."))
+    assert str(info.value) == ("Newton failed. The step was cut to 0.5 without success, "
+                               "and the floor is min_step = 0.3.")

@@ -209,16 +209,25 @@ def test_a_dropped_simulation_is_freed_with_its_solver(solver):
     The SNES callbacks used to hold the Newton solver (and so the simulation) in a
     cycle through PETSc that Python cannot collect: each simulation leaked its MPI
     communicators, and a process ran out of them after a few hundred (the suite
-    itself hit "MatCreate ... General MPI error")."""
+    itself hit "MatCreate ... General MPI error"). Its slot fields go with it: the
+    registry of slot fields once held each field's rule, which holds the fields, so
+    every simulation stayed alive, and a single-process run of the suite failed
+    after about 290 tests (a linear solve on exhausted memory)."""
     import gc
     import weakref
 
+    from fe_mpm.quadrature import PER_ENTITY_FIELDS, SLOT_FIELDS
+
+    gc.collect()
+    registered = (len(SLOT_FIELDS), len(PER_ENTITY_FIELDS))
     mesh = rectangle_mesh((0, 0), (1, 1), (2, 2))
-    sim = fe_mpm.Simulation(mesh, fe_mpm.seed(mesh), fe_mpm.NeoHookean(1.0, 0.3),
+    sim = fe_mpm.Simulation(mesh, fe_mpm.seed(mesh), fe_mpm.NeoHookean(1.0, 0.3), "up",
                             dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0))],
                             linear_solver=solver)
     sim.step(1.0)
+    assert len(SLOT_FIELDS) > registered[0] and len(PER_ENTITY_FIELDS) > registered[1]
     alive = (weakref.ref(sim), weakref.ref(sim._newton))
     del sim
     gc.collect()
     assert all(ref() is None for ref in alive)
+    assert (len(SLOT_FIELDS), len(PER_ENTITY_FIELDS)) == registered

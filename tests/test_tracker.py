@@ -5,6 +5,7 @@ import pytest
 
 import fe_mpm
 from fe_mpm._dolfinx import dolfinx
+from fe_mpm.markers import Markers
 from fe_mpm.meshes import rectangle_mesh
 from fe_mpm.tracker import Tracker
 
@@ -109,6 +110,28 @@ def test_points_leaving_the_grid_can_be_dropped_with_a_count():
         sim.step(2.0)
     assert sim.dropped > 0 and len(points) == n0 - sim.dropped
     assert np.all(points.x[:, 0] <= 2.0 + 0.6 + 1e-12)
+
+
+def test_markers_follow_their_hosts_renumbered_after_a_drop():
+    """When points are dropped, each marker's host becomes its index among the kept
+    points, so the marker still moves with it (x_m += Δu of its host, ΔF = I here):
+    hosts 2 and 4 of five points become 1 and 2 when points 0 and 3 go. A marker whose
+    host is dropped stops the run, naming the marker."""
+    x = np.array([[0.0, 0.0], [1.0, 0.0], [2.0, 0.0], [3.0, 0.0], [4.0, 0.0]])
+    markers = Markers()
+    markers.add("a", np.array([2.25, 0.5]), x)  # nearest: point 2
+    markers.add("b", np.array([3.75, 0.5]), x)  # nearest: point 4
+    keep = np.array([False, True, True, False, True])
+    markers.keep_hosts(keep)
+    du = np.array([[10.0, 0.0], [0.0, 1.0], [0.0, 2.0]])  # of the kept points 1, 2, 4
+    markers.move(x[keep], du, np.repeat(np.eye(2)[None], 3, axis=0))
+    np.testing.assert_allclose(markers.position("a"), [2.25, 1.5], rtol=0, atol=1e-15)
+    np.testing.assert_allclose(markers.position("b"), [3.75, 2.5], rtol=0, atol=1e-15)
+    lost = Markers()
+    lost.add("c", np.array([0.25, 0.0]), x)  # nearest: point 0, which goes
+    with pytest.raises(fe_mpm.PointsOutsideError,
+                       match=r"^the host point of marker 'c' left the grid$"):
+        lost.keep_hosts(keep)
 
 
 def test_snap_to_moves_points_into_the_nearest_allowed_cell_within_the_tolerance():
