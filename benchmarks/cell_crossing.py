@@ -31,12 +31,21 @@ CASES = [
 ]
 
 
-def tip(n: int, nu: float, formulation: str, per_cell: int, steps: int, m: int = 1,
-        load: str = "points") -> tuple[float, float]:
+def tip(
+    n: int, nu: float, formulation: str, per_cell: int, steps: int, m: int = 1, load: str = "points"
+) -> tuple[float, float]:
     """Cook's tip displacement (m) and the wall time of the run (s)."""
     t0 = time.perf_counter()
-    sim = scenes.cook_membrane(n, nu, formulation, per_cell=per_cell, traction=LOAD / 16,
-                               load=load, margin=n // 2, point_domains=m)
+    sim = scenes.cook_membrane(
+        n,
+        nu,
+        formulation,
+        per_cell=per_cell,
+        traction=LOAD / 16,
+        load=load,
+        margin=n // 2,
+        point_domains=m,
+    )
     sim.run(1.0, steps, progress=False)
     return scenes.tip_deflection(sim), time.perf_counter() - t0
 
@@ -58,12 +67,16 @@ def main() -> None:
     sizes = (16, 32) if args.quick else (16, 32, 64)
     for nu in args.nu:
         limit = converged_fem(nu)
-        print(f"\nν = {nu}: converged Taylor–Hood FEM u_A,y = {limit:.4f} "
-              f"(P2/P1, 3 points per triangle, one step, n = 16, 32, 64, Richardson)")
+        print(
+            f"\nν = {nu}: converged Taylor–Hood FEM u_A,y = {limit:.4f} "
+            f"(P2/P1, 3 points per triangle, one step, n = 16, 32, 64, Richardson)"
+        )
         print(f"{'case':<24}" + "".join(f"{'n = ' + str(n):>22}" for n in sizes))
         one_step = [tip(n, nu, "up", 1, 1)[0] for n in sizes]
-        print(f"{'one step (FEM at n)':<24}" + "".join(
-            f"{u:>10.4f} {100 * (u / limit - 1):+6.1f} %    " for u in one_step))
+        print(
+            f"{'one step (FEM at n)':<24}"
+            + "".join(f"{u:>10.4f} {100 * (u / limit - 1):+6.1f} %    " for u in one_step)
+        )
         for label, per_cell, m in CASES:
             cells = []
             for n in sizes:

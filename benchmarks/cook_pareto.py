@@ -69,25 +69,46 @@ def one_run(n: int, nu: float, formulation: str, per_cell: int, structured: bool
     (report,) = sim.run(progress=False)
     total = time.perf_counter() - t0
     sim.close()
-    split = {k: v for k, v in phases(sim.timings).items()
-             if k in ("tracking", "packing", "assembly", "solve")}
+    split = {
+        k: v
+        for k, v in phases(sim.timings).items()
+        if k in ("tracking", "packing", "assembly", "solve")
+    }
     split["rest"] = total - sum(split.values())
-    return {"u_A_y": scenes.tip_deflection(sim), "newton": report.newton_iterations,
-            "points": len(sim.points), "time_s": total, **split}
+    return {
+        "u_A_y": scenes.tip_deflection(sim),
+        "newton": report.newton_iterations,
+        "points": len(sim.points),
+        "time_s": total,
+        **split,
+    }
 
 
 def median_run(n, nu, formulation, per_cell, structured, repeat) -> dict:
     """Median over ``repeat`` runs (after one untimed run for JIT), per field."""
     one_run(n, nu, formulation, per_cell, structured)
     runs = [one_run(n, nu, formulation, per_cell, structured) for _ in range(repeat)]
-    return {k: (statistics.median(r[k] for r in runs) if k not in ("u_A_y", "points", "newton")
-                else runs[0][k]) for k in runs[0]}
+    return {
+        k: (
+            statistics.median(r[k] for r in runs)
+            if k not in ("u_A_y", "points", "newton")
+            else runs[0][k]
+        )
+        for k in runs[0]
+    }
 
 
 def start_up_time(repeat: int) -> float:
     """Median whole-process time of the smallest Cook run (s): start-up, imports, cached forms."""
-    command = [sys.executable, str(HERE.parent / "demos" / "cook_membrane.py"), "--n", "2",
-               "--formulation", "up", "--no-output"]
+    command = [
+        sys.executable,
+        str(HERE.parent / "demos" / "cook_membrane.py"),
+        "--n",
+        "2",
+        "--formulation",
+        "up",
+        "--no-output",
+    ]
     subprocess.run(command, check=True, capture_output=True)  # JIT
     times = []
     for _ in range(repeat):
@@ -126,8 +147,13 @@ def main() -> None:
     p.add_argument("--repeat", type=int, default=3, help="timed runs per case (median)")
     p.add_argument("--quick", action="store_true", help=f"only n in {QUICK_SIZES}")
     p.add_argument("--output", type=Path, default=Path("out_bench"))
-    p.add_argument("--replot", type=Path, default=None, metavar="CSV",
-                   help="only summarise and redraw an earlier run's CSV")
+    p.add_argument(
+        "--replot",
+        type=Path,
+        default=None,
+        metavar="CSV",
+        help="only summarise and redraw an earlier run's CSV",
+    )
     args = p.parse_args()
     if args.replot is not None:
         replot(args.replot)
@@ -139,8 +165,10 @@ def main() -> None:
     for nu in (0.33, 0.499):
         reference = COOK_FINITE_STRAIN_LIMIT[nu]
         print(f"\nν = {nu}: reference u_A,y = {reference}")
-        print(f"{'method':<24}{'n':>5}{'points':>8}{'u_A,y':>10}{'error %':>9}{'Newton':>7}"
-              f"{'run s':>8}{'whole s':>8}  track/pack/assemble/solve/rest (ms)")
+        print(
+            f"{'method':<24}{'n':>5}{'points':>8}{'u_A,y':>10}{'error %':>9}{'Newton':>7}"
+            f"{'run s':>8}{'whole s':>8}  track/pack/assemble/solve/rest (ms)"
+        )
         for formulation, per_cell, sizes in METHODS:
             for structured in (True, False):
                 for n in sizes:
@@ -149,20 +177,47 @@ def main() -> None:
                     if not structured and n == 128:
                         continue
                     r = median_run(n, nu, formulation, per_cell, structured, args.repeat)
-                    r.update(nu=nu, formulation=formulation, per_cell=per_cell, n=n,
-                             mesh="structured" if structured else "unstructured",
-                             error=abs(r["u_A_y"] / reference - 1),
-                             whole_s=r["time_s"] + start_up, reference=reference)
+                    r.update(
+                        nu=nu,
+                        formulation=formulation,
+                        per_cell=per_cell,
+                        n=n,
+                        mesh="structured" if structured else "unstructured",
+                        error=abs(r["u_A_y"] / reference - 1),
+                        whole_s=r["time_s"] + start_up,
+                        reference=reference,
+                    )
                     rows.append(r)
-                    parts = "/".join(f"{1e3 * r[k]:.0f}" for k in
-                                     ("tracking", "packing", "assembly", "solve", "rest"))
-                    print(f"{method_name(r):<24}{n:>5}{r['points']:>8}{r['u_A_y']:>10.5f}"
-                          f"{100 * r['error']:>9.3f}{r['newton']:>7}{r['time_s']:>8.3f}"
-                          f"{r['whole_s']:>8.2f}  {parts}", flush=True)
+                    parts = "/".join(
+                        f"{1e3 * r[k]:.0f}"
+                        for k in ("tracking", "packing", "assembly", "solve", "rest")
+                    )
+                    print(
+                        f"{method_name(r):<24}{n:>5}{r['points']:>8}{r['u_A_y']:>10.5f}"
+                        f"{100 * r['error']:>9.3f}{r['newton']:>7}{r['time_s']:>8.3f}"
+                        f"{r['whole_s']:>8.2f}  {parts}",
+                        flush=True,
+                    )
     summarise(rows)
-    columns = ["nu", "formulation", "per_cell", "mesh", "n", "points", "u_A_y", "reference",
-               "error", "newton", "time_s", "whole_s", "tracking", "packing", "assembly",
-               "solve", "rest"]
+    columns = [
+        "nu",
+        "formulation",
+        "per_cell",
+        "mesh",
+        "n",
+        "points",
+        "u_A_y",
+        "reference",
+        "error",
+        "newton",
+        "time_s",
+        "whole_s",
+        "tracking",
+        "packing",
+        "assembly",
+        "solve",
+        "rest",
+    ]
     with open(args.output / "cook_pareto.csv", "w", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=columns, extrasaction="ignore")
         writer.writeheader()
@@ -179,20 +234,30 @@ def summarise(rows: list[dict]) -> None:
         report_limits(mine, nu)
         print(f"Pareto front, ν = {nu} (no faster run is more accurate):")
         for r in pareto_front(mine):
-            print(f"  {r['whole_s']:6.2f} s  error {100 * r['error']:7.3f} %  "
-                  f"{method_name(r)}, n = {r['n']}")
+            print(
+                f"  {r['whole_s']:6.2f} s  error {100 * r['error']:7.3f} %  "
+                f"{method_name(r)}, n = {r['n']}"
+            )
         report_kratos(mine, nu)
 
 
 def report_limits(rows: list[dict], nu: float) -> None:
     """Re-derive the extrapolated reference from this sweep's finest runs."""
+
     def series(formulation, per_cell, sizes):
-        by_n = {r["n"]: r["u_A_y"] for r in rows if r["formulation"] == formulation
-                and r["per_cell"] == per_cell and r["mesh"] == "structured"}
+        by_n = {
+            r["n"]: r["u_A_y"]
+            for r in rows
+            if r["formulation"] == formulation
+            and r["per_cell"] == per_cell
+            and r["mesh"] == "structured"
+        }
         return [by_n[n] for n in sizes] if all(n in by_n for n in sizes) else None
 
-    for name, values in (("UP+PPP 1pt, n = 32, 64, 128", series("up", 1, (32, 64, 128))),
-                         ("P2/P1 3pt, n = 8, 16, 32", series("up-p2p1", 3, (8, 16, 32)))):
+    for name, values in (
+        ("UP+PPP 1pt, n = 32, 64, 128", series("up", 1, (32, 64, 128))),
+        ("P2/P1 3pt, n = 8, 16, 32", series("up-p2p1", 3, (8, 16, 32))),
+    ):
         if values is not None:
             print(f"  extrapolated from {name}: {richardson(values):.5f}")
 
@@ -207,14 +272,18 @@ def report_kratos(rows: list[dict], nu: float) -> None:
         err = abs(value / reference - 1)
         better = [r for r in rows if r["error"] <= err]
         if not better:
-            print(f"  Kratos UP+PPP n = {n} ({100 * err:.3f} %, {t_kratos} s): no run here is "
-                  "as accurate")
+            print(
+                f"  Kratos UP+PPP n = {n} ({100 * err:.3f} %, {t_kratos} s): no run here is "
+                "as accurate"
+            )
             continue
         r = min(better, key=lambda r: r["whole_s"])
         when = "" if nu == 0.499 else " (time as measured at ν = 0.499)"
-        print(f"  Kratos UP+PPP n = {n}: error {100 * err:.3f} % in {t_kratos} s{when}; fe-mpm "
-              f"{method_name(r)}, n = {r['n']}: {100 * r['error']:.3f} % in {r['whole_s']:.2f} s "
-              f"({t_kratos / r['whole_s']:.1f}× faster)")
+        print(
+            f"  Kratos UP+PPP n = {n}: error {100 * err:.3f} % in {t_kratos} s{when}; fe-mpm "
+            f"{method_name(r)}, n = {r['n']}: {100 * r['error']:.3f} % in {r['whole_s']:.2f} s "
+            f"({t_kratos / r['whole_s']:.1f}× faster)"
+        )
 
 
 def plot(rows: list[dict], path: Path) -> None:
@@ -229,8 +298,7 @@ def plot(rows: list[dict], path: Path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    colours = {"u": "tab:red", "up-nostab": "tab:orange", "up": "tab:blue",
-               "up-p2p1": "tab:green"}
+    colours = {"u": "tab:red", "up-nostab": "tab:orange", "up": "tab:blue", "up-p2p1": "tab:green"}
     markers = {1: "o", 3: "^", 6: "s"}
     fig, axes = plt.subplots(2, 2, figsize=(12, 9), sharey=True)
     for column, nu in enumerate((0.33, 0.499)):
@@ -238,23 +306,45 @@ def plot(rows: list[dict], path: Path) -> None:
             ax = axes[row, column]
             for formulation, per_cell, _ in METHODS:
                 for mesh, style in (("structured", "-"), ("unstructured", "--")):
-                    mine = sorted((r for r in rows if r["nu"] == nu and r["mesh"] == mesh
-                                   and r["formulation"] == formulation
-                                   and r["per_cell"] == per_cell), key=lambda r: r["n"])
+                    mine = sorted(
+                        (
+                            r
+                            for r in rows
+                            if r["nu"] == nu
+                            and r["mesh"] == mesh
+                            and r["formulation"] == formulation
+                            and r["per_cell"] == per_cell
+                        ),
+                        key=lambda r: r["n"],
+                    )
                     if mine:
-                        ax.loglog([r[key] for r in mine], [r["error"] for r in mine], style,
-                                  marker=markers[per_cell], color=colours[formulation], ms=4,
-                                  lw=1, alpha=0.85, label=method_name(mine[0]))
+                        ax.loglog(
+                            [r[key] for r in mine],
+                            [r["error"] for r in mine],
+                            style,
+                            marker=markers[per_cell],
+                            color=colours[formulation],
+                            ms=4,
+                            lw=1,
+                            alpha=0.85,
+                            label=method_name(mine[0]),
+                        )
             if key == "whole_s":
                 reference = COOK_FINITE_STRAIN_LIMIT[nu]
                 for n, t_kratos in KRATOS_TIME.items():
                     value = COOK_KRATOS_UP_PPP.get(nu, {}).get(n)
                     if value is not None:
-                        ax.loglog(t_kratos, abs(value / reference - 1), "k*", ms=12,
-                                  label=f"Kratos MPM UP+PPP n = {n}")
+                        ax.loglog(
+                            t_kratos,
+                            abs(value / reference - 1),
+                            "k*",
+                            ms=12,
+                            label=f"Kratos MPM UP+PPP n = {n}",
+                        )
             ax.set_title(f"Cook's membrane, ν = {nu}")
-            ax.set_xlabel("whole-process time (s)" if key == "whole_s"
-                          else "run time after JIT (s)")
+            ax.set_xlabel(
+                "whole-process time (s)" if key == "whole_s" else "run time after JIT (s)"
+            )
             ax.grid(True, which="both", alpha=0.3)
     for ax in axes[:, 0]:
         ax.set_ylabel("relative error of u_A,y")

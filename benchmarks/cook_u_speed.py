@@ -32,7 +32,10 @@ def solve_once(n: int, nu: float) -> dict:
     t_mesh = time.perf_counter() - t0
     points = fe_mpm.seed(scene.mesh, per_cell=1)
     sim = fe_mpm.Simulation(
-        scene.mesh, points, fe_mpm.NeoHookean(E=70.0, nu=nu), facet_tags=scene.facet_tags,
+        scene.mesh,
+        points,
+        fe_mpm.NeoHookean(E=70.0, nu=nu),
+        facet_tags=scene.facet_tags,
         dirichlet=[fe_mpm.Dirichlet(meshes.COOK_CLAMPED)],
         tractions=[fe_mpm.Traction(meshes.COOK_LOADED, (0.0, 1 / 16))],
     )
@@ -51,15 +54,23 @@ def solve_once(n: int, nu: float) -> dict:
         "update": tm["update"],
     }
     split["rest"] = total - sum(split.values())
-    return {"total": total, "split": split, "newton": report.newton_iterations,
-            "u_A_y": sim.marker("A")[1] - 60.0}
+    return {
+        "total": total,
+        "split": split,
+        "newton": report.newton_iterations,
+        "u_A_y": sim.marker("A")[1] - 60.0,
+    }
 
 
 def whole_process(n: int, nu: float) -> float:
     """Wall time of the demo as a fresh process (imports included)."""
     t0 = time.perf_counter()
-    out = subprocess.run([sys.executable, str(DEMO), "--n", str(n), "--nu", str(nu),
-                          "--no-output", "--json"], capture_output=True, text=True, check=True)
+    out = subprocess.run(
+        [sys.executable, str(DEMO), "--n", str(n), "--nu", str(nu), "--no-output", "--json"],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
     wall = time.perf_counter() - t0
     json.loads(out.stdout.strip().splitlines()[-1])
     return wall
@@ -79,11 +90,15 @@ def main() -> None:
         med = {k: statistics.median(r["split"][k] for r in runs) for k in runs[0]["split"]}
         total = statistics.median(r["total"] for r in runs)
         procs = [whole_process(n, args.nu) for _ in range(args.repeat)]
-        print(f"\nn = {n:4d}: {2 * n * n} points, Newton {runs[0]['newton']}, "
-              f"u_A,y = {runs[0]['u_A_y']:.5f}")
+        print(
+            f"\nn = {n:4d}: {2 * n * n} points, Newton {runs[0]['newton']}, "
+            f"u_A,y = {runs[0]['u_A_y']:.5f}"
+        )
         print(f"  after JIT: {total:.3f} s = " + ", ".join(f"{k} {v:.3f}" for k, v in med.items()))
-        print(f"  whole process (imports, gmsh, solve): median {statistics.median(procs):.2f} s "
-              f"(min {min(procs):.2f}, max {max(procs):.2f})")
+        print(
+            f"  whole process (imports, gmsh, solve): median {statistics.median(procs):.2f} s "
+            f"(min {min(procs):.2f}, max {max(procs):.2f})"
+        )
 
 
 if __name__ == "__main__":

@@ -41,8 +41,7 @@ def skempton(depth_over_B: np.ndarray) -> np.ndarray:
     return np.minimum(5.0 * (1.0 + 0.2 * np.asarray(depth_over_B)), 7.5)
 
 
-def run_grid(h: float, steps: int, h_far: float | None = None,
-             progress: bool = True) -> list[dict]:
+def run_grid(h: float, steps: int, h_far: float | None = None, progress: bool = True) -> list[dict]:
     """Every step of the u-p footing to s/B = 2, or to where it stops (printed).
 
     ``h`` is the cell size near the footing; ``h_far`` the far one, by default
@@ -53,14 +52,24 @@ def run_grid(h: float, steps: int, h_far: float | None = None,
     try:
         sim.run(1.0, steps, progress=progress)
     except fe_mpm.ConvergenceError as err:
-        print(f"h = {h}, {steps} steps: stopped at s/B = {2.0 * sim.t:.2f}: "
-              f"{str(err).split(';')[0]}")
+        print(
+            f"h = {h}, {steps} steps: stopped at s/B = {2.0 * sim.t:.2f}: {str(err).split(';')[0]}"
+        )
     wall = time.perf_counter() - t0
-    rows = [{"h": h, "points": len(sim.points), "step": r.step, "s_over_B": 2.0 * r.t,
-             "q_over_cu": -r.reactions["footing"][1] / 0.5 / 100.0,
-             "newton": r.newton_iterations, "held": int(r.held_points > 0),
-             "short": int(r.dt < 0.999 / steps), "wall_s": wall}
-            for r in sim.history]
+    rows = [
+        {
+            "h": h,
+            "points": len(sim.points),
+            "step": r.step,
+            "s_over_B": 2.0 * r.t,
+            "q_over_cu": -r.reactions["footing"][1] / 0.5 / 100.0,
+            "newton": r.newton_iterations,
+            "held": int(r.held_points > 0),
+            "short": int(r.dt < 0.999 / steps),
+            "wall_s": wall,
+        }
+        for r in sim.history
+    ]
     sim.close()
     return rows
 
@@ -69,23 +78,31 @@ def window_means(rows: list[dict], centres=CENTRES) -> list[float]:
     """Mean q/c_u of ``rows`` (one run) over s/B ± 0.1 around each centre (NaN past the end)."""
     s = np.array([r["s_over_B"] for r in rows])
     q = np.array([r["q_over_cu"] for r in rows])
-    return [q[np.abs(s - c) <= 0.1 + 1e-9].mean() if s.size and s[-1] >= c + 0.1 - 1e-9
-            else np.nan for c in centres]
+    return [
+        q[np.abs(s - c) <= 0.1 + 1e-9].mean() if s.size and s[-1] >= c + 0.1 - 1e-9 else np.nan
+        for c in centres
+    ]
 
 
 def report(rows: list[dict]) -> None:
     """Print the window means per grid, the changes, and the first-order estimate."""
     grids = sorted({r["h"] for r in rows}, reverse=True)
     print("window means of q/c_u at s/B = " + ", ".join(map(str, CENTRES)))
-    print(f"{'h':>6}{'points':>8}" + "".join(f"{c:>8}" for c in CENTRES)
-          + f"{'Newton':>8}{'held':>6}{'wall s':>8}")
+    print(
+        f"{'h':>6}{'points':>8}"
+        + "".join(f"{c:>8}" for c in CENTRES)
+        + f"{'Newton':>8}{'held':>6}{'wall s':>8}"
+    )
     means = {}
     for h in grids:
         mine = [r for r in rows if r["h"] == h]
         means[h] = np.array(window_means(mine))
-        print(f"{h:>6}{mine[0]['points']:>8}" + "".join(f"{m:>8.2f}" for m in means[h])
-              + f"{np.mean([r['newton'] for r in mine]):>8.1f}"
-              + f"{sum(r['held'] > 0 for r in mine):>6}{mine[0]['wall_s']:>8.0f}")
+        print(
+            f"{h:>6}{mine[0]['points']:>8}"
+            + "".join(f"{m:>8.2f}" for m in means[h])
+            + f"{np.mean([r['newton'] for r in mine]):>8.1f}"
+            + f"{sum(r['held'] > 0 for r in mine):>6}{mine[0]['wall_s']:>8.0f}"
+        )
     for coarse, fine in zip(grids, grids[1:]):
         change = 100 * (means[fine] / means[coarse] - 1)
         print(f"{coarse} -> {fine}: " + "".join(f"{c:>7.1f}%" for c in change))
@@ -106,8 +123,12 @@ def plot(rows: list[dict], path: Path) -> None:
     fig, ax = plt.subplots(figsize=(6, 4))
     for h in sorted({r["h"] for r in rows}, reverse=True):
         mine = [r for r in rows if r["h"] == h]
-        ax.plot([0] + [r["s_over_B"] for r in mine], [0] + [r["q_over_cu"] for r in mine],
-                lw=1, label=f"fe-mpm u-p, h = {h} B ({mine[0]['points']} points)")
+        ax.plot(
+            [0] + [r["s_over_B"] for r in mine],
+            [0] + [r["q_over_cu"] for r in mine],
+            lw=1,
+            label=f"fe-mpm u-p, h = {h} B ({mine[0]['points']} points)",
+        )
     s = np.linspace(0, 2, 50)
     ax.plot(s, skempton(s), "k:", lw=1, label="Skempton (1951), embedded to D = s")
     ax.axhline(2 + np.pi, color="k", ls="--", lw=1, label="2 + π (small strain)")
@@ -131,8 +152,13 @@ def main() -> None:
     out.mkdir(parents=True, exist_ok=True)
     if args.replot:
         with open(args.replot) as f:
-            rows = [{k: float(v) if k in ("h", "s_over_B", "q_over_cu", "wall_s") else int(v)
-                     for k, v in r.items()} for r in csv.DictReader(f)]
+            rows = [
+                {
+                    k: float(v) if k in ("h", "s_over_B", "q_over_cu", "wall_s") else int(v)
+                    for k, v in r.items()
+                }
+                for r in csv.DictReader(f)
+            ]
     else:
         rows = [row for h in args.h for row in run_grid(h, args.steps)]
         with open(out / "footing_grids.csv", "w", newline="") as f:

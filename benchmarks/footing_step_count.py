@@ -25,16 +25,24 @@ def main() -> None:
     p.add_argument("--h-far", type=float, default=0.5)
     p.add_argument("--steps", type=int, nargs="+", default=[25, 50, 100, 200])
     args = p.parse_args()
-    print(f"h = {args.h}, h_far = {args.h_far}: window means of q/c_u at s/B = "
-          + ", ".join(f"{c}" for c in CENTRES))
-    print(f"{'steps':>6}" + "".join(f"{c:>8}" for c in CENTRES)
-          + f"{'Newton':>8}{'max':>5}{'short':>6}{'held':>5}{'wall s':>8}")
+    print(
+        f"h = {args.h}, h_far = {args.h_far}: window means of q/c_u at s/B = "
+        + ", ".join(f"{c}" for c in CENTRES)
+    )
+    print(
+        f"{'steps':>6}"
+        + "".join(f"{c:>8}" for c in CENTRES)
+        + f"{'Newton':>8}{'max':>5}{'short':>6}{'held':>5}{'wall s':>8}"
+    )
     for n in args.steps:
         rows = run_grid(args.h, n, args.h_far, progress=False)
         newton = np.array([r["newton"] for r in rows])
-        print(f"{n:>6}" + "".join(f"{m:>8.2f}" for m in window_means(rows, CENTRES))
-              + f"{newton.mean():>8.1f}{newton.max():>5}{sum(r['short'] for r in rows):>6}"
-              + f"{sum(r['held'] for r in rows):>5}{rows[0]['wall_s']:>8.0f}")
+        print(
+            f"{n:>6}"
+            + "".join(f"{m:>8.2f}" for m in window_means(rows, CENTRES))
+            + f"{newton.mean():>8.1f}{newton.max():>5}{sum(r['short'] for r in rows):>6}"
+            + f"{sum(r['held'] for r in rows):>5}{rows[0]['wall_s']:>8.0f}"
+        )
 
 
 if __name__ == "__main__":

@@ -19,8 +19,7 @@ from fe_mpm import scenes
 
 def step_times(h: float, formulation: str, steps: int, solver: str) -> dict:
     """Median wall time of steps 2…steps and of its phases."""
-    sim = scenes.strip_footing(formulation, h=h, settlement=0.001 * steps,
-                               linear_solver=solver)
+    sim = scenes.strip_footing(formulation, h=h, settlement=0.001 * steps, linear_solver=solver)
     row = {"points": len(sim.points), **median_steps(sim, steps)}
     sim.close()
     return row
@@ -34,13 +33,17 @@ def main() -> None:
     p.add_argument("--formulation", choices=("u", "up"), default="up")
     p.add_argument("--solver", choices=("direct", "iterative"), default="direct")
     args = p.parse_args()
-    print(f"{'h':>6}{'points':>9}{'Newton':>7}{'step s':>8}{'s/iter':>8}  "
-          + "".join(f"{ph:>11}" for ph in PHASES))
+    print(
+        f"{'h':>6}{'points':>9}{'Newton':>7}{'step s':>8}{'s/iter':>8}  "
+        + "".join(f"{ph:>11}" for ph in PHASES)
+    )
     for h in args.h:
         r = step_times(h, args.formulation, args.steps, args.solver)
-        print(f"{h:>6}{r['points']:>9}{r['newton']:>7g}{r['step_s']:>8.2f}"
-              f"{r['step_s'] / r['newton']:>8.2f}  "
-              + "".join(f"{r[ph]:>11.3f}" for ph in PHASES), flush=True)
+        print(
+            f"{h:>6}{r['points']:>9}{r['newton']:>7g}{r['step_s']:>8.2f}"
+            f"{r['step_s'] / r['newton']:>8.2f}  " + "".join(f"{r[ph]:>11.3f}" for ph in PHASES),
+            flush=True,
+        )
 
 
 if __name__ == "__main__":

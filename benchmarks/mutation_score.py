@@ -71,6 +71,7 @@ def outcomes(folders: list[Path]) -> dict[str, int | None]:
     change renumbers a function's mutants. A later result replaces an earlier one;
     a mutant a folder did not run (None) keeps the earlier result.
     """
+
     def read(folder: Path) -> dict[str, tuple[int | None, str | None]]:
         found = {}
         for meta in (folder / "mutants").rglob("*.meta"):
@@ -95,8 +96,9 @@ def outcomes(folders: list[Path]) -> dict[str, int | None]:
 def main() -> None:
     """Print the score per module and in all."""
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--dir", type=Path, nargs="+", default=[ROOT],
-                   help="folders holding mutants/, oldest first")
+    p.add_argument(
+        "--dir", type=Path, nargs="+", default=[ROOT], help="folders holding mutants/, oldest first"
+    )
     p.add_argument("--equivalents", type=Path, default=ROOT / "docs/mutation_equivalents.txt")
     p.add_argument("--survivors", action="store_true", help="list the surviving mutants")
     args = p.parse_args()
@@ -104,8 +106,10 @@ def main() -> None:
     codes = outcomes(args.dir)
     if not codes:
         where = ", ".join(str(d / "mutants") for d in args.dir)
-        raise SystemExit(f"no mutmut results under {where}: run `mutmut run` there first "
-                         "(see docs/verification.md)")
+        raise SystemExit(
+            f"no mutmut results under {where}: run `mutmut run` there first "
+            "(see docs/verification.md)"
+        )
     counts: dict[str, Counter] = defaultdict(Counter)
     survivors, unused = [], {pattern for pattern, _ in patterns}
     for name, code in sorted(codes.items()):

@@ -22,15 +22,26 @@ def one_step(material, formulation: str, h: float) -> dict:
     scene = meshes.tension_specimen(0.01, 0.02, h)
     points = fe_mpm.seed(scene.mesh, per_cell=3)
     sim = fe_mpm.Simulation(
-        scene.mesh, points, material, formulation, facet_tags=scene.facet_tags,
-        dirichlet=[fe_mpm.Dirichlet(meshes.TENSION_BOTTOM),
-                   fe_mpm.Dirichlet(meshes.TENSION_TOP, value=lambda t: np.array([0.0, 6e-5 * t]))])
+        scene.mesh,
+        points,
+        material,
+        formulation,
+        facet_tags=scene.facet_tags,
+        dirichlet=[
+            fe_mpm.Dirichlet(meshes.TENSION_BOTTOM),
+            fe_mpm.Dirichlet(meshes.TENSION_TOP, value=lambda t: np.array([0.0, 6e-5 * t])),
+        ],
+    )
     report = sim.step(1.0)
     sim.close()
     tm = sim.timings
     calls = report.newton_iterations + 1
-    return {"assembly per iteration": tm["assembly"] / calls, "newton": tm["newton"],
-            "iterations": report.newton_iterations, "points": len(points)}
+    return {
+        "assembly per iteration": tm["assembly"] / calls,
+        "newton": tm["newton"],
+        "iterations": report.newton_iterations,
+        "points": len(points),
+    }
 
 
 def main() -> None:
@@ -39,8 +50,10 @@ def main() -> None:
     p.add_argument("--h", type=float, default=0.0005)
     p.add_argument("--repeat", type=int, default=5)
     args = p.parse_args()
-    laws = {"Neo-Hookean": fe_mpm.NeoHookean(200e9, 0.3),
-            "J2": fe_mpm.J2Plasticity(200e9, 0.3, 250e6)}
+    laws = {
+        "Neo-Hookean": fe_mpm.NeoHookean(200e9, 0.3),
+        "J2": fe_mpm.J2Plasticity(200e9, 0.3, 250e6),
+    }
     for formulation in ("u", "up"):
         rows = {}
         for name, law in laws.items():
@@ -50,10 +63,12 @@ def main() -> None:
         nh, j2 = rows["Neo-Hookean"], rows["J2"]
         extra = j2["assembly per iteration"] - nh["assembly per iteration"]
         share = extra * (j2["iterations"] + 1) / j2["newton"]
-        print(f"{formulation:>3}: {j2['points']:.0f} points; assembly per iteration "
-              f"Neo-Hookean {nh['assembly per iteration'] * 1e3:.2f} ms, J2 "
-              f"{j2['assembly per iteration'] * 1e3:.2f} ms; J2 step {j2['newton']:.3f} s in "
-              f"{j2['iterations']:.0f} iterations; return map ≈ {share:.0%} of the step")
+        print(
+            f"{formulation:>3}: {j2['points']:.0f} points; assembly per iteration "
+            f"Neo-Hookean {nh['assembly per iteration'] * 1e3:.2f} ms, J2 "
+            f"{j2['assembly per iteration'] * 1e3:.2f} ms; J2 step {j2['newton']:.3f} s in "
+            f"{j2['iterations']:.0f} iterations; return map ≈ {share:.0%} of the step"
+        )
 
 
 if __name__ == "__main__":

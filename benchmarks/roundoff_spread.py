@@ -115,8 +115,19 @@ def _window_means(out: dict, centres) -> list[float]:
 
 # --- the scenes: each returns the asserted quantities by name -------------------------
 
-COLLAPSE_A3 = ("--aspect", "3", "--h", "0.015", "--points-per-cell", "3", "--dt", "2.5e-3",
-               "--damping", "1.5", "--no-output")
+COLLAPSE_A3 = (
+    "--aspect",
+    "3",
+    "--h",
+    "0.015",
+    "--points-per-cell",
+    "3",
+    "--dt",
+    "2.5e-3",
+    "--damping",
+    "1.5",
+    "--no-output",
+)
 
 
 def collapse_a3() -> dict:
@@ -125,22 +136,45 @@ def collapse_a3() -> dict:
     return {f"{k} error": errors[k] for k in ("runout", "final_height", "t_inf_cell", "t_inf")}
 
 
-COLLAPSE_DT = ("--aspect", "1.2", "--h", "0.02", "--points-per-cell", "3", "--damping",
-               "1.5", "--no-output")
+COLLAPSE_DT = (
+    "--aspect",
+    "1.2",
+    "--h",
+    "0.02",
+    "--points-per-cell",
+    "3",
+    "--damping",
+    "1.5",
+    "--no-output",
+)
 
 
 def collapse_dt40() -> dict:
     """Δt = 40 ms: steps are cut (a test until its run-out was found to hinge on round-off)."""
     coarse = _demo("column_collapse.py", "--dt", "0.04", *COLLAPSE_DT)
     fine = _demo("column_collapse.py", "--dt", "0.01", *COLLAPSE_DT)
-    return {"runout 40 ms / 10 ms": coarse["runout"] / fine["runout"],
-            "height 40 ms / 10 ms": coarse["final_height"] / fine["final_height"],
-            "accepted steps at 40 ms": coarse["steps"]}
+    return {
+        "runout 40 ms / 10 ms": coarse["runout"] / fine["runout"],
+        "height 40 ms / 10 ms": coarse["final_height"] / fine["final_height"],
+        "accepted steps at 40 ms": coarse["steps"],
+    }
 
 
 def _footing(steps: int) -> dict:
-    return _demo("strip_footing.py", "--formulation", "up", "--steps", str(steps),
-                 "--settlement", "2.0", "--h", "0.2", "--h-far", "0.5", "--no-output")
+    return _demo(
+        "strip_footing.py",
+        "--formulation",
+        "up",
+        "--steps",
+        str(steps),
+        "--settlement",
+        "2.0",
+        "--h",
+        "0.2",
+        "--h-far",
+        "0.5",
+        "--no-output",
+    )
 
 
 def footing() -> dict:
@@ -149,12 +183,16 @@ def footing() -> dict:
     The 25-step comparison is ``benchmarks/footing_step_count.py``'s.
     """
     many = _footing(100)
-    out = {f"q/c_u at s/B = {c}": m
-           for c, m in zip((0.3, 0.8, 1.3, 1.9), _window_means(many, (0.3, 0.8, 1.3, 1.9)))}
+    out = {
+        f"q/c_u at s/B = {c}": m
+        for c, m in zip((0.3, 0.8, 1.3, 1.9), _window_means(many, (0.3, 0.8, 1.3, 1.9)))
+    }
     centres = (0.5, 1.0, 1.5, 1.9)
     few = _window_means(_footing(25), centres)
-    out |= {f"25/100 steps at s/B = {c}": a / b
-            for c, a, b in zip(centres, few, _window_means(many, centres))}
+    out |= {
+        f"25/100 steps at s/B = {c}": a / b
+        for c, a, b in zip(centres, few, _window_means(many, centres))
+    }
     return out
 
 
@@ -163,12 +201,15 @@ def _cook_tips(factor: int) -> dict:
 
     tips = []
     for steps in (1, 40):
-        sim = scenes.cook_membrane(16, 0.499, "up", traction=factor / 16, margin=16,
-                                   load="points", per_cell=3)
+        sim = scenes.cook_membrane(
+            16, 0.499, "up", traction=factor / 16, margin=16, load="points", per_cell=3
+        )
         reports = sim.run(1.0, steps, progress=False)
         tips.append(scenes.tip_deflection(sim))
-    return {f"x{factor}: 40 steps / 1 step": tips[1] / tips[0],
-            f"x{factor}: steps taken": len(reports)}
+    return {
+        f"x{factor}: 40 steps / 1 step": tips[1] / tips[0],
+        f"x{factor}: steps taken": len(reports),
+    }
 
 
 def cook_x5() -> dict:
@@ -189,18 +230,20 @@ def cook_plastic() -> dict:
     from fe_mpm import scenes
 
     material = fe_mpm.J2Plasticity(70.0, 0.499, 0.243, 0.135)
-    sim = scenes.cook_membrane(16, formulation="up", material=material, traction=0.1125,
-                               margin=2)
+    sim = scenes.cook_membrane(16, formulation="up", material=material, traction=0.1125, margin=2)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         reports = sim.run(1.0, 20, progress=False)
-    return {"J2 Cook tip": scenes.tip_deflection(sim),
-            "J2 Cook max Newton iterations": max(r.newton_iterations for r in reports),
-            "J2 Cook max plastic strain": float(sim.points.history["plastic_strain"].max())}
+    return {
+        "J2 Cook tip": scenes.tip_deflection(sim),
+        "J2 Cook max Newton iterations": max(r.newton_iterations for r in reports),
+        "J2 Cook max plastic strain": float(sim.points.history["plastic_strain"].max()),
+    }
 
 
-SCENES = {f.__name__: f for f in (collapse_a3, collapse_dt40, footing, cook_x5, cook_x10,
-                                  cook_plastic)}
+SCENES = {
+    f.__name__: f for f in (collapse_a3, collapse_dt40, footing, cook_x5, cook_x10, cook_plastic)
+}
 
 #: The suite's bounds on each quantity (inf where the test sets none).
 BOUNDS = [
@@ -231,9 +274,14 @@ def main() -> None:
     p.add_argument("--members", type=int, default=6)
     p.add_argument("--jobs", type=int, default=2)
     p.add_argument("--scenes", nargs="+", default=list(SCENES), choices=list(SCENES))
-    p.add_argument("--blas-cores", nargs="*", default=[], metavar="CORE",
-                   help="extra unperturbed members, each with OpenBLAS's kernels for "
-                   "another processor (OPENBLAS_CORETYPE, e.g. Haswell Sandybridge)")
+    p.add_argument(
+        "--blas-cores",
+        nargs="*",
+        default=[],
+        metavar="CORE",
+        help="extra unperturbed members, each with OpenBLAS's kernels for "
+        "another processor (OPENBLAS_CORETYPE, e.g. Haswell Sandybridge)",
+    )
     p.add_argument("--csv", type=Path, help="write every member's values here")
     p.add_argument("--member", nargs=2, metavar=("SCENE", "K"), help=argparse.SUPPRESS)
     args = p.parse_args()
@@ -244,8 +292,12 @@ def main() -> None:
     def launch(job):
         scene, k, core = job
         env = os.environ | ({"OPENBLAS_CORETYPE": core} if core else {})
-        out = subprocess.run([sys.executable, __file__, "--member", scene, str(k)],
-                             capture_output=True, text=True, env=env)
+        out = subprocess.run(
+            [sys.executable, __file__, "--member", scene, str(k)],
+            capture_output=True,
+            text=True,
+            env=env,
+        )
         member = core or str(k)
         if out.returncode != 0:
             return scene, member, {"failed": out.stderr.strip().splitlines()[-1:]}
@@ -268,8 +320,10 @@ def main() -> None:
         with open(args.csv, "w", newline="") as f:
             csv.writer(f).writerows([("scene", "member", "quantity", "value"), *rows])
     bounds = {b.name: b for b in BOUNDS}
-    print(f"{'quantity':<34}{'n':>3}{'mean':>10}{'spread':>10}{'min':>10}{'max':>10}"
-          f"{'bound':>18} {'spreads':>9}")
+    print(
+        f"{'quantity':<34}{'n':>3}{'mean':>10}{'spread':>10}{'min':>10}{'max':>10}"
+        f"{'bound':>18} {'spreads':>9}"
+    )
     for name, v in values.items():
         v = np.array(v, dtype=float)
         mean, spread = v.mean(), v.std(ddof=1) if v.size > 1 else 0.0

@@ -36,14 +36,21 @@ def block(points_wanted: float, formulation: str, solver: str):
     n = max(2, round(math.sqrt(points_wanted / (2 * per_cell))))
     grid = rectangle_mesh((0.0, 0.0), (1.0, 1.2), (n, round(1.2 * n)))
     centroids = grid.geometry.x[grid.geometry.dofmaps[0]][:, :, :2].mean(axis=1)
-    points = fe_mpm.seed(grid, per_cell, cells=np.flatnonzero(centroids[:, 1] < 1.0),
-                         density=1000.0)
+    points = fe_mpm.seed(
+        grid, per_cell, cells=np.flatnonzero(centroids[:, 1] < 1.0), density=1000.0
+    )
     return fe_mpm.Simulation(
-        grid, points, fe_mpm.NeoHookean(1.0e6, 0.3, 1000.0), formulation,
-        dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0)),
-                   fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0) | np.isclose(x[0], 1.0),
-                                    component=0)],
-        body_force=(0.0, -9.81), body_force_scale=lambda t: t, linear_solver=solver,
+        grid,
+        points,
+        fe_mpm.NeoHookean(1.0e6, 0.3, 1000.0),
+        formulation,
+        dirichlet=[
+            fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0)),
+            fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0) | np.isclose(x[0], 1.0), component=0),
+        ],
+        body_force=(0.0, -9.81),
+        body_force_scale=lambda t: t,
+        linear_solver=solver,
     )
 
 
@@ -52,8 +59,13 @@ def time_steps(points_wanted: float, formulation: str, solver: str, steps: int) 
     sim = block(points_wanted, formulation, solver)
     timed = median_steps(sim, steps)
     sim.close()
-    row = {"points": len(sim.points), "dofs": sim.w.x.array.size, "formulation": formulation,
-           "solver": solver, **timed}
+    row = {
+        "points": len(sim.points),
+        "dofs": sim.w.x.array.size,
+        "formulation": formulation,
+        "solver": solver,
+        **timed,
+    }
     row["outside_solve_us_per_point"] = 1e6 * (row["step_s"] - row["solve"]) / row["points"]
     return row
 
@@ -66,28 +78,41 @@ def main() -> None:
     p.add_argument("--solver", nargs="+", default=["direct"])
     p.add_argument("--steps", type=int, default=4, help="steps per run (the first is not timed)")
     p.add_argument("--output", type=Path, default=Path("out_bench"))
-    p.add_argument("--replot", type=Path, default=None, metavar="CSV",
-                   help="only redraw the plot of an earlier run's CSV")
+    p.add_argument(
+        "--replot",
+        type=Path,
+        default=None,
+        metavar="CSV",
+        help="only redraw the plot of an earlier run's CSV",
+    )
     args = p.parse_args()
     if args.replot is not None:
         with open(args.replot) as f:
-            rows = [{k: v if k in ("formulation", "solver") else float(v) for k, v in r.items()}
-                    for r in csv.DictReader(f)]
+            rows = [
+                {k: v if k in ("formulation", "solver") else float(v) for k, v in r.items()}
+                for r in csv.DictReader(f)
+            ]
         plot(rows, args.replot.with_suffix(".png"))
         return
     args.output.mkdir(parents=True, exist_ok=True)
     rows = []
-    print(f"{'form':<5}{'solver':<10}{'points':>9}{'dofs':>9}{'Newton':>7}{'step s':>8}  "
-          + "".join(f"{ph:>11}" for ph in PHASES) + "  µs/point outside the solve")
+    print(
+        f"{'form':<5}{'solver':<10}{'points':>9}{'dofs':>9}{'Newton':>7}{'step s':>8}  "
+        + "".join(f"{ph:>11}" for ph in PHASES)
+        + "  µs/point outside the solve"
+    )
     for formulation in args.formulation:
         for solver in args.solver:
             for n in args.points:
                 r = time_steps(n, formulation, solver, args.steps)
                 rows.append(r)
-                print(f"{formulation:<5}{solver:<10}{r['points']:>9}{r['dofs']:>9}"
-                      f"{r['newton']:>7g}{r['step_s']:>8.3f}  "
-                      + "".join(f"{r[ph]:>11.3f}" for ph in PHASES)
-                      + f"  {r['outside_solve_us_per_point']:.2f}", flush=True)
+                print(
+                    f"{formulation:<5}{solver:<10}{r['points']:>9}{r['dofs']:>9}"
+                    f"{r['newton']:>7g}{r['step_s']:>8.3f}  "
+                    + "".join(f"{r[ph]:>11.3f}" for ph in PHASES)
+                    + f"  {r['outside_solve_us_per_point']:.2f}",
+                    flush=True,
+                )
     with open(args.output / "scaling.csv", "w", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=list(rows[0]))
         writer.writeheader()
@@ -106,11 +131,14 @@ def plot(rows: list[dict], path: Path) -> None:
     keys = sorted({(r["formulation"], r["solver"]) for r in rows})
     columns = min(2, len(keys))
     rows_ = -(-len(keys) // columns)
-    fig, axes = plt.subplots(rows_, columns, figsize=(5.5 * columns, 4 * rows_), squeeze=False,
-                             sharex=True, sharey=True)
+    fig, axes = plt.subplots(
+        rows_, columns, figsize=(5.5 * columns, 4 * rows_), squeeze=False, sharex=True, sharey=True
+    )
     for ax, (formulation, solver) in zip(axes.flat, keys):
-        mine = sorted((r for r in rows if (r["formulation"], r["solver"]) == (formulation, solver)),
-                      key=lambda r: r["points"])
+        mine = sorted(
+            (r for r in rows if (r["formulation"], r["solver"]) == (formulation, solver)),
+            key=lambda r: r["points"],
+        )
         n = np.array([r["points"] for r in mine], dtype=float)
         ax.loglog(n, [r["step_s"] for r in mine], "ko-", label="whole step")
         ax.loglog(n, [r["solve"] for r in mine], "s--", label="linear solve")

@@ -47,15 +47,24 @@ def near_incompressibility() -> None:
 def large_deformation() -> None:
     """Cook u-p under ×5 and ×10 the load, in 1, 40 and 160 steps."""
     print("\n2. Large deformation: Cook, u-p, ν = 0.499, n = 32, point load")
-    print(f"{'load':>5}{'points':>7}{'steps':>6}{'taken':>6}{'tip':>9}{'vs 1 step':>10}"
-          f"{'max Newton':>11}{'time s':>8}")
+    print(
+        f"{'load':>5}{'points':>7}{'steps':>6}{'taken':>6}{'tip':>9}{'vs 1 step':>10}"
+        f"{'max Newton':>11}{'time s':>8}"
+    )
     for factor in (5, 10):
         for per_cell in (3, 6):
             one_step = None
             for steps in (1, 40, 160):
                 t0 = time.perf_counter()
-                sim = scenes.cook_membrane(32, 0.499, "up", traction=factor / 16, margin=32,
-                                           load="points", per_cell=per_cell)
+                sim = scenes.cook_membrane(
+                    32,
+                    0.499,
+                    "up",
+                    traction=factor / 16,
+                    margin=32,
+                    load="points",
+                    per_cell=per_cell,
+                )
                 try:
                     reports = sim.run(1.0, steps, progress=False)
                 except fe_mpm.ConvergenceError as err:
@@ -64,9 +73,12 @@ def large_deformation() -> None:
                 tip = scenes.tip_deflection(sim)
                 one_step = tip if steps == 1 else one_step
                 drift = "" if one_step is None else f"{100 * (tip / one_step - 1):+.1f} %"
-                print(f"{factor:>5}{per_cell:>7}{steps:>6}{len(reports):>6}{tip:>9.4f}"
-                      f"{drift:>10}{max(r.newton_iterations for r in reports):>11}"
-                      f"{time.perf_counter() - t0:>8.1f}", flush=True)
+                print(
+                    f"{factor:>5}{per_cell:>7}{steps:>6}{len(reports):>6}{tip:>9.4f}"
+                    f"{drift:>10}{max(r.newton_iterations for r in reports):>11}"
+                    f"{time.perf_counter() - t0:>8.1f}",
+                    flush=True,
+                )
 
 
 def cell_crossing() -> None:
@@ -77,8 +89,9 @@ def cell_crossing() -> None:
     for per_cell in (1, 3, 6):
         mesh = rectangle_mesh((0, 0), (3, 3), (60, 60))
         c = mesh.geometry.x[mesh.geometry.dofmaps[0]][:, :, :2].mean(axis=1)
-        block = np.flatnonzero((c[:, 0] > 0.2) & (c[:, 0] < 1.0) & (c[:, 1] > 0.2)
-                               & (c[:, 1] < 1.0))
+        block = np.flatnonzero(
+            (c[:, 0] > 0.2) & (c[:, 0] < 1.0) & (c[:, 1] > 0.2) & (c[:, 1] < 1.0)
+        )
         points = fe_mpm.seed(mesh, per_cell=per_cell, cells=block)
         velocity = np.array([0.37, 0.23])
         points.velocity[:] = velocity
@@ -98,14 +111,28 @@ def time_step_sweep() -> None:
         for steps in (4, 10, 20, 40, 80, 160, 320):
             t0 = time.perf_counter()
             out = subprocess.run(
-                [sys.executable, str(DEMOS / "elastic_column.py"), "--ny", "32", "--dynamic",
-                 "--steps", str(steps), "--json"], capture_output=True, text=True, cwd=work)
+                [
+                    sys.executable,
+                    str(DEMOS / "elastic_column.py"),
+                    "--ny",
+                    "32",
+                    "--dynamic",
+                    "--steps",
+                    str(steps),
+                    "--json",
+                ],
+                capture_output=True,
+                text=True,
+                cwd=work,
+            )
             if out.returncode:
                 print(f"{steps:>6}  stopped: {out.stderr.strip().splitlines()[-1][:90]}")
                 continue
             error = json.loads(out.stdout.strip().splitlines()[-1])["error"]
-            print(f"{steps:>6}{steps / 2:>11g}{error:>31.3f}{time.perf_counter() - t0:>8.1f}",
-                  flush=True)
+            print(
+                f"{steps:>6}{steps / 2:>11g}{error:>31.3f}{time.perf_counter() - t0:>8.1f}",
+                flush=True,
+            )
 
 
 CASES = {1: near_incompressibility, 2: large_deformation, 3: cell_crossing, 4: time_step_sweep}

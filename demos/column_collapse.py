@@ -52,18 +52,30 @@ def parse_args(argv=None):
     p.add_argument("--h", type=float, default=0.0065, help="cell size (m); thesis 0.0065")
     p.add_argument("--points-per-cell", type=int, default=6, help="points per triangle")
     p.add_argument("--dt", type=float, default=2.5e-3, help="time step (s)")
-    p.add_argument("--t-end", type=float, default=None,
-                   help="end time (s); 1.6 times the empirical duration by default")
-    p.add_argument("--damping", type=float, default=0.0,
-                   help="mass-proportional Rayleigh damping α (1/s); thesis 1.5")
+    p.add_argument(
+        "--t-end",
+        type=float,
+        default=None,
+        help="end time (s); 1.6 times the empirical duration by default",
+    )
+    p.add_argument(
+        "--damping",
+        type=float,
+        default=0.0,
+        help="mass-proportional Rayleigh damping α (1/s); thesis 1.5",
+    )
     p.add_argument("--E", type=float, default=0.84e6, help="Young's modulus (Pa)")
     p.add_argument("--nu", type=float, default=0.3, help="Poisson's ratio")
     p.add_argument("--density", type=float, default=2600.0, help="kg/m³")
     p.add_argument("--friction", type=float, default=31.0, help="friction angle φ (deg)")
     p.add_argument("--dilatancy", type=float, default=1.0, help="dilatancy angle ψ (deg)")
     p.add_argument("--gravity", type=float, default=9.81, help="m/s²")
-    p.add_argument("--mass", choices=("consistent", "lumped"), default="lumped",
-                   help="mass matrix of the points (the thesis: consistent)")
+    p.add_argument(
+        "--mass",
+        choices=("consistent", "lumped"),
+        default="lumped",
+        help="mass matrix of the points (the thesis: consistent)",
+    )
     p.add_argument("--output", default="column_collapse_output", help="output folder")
     p.add_argument("--no-output", action="store_true", help="write no files")
     p.add_argument("--json", action="store_true", help="print a JSON summary as the last line")
@@ -94,15 +106,34 @@ t_end = 1.6 * time_law if args.t_end is None else args.t_end
 # +
 try:
     scene = meshes.granular_column(d_i, a, h=args.h)
-    points = fe_mpm.seed(scene.mesh, args.points_per_cell, density=args.density,
-                         cells=scene.cell_tags.find(meshes.COLLAPSE_COLUMN))
-    sand = fe_mpm.MohrCoulomb(args.E, args.nu, cohesion=0.0, friction_angle=args.friction,
-                              dilatancy_angle=args.dilatancy, density=args.density)
+    points = fe_mpm.seed(
+        scene.mesh,
+        args.points_per_cell,
+        density=args.density,
+        cells=scene.cell_tags.find(meshes.COLLAPSE_COLUMN),
+    )
+    sand = fe_mpm.MohrCoulomb(
+        args.E,
+        args.nu,
+        cohesion=0.0,
+        friction_angle=args.friction,
+        dilatancy_angle=args.dilatancy,
+        density=args.density,
+    )
     sim = fe_mpm.Simulation(
-        scene.mesh, points, sand, "u", facet_tags=scene.facet_tags,
-        dirichlet=[fe_mpm.Dirichlet(meshes.COLLAPSE_WALL, component=0),
-                   fe_mpm.Dirichlet(meshes.COLLAPSE_BASE)],
-        body_force=(0.0, -g), dynamic=True, damping=args.damping, mass=args.mass,
+        scene.mesh,
+        points,
+        sand,
+        "u",
+        facet_tags=scene.facet_tags,
+        dirichlet=[
+            fe_mpm.Dirichlet(meshes.COLLAPSE_WALL, component=0),
+            fe_mpm.Dirichlet(meshes.COLLAPSE_BASE),
+        ],
+        body_force=(0.0, -g),
+        dynamic=True,
+        damping=args.damping,
+        mass=args.mass,
         points_leaving="drop",
         output_dir=None if args.no_output else args.output,
         output_every=max(1, int(round(t_end / args.dt)) // 40),
@@ -126,13 +157,20 @@ history = []
 
 def record(report: fe_mpm.StepReport) -> None:
     """Front d (m), height h (m) and kinetic energy (J/m) after a step."""
-    history.append((report.t, contiguous_front(points.x, 2 * args.h), points.x[:, 1].max(),
-                    points.kinetic_energy()))
+    history.append(
+        (
+            report.t,
+            contiguous_front(points.x, 2 * args.h),
+            points.x[:, 1].max(),
+            points.kinetic_energy(),
+        )
+    )
 
 
 try:
-    reports = sim.run(t_end=t_end, n_steps=int(round(t_end / args.dt)),
-                      progress=not args.json, on_step=record)
+    reports = sim.run(
+        t_end=t_end, n_steps=int(round(t_end / args.dt)), progress=not args.json, on_step=record
+    )
 except (fe_mpm.ConvergenceError, fe_mpm.PointsOutsideError) as err:
     sys.exit(f"column_collapse.py: {err}")
 t, front, height, energy = np.array(history).T
@@ -152,28 +190,45 @@ runout, final_height = float(front[-1]), float(height[-1])
 t_inf = float(t[np.argmax(front >= 0.99 * runout)])
 t_inf_cell = float(t[np.argmax(front >= runout - args.h)])
 wall = time.perf_counter() - START
-errors = {"runout": runout / runout_law - 1, "final_height": final_height / height_law - 1,
-          "t_inf": t_inf / time_law - 1, "t_inf_cell": t_inf_cell / time_law - 1}
+errors = {
+    "runout": runout / runout_law - 1,
+    "final_height": final_height / height_law - 1,
+    "t_inf": t_inf / time_law - 1,
+    "t_inf_cell": t_inf_cell / time_law - 1,
+}
 iterations = [r.newton_iterations for r in reports]
-print(f"Granular collapse, a = {a}: {len(points)} points, {len(reports)} steps of "
-      f"{args.dt:g} s, damping {args.damping:g} 1/s, wall time {wall:.1f} s"
-      + (f"; {sim.dropped} point(s) thrown off the channel's end" if sim.dropped else ""))
-for name, value, law in (("d∞ (m)", runout, runout_law), ("h∞ (m)", final_height, height_law),
-                         ("t∞ (s)", t_inf, time_law)):
+print(
+    f"Granular collapse, a = {a}: {len(points)} points, {len(reports)} steps of "
+    f"{args.dt:g} s, damping {args.damping:g} 1/s, wall time {wall:.1f} s"
+    + (f"; {sim.dropped} point(s) thrown off the channel's end" if sim.dropped else "")
+)
+for name, value, law in (
+    ("d∞ (m)", runout, runout_law),
+    ("h∞ (m)", final_height, height_law),
+    ("t∞ (s)", t_inf, time_law),
+):
     print(f"  {name:7s} {value:.4f}   Lube et al. {law:.4f}   ({100 * (value / law - 1):+.1f} %)")
-print(f"  kinetic energy at the end {energy[-1]:.3g} J/m (peak {energy.max():.3g}); "
-      f"Newton iterations per step: max {max(iterations)}, mean {np.mean(iterations):.2f}")
+print(
+    f"  kinetic energy at the end {energy[-1]:.3g} J/m (peak {energy.max():.3g}); "
+    f"Newton iterations per step: max {max(iterations)}, mean {np.mean(iterations):.2f}"
+)
 
 if not args.no_output:
     plt = pyplot()  # None without matplotlib (the plots extra)
     out = Path(args.output)
-    np.savetxt(out / "front.csv", np.column_stack([t, front, height, energy]), delimiter=",",
-               header="t,front,height,kinetic_energy", comments="")
+    np.savetxt(
+        out / "front.csv",
+        np.column_stack([t, front, height, energy]),
+        delimiter=",",
+        header="t,front,height,kinetic_energy",
+        comments="",
+    )
     # The deposit: the highest point in each column of cell width.
     bins = np.arange(0.0, points.x[:, 0].max() + args.h, args.h)
     which = np.digitize(points.x[:, 0], bins)
-    top = np.array([points.x[which == k, 1].max() if np.any(which == k) else 0.0
-                    for k in range(1, bins.size)])
+    top = np.array(
+        [points.x[which == k, 1].max() if np.any(which == k) else 0.0 for k in range(1, bins.size)]
+    )
     if plt is not None:
         fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 3.6))
         ax1.plot(t / time_law, front / runout_law, label=f"fe-mpm, a = {a:g}")
@@ -191,10 +246,17 @@ if not args.no_output:
         ax2.legend(fontsize=7)
         fig.tight_layout()
         fig.savefig(out / "collapse.png", dpi=120)
-    np.savetxt(out / "deposit.csv", np.column_stack([bins[:-1], top]), delimiter=",",
-               header="x,surface_height", comments="")
-    print(f"  wrote {out}/particles.pvd, front.csv, deposit.csv"
-          + (" and collapse.png" if plt is not None else ""))
+    np.savetxt(
+        out / "deposit.csv",
+        np.column_stack([bins[:-1], top]),
+        delimiter=",",
+        header="x,surface_height",
+        comments="",
+    )
+    print(
+        f"  wrote {out}/particles.pvd, front.csv, deposit.csv"
+        + (" and collapse.png" if plt is not None else "")
+    )
 
 # -
 
@@ -218,26 +280,47 @@ TOLERANCES = {"runout": 0.26, "final_height": 0.14, "t_inf_cell": 0.36}
 
 if 1.2 <= a <= 7.0 and not 1.8 <= a <= 2.8:
     passed = all(abs(errors[k]) <= tol for k, tol in TOLERANCES.items())
-    print(f"check: d∞ {100 * errors['runout']:+.1f} %, h∞ {100 * errors['final_height']:+.1f} %, "
-          f"t∞ (front within a cell of d∞) {100 * errors['t_inf_cell']:+.1f} % vs Lube et al. "
-          f"(a = {a:g}); tolerances ±{100 * TOLERANCES['runout']:.0f}, "
-          f"±{100 * TOLERANCES['final_height']:.0f}, ±{100 * TOLERANCES['t_inf_cell']:.0f} % "
-          f"(the thesis's largest): {'PASS' if passed else 'FAIL'}")
+    print(
+        f"check: d∞ {100 * errors['runout']:+.1f} %, h∞ {100 * errors['final_height']:+.1f} %, "
+        f"t∞ (front within a cell of d∞) {100 * errors['t_inf_cell']:+.1f} % vs Lube et al. "
+        f"(a = {a:g}); tolerances ±{100 * TOLERANCES['runout']:.0f}, "
+        f"±{100 * TOLERANCES['final_height']:.0f}, ±{100 * TOLERANCES['t_inf_cell']:.0f} % "
+        f"(the thesis's largest): {'PASS' if passed else 'FAIL'}"
+    )
 else:
     passed = True
-    print(f"check: the thesis's errors against Lube et al. are for a = 1.2 to 7 outside "
-          f"1.8–2.8, not a = {a:g}: not checked")
+    print(
+        f"check: the thesis's errors against Lube et al. are for a = 1.2 to 7 outside "
+        f"1.8–2.8, not a = {a:g}: not checked"
+    )
 if args.json:
-    print(json.dumps({
-        "aspect": a, "runout": runout, "final_height": final_height, "t_inf": t_inf,
-        "t_inf_cell": t_inf_cell,
-        "wall_time_s": wall, "runout_lube": runout_law, "final_height_lube": height_law,
-        "t_inf_lube": time_law, "relative_errors": errors, "damping": args.damping,
-        "n_particles": len(points), "steps": len(reports), "dt": args.dt,
-        "newton_iterations_max": max(iterations), "dropped_points": sim.dropped,
-        "timings": sim.timings, "check_passed": passed,
-    }))
+    print(
+        json.dumps(
+            {
+                "aspect": a,
+                "runout": runout,
+                "final_height": final_height,
+                "t_inf": t_inf,
+                "t_inf_cell": t_inf_cell,
+                "wall_time_s": wall,
+                "runout_lube": runout_law,
+                "final_height_lube": height_law,
+                "t_inf_lube": time_law,
+                "relative_errors": errors,
+                "damping": args.damping,
+                "n_particles": len(points),
+                "steps": len(reports),
+                "dt": args.dt,
+                "newton_iterations_max": max(iterations),
+                "dropped_points": sim.dropped,
+                "timings": sim.timings,
+                "check_passed": passed,
+            }
+        )
+    )
 if not passed:
-    sys.exit("column_collapse.py: the deposit is further from Lube et al.'s laws than the "
-             "thesis's own runs")
+    sys.exit(
+        "column_collapse.py: the deposit is further from Lube et al.'s laws than the "
+        "thesis's own runs"
+    )
 # -

@@ -57,19 +57,32 @@ def parse_args(argv=None):
     p.add_argument("--h", type=float, default=None, help="element size (unstructured mesh)")
     p.add_argument("--nu", type=float, default=0.33, help="Poisson's ratio")
     p.add_argument("--E", type=float, default=70.0, help="Young's modulus")
-    p.add_argument("--formulation", default="u", choices=["u", "up", "up-nostab", "up-p2p1"],
-                   help="u: irreducible; up: mixed P1/P1 with PPP; up-nostab: without it; "
-                        "up-p2p1: mixed Taylor-Hood")
-    p.add_argument("--ppp-alpha", type=float, default=1.0,
-                   help="PPP α of the thesis (times 8 in 2D, as in Kratos)")
-    p.add_argument("--mp-per-cell", type=int, default=None,
-                   help="material points per triangle (default 1; 3 for up-p2p1)")
+    p.add_argument(
+        "--formulation",
+        default="u",
+        choices=["u", "up", "up-nostab", "up-p2p1"],
+        help="u: irreducible; up: mixed P1/P1 with PPP; up-nostab: without it; "
+        "up-p2p1: mixed Taylor-Hood",
+    )
+    p.add_argument(
+        "--ppp-alpha",
+        type=float,
+        default=1.0,
+        help="PPP α of the thesis (times 8 in 2D, as in Kratos)",
+    )
+    p.add_argument(
+        "--mp-per-cell",
+        type=int,
+        default=None,
+        help="material points per triangle (default 1; 3 for up-p2p1)",
+    )
     mesh = p.add_mutually_exclusive_group()
     mesh.add_argument("--structured", dest="structured", action="store_true", default=True)
     mesh.add_argument("--unstructured", dest="structured", action="store_false")
     p.add_argument("--steps", type=int, default=1, help="load steps")
-    p.add_argument("--output", type=Path, default=Path("out_cook_membrane"),
-                   help="folder for ParaView output")
+    p.add_argument(
+        "--output", type=Path, default=Path("out_cook_membrane"), help="folder for ParaView output"
+    )
     p.add_argument("--no-output", action="store_true", help="write no files")
     p.add_argument("--json", action="store_true", help="print a JSON summary as the last line")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -95,8 +108,9 @@ if args.mp_per_cell is None:
 margin = 0 if args.steps == 1 else max(1, -(-args.n // 16))
 try:
     scene = meshes.cook_membrane(n=args.n, structured=args.structured, h=args.h, margin=margin)
-    points = fe_mpm.seed(scene.mesh, per_cell=args.mp_per_cell, density=1000.0,
-                         cells=meshes.body_cells(scene))
+    points = fe_mpm.seed(
+        scene.mesh, per_cell=args.mp_per_cell, density=1000.0, cells=meshes.body_cells(scene)
+    )
     material = fe_mpm.NeoHookean(E=args.E, nu=args.nu, density=1000.0)
 except ValueError as err:
     sys.exit(f"cook_membrane.py: {err}")
@@ -143,12 +157,18 @@ iterations = [r.newton_iterations for r in reports]
 wall = time.perf_counter() - START
 # The published numbers are for structured meshes with one point per triangle, E = 70
 # and (UP+PPP) the PPP factor 1.
-kratos_setup = (args.structured and args.mp_per_cell == 1 and args.E == 70.0
-                and (args.formulation != "up" or args.ppp_alpha == 1.0))
+kratos_setup = (
+    args.structured
+    and args.mp_per_cell == 1
+    and args.E == 70.0
+    and (args.formulation != "up" or args.ppp_alpha == 1.0)
+)
 reference = cook_reference(args.formulation, args.nu, args.n) if kratos_setup else None
 
-print(f"Cook's membrane: n = {args.n} ({'structured' if args.structured else 'unstructured'}), "
-      f"nu = {args.nu}, formulation {args.formulation}, {len(points)} material points")
+print(
+    f"Cook's membrane: n = {args.n} ({'structured' if args.structured else 'unstructured'}), "
+    f"nu = {args.nu}, formulation {args.formulation}, {len(points)} material points"
+)
 print(f"  u_A = ({u_A[0]:.6f}, {u_A[1]:.6f})", end="")
 if reference is not None:
     source, value = reference
@@ -159,10 +179,16 @@ print(f"  Newton iterations per step: {iterations}")
 print(f"  wall time {wall:.2f} s; " + ", ".join(f"{k} {v:.3f} s" for k, v in sim.timings.items()))
 
 if not args.no_output:
-    history = np.array([[0.0, 0.0]] + [[r.t, r.markers["A"][1] - meshes.COOK_POINT_A[1]]
-                                       for r in reports])
-    np.savetxt(args.output / "load_deflection.csv", history, delimiter=",",
-               header="load_factor,u_A_y", comments="")
+    history = np.array(
+        [[0.0, 0.0]] + [[r.t, r.markers["A"][1] - meshes.COOK_POINT_A[1]] for r in reports]
+    )
+    np.savetxt(
+        args.output / "load_deflection.csv",
+        history,
+        delimiter=",",
+        header="load_factor,u_A_y",
+        comments="",
+    )
     print(f"  ParaView: {args.output / 'particles.pvd'} (points), {args.output / 'grid.bp'} (grid)")
     plt = pyplot() if args.steps > 1 else None  # None without matplotlib (plots extra)
     if plt is not None:
@@ -188,8 +214,9 @@ summary = {
     "mp_per_cell": args.mp_per_cell,
     "structured": args.structured,
     "steps": args.steps,
-    "reference": None if reference is None else {"source": reference[0],
-                                                  "tip_displacement_y": reference[1]},
+    "reference": None
+    if reference is None
+    else {"source": reference[0], "tip_displacement_y": reference[1]},
     "timings_s": sim.timings,
 }
 # -
@@ -211,10 +238,12 @@ summary = {
 TOLERANCE = 0.005
 
 if reference is None:
-    not_checked = (f"no published u_A,y for formulation {args.formulation}, n = {args.n}, "
-                   f"ν = {args.nu}, E = {args.E:g}, "
-                   f"{'structured' if args.structured else 'unstructured'} grid, "
-                   f"{args.mp_per_cell} point(s) per triangle")
+    not_checked = (
+        f"no published u_A,y for formulation {args.formulation}, n = {args.n}, "
+        f"ν = {args.nu}, E = {args.E:g}, "
+        f"{'structured' if args.structured else 'unstructured'} grid, "
+        f"{args.mp_per_cell} point(s) per triangle"
+    )
 elif args.formulation == "up-nostab" and args.nu != 0.33:
     not_checked = "the thesis's quasi-incompressible UP no stab column fits another ν"
 else:
@@ -226,9 +255,11 @@ else:
     source, value = reference
     check_error = float(abs(u_A[1] / value - 1))
     passed = bool(check_error <= TOLERANCE)
-    print(f"check: u_A,y = {u_A[1]:.5f} vs {source} {value:.4f} (n = {args.n}, ν = {args.nu}): "
-          f"error {100 * check_error:.2f} % {'<=' if passed else '>'} {100 * TOLERANCE:.1f} % "
-          f"tolerance: {'PASS' if passed else 'FAIL'}")
+    print(
+        f"check: u_A,y = {u_A[1]:.5f} vs {source} {value:.4f} (n = {args.n}, ν = {args.nu}): "
+        f"error {100 * check_error:.2f} % {'<=' if passed else '>'} {100 * TOLERANCE:.1f} % "
+        f"tolerance: {'PASS' if passed else 'FAIL'}"
+    )
 if args.json:
     summary.update(check_error=check_error, check_passed=passed)
     sys.stdout.flush()

@@ -57,10 +57,18 @@ def parse_args(argv=None):
     p.add_argument("--gravity", type=float, default=None, help="m/s²: 10 static, 9.81 dynamic")
     p.add_argument("--dynamic", action="store_true", help="sudden self-weight, Newmark")
     p.add_argument("--periods", type=float, default=2.0, help="dynamic: first-mode periods")
-    p.add_argument("--mass", choices=("consistent", "lumped"), default="consistent",
-                   help="dynamic: mass matrix of the points")
-    p.add_argument("--damping", type=float, default=0.0,
-                   help="dynamic: mass-proportional Rayleigh damping α (1/s)")
+    p.add_argument(
+        "--mass",
+        choices=("consistent", "lumped"),
+        default="consistent",
+        help="dynamic: mass matrix of the points",
+    )
+    p.add_argument(
+        "--damping",
+        type=float,
+        default=0.0,
+        help="dynamic: mass-proportional Rayleigh damping α (1/s)",
+    )
     p.add_argument("--mp-per-cell", type=int, default=1)
     p.add_argument("--json", action="store_true", help="print a JSON summary as the last line")
     return p.parse_args(argv)
@@ -68,8 +76,10 @@ def parse_args(argv=None):
 
 args = parse_args()
 defaults = (25.0, 5e4, 1.0, 9.81) if args.dynamic else (50.0, 4e5, 80.0, 10.0)
-L, E, ρ, g = (d if v is None else v for v, d in
-              zip((args.height, args.E, args.density, args.gravity), defaults))
+L, E, ρ, g = (
+    d if v is None else v
+    for v, d in zip((args.height, args.E, args.density, args.gravity), defaults)
+)
 # -
 
 # ## Scene and simulation
@@ -79,9 +89,14 @@ try:
     scene = meshes.column(1.0, L, 1, args.ny, margin=0)
     points = fe_mpm.seed(scene.mesh, per_cell=args.mp_per_cell, density=ρ)
     sim = fe_mpm.Simulation(
-        scene.mesh, points, fe_mpm.NeoHookean(E, 0.0, ρ), facet_tags=scene.facet_tags,
-        dirichlet=[fe_mpm.Dirichlet(meshes.COLUMN_BASE, component=1),
-                   fe_mpm.Dirichlet(meshes.COLUMN_SIDES, component=0)],
+        scene.mesh,
+        points,
+        fe_mpm.NeoHookean(E, 0.0, ρ),
+        facet_tags=scene.facet_tags,
+        dirichlet=[
+            fe_mpm.Dirichlet(meshes.COLUMN_BASE, component=1),
+            fe_mpm.Dirichlet(meshes.COLUMN_SIDES, component=0),
+        ],
         body_force=(0.0, -g),
         body_force_scale=None if args.dynamic else (lambda t: t),
         dynamic=args.dynamic,
@@ -111,15 +126,23 @@ if args.dynamic:
     error = float(np.abs(u_top - exact).max() / (ρ * g * L**2 / (2 * E)))
 else:
     σ_exact = -ρ * g * (L - Y)
-    error = float(np.sum(np.abs(points.stress[:, 1, 1] - σ_exact) * points.volume)
-                  / (ρ * g * L * points.volume.sum()))
+    error = float(
+        np.sum(np.abs(points.stress[:, 1, 1] - σ_exact) * points.volume)
+        / (ρ * g * L * points.volume.sum())
+    )
 wall = time.perf_counter() - START
-print(f"Elastic column ({'dynamic' if args.dynamic else 'quasi-static'}): ny = {args.ny}, "
-      f"{len(reports)} steps, {len(points)} points")
-print(f"  error = {error:.3e}; base reaction {reports[-1].reactions['base'][1]:.6g} N "
-      f"(weight {ρ * g * L:.6g} N)")
-print(f"  Newton iterations per step: mean {np.mean([r.newton_iterations for r in reports]):.2f}; "
-      f"wall time {wall:.2f} s")
+print(
+    f"Elastic column ({'dynamic' if args.dynamic else 'quasi-static'}): ny = {args.ny}, "
+    f"{len(reports)} steps, {len(points)} points"
+)
+print(
+    f"  error = {error:.3e}; base reaction {reports[-1].reactions['base'][1]:.6g} N "
+    f"(weight {ρ * g * L:.6g} N)"
+)
+print(
+    f"  Newton iterations per step: mean {np.mean([r.newton_iterations for r in reports]):.2f}; "
+    f"wall time {wall:.2f} s"
+)
 # -
 
 # ## Check against the reference
@@ -161,15 +184,28 @@ passed = tolerance is None or error <= tolerance
 if tolerance is None:
     print("check: Tielen et al.'s series is for an undamped column: not checked")
 else:
-    print(f"check: error = {error:.3e} vs "
-          f"{'Tielen et al.' if args.dynamic else 'σ_yy = −ρ₀g(L − Y)'} (ny = {args.ny}, "
-          f"{args.steps} step{'s' * (args.steps > 1)}): {'<=' if passed else '>'} "
-          f"{tolerance:.3e} tolerance ({basis}): {'PASS' if passed else 'FAIL'}")
+    print(
+        f"check: error = {error:.3e} vs "
+        f"{'Tielen et al.' if args.dynamic else 'σ_yy = −ρ₀g(L − Y)'} (ny = {args.ny}, "
+        f"{args.steps} step{'s' * (args.steps > 1)}): {'<=' if passed else '>'} "
+        f"{tolerance:.3e} tolerance ({basis}): {'PASS' if passed else 'FAIL'}"
+    )
 if args.json:
-    print(json.dumps({"error": error, "wall_time_s": wall, "steps": len(reports),
-                      "n_particles": len(points), "dynamic": args.dynamic, "ny": args.ny,
-                      "newton_iterations": [r.newton_iterations for r in reports],
-                      "check_tolerance": tolerance, "check_passed": passed}))
+    print(
+        json.dumps(
+            {
+                "error": error,
+                "wall_time_s": wall,
+                "steps": len(reports),
+                "n_particles": len(points),
+                "dynamic": args.dynamic,
+                "ny": args.ny,
+                "newton_iterations": [r.newton_iterations for r in reports],
+                "check_tolerance": tolerance,
+                "check_passed": passed,
+            }
+        )
+    )
 if not passed:
     sys.exit(f"elastic_column.py: error {error:.3e} over the tolerance {tolerance:.3e}")
 # -

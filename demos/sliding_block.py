@@ -67,7 +67,10 @@ points = fe_mpm.seed(grid, per_cell=3, density=7800.0, cells=block)
 on_plane = lambda x: np.isclose(x[1], 0.0)  # noqa: E731
 try:
     sim = fe_mpm.Simulation(
-        grid, points, fe_mpm.NeoHookean(2e8, 0.3, 7800.0), dynamic=True,
+        grid,
+        points,
+        fe_mpm.NeoHookean(2e8, 0.3, 7800.0),
+        dynamic=True,
         dirichlet=[fe_mpm.Dirichlet(on_plane, component=1)],  # slip: normal only
         body_force=(g * np.sin(θ), -g * np.cos(θ)),
         reactions={"plane": on_plane},
@@ -92,12 +95,17 @@ t, s_h = np.array(com).T
 s_exact = 0.5 * g * np.sin(θ) * t**2
 error = float(np.sqrt(np.sum((s_h - s_exact) ** 2)))  # Eq. 4.44
 wall = time.perf_counter() - START
-print(f"Sliding block: θ = {args.theta}°, Δt = {args.dt}, {len(reports)} steps, "
-      f"{len(points)} points")
-print(f"  slide s = {s_h[-1]:.6f} m, exact {s_exact[-1]:.6f} m; "
-      f"Eq. 4.44 error over {len(t)} instants: {error:.2e} m")
-print(f"  Newton iterations per step: mean {np.mean([r.newton_iterations for r in reports]):.2f}; "
-      f"wall time {wall:.2f} s ({1000 * wall / len(reports):.1f} ms per step incl. set-up)")
+print(
+    f"Sliding block: θ = {args.theta}°, Δt = {args.dt}, {len(reports)} steps, {len(points)} points"
+)
+print(
+    f"  slide s = {s_h[-1]:.6f} m, exact {s_exact[-1]:.6f} m; "
+    f"Eq. 4.44 error over {len(t)} instants: {error:.2e} m"
+)
+print(
+    f"  Newton iterations per step: mean {np.mean([r.newton_iterations for r in reports]):.2f}; "
+    f"wall time {wall:.2f} s ({1000 * wall / len(reports):.1f} ms per step incl. set-up)"
+)
 # -
 
 # ## Check against the reference
@@ -112,14 +120,26 @@ print(f"  Newton iterations per step: mean {np.mean([r.newton_iterations for r i
 TOLERANCE = 1e-10
 
 passed = error <= TOLERANCE
-print(f"check: Eq. 4.44 error {error:.2e} m vs s = ½ g sin θ t² (θ = {args.theta}°, "
-      f"Δt = {args.dt}): {'<=' if passed else '>'} {TOLERANCE:g} m tolerance: "
-      f"{'PASS' if passed else 'FAIL'}")
+print(
+    f"check: Eq. 4.44 error {error:.2e} m vs s = ½ g sin θ t² (θ = {args.theta}°, "
+    f"Δt = {args.dt}): {'<=' if passed else '>'} {TOLERANCE:g} m tolerance: "
+    f"{'PASS' if passed else 'FAIL'}"
+)
 if args.json:
-    print(json.dumps({"error": error, "wall_time_s": wall, "steps": len(reports),
-                      "n_particles": len(points), "dt": args.dt,
-                      "slide_m": float(s_h[-1]), "exact_m": float(s_exact[-1]),
-                      "check_passed": passed}))
+    print(
+        json.dumps(
+            {
+                "error": error,
+                "wall_time_s": wall,
+                "steps": len(reports),
+                "n_particles": len(points),
+                "dt": args.dt,
+                "slide_m": float(s_h[-1]),
+                "exact_m": float(s_exact[-1]),
+                "check_passed": passed,
+            }
+        )
+    )
 if not passed:
     sys.exit(f"sliding_block.py: Eq. 4.44 error {error:.2e} m over {TOLERANCE:g} m")
 # -

@@ -72,14 +72,21 @@ args = parse_args()
 # cells follow the slope's surface. The soil's surfaces form physical group 1, the
 # empty cells above it group 2.
 
+
 # +
 def slope_grid(h: float):
     """The grid of the scene: (mesh, cell_tags), built on rank 0 and kept serial."""
     gmsh.initialize(interruptible=False)
     gmsh.option.setNumber("General.Terminal", 0)
     occ = gmsh.model.occ
-    outline = [(0, 0), (WIDTH, 0), (WIDTH, FOUNDATION), (TOE_X, FOUNDATION),
-               (CREST_X, FOUNDATION + SLOPE), (0, FOUNDATION + SLOPE)]
+    outline = [
+        (0, 0),
+        (WIDTH, 0),
+        (WIDTH, FOUNDATION),
+        (TOE_X, FOUNDATION),
+        (CREST_X, FOUNDATION + SLOPE),
+        (0, FOUNDATION + SLOPE),
+    ]
     corners = [occ.addPoint(x, y, 0) for x, y in outline]
     sides = [occ.addLine(a, b) for a, b in zip(corners, corners[1:] + corners[:1])]
     soil = occ.addPlaneSurface([occ.addCurveLoop(sides)])
@@ -110,8 +117,9 @@ mesh, cell_tags = slope_grid(args.h)
 # base is the whole weight, since the rollers carry no vertical force.
 
 # +
-soil = fe_mpm.MohrCoulomb(E=10e6, nu=0.3, cohesion=10e3, friction_angle=20.0,
-                          dilatancy_angle=0.0, density=2000.0)
+soil = fe_mpm.MohrCoulomb(
+    E=10e6, nu=0.3, cohesion=10e3, friction_angle=20.0, dilatancy_angle=0.0, density=2000.0
+)
 points = fe_mpm.seed(mesh, per_cell=args.per_cell, cells=cell_tags.find(SOIL))
 
 
@@ -127,9 +135,13 @@ def sides(x):
 
 try:
     sim = fe_mpm.Simulation(
-        mesh, points, soil, "u",
+        mesh,
+        points,
+        soil,
+        "u",
         dirichlet=[fe_mpm.Dirichlet(base), fe_mpm.Dirichlet(sides, component=0)],
-        body_force=(0.0, -G), body_force_scale=lambda t: args.g_max * t,
+        body_force=(0.0, -G),
+        body_force_scale=lambda t: args.g_max * t,
         reactions={"base": base},
     )
 except ValueError as err:
@@ -154,13 +166,18 @@ def report_step(r: fe_mpm.StepReport) -> None:
         return
     moved = np.linalg.norm(r.markers["crest"] - crest)
     balance = r.reactions["base"][1] / (weight * args.g_max * r.t)
-    print(f"  step {r.step:3d}  g x {args.g_max * r.t:5.3f}  Newton {r.newton_iterations:2d}  "
-          f"‖R‖/S {r.relative_residual:.1e}  crest moved {moved:7.4f} m  "
-          f"R_y/weight {balance:.6f}", flush=True)
+    print(
+        f"  step {r.step:3d}  g x {args.g_max * r.t:5.3f}  Newton {r.newton_iterations:2d}  "
+        f"‖R‖/S {r.relative_residual:.1e}  crest moved {moved:7.4f} m  "
+        f"R_y/weight {balance:.6f}",
+        flush=True,
+    )
 
 
-print(f"Slope: {len(points)} points on {mesh.topology.index_map(2).size_local} cells (h = "
-      f"{args.h} m), gravity to {args.g_max} g in {args.steps} steps")
+print(
+    f"Slope: {len(points)} points on {mesh.topology.index_map(2).size_local} cells (h = "
+    f"{args.h} m), gravity to {args.g_max} g in {args.steps} steps"
+)
 try:
     reports = sim.run(t_end=1.0, n_steps=args.steps, progress=False, on_step=report_step)
 except (fe_mpm.ConvergenceError, fe_mpm.PointsOutsideError) as err:
@@ -184,8 +201,10 @@ balance = max(abs(r.reactions["base"][1] / (weight * args.g_max * r.t) - 1.0) fo
 worst = max(r.relative_residual for r in reports)
 wall = time.perf_counter() - START
 print(f"  knee at {knee:.2f} g (slip circle: {BISHOP_FACTOR} g); reached {factor[-1]:.2f} g")
-print(f"  largest ‖R‖/S of an accepted step {worst:.1e}; base reaction within "
-      f"{balance:.1e} of the weight; wall time {wall:.0f} s")
+print(
+    f"  largest ‖R‖/S of an accepted step {worst:.1e}; base reaction within "
+    f"{balance:.1e} of the weight; wall time {wall:.0f} s"
+)
 # -
 
 # ## Check against the reference
@@ -208,22 +227,38 @@ check_knee = args.g_max >= (1 + KNEE_TOLERANCE) * BISHOP_FACTOR
 balanced = worst <= RESIDUAL_TOLERANCE and balance <= BALANCE_TOLERANCE
 passed = bool(balanced and (knee_error <= KNEE_TOLERANCE or not check_knee))
 if check_knee:
-    knee_line = (f"knee {knee:.2f} g vs slip circle {BISHOP_FACTOR} g: error "
-                 f"{100 * knee_error:.0f} % {'<=' if knee_error <= KNEE_TOLERANCE else '>'} "
-                 f"{100 * KNEE_TOLERANCE:.0f} % tolerance")
+    knee_line = (
+        f"knee {knee:.2f} g vs slip circle {BISHOP_FACTOR} g: error "
+        f"{100 * knee_error:.0f} % {'<=' if knee_error <= KNEE_TOLERANCE else '>'} "
+        f"{100 * KNEE_TOLERANCE:.0f} % tolerance"
+    )
 else:
     knee_line = f"knee not checked (ramp to {args.g_max} g only)"
-print(f"check: {knee_line}; largest ‖R‖/S {worst:.1e} "
-      f"{'<=' if worst <= RESIDUAL_TOLERANCE else '>'} {RESIDUAL_TOLERANCE:g}; reaction off "
-      f"the weight by {balance:.1e} {'<=' if balance <= BALANCE_TOLERANCE else '>'} "
-      f"{BALANCE_TOLERANCE:g}: {'PASS' if passed else 'FAIL'}")
+print(
+    f"check: {knee_line}; largest ‖R‖/S {worst:.1e} "
+    f"{'<=' if worst <= RESIDUAL_TOLERANCE else '>'} {RESIDUAL_TOLERANCE:g}; reaction off "
+    f"the weight by {balance:.1e} {'<=' if balance <= BALANCE_TOLERANCE else '>'} "
+    f"{BALANCE_TOLERANCE:g}: {'PASS' if passed else 'FAIL'}"
+)
 if args.json:
-    print(json.dumps({"knee": knee, "bishop": BISHOP_FACTOR, "reached": float(factor[-1]),
-                      "steps": len(reports), "worst_relative_residual": worst,
-                      "reaction_balance": balance, "n_particles": len(points),
-                      "newton_iterations": [r.newton_iterations for r in reports],
-                      "crest_moved": moved.tolist(), "load_factor": factor.tolist(),
-                      "wall_time_s": wall, "check_passed": passed}))
+    print(
+        json.dumps(
+            {
+                "knee": knee,
+                "bishop": BISHOP_FACTOR,
+                "reached": float(factor[-1]),
+                "steps": len(reports),
+                "worst_relative_residual": worst,
+                "reaction_balance": balance,
+                "n_particles": len(points),
+                "newton_iterations": [r.newton_iterations for r in reports],
+                "crest_moved": moved.tolist(),
+                "load_factor": factor.tolist(),
+                "wall_time_s": wall,
+                "check_passed": passed,
+            }
+        )
+    )
 if not passed:
     sys.exit("slope_gravity.py: the check against the slip circle failed")
 # -

@@ -65,14 +65,23 @@ def parse_args(argv=None):
     p.add_argument("--points-near", type=int, default=12, help="points per cell near it")
     p.add_argument("--points-far", type=int, default=3, help="points per cell elsewhere")
     p.add_argument("--smooth", action="store_true", help="smooth footing (vertical only)")
-    p.add_argument("--footing-thickness", type=float, default=None,
-                   help="height of the footing body above its base, filled with penalty points "
-                        "(m); 2h by default, 0 for the base only")
-    p.add_argument("--penalty", type=float, default=None,
-                   help="footing penalty β (Pa/m); 1e3 E/h by default")
-    p.add_argument("--line-search", choices=("basic", "bt", "l2"), default="basic",
-                   help="SNES line search (basic: full Newton steps); a failed step is "
-                        "retried with bt before it is cut")
+    p.add_argument(
+        "--footing-thickness",
+        type=float,
+        default=None,
+        help="height of the footing body above its base, filled with penalty points "
+        "(m); 2h by default, 0 for the base only",
+    )
+    p.add_argument(
+        "--penalty", type=float, default=None, help="footing penalty β (Pa/m); 1e3 E/h by default"
+    )
+    p.add_argument(
+        "--line-search",
+        choices=("basic", "bt", "l2"),
+        default="basic",
+        help="SNES line search (basic: full Newton steps); a failed step is "
+        "retried with bt before it is cut",
+    )
     p.add_argument("--output", default="strip_footing_output", help="output folder")
     p.add_argument("--no-output", action="store_true", help="write no files")
     p.add_argument("--json", action="store_true", help="print a JSON summary as the last line")
@@ -104,11 +113,21 @@ args = parse_args()
 try:
     B = args.B
     sim = scenes.strip_footing(
-        args.formulation, B=B, cu=args.cu, E=args.E, nu=args.nu, h=args.h, h_far=args.h_far,
-        near_width=args.near_width, near_depth=args.near_depth,
-        points_near=args.points_near, points_far=args.points_far,
-        settlement=args.settlement, smooth=args.smooth,
-        footing_thickness=args.footing_thickness, penalty=args.penalty,
+        args.formulation,
+        B=B,
+        cu=args.cu,
+        E=args.E,
+        nu=args.nu,
+        h=args.h,
+        h_far=args.h_far,
+        near_width=args.near_width,
+        near_depth=args.near_depth,
+        points_near=args.points_near,
+        points_far=args.points_far,
+        settlement=args.settlement,
+        smooth=args.smooth,
+        footing_thickness=args.footing_thickness,
+        penalty=args.penalty,
         petsc_options={"snes_linesearch_type": args.line_search},
         output_dir=None if args.no_output else args.output,
         output_every=max(1, args.steps // 20),
@@ -133,13 +152,17 @@ below = (points.x[:, 0] < B / 2) & (points.x[:, 1] > -args.settlement - B / 2)
 sigma_yy = points.stress[below, 1, 1] / args.cu
 oscillation = stress_oscillation(points.x[below], points.stress[below, 1, 1]) / args.cu
 wall = time.perf_counter() - START
-print(f"Strip footing, {args.formulation}: {len(points)} points, {len(reports)} steps, "
-      f"wall time {wall:.1f} s")
+print(
+    f"Strip footing, {args.formulation}: {len(points)} points, {len(reports)} steps, "
+    f"wall time {wall:.1f} s"
+)
 for target in (0.05, 0.1, 0.25, 0.5, 1.0, 1.5, 2.0):
     if s_over_B[-1] >= target - 1e-12:
         print(f"  s/B = {target:<5}  q/c_u = {np.interp(target, s_over_B, q_over_cu):.3f}")
-print(f"  σ_yy/c_u under the footing: [{sigma_yy.min():.2f}, {sigma_yy.max():.2f}]; "
-      f"oscillation {oscillation:.3f}")
+print(
+    f"  σ_yy/c_u under the footing: [{sigma_yy.min():.2f}, {sigma_yy.max():.2f}]; "
+    f"oscillation {oscillation:.3f}"
+)
 print(f"  Newton iterations per step: max {max(iterations)}, mean {np.mean(iterations):.2f}")
 held = [r.step for r in reports if r.held_points]
 if held:
@@ -148,8 +171,13 @@ if held:
 if not args.no_output:
     plt = pyplot()  # None without matplotlib (the plots extra)
     out = Path(args.output)
-    np.savetxt(out / "load_settlement.csv", np.column_stack([s_over_B, q_over_cu]),
-               delimiter=",", header="settlement_over_B,q_over_cu", comments="")
+    np.savetxt(
+        out / "load_settlement.csv",
+        np.column_stack([s_over_B, q_over_cu]),
+        delimiter=",",
+        header="settlement_over_B,q_over_cu",
+        comments="",
+    )
     if plt is not None:
         fig, ax = plt.subplots(figsize=(5, 3.5))
         ax.plot(np.r_[0, s_over_B], np.r_[0, q_over_cu], "-", label=f"fe-mpm {args.formulation}")
@@ -159,8 +187,10 @@ if not args.no_output:
         ax.legend()
         fig.tight_layout()
         fig.savefig(out / "load_settlement.png", dpi=120)
-        print(f"  wrote {out}/particles.pvd (stress, pressure, plastic_strain), "
-              "load_settlement.csv and .png")
+        print(
+            f"  wrote {out}/particles.pvd (stress, pressure, plastic_strain), "
+            "load_settlement.csv and .png"
+        )
 
 # -
 
@@ -188,28 +218,43 @@ LOWER, UPPER = -0.05, 0.15
 in_window = (s_over_B >= WINDOW[0] - 1e-9) & (s_over_B <= WINDOW[1] + 1e-9)
 if args.E / args.cu < 100 or not in_window.any():
     plateau, check_error, passed = None, None, True
-    print(f"check: 2 + π needs E/c_u ≥ 100 and steps with {WINDOW[0]} ≤ s/B ≤ {WINDOW[1]}: "
-          "not checked")
+    print(
+        f"check: 2 + π needs E/c_u ≥ 100 and steps with {WINDOW[0]} ≤ s/B ≤ {WINDOW[1]}: "
+        "not checked"
+    )
 else:
     plateau = float(q_over_cu[in_window].mean())
     check_error = plateau / (2 + np.pi) - 1
     passed = bool(LOWER <= check_error <= UPPER)
-    print(f"check: mean q/c_u over {WINDOW[0]} ≤ s/B ≤ {WINDOW[1]} = {plateau:.3f} vs Prandtl "
-          f"2 + π = {2 + np.pi:.3f} ({args.formulation}): error {100 * check_error:+.1f} % "
-          f"{'within' if passed else 'outside'} [{100 * LOWER:+.0f} %, {100 * UPPER:+.0f} %]: "
-          f"{'PASS' if passed else 'FAIL'}")
+    print(
+        f"check: mean q/c_u over {WINDOW[0]} ≤ s/B ≤ {WINDOW[1]} = {plateau:.3f} vs Prandtl "
+        f"2 + π = {2 + np.pi:.3f} ({args.formulation}): error {100 * check_error:+.1f} % "
+        f"{'within' if passed else 'outside'} [{100 * LOWER:+.0f} %, {100 * UPPER:+.0f} %]: "
+        f"{'PASS' if passed else 'FAIL'}"
+    )
 if args.json:
-    print(json.dumps({
-        "settlement_over_B": s_over_B.tolist(), "q_over_cu": q_over_cu.tolist(),
-        "wall_time_s": wall, "n_particles": len(points), "steps": len(reports),
-        "newton_iterations_max": max(iterations), "newton_iterations": iterations,
-        "steps_with_held_points": held,
-        "residual_norms": [r.residual_norms for r in reports],
-        "sigma_yy_over_cu_range": [float(sigma_yy.min()), float(sigma_yy.max())],
-        "stress_oscillation": float(oscillation), "formulation": args.formulation,
-        "timings": sim.timings, "check_q_over_cu": plateau, "check_error": check_error,
-        "check_passed": passed,
-    }))
+    print(
+        json.dumps(
+            {
+                "settlement_over_B": s_over_B.tolist(),
+                "q_over_cu": q_over_cu.tolist(),
+                "wall_time_s": wall,
+                "n_particles": len(points),
+                "steps": len(reports),
+                "newton_iterations_max": max(iterations),
+                "newton_iterations": iterations,
+                "steps_with_held_points": held,
+                "residual_norms": [r.residual_norms for r in reports],
+                "sigma_yy_over_cu_range": [float(sigma_yy.min()), float(sigma_yy.max())],
+                "stress_oscillation": float(oscillation),
+                "formulation": args.formulation,
+                "timings": sim.timings,
+                "check_q_over_cu": plateau,
+                "check_error": check_error,
+                "check_passed": passed,
+            }
+        )
+    )
 if not passed:
     sys.exit(f"strip_footing.py: q/c_u near s/B = 0.1 is {100 * check_error:+.1f} % from 2 + π")
 # -

@@ -83,11 +83,16 @@ try:
     material = fe_mpm.J2Plasticity(args.E, args.nu, args.yield_stress, args.hardening, 7800.0)
     points = fe_mpm.seed(scene.mesh, per_cell=3, density=material.density)
     sim = fe_mpm.Simulation(
-        scene.mesh, points, material, args.formulation, facet_tags=scene.facet_tags,
+        scene.mesh,
+        points,
+        material,
+        args.formulation,
+        facet_tags=scene.facet_tags,
         dirichlet=[
             fe_mpm.Dirichlet(meshes.TENSION_BOTTOM),
-            fe_mpm.Dirichlet(meshes.TENSION_TOP,
-                             value=lambda t: np.array([0.0, args.displacement * t])),
+            fe_mpm.Dirichlet(
+                meshes.TENSION_TOP, value=lambda t: np.array([0.0, args.displacement * t])
+            ),
         ],
         reactions={"top": meshes.TENSION_TOP},
         output_dir=None if args.no_output else args.output,
@@ -107,31 +112,48 @@ limit_load = float(force.max())
 analytical = 2.0 / np.sqrt(3.0) * args.yield_stress * args.width
 iterations = [r.newton_iterations for r in reports]
 wall = time.perf_counter() - START
-print(f"Tension test, {args.formulation}, ν = {args.nu}: {len(points)} points, "
-      f"{len(reports)} steps")
-print(f"  limit load {limit_load:.6g} N/m; (2/√3) σ_Y W = {analytical:.6g} N/m "
-      f"({limit_load / analytical - 1:+.2%})")
+print(
+    f"Tension test, {args.formulation}, ν = {args.nu}: {len(points)} points, {len(reports)} steps"
+)
+print(
+    f"  limit load {limit_load:.6g} N/m; (2/√3) σ_Y W = {analytical:.6g} N/m "
+    f"({limit_load / analytical - 1:+.2%})"
+)
 print(f"  max equivalent plastic strain {points.history['plastic_strain'].max():.4f}")
-print(f"  Newton iterations per step: max {max(iterations)}, mean {np.mean(iterations):.2f}; "
-      f"wall time {wall:.2f} s")
+print(
+    f"  Newton iterations per step: max {max(iterations)}, mean {np.mean(iterations):.2f}; "
+    f"wall time {wall:.2f} s"
+)
 
 if not args.no_output:
     plt = pyplot()  # None without matplotlib (the plots extra)
     out = Path(args.output)
-    np.savetxt(out / "force_displacement.csv", np.column_stack([displacement, force]),
-               delimiter=",", header="displacement_m,force_N_per_m", comments="")
+    np.savetxt(
+        out / "force_displacement.csv",
+        np.column_stack([displacement, force]),
+        delimiter=",",
+        header="displacement_m,force_N_per_m",
+        comments="",
+    )
     if plt is not None:
         fig, ax = plt.subplots(figsize=(5, 3.5))
-        ax.plot(np.r_[0, displacement] * 1e3, np.r_[0, force] / 1e3, "o-", ms=3,
-                label=f"fe-mpm {args.formulation}, ν = {args.nu}")
+        ax.plot(
+            np.r_[0, displacement] * 1e3,
+            np.r_[0, force] / 1e3,
+            "o-",
+            ms=3,
+            label=f"fe-mpm {args.formulation}, ν = {args.nu}",
+        )
         ax.axhline(analytical / 1e3, color="k", ls="--", lw=1, label="(2/√3) σ_Y W")
         ax.set_xlabel("imposed displacement (mm)")
         ax.set_ylabel("force (kN/m)")
         ax.legend()
         fig.tight_layout()
         fig.savefig(out / "force_displacement.png", dpi=120)
-        print(f"  wrote {out}/particles.pvd (plastic_strain, stress, ...), "
-              "force_displacement.csv and .png")
+        print(
+            f"  wrote {out}/particles.pvd (plastic_strain, stress, ...), "
+            "force_displacement.csv and .png"
+        )
 
 # -
 
@@ -152,23 +174,36 @@ TOLERANCE = 0.01
 check_error = abs(limit_load / analytical - 1)
 if args.hardening != 0.0 or args.displacement / args.height < 2 * args.yield_stress / args.E:
     passed = True
-    print("check: (2/√3) σ_Y W is the limit of a perfectly plastic plate pulled to "
-          "U/H ≥ 2 σ_Y/E: not checked")
+    print(
+        "check: (2/√3) σ_Y W is the limit of a perfectly plastic plate pulled to "
+        "U/H ≥ 2 σ_Y/E: not checked"
+    )
 else:
     passed = bool(check_error <= TOLERANCE)
-    print(f"check: limit load {limit_load:.6g} N/m vs (2/√3) σ_Y W {analytical:.6g} N/m "
-          f"({args.formulation}, ν = {args.nu}): error {100 * check_error:.2f} % "
-          f"{'<=' if passed else '>'} {100 * TOLERANCE:g} % tolerance: "
-          f"{'PASS' if passed else 'FAIL'}")
+    print(
+        f"check: limit load {limit_load:.6g} N/m vs (2/√3) σ_Y W {analytical:.6g} N/m "
+        f"({args.formulation}, ν = {args.nu}): error {100 * check_error:.2f} % "
+        f"{'<=' if passed else '>'} {100 * TOLERANCE:g} % tolerance: "
+        f"{'PASS' if passed else 'FAIL'}"
+    )
 if args.json:
-    print(json.dumps({
-        "limit_load": limit_load, "analytical_limit_load": analytical,
-        "relative_error": limit_load / analytical - 1, "newton_iterations_max": max(iterations),
-        "newton_iterations": iterations, "wall_time_s": wall, "steps": len(reports),
-        "n_particles": len(points), "formulation": args.formulation, "nu": args.nu,
-        "check_passed": passed,
-    }))
+    print(
+        json.dumps(
+            {
+                "limit_load": limit_load,
+                "analytical_limit_load": analytical,
+                "relative_error": limit_load / analytical - 1,
+                "newton_iterations_max": max(iterations),
+                "newton_iterations": iterations,
+                "wall_time_s": wall,
+                "steps": len(reports),
+                "n_particles": len(points),
+                "formulation": args.formulation,
+                "nu": args.nu,
+                "check_passed": passed,
+            }
+        )
+    )
 if not passed:
-    sys.exit(f"tension_plate.py: the limit load is {100 * check_error:.2f} % from "
-             "(2/√3) σ_Y W")
+    sys.exit(f"tension_plate.py: the limit load is {100 * check_error:.2f} % from (2/√3) σ_Y W")
 # -

@@ -78,18 +78,19 @@ def _sync_folder(folder: Path, pages: dict[str, str]) -> None:
 def _demo_page(script: Path) -> str:
     """The Markdown page of one demo script, converted by jupytext (not run)."""
     nb = jupytext.read(script, fmt="py:light")
-    nb.metadata = {"jupytext": {"notebook_metadata_filter": "-all",
-                                "cell_metadata_filter": "-all"}}
+    nb.metadata = {"jupytext": {"notebook_metadata_filter": "-all", "cell_metadata_filter": "-all"}}
     text = jupytext.writes(nb, fmt="md")
-    note = (f"*This page is the script `demos/{script.name}`, converted by jupytext and "
-            f"not run here: run it with "
-            f"`./run python demos/{script.name}` (`--help` lists its options).*\n")
+    note = (
+        f"*This page is the script `demos/{script.name}`, converted by jupytext and "
+        f"not run here: run it with "
+        f"`./run python demos/{script.name}` (`--help` lists its options).*\n"
+    )
     lines = text.splitlines(keepends=True)
     title = next((i for i, s in enumerate(lines) if s.startswith("# ")), None)
     if title is None:  # a script without a title: name the page after it
         lines[:0] = [f"# `demos/{script.name}`\n", "\n"]
         title = 0
-    lines[title + 1:title + 1] = ["\n", note]
+    lines[title + 1 : title + 1] = ["\n", note]
     return "".join(lines)
 
 
@@ -110,8 +111,11 @@ def _public_names() -> set[tuple[str, int]]:
         module = importlib.import_module(name)
         names = getattr(module, "__all__", None)
         if names is None:
-            names = [n for n, v in vars(module).items()
-                     if not n.startswith("_") and getattr(v, "__module__", None) == name]
+            names = [
+                n
+                for n, v in vars(module).items()
+                if not n.startswith("_") and getattr(v, "__module__", None) == name
+            ]
         exported.update((n, id(getattr(module, n))) for n in names)
     return exported
 
@@ -127,18 +131,16 @@ def _module_pages() -> dict[str, str]:
         module = importlib.import_module(name)
         package, _, short = name.rpartition(".")
         options = "   :members:\n"
-        if isinstance(getattr(importlib.import_module(package), short, None),
-                      types.FunctionType):
+        if isinstance(getattr(importlib.import_module(package), short, None), types.FunctionType):
             # A module named as the function its package exports (fe_mpm.meshes.column):
             # the function keeps the name in the index.
             options += "   :no-index:\n"
         shown = sorted(n for n, v in vars(module).items() if (n, id(v)) in exported)
         if shown:
             options += f"   :exclude-members: {', '.join(shown)}\n"
-        pages[f"{name}.md"] = (f"# `{name}`\n\n"
-                               "```{eval-rst}\n"
-                               f".. automodule:: {name}\n{options}"
-                               "```\n")
+        pages[f"{name}.md"] = (
+            f"# `{name}`\n\n```{{eval-rst}}\n.. automodule:: {name}\n{options}```\n"
+        )
     return pages
 
 

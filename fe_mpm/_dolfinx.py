@@ -76,27 +76,36 @@ class FormFactory:
         }
         ordered = ufl.algorithms.analysis.extract_constants(compiled.ufl_form)
         if len(ordered) != ufcx.num_constants:  # pragma: no cover - a DOLFINx change
-            raise RuntimeError(f"the compiled form has {ufcx.num_constants} constants, "
-                               f"its UFL form {len(ordered)}")
+            raise RuntimeError(
+                f"the compiled form has {ufcx.num_constants} constants, its UFL form {len(ordered)}"
+            )
         self._constants = {f"c{i}": constants[c]._cpp_object for i, c in enumerate(ordered)}
         self._compiled = compiled
-        self._pointer = compiled.module.ffi.cast("uintptr_t",
-                                                 compiled.module.ffi.addressof(ufcx))
+        self._pointer = compiled.module.ffi.cast("uintptr_t", compiled.module.ffi.addressof(ufcx))
         self._spaces = [V._cpp_object for V in spaces]
         self._mesh = mesh._cpp_object
         self._create = form_cpp_creator(compiled.dtype)
 
     def __call__(self, subdomains: dict) -> dolfinx.fem.Form:
         """The form over ``subdomains``: integral type -> [(subdomain id, entities)]."""
-        ordered = {kind: sorted(pairs, key=lambda pair: pair[0])
-                   for kind, pairs in subdomains.items()}
-        form = self._create(self._pointer, self._spaces, self._coefficients, self._constants,
-                            ordered, [], self._mesh)
+        ordered = {
+            kind: sorted(pairs, key=lambda pair: pair[0]) for kind, pairs in subdomains.items()
+        }
+        form = self._create(
+            self._pointer,
+            self._spaces,
+            self._coefficients,
+            self._constants,
+            ordered,
+            [],
+            self._mesh,
+        )
         return dolfinx.fem.Form(form, self._compiled.ufcx_form, self._compiled.code)
 
 
-def form_integrals(form: dolfinx.fem.Form) -> list[tuple[dolfinx.fem.IntegralType, int, int,
-                                                          np.ndarray]]:
+def form_integrals(
+    form: dolfinx.fem.Form,
+) -> list[tuple[dolfinx.fem.IntegralType, int, int, np.ndarray]]:
     """Every integral of ``form``: (type, index, subdomain id, its entities).
 
     The entities are cells (n,) for cell integrals and (cell, local facet) pairs
@@ -113,8 +122,11 @@ def form_integrals(form: dolfinx.fem.Form) -> list[tuple[dolfinx.fem.IntegralTyp
 
 def _integral_ids(ufcx_form, integral_type) -> list[int]:
     """Subdomain ids of a compiled form's integrals of one type, in DOLFINx's order."""
-    t = {dolfinx.fem.IntegralType.cell: 0, dolfinx.fem.IntegralType.exterior_facet: 1,
-         dolfinx.fem.IntegralType.interior_facet: 2}[integral_type]
+    t = {
+        dolfinx.fem.IntegralType.cell: 0,
+        dolfinx.fem.IntegralType.exterior_facet: 1,
+        dolfinx.fem.IntegralType.interior_facet: 2,
+    }[integral_type]
     offsets = ufcx_form.form_integral_offsets
     return [ufcx_form.form_integral_ids[j] for j in range(offsets[t], offsets[t + 1])]
 
@@ -124,8 +136,9 @@ def original_coefficient_positions(ufcx_object) -> list[int]:
 
     In the kernel's order; the kernel is a form's or an expression's.
     """
-    return [ufcx_object.original_coefficient_positions[i]
-            for i in range(ufcx_object.num_coefficients)]
+    return [
+        ufcx_object.original_coefficient_positions[i] for i in range(ufcx_object.num_coefficients)
+    ]
 
 
 def expression_kernel(expression: dolfinx.fem.Expression):
@@ -133,9 +146,13 @@ def expression_kernel(expression: dolfinx.fem.Expression):
     return expression._ufcx_expression
 
 
-def tabulate_expression(expression: dolfinx.fem.Expression, coefficients: np.ndarray,
-                        mesh: dolfinx.mesh.Mesh, entities: np.ndarray,
-                        values: np.ndarray) -> None:
+def tabulate_expression(
+    expression: dolfinx.fem.Expression,
+    coefficients: np.ndarray,
+    mesh: dolfinx.mesh.Mesh,
+    entities: np.ndarray,
+    values: np.ndarray,
+) -> None:
     """Evaluate ``expression`` on ``entities`` with the packed ``coefficients``.
 
     Args:
@@ -147,5 +164,6 @@ def tabulate_expression(expression: dolfinx.fem.Expression, coefficients: np.nda
     """
     cpp = expression._cpp_object
     constants = dolfinx.cpp.fem.pack_constants(cpp)
-    dolfinx.cpp.fem.tabulate_expression(values, cpp, constants, coefficients, mesh._cpp_object,
-                                        entities)
+    dolfinx.cpp.fem.tabulate_expression(
+        values, cpp, constants, coefficients, mesh._cpp_object, entities
+    )

@@ -51,16 +51,24 @@ class StepForm:
         arguments = sorted(form.arguments(), key=lambda a: a.number())
         self.spaces = [a.ufl_function_space() for a in arguments]
         self._factory = FormFactory(
-            self.compiled, self.spaces, mesh, {c: c for c in form.coefficients()},
-            {c: c for c in ufl.algorithms.analysis.extract_constants(form)})
+            self.compiled,
+            self.spaces,
+            mesh,
+            {c: c for c in form.coefficients()},
+            {c: c for c in ufl.algorithms.analysis.extract_constants(form)},
+        )
         self.quadratures = quadratures or {}
         self.dynamic = dynamic or set()
         tdim = mesh.topology.dim
         mesh.topology.create_connectivity(tdim - 1, tdim)
         mesh.topology.create_connectivity(tdim, tdim - 1)
         self._facets = [
-            (tag, dolfinx.fem.compute_integration_domains(
-                IntegralType.exterior_facet, mesh.topology, np.asarray(facets, dtype=np.int32)))
+            (
+                tag,
+                dolfinx.fem.compute_integration_domains(
+                    IntegralType.exterior_facet, mesh.topology, np.asarray(facets, dtype=np.int32)
+                ),
+            )
             for tag, facets in sorted((facet_domains or {}).items())
         ]
 
@@ -72,8 +80,9 @@ class StepForm:
         cells = {OCCUPIED: layout.entities}
         if boundary is not None:
             cells[BOUNDARY_POINTS] = boundary.entities
-        return BoundForm(self._create(cells), self.columns, self.width, self.quadratures,
-                         self.dynamic)
+        return BoundForm(
+            self._create(cells), self.columns, self.width, self.quadratures, self.dynamic
+        )
 
     def bind_cells(self, cells: np.ndarray) -> dolfinx.fem.Form:
         """A plain DOLFINx form with every integral over ``cells`` once.
@@ -85,8 +94,9 @@ class StepForm:
 
     def _create(self, cells: dict[int, np.ndarray]) -> dolfinx.fem.Form:
         subdomains = {
-            IntegralType.cell: [(i, np.asarray(c, dtype=np.int32))
-                                for i, c in sorted(cells.items())],
+            IntegralType.cell: [
+                (i, np.asarray(c, dtype=np.int32)) for i, c in sorted(cells.items())
+            ],
             IntegralType.exterior_facet: list(self._facets),
         }
         return self._factory(subdomains)

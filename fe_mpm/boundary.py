@@ -28,8 +28,10 @@ def _check_where(owner: str, where: object) -> None:
         return
     # int(1.5) would select tag 1 without a word.
     if isinstance(where, bool | np.bool_) or not isinstance(where, numbers.Integral):
-        raise TypeError(f"{owner}: where must be a facet tag (an int) or a marker x -> bool, "
-                        f"got {reprlib.repr(where)}")
+        raise TypeError(
+            f"{owner}: where must be a facet tag (an int) or a marker x -> bool, "
+            f"got {reprlib.repr(where)}"
+        )
 
 
 def _check_callable(owner: str, field: str, value: object, kind: str) -> None:
@@ -42,8 +44,10 @@ def _vector(owner: str, field: str, value: object) -> tuple[float, ...]:
     """A non-empty 1-D sequence of finite numbers as a tuple of floats, or raise."""
     a = check_finite(owner, field, value, what="component")
     if a.ndim != 1 or a.size == 0:
-        raise TypeError(f"{owner}: {field} must be a sequence of numbers, one per component, "
-                        f"got {reprlib.repr(value)}")
+        raise TypeError(
+            f"{owner}: {field} must be a sequence of numbers, one per component, "
+            f"got {reprlib.repr(value)}"
+        )
     return tuple(a.tolist())
 
 
@@ -63,8 +67,10 @@ def _value_at(owner: str, field: str, f: Callable, t: float) -> np.ndarray:
         a = np.asarray(np.nan)
     # A nan here would reach the grid as a boundary value and Newton would fail far from the cause.
     if a.dtype.kind not in "iuf" or not np.all(np.isfinite(a)):
-        raise ValueError(f"{owner}: {field}(t) must return finite numbers, got "
-                         f"{reprlib.repr(v)} at t = {float(t):g}")
+        raise ValueError(
+            f"{owner}: {field}(t) must return finite numbers, got "
+            f"{reprlib.repr(v)} at t = {float(t):g}"
+        )
     return a.astype(np.float64)
 
 
@@ -74,8 +80,10 @@ def _scale_at(owner: str, scale: Callable[[float], float] | None, t: float) -> f
         return 1.0
     factor = _value_at(owner, "scale", scale, t)
     if factor.size != 1:
-        raise ValueError(f"{owner}: scale(t) must return one number, got shape {factor.shape} "
-                         f"at t = {float(t):g}")
+        raise ValueError(
+            f"{owner}: scale(t) must return one number, got shape {factor.shape} "
+            f"at t = {float(t):g}"
+        )
     return float(factor.reshape(-1)[0])
 
 
@@ -92,13 +100,17 @@ def _points(owner: str, x: object, weight: object) -> tuple[np.ndarray, np.ndarr
         raise ValueError(f"{owner}: x must have shape (n, 2) or (n, 3) with n ≥ 1, got {x.shape}")
     w = check_finite(owner, "weight", weight, what="point")
     if w.ndim > 1 or w.size not in (1, x.shape[0]):
-        raise ValueError(f"{owner}: weight must be one number or one per point, shape "
-                         f"({x.shape[0]},), got shape {w.shape}")
+        raise ValueError(
+            f"{owner}: weight must be one number or one per point, shape "
+            f"({x.shape[0]},), got shape {w.shape}"
+        )
     w = np.broadcast_to(w, (x.shape[0],)).copy()
     bad = np.flatnonzero(w <= 0)
     if bad.size:
-        raise ValueError(f"{owner}: every weight must be > 0 (m in 2D, m² in 3D); point "
-                         f"{bad[0]} has {w[bad[0]]:g}")
+        raise ValueError(
+            f"{owner}: every weight must be > 0 (m in 2D, m² in 3D); point "
+            f"{bad[0]} has {w[bad[0]]:g}"
+        )
     return x, w
 
 
@@ -133,11 +145,13 @@ class Dirichlet:
         if not callable(self.value):
             value = check_finite("Dirichlet", "value", self.value, what="component")
             if value.ndim > 1:
-                raise ValueError(f"Dirichlet: value must be a number or a vector, got shape "
-                                 f"{value.shape}")
+                raise ValueError(
+                    f"Dirichlet: value must be a number or a vector, got shape {value.shape}"
+                )
             # object.__setattr__: the dataclass is frozen; keep floats, not what was given.
-            object.__setattr__(self, "value", float(value) if value.ndim == 0
-                               else tuple(value.tolist()))
+            object.__setattr__(
+                self, "value", float(value) if value.ndim == 0 else tuple(value.tolist())
+            )
 
     def at(self, t: float) -> np.ndarray:
         """Prescribed displacement at time ``t`` (m) as an array.
@@ -194,7 +208,8 @@ def boundary_facets(
         # find() would return cell indices, taken for facet indices without a word.
         raise ValueError(
             f"facet_tags has entities of dimension {facet_tags.dim} but the facets of this "
-            f"{tdim}D mesh have dimension {fdim}; cell tags cannot select boundary facets")
+            f"{tdim}D mesh have dimension {fdim}; cell tags cannot select boundary facets"
+        )
     if callable(where):
         facets = dolfinx.mesh.locate_entities_boundary(mesh, fdim, where)
     else:
@@ -250,18 +265,26 @@ class PointDirichlet:
         owner = f"PointDirichlet {self.name!r}"
         x, weight = _points(owner, self.x, self.weight)
         if not callable(self.value):
-            raise TypeError(f"{owner}: value must be a function t -> displacement (m), "
-                            f"got {reprlib.repr(self.value)}")
+            raise TypeError(
+                f"{owner}: value must be a function t -> displacement (m), "
+                f"got {reprlib.repr(self.value)}"
+            )
         penalty = check_range(owner, "penalty", self.penalty, lo=0.0, lo_open=True)
         components = self.components
         if components is not None:
             if isinstance(components, str) or not isinstance(components, Sequence | np.ndarray):
-                raise TypeError(f"{owner}: components must be a tuple of component indices "
-                                f"such as (1,), got {reprlib.repr(components)}")
+                raise TypeError(
+                    f"{owner}: components must be a tuple of component indices "
+                    f"such as (1,), got {reprlib.repr(components)}"
+                )
             components = tuple(check_int(owner, "components", c, lo=0, hi=2) for c in components)
         # object.__setattr__: the dataclass is frozen; keep the checked arrays and floats.
-        for name, value in (("x", x), ("weight", weight), ("penalty", penalty),
-                            ("components", components)):
+        for name, value in (
+            ("x", x),
+            ("weight", weight),
+            ("penalty", penalty),
+            ("components", components),
+        ):
             object.__setattr__(self, name, value)
 
     def at(self, t: float) -> np.ndarray:
@@ -305,8 +328,11 @@ class PointTraction:
         x, weight = _points(owner, self.x, self.weight)
         _check_callable(owner, "scale", self.scale, "a function t -> float")
         # object.__setattr__: the dataclass is frozen; keep the checked arrays and floats.
-        for name, value in (("x", x), ("weight", weight),
-                            ("value", _vector(owner, "value", self.value))):
+        for name, value in (
+            ("x", x),
+            ("weight", weight),
+            ("value", _vector(owner, "value", self.value)),
+        ):
             object.__setattr__(self, name, value)
 
     def at(self, t: float) -> np.ndarray:

@@ -42,8 +42,9 @@ class BoundaryPoints:
             kind = type(c).__name__
             x = np.asarray(c.x, dtype=np.float64)
             if x.ndim != 2 or x.shape[1] != gdim or x.shape[0] == 0:
-                raise ValueError(f"{kind} {c.name!r}: x must have shape (n, {gdim}) with "
-                                 f"n ≥ 1, got {x.shape}")
+                raise ValueError(
+                    f"{kind} {c.name!r}: x must have shape (n, {gdim}) with n ≥ 1, got {x.shape}"
+                )
             w = np.broadcast_to(np.asarray(c.weight, dtype=np.float64), (x.shape[0],))
             if not np.all(w > 0) or not np.all(np.isfinite(w)):
                 raise ValueError(f"{kind} {c.name!r}: every weight must be > 0")
@@ -57,7 +58,7 @@ class BoundaryPoints:
                 continue
             check_range(f"PointDirichlet {c.name!r}", "penalty", c.penalty, lo=0.0, lo_open=True)
             mask = np.zeros(gdim)
-            for comp in (range(gdim) if c.components is None else c.components):
+            for comp in range(gdim) if c.components is None else c.components:
                 check_range(f"PointDirichlet {c.name!r}", "components", comp, lo=0, hi=gdim - 1)
                 mask[int(comp)] = 1.0
             stiffness.append(np.tile(c.penalty * mask, (x.shape[0], 1)))
@@ -99,9 +100,12 @@ class BoundaryPoints:
             t: Time at the end of the step.
         """
         per_point = self.weight[active, None] * (
-            self.tractions(t)[active] - self.stiffness[active] * mismatch)
-        return {c.name: per_point[self.owner[active] == i].sum(axis=0)
-                for i, c in enumerate(self.conditions)}
+            self.tractions(t)[active] - self.stiffness[active] * mismatch
+        )
+        return {
+            c.name: per_point[self.owner[active] == i].sum(axis=0)
+            for i, c in enumerate(self.conditions)
+        }
 
 
 class BoundaryPointStep:
@@ -125,8 +129,9 @@ class BoundaryPointStep:
         self._warned = False
 
     @classmethod
-    def of(cls, conditions: Sequence[PointDirichlet | PointTraction],
-           tracker: Tracker) -> BoundaryPointStep | None:
+    def of(
+        cls, conditions: Sequence[PointDirichlet | PointTraction], tracker: Tracker
+    ) -> BoundaryPointStep | None:
         """The boundary points of ``conditions`` on the grid of ``tracker``; None if none."""
         if not conditions:
             return None
@@ -148,7 +153,8 @@ class BoundaryPointStep:
             raise PointsOutsideError(
                 f"boundary point {first} of {type(pp.conditions[pp.owner[first]]).__name__} "
                 f"{pp.conditions[pp.owner[first]].name!r} at x = {pp.x[first]} is outside the grid "
-                f"(step to t = {t_new:g})")
+                f"(step to t = {t_new:g})"
+            )
         occupied = np.zeros(tracker.num_cells, dtype=bool)
         occupied[occupied_cells] = True
         # The body's surface lies between its points, often in a cell whose points
@@ -162,7 +168,8 @@ class BoundaryPointStep:
             warn(
                 f"{idle.sum()} point(s) of PointTraction "
                 f"{pp.conditions[pp.owner[first]].name!r} lie in no occupied cell at the step "
-                f"to t = {t_new:g} (first at x = {pp.x[first]}); their load is not applied.")
+                f"to t = {t_new:g} (first at x = {pp.x[first]}); their load is not applied."
+            )
         cells = cells[self._active]
         self._nslot = slot_count(np.bincount(cells), self._nslot)
         self.layout = SlotLayout.from_cells(cells, self._nslot)
@@ -171,8 +178,9 @@ class BoundaryPointStep:
     def pack(self, forms, t_new: float) -> None:
         """Their positions, gaps, penalties and tractions into the step's slot fields."""
         pp, active, qb, layout = self.points, self._active, forms.q_boundary, self.layout
-        qb.pack_geometry(pp.x[active], pp.weight[active], layout, self.tracker.centroids,
-                         self.tracker.volumes)
+        qb.pack_geometry(
+            pp.x[active], pp.weight[active], layout, self.tracker.centroids, self.tracker.volumes
+        )
         self._gap = pp.x[active] - pp.targets(t_new)[active]
         qb.pack(forms.gap, layout, self._gap)
         qb.pack(forms.penalty_stiffness, layout, pp.stiffness[active])

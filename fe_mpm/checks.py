@@ -73,8 +73,9 @@ def check_range(
     return v
 
 
-def check_int(owner: str, field: str, value: object, *, lo: int | None = None,
-              hi: int | None = None) -> int:
+def check_int(
+    owner: str, field: str, value: object, *, lo: int | None = None, hi: int | None = None
+) -> int:
     """Return ``value`` as an int or raise unless it is an integer in ``[lo, hi]``.
 
     Raises:
@@ -108,11 +109,13 @@ def check_finite(owner: str, field: str, value: object, *, what: str = "entry") 
     try:
         a = np.asarray(value)
     except ValueError:  # a ragged nesting such as [[1, 2], [3]]
-        raise TypeError(f"{owner}: {field} must be an array of numbers, "
-                        f"got {reprlib.repr(value)}") from None
+        raise TypeError(
+            f"{owner}: {field} must be an array of numbers, got {reprlib.repr(value)}"
+        ) from None
     if a.dtype.kind not in _REAL_KINDS:
-        raise TypeError(f"{owner}: {field} must hold real numbers, got {reprlib.repr(value)} "
-                        f"(dtype {a.dtype})")
+        raise TypeError(
+            f"{owner}: {field} must hold real numbers, got {reprlib.repr(value)} (dtype {a.dtype})"
+        )
     a = a.astype(np.float64, copy=False)
     finite = np.isfinite(a)
     if not finite.all():
@@ -120,8 +123,10 @@ def check_finite(owner: str, field: str, value: object, *, what: str = "entry") 
             raise ValueError(f"{owner}: {field} must be finite, got {a.item():g}")
         bad = np.flatnonzero(~finite.reshape(a.shape[0], -1).all(axis=1))
         i = int(bad[0])
-        raise ValueError(f"{owner}: {field} must be finite; {what} {i} is {a[i].tolist()} "
-                         f"({bad.size} of {a.shape[0]} {what}s non-finite)")
+        raise ValueError(
+            f"{owner}: {field} must be finite; {what} {i} is {a[i].tolist()} "
+            f"({bad.size} of {a.shape[0]} {what}s non-finite)"
+        )
     return a
 
 

@@ -64,7 +64,7 @@ class PointDomains:
         """The domains of ``points``, located in the cells of ``mesh``; None for m = 1."""
         if m == 1:
             return None
-        vertices = mesh.geometry.x[mesh.geometry.dofmaps[0][points.cell], :points.gdim]
+        vertices = mesh.geometry.x[mesh.geometry.dofmaps[0][points.cell], : points.gdim]
         return cls(points, vertices, m)
 
     def __init__(self, points: MaterialPoints, cell_vertices: np.ndarray, m: int):
@@ -86,14 +86,26 @@ class PointDomains:
 
         x = np.einsum("sc,pcg->psg", self.rule, self.corners).reshape(-1, points.gdim)
         sub = MaterialPoints(
-            x, repeat(points.volume) * share, repeat(points.mass) * share, F=repeat(points.F),
-            stress=repeat(points.stress), cell=repeat(points.cell),
-            velocity=repeat(points.velocity), acceleration=repeat(points.acceleration))
+            x,
+            repeat(points.volume) * share,
+            repeat(points.mass) * share,
+            F=repeat(points.F),
+            stress=repeat(points.stress),
+            cell=repeat(points.cell),
+            velocity=repeat(points.velocity),
+            acceleration=repeat(points.acceleration),
+        )
         sub.history = {name: repeat(values) for name, values in points.history.items()}
         return sub
 
-    def gather(self, points: MaterialPoints, sub: MaterialPoints, x_sub: np.ndarray,
-               F_sub: np.ndarray, markers: Markers) -> None:
+    def gather(
+        self,
+        points: MaterialPoints,
+        sub: MaterialPoints,
+        x_sub: np.ndarray,
+        F_sub: np.ndarray,
+        markers: Markers,
+    ) -> None:
         """Give each point the mean of its sub-points' step; move its domain and the markers.
 
         Args:

@@ -43,8 +43,13 @@ class NewmarkDynamics:
     #: PETSc options prefix of the mass system (``-fe_mpm_mass_ksp_view`` works).
     PREFIX = "fe_mpm_mass_"
 
-    def __init__(self, fields: GridFields, damping: float, linear_solver: str = "direct",
-                 petsc_options: dict | None = None):
+    def __init__(
+        self,
+        fields: GridFields,
+        damping: float,
+        linear_solver: str = "direct",
+        petsc_options: dict | None = None,
+    ):
         mesh = fields.W.mesh
         self.n_unknowns = fields.w.x.array.size
         # The grid velocity/acceleration live on the displacement space itself.
@@ -70,8 +75,15 @@ class NewmarkDynamics:
         """The P1 vector space of the grid velocity and acceleration."""
         return self.data.v_n.function_space
 
-    def project(self, cells: np.ndarray, bary: np.ndarray, mass: np.ndarray,
-                velocity: np.ndarray, acceleration: np.ndarray, dt: float) -> None:
+    def project(
+        self,
+        cells: np.ndarray,
+        bary: np.ndarray,
+        mass: np.ndarray,
+        velocity: np.ndarray,
+        acceleration: np.ndarray,
+        dt: float,
+    ) -> None:
         """Project the points' velocity and acceleration to the nodes and set Δt.
 
         Mass weighted: ``ṽ_I = Σ_p N_I m_p v_p / Σ_p N_I m_p``, likewise ã; and
@@ -94,8 +106,12 @@ class NewmarkDynamics:
         self.data.c_v.value = 2.0 / dt
 
     def initial_acceleration(
-        self, residual_at_rest: Callable[[], np.ndarray], mass_matrix, layout,
-        constrained: np.ndarray, bary: np.ndarray,
+        self,
+        residual_at_rest: Callable[[], np.ndarray],
+        mass_matrix,
+        layout,
+        constrained: np.ndarray,
+        bary: np.ndarray,
     ) -> np.ndarray:
         """Point accelerations in equilibrium at the start: ``M a₀ = f_ext − f_int − α_R M v₀``.
 
@@ -132,8 +148,10 @@ class NewmarkDynamics:
         rhs.x.array[:] = -b[self.u_dofs]
         # The pattern of all cells (explicit zeros where empty) keeps every diagonal
         # entry for the constraint rows below.
-        all_cells = np.arange(self.space.mesh.topology.index_map(
-            self.space.mesh.topology.dim).size_local, dtype=np.int32)
+        all_cells = np.arange(
+            self.space.mesh.topology.index_map(self.space.mesh.topology.dim).size_local,
+            dtype=np.int32,
+        )
         M = dolfinx.fem.petsc.assemble_matrix(mass_matrix.bind_cells(all_cells))
         M.assemble()
         mass_matrix.bind(layout).assemble_matrix(M)
@@ -150,7 +168,8 @@ class NewmarkDynamics:
             if ksp.getConvergedReason() < 0:
                 raise ConvergenceError(
                     "step 1: the mass system of the initial acceleration did not converge "
-                    f"(KSP reason {ksp.getConvergedReason()}); nothing was updated")
+                    f"(KSP reason {ksp.getConvergedReason()}); nothing was updated"
+                )
         finally:
             ksp.destroy()
             M.destroy()
@@ -159,8 +178,16 @@ class NewmarkDynamics:
         nodes = self.space.dofmap.list[layout.cell]
         return np.einsum("pv,pvg->pg", bary, a0.x.array.reshape(-1, g)[nodes])
 
-    def start(self, residual_at_rest: Callable[[], np.ndarray], mass_matrix, layout,
-              bcs: list, bary: np.ndarray, points, dt: float) -> None:
+    def start(
+        self,
+        residual_at_rest: Callable[[], np.ndarray],
+        mass_matrix,
+        layout,
+        bcs: list,
+        bary: np.ndarray,
+        points,
+        dt: float,
+    ) -> None:
         """Give the points accelerations in equilibrium with the loads and project them.
 
         See :meth:`initial_acceleration`; the dofs of ``w`` that the step's ``bcs``
@@ -171,11 +198,13 @@ class NewmarkDynamics:
         for bc in bcs:
             constrained[bc.dof_indices()[0]] = True
         points.acceleration = self.initial_acceleration(
-            residual_at_rest, mass_matrix, layout, constrained, bary)
+            residual_at_rest, mass_matrix, layout, constrained, bary
+        )
         self.project(layout.cell, bary, points.mass, points.velocity, points.acceleration, dt)
 
     @staticmethod
-    def updated_velocity(velocity: np.ndarray, acceleration: np.ndarray,
-                         new_acceleration: np.ndarray, dt: float) -> np.ndarray:
+    def updated_velocity(
+        velocity: np.ndarray, acceleration: np.ndarray, new_acceleration: np.ndarray, dt: float
+    ) -> np.ndarray:
         """``v_{n+1} = v_n + Δt (a_n + a_{n+1}) / 2`` (Eq. 2.16), (n, g) in m/s."""
         return velocity + 0.5 * dt * (acceleration + new_acceleration)

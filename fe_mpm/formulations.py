@@ -43,7 +43,8 @@ class FormulationSpec:
             "the gradients of the P2 shape functions exactly, and a homogeneous "
             "stress then leaves spurious nodal forces (the patch test fails; see "
             "docs/formulations.md, 'P2/P1 once the points have moved'). Use 'up' for "
-            "runs of many steps.")
+            "runs of many steps."
+        )
 
 
 FORMULATIONS = {
@@ -102,8 +103,9 @@ class GridFields:
             bcs.append(dolfinx.fem.dirichletbc(zero, to_parent[~supported], sub))
         return bcs
 
-    def start_from_rest(self, cells: np.ndarray, bary: np.ndarray, mass: np.ndarray,
-                        stress: np.ndarray) -> None:
+    def start_from_rest(
+        self, cells: np.ndarray, bary: np.ndarray, mass: np.ndarray, stress: np.ndarray
+    ) -> None:
         """Newton's start: Δu = 0, and the pressure projected from the points (Eq. 5.20).
 
         ``p_I = Σ_p N_I(x_p) m_p p_p / Σ_p N_I(x_p) m_p``, mass weighted, with the

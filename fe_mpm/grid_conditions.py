@@ -90,7 +90,8 @@ class GridConditions:
                 check_range("Dirichlet", "component", spec.component, lo=0, hi=g - 1)
             self.dirichlet.append((spec, *self._dirichlet_bc(spec.component, facets)))
             self.dirichlet_nodes.append(
-                np.unique(dolfinx.mesh.entities_to_geometry(mesh, fdim, facets)))
+                np.unique(dolfinx.mesh.entities_to_geometry(mesh, fdim, facets))
+            )
 
         self.tractions = []  # (spec, Constant)
         self.traction_terms = []
@@ -163,8 +164,10 @@ class GridConditions:
             if spec.profile is not None:
                 value.interpolate(lambda x: spec.profile(x, t_new) - spec.profile(x, t_old))
                 if not np.all(np.isfinite(value.x.array)):
-                    raise ValueError(f"Dirichlet: profile(x, t) is not finite everywhere "
-                                     f"at t = {t_old:g} or {t_new:g}")
+                    raise ValueError(
+                        f"Dirichlet: profile(x, t) is not finite everywhere "
+                        f"at t = {t_old:g} or {t_new:g}"
+                    )
             else:
                 increment = spec.at(t_new) - spec.at(t_old)
                 bs = value.function_space.dofmap.bs
@@ -172,8 +175,9 @@ class GridConditions:
         for spec, value in self.tractions:
             value.value = spec.at(t_new)
         if self.body_force is not None and self._body_force_scale is not None:
-            factor = check_range("Simulation", f"body_force_scale(t = {t_new:g})",
-                                 self._body_force_scale(t_new))
+            factor = check_range(
+                "Simulation", f"body_force_scale(t = {t_new:g})", self._body_force_scale(t_new)
+            )
             self.body_force.value = self._body_force_value * factor
         pins = self.fields.pin_unsupported(occupied)
         return [bc for _, _, bc in self.dirichlet] + pins
@@ -212,7 +216,8 @@ class GridConditions:
                     f"Traction {i - 1}: {idle.sum()} of its {nodes.size} grid nodes carry no "
                     f"material at the step to t = {t_new:g}, so {100 * share:.1f} % of its "
                     "load is lost (StepReport.lost_load). A grid traction stays on the grid; "
-                    "use PointTraction for a load that follows the body.")
+                    "use PointTraction for a load that follows the body."
+                )
 
     def reactions(self, residual: Callable[[], np.ndarray]) -> dict[str, np.ndarray]:
         """The force (g,) each named boundary exerts on the body, in N (N/m in 2D).
@@ -224,5 +229,7 @@ class GridConditions:
         if not self.reaction_dofs:
             return {}
         b = residual()
-        return {name: np.array([b[dofs].sum() for dofs in comps])
-                for name, comps in self.reaction_dofs.items()}
+        return {
+            name: np.array([b[dofs].sum() for dofs in comps])
+            for name, comps in self.reaction_dofs.items()
+        }

@@ -77,10 +77,14 @@ class ParticleWriter:
         return self.folder / fname
 
     def _write_pvd(self) -> None:
-        lines = ['<?xml version="1.0"?>',
-                 '<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">',
-                 "  <Collection>"]
-        lines += [f'    <DataSet timestep="{t:.10g}" part="0" file={quoteattr(f)}/>'
-                  for t, f in self._entries]
+        lines = [
+            '<?xml version="1.0"?>',
+            '<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">',
+            "  <Collection>",
+        ]
+        lines += [
+            f'    <DataSet timestep="{t:.10g}" part="0" file={quoteattr(f)}/>'
+            for t, f in self._entries
+        ]
         lines += ["  </Collection>", "</VTKFile>", ""]
         self.pvd.write_text("\n".join(lines))

@@ -47,8 +47,11 @@ class MaterialDriver:
         if self._pointwise:
             return
         cell = "triangle" if gdim == 2 else "tetrahedron"
-        self.mesh = dolfinx.mesh.create_unit_square(MPI.COMM_SELF, 1, 1) if gdim == 2 else \
-            dolfinx.mesh.create_unit_cube(MPI.COMM_SELF, 1, 1, 1)
+        self.mesh = (
+            dolfinx.mesh.create_unit_square(MPI.COMM_SELF, 1, 1)
+            if gdim == 2
+            else dolfinx.mesh.create_unit_cube(MPI.COMM_SELF, 1, 1, 1)
+        )
         centroid = basix.geometry(basix.CellType[cell]).mean(axis=0)
         points = np.tile(centroid, (n, 1))
         weights = np.full(n, 1.0 / n)
@@ -56,7 +59,8 @@ class MaterialDriver:
 
         def function(shape, name):
             element = basix.ufl.quadrature_element(
-                cell, value_shape=shape, scheme="custom", points=points, weights=weights)
+                cell, value_shape=shape, scheme="custom", points=points, weights=weights
+            )
             return dolfinx.fem.Function(dolfinx.fem.functionspace(self.mesh, element), name=name)
 
         self._dF = function((g, g), "dF")
@@ -97,8 +101,12 @@ class MaterialDriver:
         if self._pointwise:
             g = self.gdim
             result = self.material.return_map(F @ np.linalg.inv(self.F), self.history)
-            return {"tangent": result.tangent[:, :g, :g], "tau": result.tau,
-                    "region": result.region, **result.history}
+            return {
+                "tangent": result.tangent[:, :g, :g],
+                "tau": result.tau,
+                "region": result.region,
+                **result.history,
+            }
         self._pack(self._dF, F @ np.linalg.inv(self.F))
         self._pack(self._F_n, self.F)
         for name, f in self._hist.items():

@@ -24,8 +24,13 @@ DENSITY_RTOL = 1e-9
 LINE_SEARCHES = ("basic", "bt", "l2", "cp")
 
 
-def check_choices(formulation: str, mass: str, points_leaving: str, linear_solver: str,
-                  fallback_line_search: str | None) -> None:
+def check_choices(
+    formulation: str,
+    mass: str,
+    points_leaving: str,
+    linear_solver: str,
+    fallback_line_search: str | None,
+) -> None:
     """Refuse an option that is not one of its choices, naming it and the choices."""
     check_choice("Simulation", "formulation", formulation, tuple(FORMULATIONS))
     check_choice("Simulation", "mass", mass, ("consistent", "lumped"))
@@ -35,8 +40,9 @@ def check_choices(formulation: str, mass: str, points_leaving: str, linear_solve
         check_choice("Simulation", "fallback_line_search", fallback_line_search, LINE_SEARCHES)
 
 
-def check_ranges(max_step_cells: float, ppp_alpha: float, damping: float,
-                 output_every: int) -> None:
+def check_ranges(
+    max_step_cells: float, ppp_alpha: float, damping: float, output_every: int
+) -> None:
     """Refuse a number outside its range, naming it and the range."""
     check_range("Simulation", "max_step_cells", max_step_cells, lo=0.0, lo_open=True)
     check_range("Simulation", "ppp_alpha", ppp_alpha, lo=0.0)
@@ -50,7 +56,8 @@ def check_dynamics(dynamic: bool, formulation: str, damping: float, mass: str) -
     if dynamic and spec.u_degree != 1:
         raise ValueError(
             f"Simulation: dynamic analysis needs a P1 displacement; formulation "
-            f"{formulation!r} is P{spec.u_degree}")
+            f"{formulation!r} is P{spec.u_degree}"
+        )
     if not dynamic and damping:
         raise ValueError("Simulation: damping needs dynamic=True")
     if not dynamic and mass != "consistent":
@@ -64,7 +71,8 @@ def check_grid_and_points(mesh: dolfinx.mesh.Mesh, points: MaterialPoints) -> No
         raise NotImplementedError(
             f"Simulation: fe-mpm runs on one MPI rank for now, and this mesh is "
             f"distributed over {mesh.comm.size}. Run without mpiexec, or build the "
-            "mesh on MPI.COMM_SELF to run independent serial simulations per rank.")
+            "mesh on MPI.COMM_SELF to run independent serial simulations per rank."
+        )
     if mesh.topology.index_map(mesh.topology.dim).size_global == 0:
         raise ValueError("Simulation: the mesh is empty (it has no cells)")
     simplex_cell_type(mesh)
@@ -72,7 +80,8 @@ def check_grid_and_points(mesh: dolfinx.mesh.Mesh, points: MaterialPoints) -> No
         raise ValueError("Simulation: there are no material points")
     if points.gdim != mesh.geometry.dim:
         raise ValueError(
-            f"Simulation: points are {points.gdim}D but the mesh is {mesh.geometry.dim}D")
+            f"Simulation: points are {points.gdim}D but the mesh is {mesh.geometry.dim}D"
+        )
 
 
 def check_domains(point_domains: int, gdim: int, points_leaving: str) -> None:
@@ -81,11 +90,13 @@ def check_domains(point_domains: int, gdim: int, points_leaving: str) -> None:
     if point_domains > 1 and gdim != 2:
         raise NotImplementedError(
             "Simulation: point_domains > 1 works on triangles (2D) for now; in 3D use 1 "
-            "(standard MPM)")
+            "(standard MPM)"
+        )
     if point_domains > 1 and points_leaving != "raise":
         raise ValueError(
             "Simulation: point_domains > 1 needs points_leaving='raise': a point whose "
-            "sub-points leave the grid cannot gather its step")
+            "sub-points leave the grid cannot gather its step"
+        )
 
 
 def check_law(material, spec: FormulationSpec, formulation: str) -> None:
@@ -98,12 +109,14 @@ def check_law(material, spec: FormulationSpec, formulation: str) -> None:
     if missing:
         raise TypeError(
             f"Simulation: material {type(material).__name__} is not a law: it lacks "
-            f"{', '.join(missing)} (fe_mpm.materials.protocol.Law says what a law provides)")
+            f"{', '.join(missing)} (fe_mpm.materials.protocol.Law says what a law provides)"
+        )
     if spec.pressure and not isinstance(material, MixedLaw):
         raise ValueError(
             f"Simulation: formulation {formulation!r} needs a material with a "
             "deviatoric response (kirchhoff_deviatoric, see "
-            "fe_mpm.materials.protocol.MixedLaw)")
+            "fe_mpm.materials.protocol.MixedLaw)"
+        )
     check_formulation = getattr(material, "check_formulation", None)
     if check_formulation is not None:
         check_formulation(spec.pressure)
@@ -131,7 +144,8 @@ def take_density(material, points: MaterialPoints) -> None:
             f"Simulation: the material's density {rho:g} kg/m³ differs from the points' "
             f"{rho_points[first]:g} kg/m³ (point {first}; from seed(..., density=...) or "
             "their masses). Give the density in one place: seed(..., density=...) for "
-            "zones of different densities, or the law's density alone.")
+            "zones of different densities, or the law's density alone."
+        )
 
 
 def check_supports(conditions, boundary, occupied: np.ndarray) -> None:
@@ -162,4 +176,5 @@ def check_supports(conditions, boundary, occupied: np.ndarray) -> None:
             f"translation, but nothing holds the material in {free}: no Dirichlet "
             "condition (or PointDirichlet) on that component touches a node of an "
             "occupied cell. The tangent would be singular (a rigid-body mode). Add a "
-            "support, or pass dynamic=True.")
+            "support, or pass dynamic=True."
+        )

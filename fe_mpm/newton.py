@@ -30,8 +30,13 @@ from fe_mpm.solver_options import (
 )
 
 __all__ = [
-    "LINEAR_SOLVERS", "NEWTON_OPTIONS", "ROUND_OFF_FACTOR", "ForceTest", "NewtonResult",
-    "NewtonSolver", "with_petsc_options",
+    "LINEAR_SOLVERS",
+    "NEWTON_OPTIONS",
+    "ROUND_OFF_FACTOR",
+    "ForceTest",
+    "NewtonResult",
+    "NewtonSolver",
+    "with_petsc_options",
 ]
 
 #: A constrained dof counts as off its prescribed value when it misses it by more
@@ -107,8 +112,11 @@ class NewtonSolver:
         self.A.setOptionsPrefix(f"{prefix}A_")
         self._prefix = prefix
         mixed = displacement is not None and displacement is not u.function_space
-        self._options = {**NEWTON_OPTIONS, **LINEAR_SOLVERS[linear_solver, mixed],
-                         **(petsc_options or {})}
+        self._options = {
+            **NEWTON_OPTIONS,
+            **LINEAR_SOLVERS[linear_solver, mixed],
+            **(petsc_options or {}),
+        }
         # The displacement's dofs in the unknown, once: the Newton test and the field
         # split both need them.
         split = collapse(displacement) if mixed else None
@@ -116,9 +124,12 @@ class NewtonSolver:
         if linear_solver == "iterative":
             self._set_up_iterative(displacement or u.function_space, split)
         self._with_options(self.snes.setFromOptions)
-        self.test = ForceTest(float(self._options["snes_rtol"]),
-                              float(self._options["snes_atol"]),
-                              int(self._options["snes_max_it"]), length)
+        self.test = ForceTest(
+            float(self._options["snes_rtol"]),
+            float(self._options["snes_atol"]),
+            int(self._options["snes_max_it"]),
+            length,
+        )
         self.snes.setConvergenceTest(_weak(self.test.__call__))
         self.norms: list[float] = []
         self.snes.setMonitor(_weak(self._monitor))
@@ -209,8 +220,14 @@ class NewtonSolver:
             lift = self._scratch
             with lift.localForm() as local:
                 local.set(0.0)
-            fem_petsc.apply_lifting(lift, [self._J.form], bcs=[self._bcs], x0=[x], alpha=-1.0,
-                                    coeffs=[self._J.coefficients()])
+            fem_petsc.apply_lifting(
+                lift,
+                [self._J.form],
+                bcs=[self._bcs],
+                x0=[x],
+                alpha=-1.0,
+                coeffs=[self._J.coefficients()],
+            )
             lift.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
             b.axpy(1.0, lift)
         fem_petsc.set_bc(b, self._bcs, x, -1.0)
@@ -313,6 +330,14 @@ class NewtonSolver:
 
     def destroy(self) -> None:
         """Free the PETSc objects."""
-        for obj in (self.snes, self.A, self.b, self.x, self._gap, self._loads, self._scratch,
-                    self._diagonal):
+        for obj in (
+            self.snes,
+            self.A,
+            self.b,
+            self.x,
+            self._gap,
+            self._loads,
+            self._scratch,
+            self._diagonal,
+        ):
             obj.destroy()

@@ -31,11 +31,15 @@ class SimulationOutput:
         self._points = ParticleWriter(self.folder)
         self._grid, self._maps = self._grid_functions()
         comm = fields.W.mesh.comm
-        self._writers = [dolfinx.io.VTXWriter(comm, self.folder / "grid.bp", self._grid[:1],
-                                              engine="BP4")]
+        self._writers = [
+            dolfinx.io.VTXWriter(comm, self.folder / "grid.bp", self._grid[:1], engine="BP4")
+        ]
         if len(self._grid) > 1:
-            self._writers.append(dolfinx.io.VTXWriter(
-                comm, self.folder / "grid_pressure.bp", self._grid[1:], engine="BP4"))
+            self._writers.append(
+                dolfinx.io.VTXWriter(
+                    comm, self.folder / "grid_pressure.bp", self._grid[1:], engine="BP4"
+                )
+            )
 
     def _grid_functions(self) -> tuple[list[dolfinx.fem.Function], list]:
         """Collapsed copies of Δu (and p) for VTX output, with their dofs in ``w``."""
@@ -44,8 +48,10 @@ class SimulationOutput:
             return [dolfinx.fem.Function(W, name="du")], [slice(None)]
         U, u_map = collapse(W.sub(0))
         Q, p_map = self.fields.Q
-        return [dolfinx.fem.Function(U, name="du"), dolfinx.fem.Function(Q, name="p")], \
-            [u_map, p_map]
+        return [dolfinx.fem.Function(U, name="du"), dolfinx.fem.Function(Q, name="p")], [
+            u_map,
+            p_map,
+        ]
 
     def write(self, step: int, t: float, points: MaterialPoints, force: bool = False) -> bool:
         """Write the state after ``step`` at time ``t`` if it is due; True if written.

@@ -74,8 +74,13 @@ def is_per_entity(c) -> bool:
 class _Kernel:
     """One kernel's packed coefficients over its entities."""
 
-    def __init__(self, columns: dict, width: int, cells: np.ndarray,
-                 quadrature: MaterialPointQuadrature | None):
+    def __init__(
+        self,
+        columns: dict,
+        width: int,
+        cells: np.ndarray,
+        quadrature: MaterialPointQuadrature | None,
+    ):
         self.columns, self.width, self.cells = columns, width, cells
         self.quadrature = quadrature
         self.array: np.ndarray | None = None
@@ -108,8 +113,14 @@ class BoundForm:
         dynamic: Slot fields that change during Newton (repacked at every assembly).
     """
 
-    def __init__(self, form: dolfinx.fem.Form, columns: dict, width: int,
-                 quadratures: dict[int, MaterialPointQuadrature], dynamic: set):
+    def __init__(
+        self,
+        form: dolfinx.fem.Form,
+        columns: dict,
+        width: int,
+        quadratures: dict[int, MaterialPointQuadrature],
+        dynamic: set,
+    ):
         self.form = form
         self._changing = [c for c in columns if not is_per_entity(c) or c in dynamic]
         self._kernels = {}
@@ -120,8 +131,10 @@ class BoundForm:
 
     def coefficients(self) -> dict:
         """The packed coefficients for DOLFINx's assemblers, current for this iterate."""
-        return {key: kernel.pack(None if kernel.array is None else self._changing)
-                for key, kernel in self._kernels.items()}
+        return {
+            key: kernel.pack(None if kernel.array is None else self._changing)
+            for key, kernel in self._kernels.items()
+        }
 
     def assemble_vector(self) -> np.ndarray:
         """The assembled vector (owned and ghost entries), for checks and reactions."""
@@ -157,7 +170,8 @@ class PointExpression:
         self.quadrature = quadrature
         self.expression = dolfinx.fem.Expression(expression, quadrature.points)
         self._columns, self._width = coefficient_columns(
-            expression, expression_kernel(self.expression))
+            expression, expression_kernel(self.expression)
+        )
         self._shape = self.expression.value_shape
 
     def evaluate(self, layout: SlotLayout) -> np.ndarray:

@@ -68,10 +68,12 @@ class MaterialPoints:
                 f"MaterialPoints: x must have shape (n, 2) or (n, 3), got {self.x.shape}"
             )
         n, g = self.x.shape
-        self.volume = check_finite("MaterialPoints", "volume", self.volume,
-                                   what="point").reshape(n).copy()
-        self.mass = check_finite("MaterialPoints", "mass", self.mass,
-                                 what="point").reshape(n).copy()
+        self.volume = (
+            check_finite("MaterialPoints", "volume", self.volume, what="point").reshape(n).copy()
+        )
+        self.mass = (
+            check_finite("MaterialPoints", "mass", self.mass, what="point").reshape(n).copy()
+        )
         _refuse_points("volume", self.volume <= 0, "> 0", self.volume)
         _refuse_points("mass", self.mass < 0, ">= 0", self.mass)
         if self.F is None:
@@ -89,8 +91,11 @@ class MaterialPoints:
         self.x0 = self.x.copy() if self.x0 is None else np.array(self.x0, dtype=np.float64)
         for name in ("velocity", "acceleration"):
             value = getattr(self, name)
-            value = (np.zeros((n, g)) if value is None
-                     else check_finite("MaterialPoints", name, value, what="point").copy())
+            value = (
+                np.zeros((n, g))
+                if value is None
+                else check_finite("MaterialPoints", name, value, what="point").copy()
+            )
             if value.shape != (n, g):
                 raise ValueError(
                     f"MaterialPoints: {name} must have shape {(n, g)}, got {value.shape}"
@@ -140,8 +145,10 @@ def _refuse_points(field: str, bad: np.ndarray, valid: str, values: np.ndarray) 
     where = np.flatnonzero(bad)
     if where.size:
         i = int(where[0])
-        raise ValueError(f"MaterialPoints: {field} must be {valid} at every point; point {i} "
-                         f"has {values[i]:g} ({where.size} of {bad.size} points)")
+        raise ValueError(
+            f"MaterialPoints: {field} must be {valid} at every point; point {i} "
+            f"has {values[i]:g} ({where.size} of {bad.size} points)"
+        )
 
 
 def _rule_with_count(cell: basix.CellType, per_cell: int) -> tuple[np.ndarray, np.ndarray]:
@@ -247,8 +254,9 @@ def _cells(cells: npt.ArrayLike, num_cells: int) -> np.ndarray:
     a = np.asarray(cells)
     # np.asarray(mask, np.int32) would read a mask as the indices 0 and 1.
     if a.dtype.kind == "b":
-        raise TypeError("seed: cells must be cell indices, got a boolean mask; "
-                        "use np.flatnonzero(mask)")
+        raise TypeError(
+            "seed: cells must be cell indices, got a boolean mask; use np.flatnonzero(mask)"
+        )
     if a.ndim != 1:
         raise ValueError(f"seed: cells must be a 1-D array of cell indices, got shape {a.shape}")
     if a.size == 0:
@@ -257,21 +265,25 @@ def _cells(cells: npt.ArrayLike, num_cells: int) -> np.ndarray:
     if a.dtype.kind == "f" and np.all(np.isfinite(a) & (a == np.trunc(a))):
         a = a.astype(np.int64)
     if a.dtype.kind not in "iu":
-        raise TypeError(f"seed: cells must be integer cell indices, got "
-                        f"{reprlib.repr(cells)} (dtype {a.dtype})")
+        raise TypeError(
+            f"seed: cells must be integer cell indices, got {reprlib.repr(cells)} (dtype {a.dtype})"
+        )
     outside = np.flatnonzero((a < 0) | (a >= num_cells))
     if outside.size:
         raise ValueError(
             f"seed: cells must lie in [0, {num_cells - 1}] (this rank's {num_cells} owned cells), "
             f"got {a[outside[0]]}; ghost cells (index >= size_local = {num_cells}) cannot be "
-            "seeded: the rank that owns them seeds them")
+            "seeded: the rank that owns them seeds them"
+        )
     values, counts = np.unique(a, return_counts=True)
     repeated = np.flatnonzero(counts > 1)
     if repeated.size:
         cell, k = int(values[repeated[0]]), int(counts[repeated[0]])
         times = "twice" if k == 2 else f"{k} times"
-        raise ValueError(f"seed: cells holds duplicates, e.g. cell {cell} {times}; each cell "
-                         "would get its points again")
+        raise ValueError(
+            f"seed: cells holds duplicates, e.g. cell {cell} {times}; each cell "
+            "would get its points again"
+        )
     return a.astype(np.int32)
 
 
@@ -281,8 +293,10 @@ def merge(*sets: MaterialPoints) -> MaterialPoints:
         raise ValueError("merge: no point sets given")
     given = {s.density_given for s in sets}
     if len(given) > 1:
-        raise ValueError("merge: some sets were seeded with a density and some without; "
-                         "give every zone its density (seed(..., density=...))")
+        raise ValueError(
+            "merge: some sets were seeded with a density and some without; "
+            "give every zone its density (seed(..., density=...))"
+        )
     return MaterialPoints(
         x=np.vstack([s.x for s in sets]),
         volume=np.concatenate([s.volume for s in sets]),

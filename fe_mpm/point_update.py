@@ -19,8 +19,13 @@ from fe_mpm.step_forms import PointUpdate, UpdateLayout
 
 
 def checked_update(
-    values: np.ndarray, layout: UpdateLayout, points: MaterialPoints, cell_sizes: np.ndarray,
-    max_step_cells: float | None, step: int, t: float,
+    values: np.ndarray,
+    layout: UpdateLayout,
+    points: MaterialPoints,
+    cell_sizes: np.ndarray,
+    max_step_cells: float | None,
+    step: int,
+    t: float,
 ) -> PointUpdate:
     """The points' new state from the evaluated update vector, once it passes the checks.
 
@@ -42,7 +47,8 @@ def checked_update(
         bad = np.flatnonzero(~np.all(np.isfinite(values), axis=1))
         raise ConvergenceError(
             f"non-finite state at {bad.size} material point(s) in step {step} (t = {t:g}); "
-            f"first: point {bad[0]} at x = {points.x[bad[0]]}. Nothing was updated.")
+            f"first: point {bad[0]} at x = {points.x[bad[0]]}. Nothing was updated."
+        )
     new = layout.decode(values)
     if max_step_cells is not None:
         cells_moved = np.linalg.norm(new.du, axis=1) / cell_sizes
@@ -53,19 +59,25 @@ def checked_update(
                 f"{cells_moved[far]:.3g} cell sizes ({np.linalg.norm(new.du[far]):.3g} m) in "
                 f"static step {step} (t = {t:g}), more than max_step_cells = "
                 f"{max_step_cells:g}: a grid value blew up (e.g. at a node with "
-                "almost no material). Nothing was updated.")
+                "almost no material). Nothing was updated."
+            )
     det_dF = np.linalg.det(new.dF)
     if np.any(det_dF <= 0):
         bad = np.flatnonzero(det_dF <= 0)[0]
         raise ConvergenceError(
             f"det(ΔF) <= 0 at point {bad} (x = {points.x[bad]}) in step {step} "
-            f"(t = {t:g}): the step inverts material; take smaller steps.")
+            f"(t = {t:g}): the step inverts material; take smaller steps."
+        )
     return new
 
 
 def apply_update(
-    points: MaterialPoints, new: PointUpdate, markers: Markers,
-    dynamics: NewmarkDynamics | None, dt: float, return_map_history: dict | None = None,
+    points: MaterialPoints,
+    new: PointUpdate,
+    markers: Markers,
+    dynamics: NewmarkDynamics | None,
+    dt: float,
+    return_map_history: dict | None = None,
 ) -> None:
     """Move the points and markers and give the points their state at t_{n+1}.
 
@@ -87,8 +99,9 @@ def apply_update(
     points.volume *= np.linalg.det(new.dF)
     points.stress = new.stress
     if dynamics is not None:
-        points.velocity = dynamics.updated_velocity(points.velocity, points.acceleration,
-                                                    new.acceleration, dt)
+        points.velocity = dynamics.updated_velocity(
+            points.velocity, points.acceleration, new.acceleration, dt
+        )
         points.acceleration = new.acceleration
     for name, value in new.history.items():
         points.history[name] = value.reshape(points.history[name].shape)

@@ -126,8 +126,11 @@ class SlotLayout:
         cells = np.asarray(cells)
         order = np.argsort(cells, kind="stable")
         sorted_cells = cells[order]
-        first = np.flatnonzero(np.r_[True, sorted_cells[1:] != sorted_cells[:-1]]) \
-            if cells.size else np.zeros(0, dtype=np.int64)
+        first = (
+            np.flatnonzero(np.r_[True, sorted_cells[1:] != sorted_cells[:-1]])
+            if cells.size
+            else np.zeros(0, dtype=np.int64)
+        )
         occupied = sorted_cells[first]
         counts = np.diff(np.r_[first, cells.size])
         max_count = int(counts.max(initial=0))
@@ -139,8 +142,15 @@ class SlotLayout:
         entity = np.empty(cells.size, dtype=np.int64)
         entity[order] = np.repeat(first_entity, counts)
         entity += rank // nslot
-        return cls(cells, rank % nslot, entity, np.repeat(occupied, per_cell).astype(np.int32),
-                   occupied.astype(np.int32), max_count, nslot)
+        return cls(
+            cells,
+            rank % nslot,
+            entity,
+            np.repeat(occupied, per_cell).astype(np.int32),
+            occupied.astype(np.int32),
+            max_count,
+            nslot,
+        )
 
     @property
     def num_entities(self) -> int:

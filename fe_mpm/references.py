@@ -76,7 +76,7 @@ def lube_height(d_i: float, aspect: float) -> float:
     The thesis prints the exponent 2/3 in Eq. 6.3, but its Table 6.5 (and Lube
     et al.) follow 2/5.
     """
-    return aspect * d_i if aspect <= 1.15 else d_i * aspect ** 0.4
+    return aspect * d_i if aspect <= 1.15 else d_i * aspect**0.4
 
 
 def lube_time(d_i: float, aspect: float, g: float = 9.81) -> float:

@@ -56,8 +56,17 @@ class StepReport:
     lost_load: dict[str, float] = field(default_factory=dict)
 
     @classmethod
-    def of_step(cls, step: int, t: float, result: NewtonResult, current, reactions: dict,
-                markers, tracking, conditions) -> StepReport:
+    def of_step(
+        cls,
+        step: int,
+        t: float,
+        result: NewtonResult,
+        current,
+        reactions: dict,
+        markers,
+        tracking,
+        conditions,
+    ) -> StepReport:
         """The report of an accepted step from what its phases hold.
 
         Args:
@@ -71,20 +80,36 @@ class StepReport:
             conditions: The :class:`~fe_mpm.grid_conditions.GridConditions`, whose
                 ``lost_load`` is keyed by the tractions' tags, i + 1 for ``Traction i``.
         """
-        lost = {f"Traction {i - 1}": share for i, share in conditions.lost_load.items()
-                if share > 0}
+        lost = {
+            f"Traction {i - 1}": share for i, share in conditions.lost_load.items() if share > 0
+        }
         return cls(
-            step=step, t=t, newton_iterations=result.iterations,
-            residual_norms=result.residual_norms, markers=markers.positions(),
-            nslot=current.forms.q.nslot, occupied_cells=current.layout.occupied.size,
-            dt=current.dt, reactions=reactions, held_points=tracking.held_points,
-            converged_reason=result.reason, force_scale=result.force_scale,
-            relative_residual=result.relative_residual, lost_load=lost)
+            step=step,
+            t=t,
+            newton_iterations=result.iterations,
+            residual_norms=result.residual_norms,
+            markers=markers.positions(),
+            nslot=current.forms.q.nslot,
+            occupied_cells=current.layout.occupied.size,
+            dt=current.dt,
+            reactions=reactions,
+            held_points=tracking.held_points,
+            converged_reason=result.reason,
+            force_scale=result.force_scale,
+            relative_residual=result.relative_residual,
+            lost_load=lost,
+        )
 
 
-def newton_failure(result: NewtonResult, step: int, t_old: float, t_new: float,
-                   mesh: dolfinx.mesh.Mesh, layout: SlotLayout,
-                   centroids: np.ndarray) -> ConvergenceError:
+def newton_failure(
+    result: NewtonResult,
+    step: int,
+    t_old: float,
+    t_new: float,
+    mesh: dolfinx.mesh.Mesh,
+    layout: SlotLayout,
+    centroids: np.ndarray,
+) -> ConvergenceError:
     """The error of a step whose Newton solves all failed.
 
     It gives the residual history, the accepted bound, and the hinged cells that
@@ -97,7 +122,8 @@ def newton_failure(result: NewtonResult, step: int, t_old: float, t_new: float,
         f"{result.iterations} iterations: {result.reason}; ‖R‖ history: [{norms}] "
         f"against the force scale {result.force_scale:.3e} (accepted: ‖R‖ <= "
         f"{result.tolerance:.3e}). {hinges}"
-        "Points were not updated and nothing was written for this step.")
+        "Points were not updated and nothing was written for this step."
+    )
 
 
 class ProgressBar:

@@ -129,8 +129,11 @@ class RetryLadder:
 
     def attempts(self, configured: str, can_hold: bool) -> list[Attempt]:
         """Every attempt at one step length, in order (see the module's docstring)."""
-        return [Attempt(rebin, search) for rebin in self.placements(can_hold)
-                for search in self.line_searches(configured)]
+        return [
+            Attempt(rebin, search)
+            for rebin in self.placements(can_hold)
+            for search in self.line_searches(configured)
+        ]
 
 
 class StepLength:
@@ -161,7 +164,8 @@ class StepLength:
         if not self.cut():
             raise ConvergenceError(
                 f"{failure} The step was cut to {2 * self.dt:.3g} without success, "
-                f"and the floor is min_step = {self.floor:.3g}.") from None
+                f"and the floor is min_step = {self.floor:.3g}."
+            ) from None
 
     def accepted(self) -> None:
         """Count a success; after enough of them in a row a cut step doubles again."""

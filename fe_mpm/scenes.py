@@ -61,13 +61,19 @@ def cook_membrane(
     elif load == "points":
         x, weight = meshes.facet_points(scene.mesh, scene.facet_tags.find(meshes.COOK_LOADED))
         loads["point_tractions"] = [
-            PointTraction("load", x, weight, (0.0, traction), scale=lambda t: t)]
+            PointTraction("load", x, weight, (0.0, traction), scale=lambda t: t)
+        ]
     else:
         raise ValueError(f"cook_membrane: load must be 'grid' or 'points', got {load!r}")
     sim = Simulation(
-        scene.mesh, points, material or NeoHookean(E=E, nu=nu), formulation,
-        facet_tags=scene.facet_tags, dirichlet=[Dirichlet(meshes.COOK_CLAMPED)],
-        **loads, **options,
+        scene.mesh,
+        points,
+        material or NeoHookean(E=E, nu=nu),
+        formulation,
+        facet_tags=scene.facet_tags,
+        dirichlet=[Dirichlet(meshes.COOK_CLAMPED)],
+        **loads,
+        **options,
     )
     sim.add_marker("A", meshes.COOK_POINT_A)
     return sim
@@ -122,25 +128,33 @@ def strip_footing(
         penalty: Penalty stiffness of the footing points (Pa/m); default 1e3 E/h.
         options: Passed on to :class:`~fe_mpm.simulation.Simulation`.
     """
-    scene = meshes.strip_footing(B, h=h, h_far=h_far, near_width=near_width,
-                                 near_depth=near_depth)
+    scene = meshes.strip_footing(B, h=h, h_far=h_far, near_width=near_width, near_depth=near_depth)
     near = scene.cell_tags.find(meshes.FOOTING_SOIL_NEAR)
     far = scene.cell_tags.find(meshes.FOOTING_SOIL)
-    points = merge(seed(scene.mesh, points_near, cells=near),
-                   seed(scene.mesh, points_far, cells=far))
+    points = merge(
+        seed(scene.mesh, points_near, cells=near), seed(scene.mesh, points_far, cells=far)
+    )
     thickness = 2 * h if footing_thickness is None else footing_thickness
     x_f, w_f = meshes.footing_points(B, max(4, int(round(B / h))), thickness)
     footing = PointDirichlet(
-        "footing", x_f, w_f, lambda t: np.array([0.0, -settlement * t]),
-        penalty=penalty or 1e3 * E / h, components=(1,) if smooth else None,
+        "footing",
+        x_f,
+        w_f,
+        lambda t: np.array([0.0, -settlement * t]),
+        penalty=penalty or 1e3 * E / h,
+        components=(1,) if smooth else None,
     )
     return Simulation(
-        scene.mesh, points, MohrCoulomb.tresca(E, nu, cu), formulation,
+        scene.mesh,
+        points,
+        MohrCoulomb.tresca(E, nu, cu),
+        formulation,
         facet_tags=scene.facet_tags,
         dirichlet=[
             Dirichlet(meshes.FOOTING_SYMMETRY, component=0),
             Dirichlet(meshes.FOOTING_FAR_SIDE, component=0),
             Dirichlet(meshes.FOOTING_BASE),
         ],
-        point_dirichlet=[footing], **options,
+        point_dirichlet=[footing],
+        **options,
     )

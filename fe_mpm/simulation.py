@@ -153,8 +153,9 @@ class Simulation:
         point_domains: int = 1,
     ):
         model_checks.check_grid_and_points(mesh, points)
-        model_checks.check_choices(formulation, mass, points_leaving, linear_solver,
-                                   fallback_line_search)
+        model_checks.check_choices(
+            formulation, mass, points_leaving, linear_solver, fallback_line_search
+        )
         model_checks.check_ranges(max_step_cells, ppp_alpha, damping, output_every)
         model_checks.check_dynamics(dynamic, formulation, damping, mass)
         model_checks.check_domains(point_domains, points.gdim, points_leaving)
@@ -180,19 +181,21 @@ class Simulation:
         self.dynamics = None
         if self.dynamic:
             self.dynamics = NewmarkDynamics(self.fields, damping, linear_solver, petsc_options)
-        self.conditions = GridConditions(self.fields, dirichlet, tractions, body_force,
-                                         body_force_scale, reactions, facet_tags)
+        self.conditions = GridConditions(
+            self.fields, dirichlet, tractions, body_force, body_force_scale, reactions, facet_tags
+        )
         self._boundary = BoundaryPointStep.of([*point_dirichlet, *point_tractions], self.tracker)
         ppp = PPPData.on_grid(mesh, self.tracker.centroids, ppp_alpha) if self.spec.ppp else None
-        self._forms = FormsBySlotCount(self.fields, self.spec, material, self.conditions, ppp,
-                                       self.dynamics, mass)
+        self._forms = FormsBySlotCount(
+            self.fields, self.spec, material, self.conditions, ppp, self.dynamics, mass
+        )
         self._current: StepInProgress | None = None
         self._cells_of_last_step: np.ndarray | None = None
         self._newton: NewtonSolver | None = None
         self._add_time("setup", t0)
         self.output = (
-            None if output_dir is None
-            else SimulationOutput(output_dir, self.fields, output_every))
+            None if output_dir is None else SimulationOutput(output_dir, self.fields, output_every)
+        )
         self._track()  # once now, so a bad initial layout fails at set-up
         self.domains = PointDomains.of(points, mesh, point_domains)
 
@@ -246,7 +249,8 @@ class Simulation:
                 try:
                     report = self.ladder.take_step(
                         lambda rebin: self.step(t_new, rebin),
-                        can_hold and self._cells_of_last_step is not None)
+                        can_hold and self._cells_of_last_step is not None,
+                    )
                 except ConvergenceError as failure:
                     length.cut_after(failure)
                     continue
@@ -281,8 +285,9 @@ class Simulation:
         # Solve for the grid increment: Newton from Δu = 0.
         result = self._solve(forms, R, J, bcs)
         if not result.converged or not np.all(np.isfinite(self.w.x.array)):
-            raise newton_failure(result, k, self.t, t_new, self.mesh, layout,
-                                 self.tracker.centroids)
+            raise newton_failure(
+                result, k, self.t, t_new, self.mesh, layout, self.tracker.centroids
+            )
         self.refresh_material(tangent=False)  # the converged iterate's, for reactions and history
         reactions = self.conditions.reactions(R.assemble_vector)
         # Update the points (the last check may still reject the step); the grid is reset.
@@ -293,8 +298,9 @@ class Simulation:
         self._add_time("update", t0)
         self._cells_of_last_step = layout.cell.copy()
         self.t, self.step_number = t_new, k
-        report = StepReport.of_step(k, t_new, result, self._current, reactions, self.markers,
-                                    self.tracking, self.conditions)
+        report = StepReport.of_step(
+            k, t_new, result, self._current, reactions, self.markers, self.tracking, self.conditions
+        )
         self.history.append(report)
         self._write_output()
         return report
@@ -311,8 +317,9 @@ class Simulation:
             Taylor tests use this to check every residual/Jacobian pair (with
             :meth:`refresh_material` before each assembly for a pointwise law).
         """
-        layout = self._track(self.step_number + 1, t_new,
-                             hold=None if rebin else self._cells_of_last_step)
+        layout = self._track(
+            self.step_number + 1, t_new, hold=None if rebin else self._cells_of_last_step
+        )
         check_points_per_cell(layout, self.spec, self.step_number, self.tracker.centroids)
         if self.step_number == 0 and not self.dynamic:
             model_checks.check_supports(self.conditions, self._boundary, layout.occupied)
@@ -333,8 +340,9 @@ class Simulation:
         loads = None if forms.loads is None else forms.loads.bind(layout, boundary)
         bcs = self.conditions.impose(layout.occupied, self.t, t_new)
         if self.dynamics is not None:
-            self.dynamics.project(layout.cell, bary, pts.mass, pts.velocity, pts.acceleration,
-                                  t_new - self.t)
+            self.dynamics.project(
+                layout.cell, bary, pts.mass, pts.velocity, pts.acceleration, t_new - self.t
+            )
         self._add_time("packing", t0)
         return_map = ReturnMapAtIterate(forms, layout, pts, self.w) if forms.pointwise else None
         self._current = StepInProgress(forms, layout, bary, return_map, loads, t_new - self.t)
@@ -388,19 +396,23 @@ class Simulation:
         current, pts = self._current, self.points
         self.fields.start_from_rest(current.layout.cell, current.bary, pts.mass, pts.stress)
 
-    def _consistent_initial_acceleration(self, forms: StepForms, layout: SlotLayout, R,
-                                         bcs: list, dt: float) -> None:
+    def _consistent_initial_acceleration(
+        self, forms: StepForms, layout: SlotLayout, R, bcs: list, dt: float
+    ) -> None:
         """Start from accelerations in equilibrium (:meth:`NewmarkDynamics.start`)."""
+
         def residual_at_rest() -> np.ndarray:
             self._initial_guess()
             self.refresh_material(tangent=False)
             return R.assemble_vector()
 
-        self.dynamics.start(residual_at_rest, forms.mass_matrix, layout, bcs,
-                            self._current.bary, self.points, dt)
+        self.dynamics.start(
+            residual_at_rest, forms.mass_matrix, layout, bcs, self._current.bary, self.points, dt
+        )
 
-    def _update_points(self, forms: StepForms, layout: SlotLayout, step: int, t: float,
-                       dt: float) -> None:
+    def _update_points(
+        self, forms: StepForms, layout: SlotLayout, step: int, t: float, dt: float
+    ) -> None:
         """The points take the converged state (:mod:`fe_mpm.point_update`)."""
         values, pts, rm = forms.update.evaluate(layout), self.points, self._current.return_map
         limit = None if self.dynamic else self.max_step_cells

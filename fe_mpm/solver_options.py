@@ -55,10 +55,14 @@ LINEAR_SOLVERS = {
     ("direct", False): _DIRECT,
     ("direct", True): _DIRECT,
     ("iterative", False): {
-        "ksp_type": "gmres", **_KRYLOV, "pc_type": "gamg",
+        "ksp_type": "gmres",
+        **_KRYLOV,
+        "pc_type": "gamg",
     },
     ("iterative", True): {
-        "ksp_type": "fgmres", **_KRYLOV, "pc_type": "fieldsplit",
+        "ksp_type": "fgmres",
+        **_KRYLOV,
+        "pc_type": "fieldsplit",
         "pc_fieldsplit_type": "schur",
         "pc_fieldsplit_schur_fact_type": "full",
         "pc_fieldsplit_schur_precondition": "selfp",

@@ -112,18 +112,28 @@ class StepForms:
         lumped: Whether the mass matrix is lumped (dynamics).
     """
 
-    def __init__(self, fields: GridFields, spec: FormulationSpec, material, nslot: int,
-                 nslot_boundary: int = 0, *, conditions: GridConditions,
-                 ppp: mixed_up.PPPData | None = None,
-                 newmark: inertia.NewmarkData | None = None, lumped: bool = False):
+    def __init__(
+        self,
+        fields: GridFields,
+        spec: FormulationSpec,
+        material,
+        nslot: int,
+        nslot_boundary: int = 0,
+        *,
+        conditions: GridConditions,
+        ppp: mixed_up.PPPData | None = None,
+        newmark: inertia.NewmarkData | None = None,
+        lumped: bool = False,
+    ):
         mesh, g = fields.W.mesh, fields.W.mesh.geometry.dim
         self.mesh, self.spec, self.material, self.newmark = mesh, spec, material, newmark
         self.ppp = ppp
         self.q = q = MaterialPointQuadrature(mesh, nslot)
         self.F_n = q.function((g, g), "F_n", empty=np.eye(g))
         self.density = q.function((), "density")
-        self.history = {name: q.function(h.shape, name, empty=h.initial)
-                        for name, h in material.history.items()}
+        self.history = {
+            name: q.function(h.shape, name, empty=h.initial) for name, h in material.history.items()
+        }
         self.dF = ufl.Identity(g) + q.grad_at_points(fields.du, spec.u_degree)
         # A pointwise law (numpy return map) enters the forms through its
         # linearisation at the current iterate, refreshed before every residual.
@@ -131,11 +141,15 @@ class StepForms:
         self.linearisation, dynamic = None, set()  # slot fields that change during Newton
         if self.pointwise:
             lin = self.linearisation = Linearisation(
-                q.function((3, 3), "tau_k"), q.function((9 * g * g,), "tangent_k"),
-                q.function((g, g), "dF_k", empty=np.eye(g)), g)
+                q.function((3, 3), "tau_k"),
+                q.function((9 * g * g,), "tangent_k"),
+                q.function((g, g), "dF_k", empty=np.eye(g)),
+                g,
+            )
             dynamic = {lin.tau, lin.tangent, lin.dF}
             self.dF_at_points = PointExpression(
-                ufl.as_vector([self.dF[i, j] for i in range(g) for j in range(g)]), q)
+                ufl.as_vector([self.dF[i, j] for i in range(g) for j in range(g)]), q
+            )
         self.state = PointState(self.dF, self.history, self.linearisation)
         w = ufl.TestFunctions(fields.W)[0] if spec.pressure else ufl.TestFunction(fields.W)
         R = self._residual(fields, conditions, ppp)
@@ -152,15 +166,16 @@ class StepForms:
             V1 = newmark.a_n.function_space
             a, v = ufl.TrialFunction(V1), ufl.TestFunction(V1)
             self.mass_matrix = StepForm(
-                inertia.mass_product(a, v, q, self.density, self.lumping), mesh,
-                quadratures=rules)
+                inertia.mass_product(a, v, q, self.density, self.lumping), mesh, quadratures=rules
+            )
         J = ufl.derivative(R, fields.w, ufl.TrialFunction(fields.W))
         self.residual = StepForm(R, mesh, facets, rules, dynamic)
         self.jacobian = StepForm(J, mesh, facets, rules, dynamic)
         self.update_layout, self.update = self._update(fields)
 
-    def pack(self, layout: SlotLayout, points: MaterialPoints, tracker: Tracker,
-             bary: np.ndarray) -> None:
+    def pack(
+        self, layout: SlotLayout, points: MaterialPoints, tracker: Tracker, bary: np.ndarray
+    ) -> None:
         """Write the points' data at t_n into the slot fields of ``layout``.
 
         Position, volume, ``F_n``, density and history; the second moments of a
@@ -185,19 +200,38 @@ class StepForms:
             volume = np.bincount(layout.cell, weights=points.volume, minlength=tracker.num_cells)
             q.pack_cell_field(self.ppp.fill, layout, volume / tracker.volumes)
 
-    def _residual(self, fields: GridFields, conditions: GridConditions,
-                  ppp: mixed_up.PPPData | None) -> ufl.Form:
+    def _residual(
+        self, fields: GridFields, conditions: GridConditions, ppp: mixed_up.PPPData | None
+    ) -> ufl.Form:
         """The static residual of the material points and the grid's loads."""
         q, material, state, deg = self.q, self.material, self.state, self.spec.u_degree
         if self.spec.pressure:
             w, q_test = ufl.TestFunctions(fields.W)
             return mixed_up.residual(
-                fields.du, fields.p, w, q_test, q, self.F_n, self.density, material, ppp,
-                conditions.body_force, conditions.traction_terms, u_degree=deg, state=state)
+                fields.du,
+                fields.p,
+                w,
+                q_test,
+                q,
+                self.F_n,
+                self.density,
+                material,
+                ppp,
+                conditions.body_force,
+                conditions.traction_terms,
+                u_degree=deg,
+                state=state,
+            )
         return displacement.residual(
-            fields.du, ufl.TestFunction(fields.W), q, self.F_n, self.density,
-            lambda F: material.kirchhoff(F, state), conditions.body_force,
-            conditions.traction_terms)
+            fields.du,
+            ufl.TestFunction(fields.W),
+            q,
+            self.F_n,
+            self.density,
+            lambda F: material.kirchhoff(F, state),
+            conditions.body_force,
+            conditions.traction_terms,
+        )
 
     def _boundary_points(self, fields: GridFields, w, nslot: int) -> ufl.Form:
         """The penalty and point loads of the boundary points, on their own rule."""
@@ -208,14 +242,16 @@ class StepForms:
         self.penalty_stiffness = qb.function((g,), "penalty")
         self.boundary_traction = qb.function((g,), "boundary_traction")
         self.du_at_boundary = PointExpression(qb.at_points(fields.du, deg), qb)
-        return penalty.penalty(fields.du, w, qb, self.gap, self.penalty_stiffness,
-                               self.boundary_traction, deg)
+        return penalty.penalty(
+            fields.du, w, qb, self.gap, self.penalty_stiffness, self.boundary_traction, deg
+        )
 
     def _loads(self, w, conditions: GridConditions) -> ufl.Form | None:
         """The external work of the body force, the tractions and the point loads."""
         deg = self.spec.u_degree
-        loads = loads_form.external_work(w, self.q, self.density, conditions.body_force,
-                                         conditions.traction_terms, deg)
+        loads = loads_form.external_work(
+            w, self.q, self.density, conditions.body_force, conditions.traction_terms, deg
+        )
         if self.q_boundary is not None:
             qb = self.q_boundary
             point_loads = qb.sum(ufl.dot(self.boundary_traction, qb.at_points(w, deg)))
@@ -234,12 +270,13 @@ class StepForms:
         if self.newmark is not None:
             acceleration = q.at_points(inertia.acceleration(fields.du, self.newmark))
         history = material.updated_history(F, state)
-        layout = UpdateLayout(g, self.newmark is not None,
-                              {name: ufl.shape(value) for name, value in history.items()})
+        layout = UpdateLayout(
+            g, self.newmark is not None, {name: ufl.shape(value) for name, value in history.items()}
+        )
         du_p = q.at_points(fields.du, self.spec.u_degree)
-        return layout, PointExpression(layout.vector(du_p, self.dF, sigma, acceleration,
-                                                     history), q)
-
+        return layout, PointExpression(
+            layout.vector(du_p, self.dF, sigma, acceleration, history), q
+        )
 
 
 class FormsBySlotCount:
@@ -255,19 +292,32 @@ class FormsBySlotCount:
         mass: ``"consistent"`` or ``"lumped"`` (dynamics).
     """
 
-    def __init__(self, fields: GridFields, spec: FormulationSpec, material,
-                 conditions: GridConditions, ppp: mixed_up.PPPData | None, dynamics, mass: str):
+    def __init__(
+        self,
+        fields: GridFields,
+        spec: FormulationSpec,
+        material,
+        conditions: GridConditions,
+        ppp: mixed_up.PPPData | None,
+        dynamics,
+        mass: str,
+    ):
         self.fields, self.spec, self.material = fields, spec, material
-        self.options = dict(conditions=conditions, ppp=ppp, lumped=mass == "lumped",
-                            newmark=None if dynamics is None else dynamics.data)
+        self.options = dict(
+            conditions=conditions,
+            ppp=ppp,
+            lumped=mass == "lumped",
+            newmark=None if dynamics is None else dynamics.data,
+        )
         self._forms: dict[tuple[int, int], StepForms] = {}
 
     def get(self, nslot: int, nslot_boundary: int) -> StepForms:
         """The forms for ``nslot`` slots per entity (``nslot_boundary`` of boundary points)."""
         key = (nslot, nslot_boundary)
         if key not in self._forms:
-            self._forms[key] = StepForms(self.fields, self.spec, self.material, *key,
-                                         **self.options)
+            self._forms[key] = StepForms(
+                self.fields, self.spec, self.material, *key, **self.options
+            )
         return self._forms[key]
 
 
@@ -286,8 +336,9 @@ class ReturnMapAtIterate:
         w: The grid unknown.
     """
 
-    def __init__(self, forms: StepForms, layout: SlotLayout, points: MaterialPoints,
-                 w: dolfinx.fem.Function):
+    def __init__(
+        self, forms: StepForms, layout: SlotLayout, points: MaterialPoints, w: dolfinx.fem.Function
+    ):
         self.forms, self.layout, self.points, self.w = forms, layout, points, w
         self.result: ReturnMapResult | None = None  # at the iterate self._at
         self._at: np.ndarray | None = None

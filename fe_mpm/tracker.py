@@ -85,8 +85,9 @@ class Tracker:
             cells[todo] = self._tree_search(x[todo])
         return cells
 
-    def snap_to(self, x: np.ndarray, cells: np.ndarray, allowed: np.ndarray,
-                tol: float = 1e-6) -> np.ndarray:
+    def snap_to(
+        self, x: np.ndarray, cells: np.ndarray, allowed: np.ndarray, tol: float = 1e-6
+    ) -> np.ndarray:
         """Move points whose cell is not ``allowed`` to an allowed cell touching it, if close.
 
         A point on a facet between an empty and an occupied cell belongs to
@@ -112,7 +113,9 @@ class Tracker:
         owner, starts = self._node_cells
         for i in np.flatnonzero((out < 0) & (cells >= 0)):
             nodes = self._nodes_of[cells[i]]
-            candidates = np.unique(np.concatenate([owner[starts[v]:starts[v + 1]] for v in nodes]))
+            candidates = np.unique(
+                np.concatenate([owner[starts[v] : starts[v + 1]] for v in nodes])
+            )
             candidates = candidates[allowed[candidates]]
             if candidates.size == 0:
                 continue

@@ -41,8 +41,14 @@ class PointTracking:
         self.dropped = 0
         self._nslot: int | None = None  # slots per entity, kept while they suit
 
-    def track(self, points: MaterialPoints, markers: Markers, step: int = 0, t: float = 0.0,
-              hold: np.ndarray | None = None) -> SlotLayout:
+    def track(
+        self,
+        points: MaterialPoints,
+        markers: Markers,
+        step: int = 0,
+        t: float = 0.0,
+        hold: np.ndarray | None = None,
+    ) -> SlotLayout:
         """Find each point's cell (``points.cell``) and return their slot layout.
 
         Args:
@@ -63,18 +69,27 @@ class PointTracking:
             cells = held
         outside = np.flatnonzero(cells < 0)
         if outside.size:
-            cells = self._drop(points, markers, cells, outside,
-                               f"step {step} (t = {t:g})" if step else "set-up")
+            cells = self._drop(
+                points, markers, cells, outside, f"step {step} (t = {t:g})" if step else "set-up"
+            )
         points.cell = cells
         self._nslot = slot_count(np.bincount(cells), self._nslot)
         return SlotLayout.from_cells(cells, self._nslot)
 
-    def _drop(self, points: MaterialPoints, markers: Markers, cells: np.ndarray,
-              outside: np.ndarray, where: str) -> np.ndarray:
+    def _drop(
+        self,
+        points: MaterialPoints,
+        markers: Markers,
+        cells: np.ndarray,
+        outside: np.ndarray,
+        where: str,
+    ) -> np.ndarray:
         """Refuse, or remove with a warning, the points outside the grid; the kept cells."""
         first = outside[0]
-        msg = (f"{outside.size} material point(s) left the grid at {where}; first: "
-               f"point {first} at x = {points.x[first]}")
+        msg = (
+            f"{outside.size} material point(s) left the grid at {where}; first: "
+            f"point {first} at x = {points.x[first]}"
+        )
         if self.points_leaving == "raise":
             raise PointsOutsideError(msg + ". Pass points_leaving='drop' to remove them.")
         warn(msg + "; dropped.")
@@ -87,8 +102,9 @@ class PointTracking:
         return cells[keep]
 
 
-def check_points_per_cell(layout: SlotLayout, spec: FormulationSpec, step_number: int,
-                          centroids: np.ndarray) -> None:
+def check_points_per_cell(
+    layout: SlotLayout, spec: FormulationSpec, step_number: int, centroids: np.ndarray
+) -> None:
     """Refuse a layout with fewer points in an occupied cell than the formulation needs.
 
     ``spec.min_points_per_cell`` is 3 for P2/P1 (the rank of the P2 strain) and 1
@@ -118,7 +134,8 @@ def check_points_per_cell(layout: SlotLayout, spec: FormulationSpec, step_number
         raise ValueError(f"Simulation: {message} Seed more points per cell.")
     raise ConvergenceError(
         f"step {step_number + 1}: {message} The points no longer support the "
-        "unknowns; use the 'up' (P1) formulation or more points per cell.")
+        "unknowns; use the 'up' (P1) formulation or more points per cell."
+    )
 
 
 def hinge_diagnosis(mesh: dolfinx.mesh.Mesh, layout: SlotLayout, centroids: np.ndarray) -> str:

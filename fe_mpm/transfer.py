@@ -34,7 +34,10 @@ def nodal_shares(
 
 
 def mass_weighted_projection(
-    space: dolfinx.fem.FunctionSpace, cells: np.ndarray, bary: np.ndarray, mass: np.ndarray,
+    space: dolfinx.fem.FunctionSpace,
+    cells: np.ndarray,
+    bary: np.ndarray,
+    mass: np.ndarray,
     values: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray]:
     """``Σ_p N_I(x_p) m_p v_p / Σ_p N_I(x_p) m_p`` on the nodes of a P1 space.
@@ -53,10 +56,16 @@ def mass_weighted_projection(
     nodes, weights, n = nodal_shares(space, cells, bary, mass)
     nodal_mass = np.bincount(nodes, weights=weights, minlength=n)
     repeated = np.repeat(values, space.dofmap.list.shape[1], axis=0)
-    moment = np.stack([np.bincount(nodes, weights=weights * repeated[:, c], minlength=n)
-                       for c in range(values.shape[1])], axis=1)
-    nodal = np.divide(moment, nodal_mass[:, None], out=np.zeros_like(moment),
-                      where=nodal_mass[:, None] > 0)
+    moment = np.stack(
+        [
+            np.bincount(nodes, weights=weights * repeated[:, c], minlength=n)
+            for c in range(values.shape[1])
+        ],
+        axis=1,
+    )
+    nodal = np.divide(
+        moment, nodal_mass[:, None], out=np.zeros_like(moment), where=nodal_mass[:, None] > 0
+    )
     return nodal, nodal_mass
 
 

@@ -34,7 +34,8 @@ def _jit_config(*flags: str) -> str:
     config = Path(tempfile.mkdtemp(prefix="fe_mpm_jit_"))
     (config / "dolfinx").mkdir()
     (config / "dolfinx" / "dolfinx_jit_options.json").write_text(
-        json.dumps({"cffi_extra_compile_args": [*flags, "-g0"]}))
+        json.dumps({"cffi_extra_compile_args": [*flags, "-g0"]})
+    )
     atexit.register(shutil.rmtree, config, ignore_errors=True)
     return str(config)
 

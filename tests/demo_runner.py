@@ -19,9 +19,14 @@ def run_demo(name: str, *args: str, cwd, env: dict | None = None, fails: bool = 
     # As in the suite (pyproject.toml), a RuntimeWarning (overflow, 0/0) fails the demo.
     # The demos compile at -O1, the in-process tests at -O0 (conftest.py).
     env = {**os.environ, "XDG_CONFIG_HOME": os.environ["FE_MPM_DEMO_JIT_CONFIG"], **(env or {})}
-    out = subprocess.run([sys.executable, "-W", "error::RuntimeWarning", str(DEMOS / name),
-                          *args], cwd=cwd, env=env,
-                         capture_output=True, text=True, timeout=600)
+    out = subprocess.run(
+        [sys.executable, "-W", "error::RuntimeWarning", str(DEMOS / name), *args],
+        cwd=cwd,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     if fails:
         assert out.returncode == 1 and "Traceback" not in out.stderr, out.stderr[-3000:]
         assert check_line(out.stdout).endswith(": FAIL"), out.stdout[-3000:]

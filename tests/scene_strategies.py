@@ -43,8 +43,11 @@ G = 9.81
 #: and so a set of forms to compile; with a cold compile cache the larger counts cost the
 #: suite more time than they add scenes.
 PER_CELL = {2: (1, 3, 6), 3: (1, 4)}
-DIAGONALS = {"right": dolfinx.mesh.DiagonalType.right, "left": dolfinx.mesh.DiagonalType.left,
-             "crossed": dolfinx.mesh.DiagonalType.crossed}
+DIAGONALS = {
+    "right": dolfinx.mesh.DiagonalType.right,
+    "left": dolfinx.mesh.DiagonalType.left,
+    "crossed": dolfinx.mesh.DiagonalType.crossed,
+}
 
 
 def _sig(x: float, digits: int = 3) -> float:
@@ -85,8 +88,9 @@ class Law:
             return fe_mpm.NeoHookean(self.E, self.nu)
         if self.name == "J2Plasticity":
             return fe_mpm.J2Plasticity(self.E, self.nu, yield_stress=self.strength)
-        return fe_mpm.MohrCoulomb(self.E, self.nu, cohesion=self.strength,
-                                  friction_angle=self.friction_angle)
+        return fe_mpm.MohrCoulomb(
+            self.E, self.nu, cohesion=self.strength, friction_angle=self.friction_angle
+        )
 
 
 @dataclass(frozen=True)
@@ -194,12 +198,19 @@ def build(scene: Scene, min_step_fraction: float | None = None) -> Built:
     L = s.size
     if g == 2:
         mesh = dolfinx.mesh.create_rectangle(
-            MPI.COMM_SELF, [[0.0, 0.0], list(L)], list(s.cells), dolfinx.mesh.CellType.triangle,
-            diagonal=DIAGONALS[s.diagonal])
+            MPI.COMM_SELF,
+            [[0.0, 0.0], list(L)],
+            list(s.cells),
+            dolfinx.mesh.CellType.triangle,
+            diagonal=DIAGONALS[s.diagonal],
+        )
     else:
         mesh = dolfinx.mesh.create_box(
-            MPI.COMM_SELF, [[0.0, 0.0, 0.0], list(L)], list(s.cells),
-            dolfinx.mesh.CellType.tetrahedron)
+            MPI.COMM_SELF,
+            [[0.0, 0.0, 0.0], list(L)],
+            list(s.cells),
+            dolfinx.mesh.CellType.tetrahedron,
+        )
     tdim = mesh.topology.dim
     num_cells = mesh.topology.index_map(tdim).size_local
     centroids = dolfinx.mesh.compute_midpoints(mesh, tdim, np.arange(num_cells, dtype=np.int32))
@@ -209,8 +220,9 @@ def build(scene: Scene, min_step_fraction: float | None = None) -> Built:
     else:
         below = centroids[:, 1] < s.body_height - 1e-9
     cells = np.flatnonzero(below).astype(np.int32)
-    points = fe_mpm.seed(mesh, s.per_cell, density=s.density,
-                         cells=None if cells.size == num_cells else cells)
+    points = fe_mpm.seed(
+        mesh, s.per_cell, density=s.density, cells=None if cells.size == num_cells else cells
+    )
 
     def base(x):
         return _close(x[1], 0.0)
@@ -219,8 +231,9 @@ def build(scene: Scene, min_step_fraction: float | None = None) -> Built:
     dirichlet = [fe_mpm.Dirichlet(base)]
     if s.rollers:
         for c in sides:
-            dirichlet.append(fe_mpm.Dirichlet(
-                lambda x, c=c: _close(x[c], 0.0) | _close(x[c], L[c]), component=c))
+            dirichlet.append(
+                fe_mpm.Dirichlet(lambda x, c=c: _close(x[c], 0.0) | _close(x[c], L[c]), component=c)
+            )
 
     def supports(x):
         held = base(x)
@@ -239,9 +252,17 @@ def build(scene: Scene, min_step_fraction: float | None = None) -> Built:
     if min_step_fraction is not None:
         kwargs["min_step"] = min_step_fraction * s.t_end / s.n_steps
     sim = fe_mpm.Simulation(
-        mesh, points, s.law.build(), s.formulation,
-        dirichlet=dirichlet, tractions=tractions, body_force=tuple(gravity),
-        body_force_scale=scale, reactions={"base": base, "supports": supports}, **kwargs)
+        mesh,
+        points,
+        s.law.build(),
+        s.formulation,
+        dirichlet=dirichlet,
+        tractions=tractions,
+        body_force=tuple(gravity),
+        body_force_scale=scale,
+        reactions={"base": base, "supports": supports},
+        **kwargs,
+    )
     top_area = float(np.prod([L[c] for c in sides]))
     return Built(s, mesh, points, sim, gravity, top_area)
 
@@ -311,8 +332,10 @@ def scenes(
     weight_stress = density * G * body_h
     if tractions and shape == "block" and draw(st.booleans()):
         q = draw(grid(0.0, 1.0, 0.1)) * weight_stress
-        shear = [draw(st.sampled_from((0.0, 0.1, -0.1, 0.2, -0.2))) * weight_stress
-                 for _ in range(dim - 1)]
+        shear = [
+            draw(st.sampled_from((0.0, 0.1, -0.1, 0.2, -0.2))) * weight_stress
+            for _ in range(dim - 1)
+        ]
         traction = (shear[0], -q) if dim == 2 else (shear[0], -q, shear[1])
         traction = tuple(_sig(v) for v in traction)
     demand = weight_stress + (float(np.linalg.norm(traction)) if traction else 0.0)
@@ -328,10 +351,40 @@ def scenes(
     has_rollers = draw(st.booleans()) if rollers is None else rollers
     steps = draw(st.integers(*n_steps))
     if is_static:
-        return Scene(dim, size, cells, diagonal, per_cell, body_rows, slope, law, density,
-                     formulation, ramp, traction, has_rollers, steps)
+        return Scene(
+            dim,
+            size,
+            cells,
+            diagonal,
+            per_cell,
+            body_rows,
+            slope,
+            law,
+            density,
+            formulation,
+            ramp,
+            traction,
+            has_rollers,
+            steps,
+        )
     t_end = draw(grid(0.01, 0.05, 0.01))
     damping = draw(st.sampled_from((0.0, 0.0, 0.5, 1.5)))
-    return Scene(dim, size, cells, diagonal, per_cell, body_rows, slope, law, density,
-                 formulation, ramp, traction, has_rollers, steps, dynamic=True, t_end=t_end,
-                 damping=damping)
+    return Scene(
+        dim,
+        size,
+        cells,
+        diagonal,
+        per_cell,
+        body_rows,
+        slope,
+        law,
+        density,
+        formulation,
+        ramp,
+        traction,
+        has_rollers,
+        steps,
+        dynamic=True,
+        t_end=t_end,
+        damping=damping,
+    )

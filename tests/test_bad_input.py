@@ -36,7 +36,6 @@ def test_unknown_formulation():
         fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1.0, 0.3), formulation="uu")
 
 
-
 class _HalfALaw:
     """A user's law that forgot its moduli and history: not a fe_mpm.materials.Law."""
 
@@ -48,17 +47,31 @@ class _HalfALaw:
 
 def test_an_object_that_is_not_a_law_is_refused_naming_what_it_lacks():
     mesh, points = _scene()
-    with pytest.raises(TypeError, match=r"material _HalfALaw is not a law: it lacks mu, "
-                                        r"bulk_modulus, history, updated_history \(fe_mpm"):
+    with pytest.raises(
+        TypeError,
+        match=r"material _HalfALaw is not a law: it lacks mu, "
+        r"bulk_modulus, history, updated_history \(fe_mpm",
+    ):
         fe_mpm.Simulation(mesh, points, _HalfALaw())
 
 
 def test_the_laws_keep_their_contract():
-    laws = [fe_mpm.NeoHookean(1.0, 0.3), fe_mpm.J2Plasticity(E=1.0, nu=0.3, yield_stress=0.01),
-            fe_mpm.MohrCoulomb(E=1.0, nu=0.3, cohesion=0.01, friction_angle=30.0)]
-    kinds = [[isinstance(law, kind) for kind in (fe_mpm.materials.Law, fe_mpm.materials.MixedLaw,
-                                                   fe_mpm.materials.PointwiseLaw)]
-             for law in laws]
+    laws = [
+        fe_mpm.NeoHookean(1.0, 0.3),
+        fe_mpm.J2Plasticity(E=1.0, nu=0.3, yield_stress=0.01),
+        fe_mpm.MohrCoulomb(E=1.0, nu=0.3, cohesion=0.01, friction_angle=30.0),
+    ]
+    kinds = [
+        [
+            isinstance(law, kind)
+            for kind in (
+                fe_mpm.materials.Law,
+                fe_mpm.materials.MixedLaw,
+                fe_mpm.materials.PointwiseLaw,
+            )
+        ]
+        for law in laws
+    ]
     assert kinds == [[True, True, False], [True, True, False], [True, True, True]]
     assert not isinstance(_HalfALaw(), fe_mpm.materials.Law)
 
@@ -73,7 +86,8 @@ def test_taylor_hood_needs_enough_points_per_cell():
 def test_empty_mesh():
     element = basix.ufl.element("Lagrange", "triangle", 1, shape=(2,))
     empty = dolfinx.mesh.create_mesh(
-        MPI.COMM_WORLD, np.zeros((0, 3), dtype=np.int64), element, np.zeros((0, 2)))
+        MPI.COMM_WORLD, np.zeros((0, 3), dtype=np.int64), element, np.zeros((0, 2))
+    )
     with pytest.raises(ValueError, match="seed: the mesh has no cells"):
         fe_mpm.seed(empty)
     _, points = _scene()
@@ -93,8 +107,9 @@ def test_other_bad_values():
     with pytest.raises(ValueError, match=r"Simulation.run: n_steps must lie in \[1, inf\]"):
         sim.run(n_steps=0)
     with pytest.raises(ValueError, match="boundary tag 7 given but the mesh has no facet tags"):
-        fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1.0, 0.3),
-                          dirichlet=[fe_mpm.Dirichlet(7)])
+        fe_mpm.Simulation(
+            mesh, points, fe_mpm.NeoHookean(1.0, 0.3), dirichlet=[fe_mpm.Dirichlet(7)]
+        )
     material = fe_mpm.NeoHookean(1.0, 0.3)
     unknown_mass = "Simulation: unknown mass 'diagonal'; choose one of consistent, lumped"
     with pytest.raises(ValueError, match=unknown_mass):
@@ -115,7 +130,9 @@ def test_divergence_stops_with_step_and_reason():
     mesh, points = _scene()
     x_before = points.x.copy()
     sim = fe_mpm.Simulation(
-        mesh, points, fe_mpm.NeoHookean(1.0, 0.3),
+        mesh,
+        points,
+        fe_mpm.NeoHookean(1.0, 0.3),
         dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0))],
         tractions=[fe_mpm.Traction(lambda x: np.isclose(x[0], 1.0), (1e6, 0.0))],
         petsc_options={"snes_max_it": 8},
@@ -142,7 +159,10 @@ def test_singular_tangent_names_the_hinged_cells():
     hinged_cell = np.flatnonzero((shared == 1) & away)[0]
     points = fe_mpm.seed(mesh, per_cell=1, cells=[clamped_cell, hinged_cell])
     sim = fe_mpm.Simulation(
-        mesh, points, fe_mpm.NeoHookean(1.0, 0.3), body_force=(0.0, -1.0),
+        mesh,
+        points,
+        fe_mpm.NeoHookean(1.0, 0.3),
+        body_force=(0.0, -1.0),
         dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0))],
     )
     hinge = r"\d+ occupied cell.* share at most one node"
@@ -155,14 +175,21 @@ def test_taylor_hood_stops_when_points_move_into_too_few_per_cell():
     could converge on the singular tangent to a wrong answer, so it is refused."""
     mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (2, 2))
     points = fe_mpm.seed(mesh, per_cell=3)
-    sim = fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1.0, 0.3), formulation="up-p2p1",
-                            dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))])
+    sim = fe_mpm.Simulation(
+        mesh,
+        points,
+        fe_mpm.NeoHookean(1.0, 0.3),
+        formulation="up-p2p1",
+        dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))],
+    )
     sim.step(1.0)
     first = np.flatnonzero(points.cell == points.cell[0])[0]
     other = np.flatnonzero(points.cell != points.cell[0])[0]
     points.x[first] = points.x[other]  # one cell now holds 2 points
-    with pytest.raises(fe_mpm.ConvergenceError,
-                       match="step 2: .*needs at least 3 material points .* no longer support"):
+    with pytest.raises(
+        fe_mpm.ConvergenceError,
+        match="step 2: .*needs at least 3 material points .* no longer support",
+    ):
         sim.step(2.0)
     assert sim.step_number == 1
 
@@ -170,16 +197,18 @@ def test_taylor_hood_stops_when_points_move_into_too_few_per_cell():
 # --- 1. check_range takes real numbers only ------------------------------------------
 
 
-@pytest.mark.parametrize("E", ["1e6", b"1", True, np.True_, None, 1e6 + 0j,
-                               np.array([1.0, 2.0]), np.array([])])
+@pytest.mark.parametrize(
+    "E", ["1e6", b"1", True, np.True_, None, 1e6 + 0j, np.array([1.0, 2.0]), np.array([])]
+)
 def test_check_range_refuses_what_is_not_a_number(E):
     """float() would accept "1e6", True and size-1 arrays; only real numbers may pass."""
     with pytest.raises(TypeError, match="NeoHookean: E must be a number, got"):
         fe_mpm.NeoHookean(E=E, nu=0.3)
 
 
-@pytest.mark.parametrize("value", [2, 2.0, np.float32(2), np.int64(2), np.array(2.0),
-                                   np.array([2])])
+@pytest.mark.parametrize(
+    "value", [2, 2.0, np.float32(2), np.int64(2), np.array(2.0), np.array([2])]
+)
 def test_check_range_returns_a_float_of_a_real_number(value):
     v = check_range("owner", "field", value, lo=0.0)
     assert type(v) is float and v == 2.0
@@ -188,35 +217,65 @@ def test_check_range_returns_a_float_of_a_real_number(value):
 # --- 2. laws check every parameter and keep floats -----------------------------------
 
 
-@pytest.mark.parametrize("make, error, match", [
-    (lambda: fe_mpm.NeoHookean(1.0, "0.3"), TypeError, "NeoHookean: nu must be a number"),
-    (lambda: fe_mpm.J2Plasticity(1.0, 0.3, float("nan")), ValueError,
-     r"J2Plasticity: yield_stress must lie in \(0, inf\]"),
-    (lambda: fe_mpm.J2Plasticity(1.0, 0.3, "5"), TypeError,
-     "J2Plasticity: yield_stress must be a number"),
-    (lambda: fe_mpm.J2Plasticity(1.0, 0.3, 1.0, hardening=float("inf")), ValueError,
-     r"J2Plasticity: hardening must lie in \[0, inf\]"),
-    (lambda: fe_mpm.J2Plasticity(1.0, 0.3, 1.0, hardening=True), TypeError,
-     "J2Plasticity: hardening must be a number"),
-    (lambda: fe_mpm.MohrCoulomb(1.0, 0.3, float("nan"), 30.0), ValueError,
-     r"MohrCoulomb: cohesion must lie in \[0, inf\]"),
-    (lambda: fe_mpm.MohrCoulomb(1.0, 0.3, 1.0, "30"), TypeError,
-     "MohrCoulomb: friction_angle must be a number"),
-    (lambda: fe_mpm.MohrCoulomb(1.0, 0.3, 1.0, 30.0, float("inf")), ValueError,
-     r"MohrCoulomb: dilatancy_angle must lie in \[0, 30\]"),
-    (lambda: fe_mpm.MohrCoulomb(1.0, 0.3, 1.0, 30.0, 40.0), ValueError,
-     r"MohrCoulomb: dilatancy_angle must lie in \[0, 30\]"),
-])
+@pytest.mark.parametrize(
+    "make, error, match",
+    [
+        (lambda: fe_mpm.NeoHookean(1.0, "0.3"), TypeError, "NeoHookean: nu must be a number"),
+        (
+            lambda: fe_mpm.J2Plasticity(1.0, 0.3, float("nan")),
+            ValueError,
+            r"J2Plasticity: yield_stress must lie in \(0, inf\]",
+        ),
+        (
+            lambda: fe_mpm.J2Plasticity(1.0, 0.3, "5"),
+            TypeError,
+            "J2Plasticity: yield_stress must be a number",
+        ),
+        (
+            lambda: fe_mpm.J2Plasticity(1.0, 0.3, 1.0, hardening=float("inf")),
+            ValueError,
+            r"J2Plasticity: hardening must lie in \[0, inf\]",
+        ),
+        (
+            lambda: fe_mpm.J2Plasticity(1.0, 0.3, 1.0, hardening=True),
+            TypeError,
+            "J2Plasticity: hardening must be a number",
+        ),
+        (
+            lambda: fe_mpm.MohrCoulomb(1.0, 0.3, float("nan"), 30.0),
+            ValueError,
+            r"MohrCoulomb: cohesion must lie in \[0, inf\]",
+        ),
+        (
+            lambda: fe_mpm.MohrCoulomb(1.0, 0.3, 1.0, "30"),
+            TypeError,
+            "MohrCoulomb: friction_angle must be a number",
+        ),
+        (
+            lambda: fe_mpm.MohrCoulomb(1.0, 0.3, 1.0, 30.0, float("inf")),
+            ValueError,
+            r"MohrCoulomb: dilatancy_angle must lie in \[0, 30\]",
+        ),
+        (
+            lambda: fe_mpm.MohrCoulomb(1.0, 0.3, 1.0, 30.0, 40.0),
+            ValueError,
+            r"MohrCoulomb: dilatancy_angle must lie in \[0, 30\]",
+        ),
+    ],
+)
 def test_law_parameters_are_checked(make, error, match):
     with pytest.raises(error, match=match):
         make()
 
 
-@pytest.mark.parametrize("law", [
-    lambda rho: fe_mpm.NeoHookean(1.0, 0.3, density=rho),
-    lambda rho: fe_mpm.J2Plasticity(1.0, 0.3, 1.0, density=rho),
-    lambda rho: fe_mpm.MohrCoulomb(1.0, 0.3, 1.0, 30.0, density=rho),
-])
+@pytest.mark.parametrize(
+    "law",
+    [
+        lambda rho: fe_mpm.NeoHookean(1.0, 0.3, density=rho),
+        lambda rho: fe_mpm.J2Plasticity(1.0, 0.3, 1.0, density=rho),
+        lambda rho: fe_mpm.MohrCoulomb(1.0, 0.3, 1.0, 30.0, density=rho),
+    ],
+)
 def test_every_law_takes_a_positive_density_and_refuses_zero(law):
     assert law(0.5).density == 0.5
     with pytest.raises(ValueError, match=r": density must lie in \(0, inf\]"):
@@ -228,11 +287,19 @@ def test_laws_keep_the_checked_floats():
     laws = [
         fe_mpm.NeoHookean(np.int64(2), np.float32(0.25)),
         fe_mpm.J2Plasticity(np.int64(2), np.float32(0.25), np.int64(1), np.float32(0.5)),
-        fe_mpm.MohrCoulomb(np.int64(2), np.float32(0.25), np.int64(1), np.int64(30),
-                           np.float32(10)),
+        fe_mpm.MohrCoulomb(
+            np.int64(2), np.float32(0.25), np.int64(1), np.int64(30), np.float32(10)
+        ),
     ]
-    fields = ("E", "nu", "yield_stress", "hardening", "cohesion", "friction_angle",
-              "dilatancy_angle")
+    fields = (
+        "E",
+        "nu",
+        "yield_stress",
+        "hardening",
+        "cohesion",
+        "friction_angle",
+        "dilatancy_angle",
+    )
     for law in laws:
         for name in fields:
             if hasattr(law, name):
@@ -242,22 +309,31 @@ def test_laws_keep_the_checked_floats():
 # --- 3. seed and MaterialPoints ---------------------------------------------------------
 
 
-@pytest.mark.parametrize("options, error, match", [
-    (dict(cells=np.ones(8, dtype=bool)), TypeError,
-     r"seed: cells must be cell indices, got a boolean mask; use np.flatnonzero\(mask\)"),
-    (dict(cells=[1.5, 2.0]), TypeError, r"seed: cells must be integer cell indices, got \[1.5"),
-    (dict(cells=["1"]), TypeError, "seed: cells must be integer cell indices"),
-    (dict(cells=[3, 1, 3]), ValueError, "seed: cells holds duplicates, e.g. cell 3 twice"),
-    (dict(cells=[0, 8]), ValueError,
-     r"seed: cells must lie in \[0, 7\] .*got 8; ghost cells \(index >= size_local = 8\) "
-     "cannot be seeded"),
-    (dict(cells=[-1]), ValueError, r"seed: cells must lie in \[0, 7\]"),
-    (dict(cells=[[1, 2]]), ValueError, r"seed: cells must be a 1-D array .*shape \(1, 2\)"),
-    (dict(cells=3), ValueError, r"seed: cells must be a 1-D array .*shape \(\)"),
-    (dict(per_cell=2.5), TypeError, "seed: per_cell must be an int, got 2.5"),
-    (dict(per_cell="3"), TypeError, "seed: per_cell must be an int, got '3'"),
-    (dict(per_cell=True), TypeError, "seed: per_cell must be an int, got True"),
-])
+@pytest.mark.parametrize(
+    "options, error, match",
+    [
+        (
+            dict(cells=np.ones(8, dtype=bool)),
+            TypeError,
+            r"seed: cells must be cell indices, got a boolean mask; use np.flatnonzero\(mask\)",
+        ),
+        (dict(cells=[1.5, 2.0]), TypeError, r"seed: cells must be integer cell indices, got \[1.5"),
+        (dict(cells=["1"]), TypeError, "seed: cells must be integer cell indices"),
+        (dict(cells=[3, 1, 3]), ValueError, "seed: cells holds duplicates, e.g. cell 3 twice"),
+        (
+            dict(cells=[0, 8]),
+            ValueError,
+            r"seed: cells must lie in \[0, 7\] .*got 8; ghost cells \(index >= size_local = 8\) "
+            "cannot be seeded",
+        ),
+        (dict(cells=[-1]), ValueError, r"seed: cells must lie in \[0, 7\]"),
+        (dict(cells=[[1, 2]]), ValueError, r"seed: cells must be a 1-D array .*shape \(1, 2\)"),
+        (dict(cells=3), ValueError, r"seed: cells must be a 1-D array .*shape \(\)"),
+        (dict(per_cell=2.5), TypeError, "seed: per_cell must be an int, got 2.5"),
+        (dict(per_cell="3"), TypeError, "seed: per_cell must be an int, got '3'"),
+        (dict(per_cell=True), TypeError, "seed: per_cell must be an int, got True"),
+    ],
+)
 def test_seed_refuses_bad_cells_and_per_cell(options, error, match):
     mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (2, 2))  # 8 cells
     with pytest.raises(error, match=match):
@@ -272,20 +348,34 @@ def test_seed_takes_whole_float_cell_indices():
 _INVERTED = np.array([[-1.0, 0.0], [0.0, 1.0]])
 
 
-@pytest.mark.parametrize("bad, match", [
-    (dict(x=[[0.1, 0.1], [np.nan, 0.2]]), r"MaterialPoints: x must be finite; point 1 is"),
-    (dict(mass=[1.0, np.nan]), "MaterialPoints: mass must be finite; point 1"),
-    (dict(volume=[1.0, np.inf]), "MaterialPoints: volume must be finite; point 1"),
-    (dict(velocity=[[0.0, 0.0], [np.inf, 0.0]]),
-     "MaterialPoints: velocity must be finite; point 1"),
-    (dict(acceleration=[[np.nan, 0.0], [0.0, 0.0]]),
-     "MaterialPoints: acceleration must be finite; point 0"),
-    (dict(F=[np.eye(2), [[np.nan, 0.0], [0.0, 1.0]]]), "MaterialPoints: F must be finite; point 1"),
-    (dict(F=[np.eye(2), _INVERTED]),
-     "MaterialPoints: det F must be > 0 at every point; point 1 has -1"),
-    (dict(F=[np.zeros((2, 2)), np.eye(2)]),  # a flattened point
-     "MaterialPoints: det F must be > 0 at every point; point 0 has 0"),
-])
+@pytest.mark.parametrize(
+    "bad, match",
+    [
+        (dict(x=[[0.1, 0.1], [np.nan, 0.2]]), r"MaterialPoints: x must be finite; point 1 is"),
+        (dict(mass=[1.0, np.nan]), "MaterialPoints: mass must be finite; point 1"),
+        (dict(volume=[1.0, np.inf]), "MaterialPoints: volume must be finite; point 1"),
+        (
+            dict(velocity=[[0.0, 0.0], [np.inf, 0.0]]),
+            "MaterialPoints: velocity must be finite; point 1",
+        ),
+        (
+            dict(acceleration=[[np.nan, 0.0], [0.0, 0.0]]),
+            "MaterialPoints: acceleration must be finite; point 0",
+        ),
+        (
+            dict(F=[np.eye(2), [[np.nan, 0.0], [0.0, 1.0]]]),
+            "MaterialPoints: F must be finite; point 1",
+        ),
+        (
+            dict(F=[np.eye(2), _INVERTED]),
+            "MaterialPoints: det F must be > 0 at every point; point 1 has -1",
+        ),
+        (
+            dict(F=[np.zeros((2, 2)), np.eye(2)]),  # a flattened point
+            "MaterialPoints: det F must be > 0 at every point; point 0 has 0",
+        ),
+    ],
+)
 def test_material_points_refuse_non_finite_values_and_inverted_F(bad, match):
     spec = dict(x=[[0.1, 0.1], [0.2, 0.2]], volume=[1.0, 1.0], mass=[1.0, 1.0])
     spec.update(bad)
@@ -301,8 +391,10 @@ def test_cell_tags_cannot_select_boundary_facets():
     mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (2, 2))
     cells = np.arange(mesh.topology.index_map(2).size_local, dtype=np.int32)
     cell_tags = dolfinx.mesh.meshtags(mesh, 2, cells, np.ones_like(cells))
-    match = ("facet_tags has entities of dimension 2 but the facets of this 2D mesh have "
-             "dimension 1; cell tags cannot select boundary facets")
+    match = (
+        "facet_tags has entities of dimension 2 but the facets of this 2D mesh have "
+        "dimension 1; cell tags cannot select boundary facets"
+    )
     with pytest.raises(ValueError, match=match):
         boundary_facets(mesh, 1, cell_tags)
 
@@ -314,52 +406,119 @@ def _no_motion(t):
     return (0.0, 0.0)
 
 
-@pytest.mark.parametrize("make, error, match", [
-    (lambda: fe_mpm.Dirichlet(1, value=np.nan), ValueError, "Dirichlet: value must be finite"),
-    (lambda: fe_mpm.Dirichlet(1, value=(0.0, np.inf)), ValueError,
-     "Dirichlet: value must be finite; component 1 is inf"),
-    (lambda: fe_mpm.Dirichlet(1, value="0"), TypeError, "Dirichlet: value must hold real numbers"),
-    (lambda: fe_mpm.Dirichlet(1.5), TypeError, r"Dirichlet: where must be a facet tag \(an int\)"),
-    (lambda: fe_mpm.Traction(1, (np.nan, 0.0)), ValueError,
-     "Traction: value must be finite; component 0 is nan"),
-    (lambda: fe_mpm.Traction(1, 5.0), TypeError, "Traction: value must be a sequence of numbers"),
-    (lambda: fe_mpm.Traction(1, ("1", 0.0)), TypeError, "Traction: value must hold real numbers"),
-    (lambda: fe_mpm.Traction(1, (1.0, 0.0), scale=2.0), TypeError,
-     "Traction: scale must be a function t -> float or None"),
-    (lambda: fe_mpm.PointDirichlet("p", [[0.2, np.nan]], 1.0, _no_motion, 1.0), ValueError,
-     "PointDirichlet 'p': x must be finite; point 0"),
-    (lambda: fe_mpm.PointDirichlet("p", _XB, [1.0, np.nan], _no_motion, 1.0), ValueError,
-     "PointDirichlet 'p': weight must be finite; point 1"),
-    (lambda: fe_mpm.PointDirichlet("p", _XB, [1.0, -1.0], _no_motion, 1.0), ValueError,
-     "PointDirichlet 'p': every weight must be > 0 .*; point 1 has -1"),
-    (lambda: fe_mpm.PointDirichlet("p", _XB, 1.0, _no_motion, np.inf), ValueError,
-     r"PointDirichlet 'p': penalty must lie in \(0, inf\]"),
-    (lambda: fe_mpm.PointDirichlet("p", _XB, 1.0, _no_motion, "1e3"), TypeError,
-     "PointDirichlet 'p': penalty must be a number"),
-    (lambda: fe_mpm.PointDirichlet("p", _XB, 1.0, (0.0, 0.0), 1.0), TypeError,
-     "PointDirichlet 'p': value must be a function t -> displacement"),
-    (lambda: fe_mpm.PointTraction("q", _XB, 1.0, (0.0, np.nan)), ValueError,
-     "PointTraction 'q': value must be finite; component 1 is nan"),
-    (lambda: fe_mpm.PointTraction("q", [[np.inf, 0.5]], 1.0, (0.0, 1.0)), ValueError,
-     "PointTraction 'q': x must be finite; point 0"),
-    (lambda: fe_mpm.PointTraction("q", _XB, 0.0, (0.0, 1.0)), ValueError,
-     "PointTraction 'q': every weight must be > 0"),
-])
+@pytest.mark.parametrize(
+    "make, error, match",
+    [
+        (lambda: fe_mpm.Dirichlet(1, value=np.nan), ValueError, "Dirichlet: value must be finite"),
+        (
+            lambda: fe_mpm.Dirichlet(1, value=(0.0, np.inf)),
+            ValueError,
+            "Dirichlet: value must be finite; component 1 is inf",
+        ),
+        (
+            lambda: fe_mpm.Dirichlet(1, value="0"),
+            TypeError,
+            "Dirichlet: value must hold real numbers",
+        ),
+        (
+            lambda: fe_mpm.Dirichlet(1.5),
+            TypeError,
+            r"Dirichlet: where must be a facet tag \(an int\)",
+        ),
+        (
+            lambda: fe_mpm.Traction(1, (np.nan, 0.0)),
+            ValueError,
+            "Traction: value must be finite; component 0 is nan",
+        ),
+        (
+            lambda: fe_mpm.Traction(1, 5.0),
+            TypeError,
+            "Traction: value must be a sequence of numbers",
+        ),
+        (
+            lambda: fe_mpm.Traction(1, ("1", 0.0)),
+            TypeError,
+            "Traction: value must hold real numbers",
+        ),
+        (
+            lambda: fe_mpm.Traction(1, (1.0, 0.0), scale=2.0),
+            TypeError,
+            "Traction: scale must be a function t -> float or None",
+        ),
+        (
+            lambda: fe_mpm.PointDirichlet("p", [[0.2, np.nan]], 1.0, _no_motion, 1.0),
+            ValueError,
+            "PointDirichlet 'p': x must be finite; point 0",
+        ),
+        (
+            lambda: fe_mpm.PointDirichlet("p", _XB, [1.0, np.nan], _no_motion, 1.0),
+            ValueError,
+            "PointDirichlet 'p': weight must be finite; point 1",
+        ),
+        (
+            lambda: fe_mpm.PointDirichlet("p", _XB, [1.0, -1.0], _no_motion, 1.0),
+            ValueError,
+            "PointDirichlet 'p': every weight must be > 0 .*; point 1 has -1",
+        ),
+        (
+            lambda: fe_mpm.PointDirichlet("p", _XB, 1.0, _no_motion, np.inf),
+            ValueError,
+            r"PointDirichlet 'p': penalty must lie in \(0, inf\]",
+        ),
+        (
+            lambda: fe_mpm.PointDirichlet("p", _XB, 1.0, _no_motion, "1e3"),
+            TypeError,
+            "PointDirichlet 'p': penalty must be a number",
+        ),
+        (
+            lambda: fe_mpm.PointDirichlet("p", _XB, 1.0, (0.0, 0.0), 1.0),
+            TypeError,
+            "PointDirichlet 'p': value must be a function t -> displacement",
+        ),
+        (
+            lambda: fe_mpm.PointTraction("q", _XB, 1.0, (0.0, np.nan)),
+            ValueError,
+            "PointTraction 'q': value must be finite; component 1 is nan",
+        ),
+        (
+            lambda: fe_mpm.PointTraction("q", [[np.inf, 0.5]], 1.0, (0.0, 1.0)),
+            ValueError,
+            "PointTraction 'q': x must be finite; point 0",
+        ),
+        (
+            lambda: fe_mpm.PointTraction("q", _XB, 0.0, (0.0, 1.0)),
+            ValueError,
+            "PointTraction 'q': every weight must be > 0",
+        ),
+    ],
+)
 def test_boundary_conditions_refuse_bad_constants(make, error, match):
     with pytest.raises(error, match=match):
         make()
 
 
-@pytest.mark.parametrize("condition, match", [
-    (fe_mpm.Dirichlet(1, value=lambda t: (0.0, np.nan * t)),
-     r"Dirichlet: value\(t\) must return finite numbers, got \(0.0, nan\) at t = 0.5"),
-    (fe_mpm.Traction(1, (1.0, 0.0), scale=lambda t: np.inf),
-     r"Traction: scale\(t\) must return finite numbers, got inf at t = 0.5"),
-    (fe_mpm.PointDirichlet("p", _XB, 1.0, lambda t: (np.nan, 0.0), 1.0),
-     r"PointDirichlet 'p': value\(t\) must return finite numbers, got \(nan, 0.0\) at t = 0.5"),
-    (fe_mpm.PointTraction("q", _XB, 1.0, (0.0, 1.0), scale=lambda t: np.nan),
-     r"PointTraction 'q': scale\(t\) must return finite numbers, got nan at t = 0.5"),
-])
+@pytest.mark.parametrize(
+    "condition, match",
+    [
+        (
+            fe_mpm.Dirichlet(1, value=lambda t: (0.0, np.nan * t)),
+            r"Dirichlet: value\(t\) must return finite numbers, got \(0.0, nan\) at t = 0.5",
+        ),
+        (
+            fe_mpm.Traction(1, (1.0, 0.0), scale=lambda t: np.inf),
+            r"Traction: scale\(t\) must return finite numbers, got inf at t = 0.5",
+        ),
+        (
+            fe_mpm.PointDirichlet("p", _XB, 1.0, lambda t: (np.nan, 0.0), 1.0),
+            r"PointDirichlet 'p': value\(t\) must return finite numbers, "
+            r"got \(nan, 0.0\) at t = 0.5",
+        ),
+        (
+            fe_mpm.PointTraction("q", _XB, 1.0, (0.0, 1.0), scale=lambda t: np.nan),
+            r"PointTraction 'q': scale\(t\) must return finite numbers, got nan at t = 0.5",
+        ),
+    ],
+)
 def test_callable_boundary_values_must_return_finite_numbers(condition, match):
     with pytest.raises(ValueError, match=match):
         condition.at(0.5)

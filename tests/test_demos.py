@@ -12,8 +12,17 @@ pytestmark = pytest.mark.demo
 
 
 def test_cook_membrane_json_contract(tmp_path):
-    stdout = run_demo("cook_membrane.py", "--n", "8", "--nu", "0.499", "--json",
-                      "--output", str(tmp_path / "out"), cwd=tmp_path)
+    stdout = run_demo(
+        "cook_membrane.py",
+        "--n",
+        "8",
+        "--nu",
+        "0.499",
+        "--json",
+        "--output",
+        str(tmp_path / "out"),
+        cwd=tmp_path,
+    )
     summary = _last_json(stdout)
     for key in ("tip_displacement_y", "newton_iterations", "wall_time_s", "n_particles"):
         assert key in summary
@@ -27,8 +36,17 @@ def test_cook_membrane_json_contract(tmp_path):
 
 def test_cook_membrane_writes_paraview_series(tmp_path):
     out = tmp_path / "out"
-    stdout = run_demo("cook_membrane.py", "--n", "4", "--steps", "3", "--output", str(out),
-                      "--quiet", cwd=tmp_path)
+    stdout = run_demo(
+        "cook_membrane.py",
+        "--n",
+        "4",
+        "--steps",
+        "3",
+        "--output",
+        str(out),
+        "--quiet",
+        cwd=tmp_path,
+    )
     assert "u_A = " in stdout and "Newton iterations per step: [" in stdout
     assert check_line(stdout).endswith("tolerance: PASS")  # Kratos's n = 4, over 3 steps
     pvd = (out / "particles.pvd").read_text()
@@ -47,7 +65,6 @@ def test_cook_membrane_writes_paraview_series(tmp_path):
     assert (out / "load_deflection.png").stat().st_size > 1000
 
 
-
 def test_demos_run_without_matplotlib(tmp_path):
     """Plots are an extra: without matplotlib a demo still writes its CSV files, says
     which plot it left out, and exits 0."""
@@ -55,8 +72,17 @@ def test_demos_run_without_matplotlib(tmp_path):
     shadow.mkdir(parents=True)
     (shadow / "__init__.py").write_text('raise ImportError("no matplotlib here")\n')
     out = tmp_path / "out"
-    stdout = run_demo("cook_membrane.py", "--n", "4", "--steps", "3", "--output", str(out),
-                      cwd=tmp_path, env={"PYTHONPATH": str(shadow.parent)})
+    stdout = run_demo(
+        "cook_membrane.py",
+        "--n",
+        "4",
+        "--steps",
+        "3",
+        "--output",
+        str(out),
+        cwd=tmp_path,
+        env={"PYTHONPATH": str(shadow.parent)},
+    )
     assert "matplotlib is not installed, so no plot: pip install 'fe-mpm[plots]'" in stdout
     assert (out / "load_deflection.csv").exists()
     assert not (out / "load_deflection.png").exists()
@@ -68,15 +94,19 @@ def test_elastic_column_json_contract(tmp_path):
         assert key in static
     assert abs(static["error"] - 1.035e-2) < 1e-4  # first order in h: 2.07e-2 at ny = 8
     assert static["check_passed"] and static["check_tolerance"] == pytest.approx(0.35 / 16)
-    dynamic = _last_json(run_demo("elastic_column.py", "--ny", "16", "--dynamic",
-                                  "--steps", "80", "--json", cwd=tmp_path))
+    dynamic = _last_json(
+        run_demo(
+            "elastic_column.py", "--ny", "16", "--dynamic", "--steps", "80", "--json", cwd=tmp_path
+        )
+    )
     assert dynamic["steps"] == 80 and dynamic["error"] < 0.15
     assert dynamic["check_passed"]
 
 
 def test_sliding_block_json_contract(tmp_path):
-    out = _last_json(run_demo("sliding_block.py", "--dt", "0.02", "--t-end", "0.4", "--json",
-                              cwd=tmp_path))
+    out = _last_json(
+        run_demo("sliding_block.py", "--dt", "0.02", "--t-end", "0.4", "--json", cwd=tmp_path)
+    )
     for key in ("error", "wall_time_s", "steps", "n_particles"):
         assert key in out
     assert out["steps"] == 20 and out["error"] < 1e-10 and out["check_passed"]
@@ -89,8 +119,17 @@ def test_tension_test_json_contract_and_plastic_output_and_two_runs_agree(tmp_pa
     runs, frames = [], []
     for k in range(2):
         out = tmp_path / f"out{k}"
-        stdout = run_demo("tension_plate.py", "--formulation", "up", "--steps", "10", "--json",
-                          "--output", str(out), cwd=tmp_path)
+        stdout = run_demo(
+            "tension_plate.py",
+            "--formulation",
+            "up",
+            "--steps",
+            "10",
+            "--json",
+            "--output",
+            str(out),
+            cwd=tmp_path,
+        )
         runs.append(_last_json(stdout))
         frames.append(meshio.read(sorted(out.glob("particles_*.vtu"))[-1]).point_data)
     summary = runs[0]
@@ -122,8 +161,16 @@ def test_strip_footing_contract_and_u_versus_up_stress(tmp_path):
     runs = {}
     for formulation in ("u", "up"):
         out = tmp_path / formulation
-        stdout = run_demo("strip_footing.py", "--formulation", formulation, *common,
-                          "--output", str(out), cwd=tmp_path, fails=formulation == "u")
+        stdout = run_demo(
+            "strip_footing.py",
+            "--formulation",
+            formulation,
+            *common,
+            "--output",
+            str(out),
+            cwd=tmp_path,
+            fails=formulation == "u",
+        )
         runs[formulation] = _last_json(stdout)
         for key in ("settlement_over_B", "q_over_cu", "wall_time_s", "n_particles"):
             assert key in runs[formulation]
@@ -150,9 +197,25 @@ def test_strip_footing_prandtl_plateau_rough_and_smooth(tmp_path):
     """
     means = []
     for roughness in ((), ("--smooth",)):
-        out = _last_json(run_demo("strip_footing.py", "--formulation", "up", "--steps", "20",
-                                  "--settlement", "0.1", "--h", "0.1", "--h-far", "0.4",
-                                  "--no-output", "--json", *roughness, cwd=tmp_path))
+        out = _last_json(
+            run_demo(
+                "strip_footing.py",
+                "--formulation",
+                "up",
+                "--steps",
+                "20",
+                "--settlement",
+                "0.1",
+                "--h",
+                "0.1",
+                "--h-far",
+                "0.4",
+                "--no-output",
+                "--json",
+                *roughness,
+                cwd=tmp_path,
+            )
+        )
         s, q = np.array(out["settlement_over_B"]), np.array(out["q_over_cu"]) / (2 + np.pi)
         plateau = q[s >= 0.08 - 1e-9]
         assert plateau.size >= 4
@@ -163,9 +226,24 @@ def test_strip_footing_prandtl_plateau_rough_and_smooth(tmp_path):
 
 def _coarse_footing_to_2B(tmp_path, steps: int) -> dict:
     """u-p on the coarse grid (h = 0.2 B) to s/B = 2 in ``steps`` steps: the demo's JSON."""
-    return _last_json(run_demo("strip_footing.py", "--formulation", "up", "--steps", str(steps),
-                               "--settlement", "2.0", "--h", "0.2", "--h-far", "0.5",
-                               "--no-output", "--json", cwd=tmp_path))
+    return _last_json(
+        run_demo(
+            "strip_footing.py",
+            "--formulation",
+            "up",
+            "--steps",
+            str(steps),
+            "--settlement",
+            "2.0",
+            "--h",
+            "0.2",
+            "--h-far",
+            "0.5",
+            "--no-output",
+            "--json",
+            cwd=tmp_path,
+        )
+    )
 
 
 def _window_means(out: dict, centres) -> np.ndarray:
@@ -208,9 +286,23 @@ def test_column_collapse_runout_a3(tmp_path):
     run-out −10.3, −10.7, −10.3 %, height −3.7 % each, ``t_inf`` +22.2, +9.9,
     +21.7 % and ``t_inf_cell`` −1.1, −4.3, −1.1 %.
     """
-    stdout = run_demo("column_collapse.py", "--aspect", "3", "--h", "0.015",
-                      "--points-per-cell", "3", "--dt", "2.5e-3", "--damping", "1.5",
-                      "--output", str(tmp_path / "out"), "--json", cwd=tmp_path)
+    stdout = run_demo(
+        "column_collapse.py",
+        "--aspect",
+        "3",
+        "--h",
+        "0.015",
+        "--points-per-cell",
+        "3",
+        "--dt",
+        "2.5e-3",
+        "--damping",
+        "1.5",
+        "--output",
+        str(tmp_path / "out"),
+        "--json",
+        cwd=tmp_path,
+    )
     out = _last_json(stdout)
     for key in ("runout", "final_height", "t_inf", "wall_time_s"):
         assert key in out
@@ -244,8 +336,17 @@ def test_a_demo_whose_result_is_off_its_reference_exits_non_zero(tmp_path):
     tension test in the irreducible form at ν = 0.4999 locks: its limit load
     overshoots (2/√3) σ_Y W by 3.6 % (measured), beyond the demo's 1 % tolerance, so
     the demo prints a FAIL line and exits 1 (the u-p form passes at 0.08 %)."""
-    stdout = run_demo("tension_plate.py", "--formulation", "u", "--steps", "10",
-                      "--no-output", "--json", cwd=tmp_path, fails=True)
+    stdout = run_demo(
+        "tension_plate.py",
+        "--formulation",
+        "u",
+        "--steps",
+        "10",
+        "--no-output",
+        "--json",
+        cwd=tmp_path,
+        fails=True,
+    )
     line = check_line(stdout)
     assert line.startswith("check: limit load ") and "(u, ν = 0.4999)" in line
     assert "> 1 % tolerance: FAIL" in line

@@ -16,8 +16,16 @@ COOK_LOAD = 5.0 / 16.0  # 5 N on the right edge: large rotations, points cross c
 
 
 def _cook(n, steps, m, formulation="up", nu=0.499, **options):
-    sim = scenes.cook_membrane(n, nu, formulation, traction=COOK_LOAD, load="points",
-                               margin=n // 2, point_domains=m, **options)
+    sim = scenes.cook_membrane(
+        n,
+        nu,
+        formulation,
+        traction=COOK_LOAD,
+        load="points",
+        margin=n // 2,
+        point_domains=m,
+        **options,
+    )
     sim.run(1.0, steps, progress=False)
     return sim
 
@@ -56,8 +64,9 @@ def test_domains_cut_the_drift_of_cook_over_twenty_steps(tmp_path):
     assert standard / one_step - 1 > 0.15
     assert 0.0 < with_domains / one_step - 1 < 0.07
     pts = sim.points
-    initial = fe_mpm.seed(sim.mesh, per_cell=1,
-                          cells=meshes.body_cells(meshes.cook_membrane(16, margin=8)))
+    initial = fe_mpm.seed(
+        sim.mesh, per_cell=1, cells=meshes.body_cells(meshes.cook_membrane(16, margin=8))
+    )
     assert len(pts) == len(initial)
     assert pts.mass.sum() == pytest.approx(initial.mass.sum(), rel=1e-14)
     assert np.allclose(pts.volume, np.linalg.det(pts.F) * initial.volume, rtol=1e-12)
@@ -76,8 +85,14 @@ def test_free_fall_with_domains_is_exact():
     points = fe_mpm.seed(mesh, per_cell=1, density=1000.0)
     points.keep((points.x[:, 0] < 1.0) & (points.x[:, 1] > 3.0))
     g = np.array([3.0, -9.0])
-    sim = fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1e6, 0.3, density=1000.0),
-                            dynamic=True, body_force=g, point_domains=2)
+    sim = fe_mpm.Simulation(
+        mesh,
+        points,
+        fe_mpm.NeoHookean(1e6, 0.3, density=1000.0),
+        dynamic=True,
+        body_force=g,
+        point_domains=2,
+    )
     x0 = points.x.copy()
     sim.run(0.6, 6, progress=False)
     assert np.allclose(points.x - x0, 0.5 * g * 0.6**2, rtol=1e-10, atol=0)
@@ -95,8 +110,10 @@ def test_a_plastic_law_gathers_its_history_from_the_sub_points():
     law = fe_mpm.J2Plasticity(E=1e4, nu=0.3, yield_stress=20.0)
     base = fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))
     top = fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 1.0), lambda t: (0.0, -0.05 * t))
-    sims = [fe_mpm.Simulation(mesh, fe_mpm.seed(mesh), law, "u", dirichlet=[base, top],
-                              point_domains=m) for m in (1, 2)]
+    sims = [
+        fe_mpm.Simulation(mesh, fe_mpm.seed(mesh), law, "u", dirichlet=[base, top], point_domains=m)
+        for m in (1, 2)
+    ]
     for sim in sims:
         sim.run(1.0, 4, progress=False)
     standard, domains = (s.points.history["plastic_strain"] for s in sims)
@@ -109,16 +126,19 @@ def test_a_plastic_law_gathers_its_history_from_the_sub_points():
 def test_point_domains_must_be_a_positive_int(m, error):
     mesh = meshes.rectangle_mesh((0.0, 0.0), (1.0, 1.0), (2, 2))
     with pytest.raises(error, match="point_domains"):
-        fe_mpm.Simulation(mesh, fe_mpm.seed(mesh), fe_mpm.NeoHookean(1.0, 0.3),
-                          point_domains=m)
+        fe_mpm.Simulation(mesh, fe_mpm.seed(mesh), fe_mpm.NeoHookean(1.0, 0.3), point_domains=m)
 
 
 def test_point_domains_refuse_3d_and_dropping_points():
     cube = create_unit_cube(MPI.COMM_SELF, 1, 1, 1)
     with pytest.raises(NotImplementedError, match="point_domains > 1 works on triangles"):
-        fe_mpm.Simulation(cube, fe_mpm.seed(cube), fe_mpm.NeoHookean(1.0, 0.3),
-                          point_domains=2)
+        fe_mpm.Simulation(cube, fe_mpm.seed(cube), fe_mpm.NeoHookean(1.0, 0.3), point_domains=2)
     mesh = meshes.rectangle_mesh((0.0, 0.0), (1.0, 1.0), (2, 2))
     with pytest.raises(ValueError, match="points_leaving='raise'"):
-        fe_mpm.Simulation(mesh, fe_mpm.seed(mesh), fe_mpm.NeoHookean(1.0, 0.3),
-                          point_domains=2, points_leaving="drop")
+        fe_mpm.Simulation(
+            mesh,
+            fe_mpm.seed(mesh),
+            fe_mpm.NeoHookean(1.0, 0.3),
+            point_domains=2,
+            points_leaving="drop",
+        )

@@ -22,9 +22,15 @@ def sliding_block(dt, T=0.5, theta=np.radians(30)):
     block = np.flatnonzero((centroids[:, 0] < 1.0) & (centroids[:, 1] < 0.5))
     points = fe_mpm.seed(mesh, per_cell=3, density=7800.0, cells=block)
     slip = fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0), component=1)  # normal only
-    sim = fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(2e8, 0.3, 7800.0), dynamic=True,
-                            dirichlet=[slip], body_force=(G * np.sin(theta), -G * np.cos(theta)),
-                            reactions={"plane": lambda x: np.isclose(x[1], 0.0)})
+    sim = fe_mpm.Simulation(
+        mesh,
+        points,
+        fe_mpm.NeoHookean(2e8, 0.3, 7800.0),
+        dynamic=True,
+        dirichlet=[slip],
+        body_force=(G * np.sin(theta), -G * np.cos(theta)),
+        reactions={"plane": lambda x: np.isclose(x[1], 0.0)},
+    )
     reports = sim.run(t_end=T, n_steps=round(T / dt), progress=False)
     return sim, reports, 0.5 * G * np.sin(theta) * T**2
 
@@ -58,8 +64,14 @@ def test_mass_and_momentum_are_conserved_by_the_projection():
     pts = sim.points
     total_mass = pts.mass.sum()
     layout = sim._track(step=99, t=1.0)
-    sim.dynamics.project(layout.cell, sim.tracker.barycentric(pts.x, layout.cell), pts.mass,
-                         pts.velocity, pts.acceleration, 0.05)
+    sim.dynamics.project(
+        layout.cell,
+        sim.tracker.barycentric(pts.x, layout.cell),
+        pts.mass,
+        pts.velocity,
+        pts.acceleration,
+        0.05,
+    )
     grid_mass = sim.dynamics.grid_mass
     grid_momentum = grid_mass @ sim.dynamics.data.v_n.x.array.reshape(-1, 2)
     assert abs(grid_mass.sum() - total_mass) < 1e-12 * total_mass
@@ -89,8 +101,12 @@ def test_a_block_of_a_law_with_history_falls_freely():
     the history keeps its shapes and its virgin values."""
     mesh = rectangle_mesh((0, 0), (1, 2), (10, 20))
     centroids = mesh.geometry.x[mesh.geometry.dofmaps[0]][:, :, :2].mean(axis=1)
-    cells = np.flatnonzero((centroids[:, 1] > 1.2) & (centroids[:, 1] < 1.8)
-                           & (centroids[:, 0] > 0.2) & (centroids[:, 0] < 0.8))
+    cells = np.flatnonzero(
+        (centroids[:, 1] > 1.2)
+        & (centroids[:, 1] < 1.8)
+        & (centroids[:, 0] > 0.2)
+        & (centroids[:, 0] < 0.8)
+    )
     points = fe_mpm.seed(mesh, per_cell=3, cells=cells)
     law = fe_mpm.J2Plasticity(1e4, 0.3, yield_stress=10.0, density=100.0)
     sim = fe_mpm.Simulation(mesh, points, law, dynamic=True, body_force=(0.0, -G))
@@ -105,8 +121,9 @@ def test_a_block_of_a_law_with_history_falls_freely():
     assert np.all(points.history["plastic_strain"] == 0.0)
 
 
-def vibrating_bar(ny=16, steps_per_period=50, periods=5, mass="consistent", damping=0.0,
-                  formulation="u", nu=0.0):
+def vibrating_bar(
+    ny=16, steps_per_period=50, periods=5, mass="consistent", damping=0.0, formulation="u", nu=0.0
+):
     """First mode of a fixed-free bar with side rollers (uniaxial strain), started
     from its modal velocity. Returns (top displacement history, energy, T, amplitude)."""
     H, E, rho, v0 = 25.0, 5e4, 1.0, 0.1
@@ -118,10 +135,19 @@ def vibrating_bar(ny=16, steps_per_period=50, periods=5, mass="consistent", damp
     points.velocity[:, 1] = v0 * np.sin(beta * points.x[:, 1])
     material = fe_mpm.NeoHookean(E, nu, rho)
     sim = fe_mpm.Simulation(
-        scene.mesh, points, material, formulation, facet_tags=scene.facet_tags, dynamic=True,
-        mass=mass, damping=damping,
-        dirichlet=[fe_mpm.Dirichlet(meshes.COLUMN_BASE, component=1),
-                   fe_mpm.Dirichlet(meshes.COLUMN_SIDES, component=0)])
+        scene.mesh,
+        points,
+        material,
+        formulation,
+        facet_tags=scene.facet_tags,
+        dynamic=True,
+        mass=mass,
+        damping=damping,
+        dirichlet=[
+            fe_mpm.Dirichlet(meshes.COLUMN_BASE, component=1),
+            fe_mpm.Dirichlet(meshes.COLUMN_SIDES, component=0),
+        ],
+    )
     sim.add_marker("top", (0.5, H))
     period = 2 * np.pi / omega
     energy = [total_energy(points, material)]
@@ -191,8 +217,9 @@ def test_lumped_mass_is_the_row_sum_of_the_consistent_mass():
     points = fe_mpm.seed(mesh, per_cell=3, density=2.0)
     diagonals = {}
     for mass in ("consistent", "lumped"):
-        sim = fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1e3, 0.3, 2.0),
-                                dynamic=True, mass=mass)
+        sim = fe_mpm.Simulation(
+            mesh, points, fe_mpm.NeoHookean(1e3, 0.3, 2.0), dynamic=True, mass=mass
+        )
         forms, layout, *_ = sim.prepare_step(0.1)
         M = forms.mass_matrix.bind(layout).assemble_matrix()
         A = M.convert("dense").getDenseArray()
@@ -216,15 +243,23 @@ def test_initial_acceleration_is_gravity_on_free_nodes_and_zero_on_the_support(l
     mesh = rectangle_mesh((0, 0), (1, 1), (4, 4))
     points = fe_mpm.seed(mesh, per_cell=3, density=2.0)
     base = fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))
-    sim = fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1e3, 0.3, 2.0), dynamic=True,
-                            mass="lumped", dirichlet=[base], body_force=(0.0, -G),
-                            linear_solver=linear_solver)
+    sim = fe_mpm.Simulation(
+        mesh,
+        points,
+        fe_mpm.NeoHookean(1e3, 0.3, 2.0),
+        dynamic=True,
+        mass="lumped",
+        dirichlet=[base],
+        body_force=(0.0, -G),
+        linear_solver=linear_solver,
+    )
     dt = 0.01
     forms, layout, R, _, bcs = sim.prepare_step(dt)
     sim._consistent_initial_acceleration(forms, layout, R, bcs, dt)
     vertices = mesh.geometry.x[mesh.geometry.dofmaps[0][layout.cell], 1]
-    free_share = np.where(np.isclose(vertices, 0.0), 0.0,
-                          sim.tracker.barycentric(points.x, layout.cell)).sum(axis=1)
+    free_share = np.where(
+        np.isclose(vertices, 0.0), 0.0, sim.tracker.barycentric(points.x, layout.cell)
+    ).sum(axis=1)
     assert free_share.min() < 0.5, "want points next to the base"
     assert np.allclose(points.acceleration[:, 0], 0.0, rtol=0, atol=1e-12 * G)
     assert np.allclose(points.acceleration[:, 1], -G * free_share, rtol=1e-12, atol=0)
@@ -241,8 +276,9 @@ def test_damped_free_flight_follows_the_trapezoidal_rule(mass):
     v0, alpha, dt, n = np.array([2.0, 0.1]), 1.5, 0.05, 20
     points.velocity[:] = v0
     x0 = points.x.copy()
-    sim = fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1e3, 0.3), dynamic=True,
-                            damping=alpha, mass=mass)
+    sim = fe_mpm.Simulation(
+        mesh, points, fe_mpm.NeoHookean(1e3, 0.3), dynamic=True, damping=alpha, mass=mass
+    )
     sim.run(t_end=n * dt, n_steps=n, progress=False)
     speed = ((1 - alpha * dt / 2) / (1 + alpha * dt / 2)) ** np.arange(n + 1)
     assert np.allclose(points.velocity, speed[-1] * v0, rtol=1e-10, atol=0)
@@ -296,16 +332,24 @@ def column(ny, steps=1, E=4e5, rho=80.0, L=50.0):
     scene = meshes.column(1.0, L, 1, ny)
     points = fe_mpm.seed(scene.mesh, density=rho)
     sim = fe_mpm.Simulation(
-        scene.mesh, points, fe_mpm.NeoHookean(E, 0.0, rho), facet_tags=scene.facet_tags,
-        dirichlet=[fe_mpm.Dirichlet(meshes.COLUMN_BASE, component=1),
-                   fe_mpm.Dirichlet(meshes.COLUMN_SIDES, component=0)],
-        body_force=(0.0, -10.0), body_force_scale=lambda t: t,
-        reactions={"base": meshes.COLUMN_BASE})
+        scene.mesh,
+        points,
+        fe_mpm.NeoHookean(E, 0.0, rho),
+        facet_tags=scene.facet_tags,
+        dirichlet=[
+            fe_mpm.Dirichlet(meshes.COLUMN_BASE, component=1),
+            fe_mpm.Dirichlet(meshes.COLUMN_SIDES, component=0),
+        ],
+        body_force=(0.0, -10.0),
+        body_force_scale=lambda t: t,
+        reactions={"base": meshes.COLUMN_BASE},
+    )
     sim.add_marker("top", (0.5, L))
     reports = sim.run(n_steps=steps, progress=False)
     Y = points.x0[:, 1]
     stress_error = np.sum(np.abs(points.stress[:, 1, 1] + rho * 10.0 * (L - Y)) * points.volume) / (
-        rho * 10.0 * L * points.volume.sum())
+        rho * 10.0 * L * points.volume.sum()
+    )
     a = rho * 10.0 / E
     f = lambda s: -(s**2) + s * np.sqrt(1 + s**2) + np.arcsinh(s)  # noqa: E731
     top_exact = (f(a * L) - f(0.0)) / (2 * a)
@@ -331,9 +375,12 @@ def _stretched_block(max_it, n_steps):
     centroids = mesh.geometry.x[mesh.geometry.dofmaps[0]][:, :, :2].mean(axis=1)
     points = fe_mpm.seed(mesh, cells=np.flatnonzero(centroids[:, 0] < 1.0))
     sim = fe_mpm.Simulation(
-        mesh, points, fe_mpm.NeoHookean(1.0, 0.3),
+        mesh,
+        points,
+        fe_mpm.NeoHookean(1.0, 0.3),
         dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0))],
-        body_force=(0.1, 0.0), body_force_scale=lambda t: t,
+        body_force=(0.1, 0.0),
+        body_force_scale=lambda t: t,
         petsc_options={"snes_max_it": max_it},
     )
     if n_steps is None:
@@ -369,8 +416,14 @@ def test_initial_acceleration_with_the_consistent_mass_solves_the_free_rows_alon
     mesh = rectangle_mesh((0, 0), (1, 1), (3, 3))
     points = fe_mpm.seed(mesh, per_cell=3, density=2.0)
     base = fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))
-    sim = fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1e3, 0.3, 2.0), dynamic=True,
-                            dirichlet=[base], body_force=(0.0, -G))
+    sim = fe_mpm.Simulation(
+        mesh,
+        points,
+        fe_mpm.NeoHookean(1e3, 0.3, 2.0),
+        dynamic=True,
+        dirichlet=[base],
+        body_force=(0.0, -G),
+    )
     dt = 0.01
     forms, layout, R, _, bcs = sim.prepare_step(dt)
     sim._consistent_initial_acceleration(forms, layout, R, bcs, dt)
@@ -396,13 +449,20 @@ def test_a_mass_system_that_does_not_converge_stops_the_run_naming_it():
     mesh = rectangle_mesh((0, 0), (1, 1), (3, 3))
     points = fe_mpm.seed(mesh, per_cell=3, density=2.0)
     sim = fe_mpm.Simulation(
-        mesh, points, fe_mpm.NeoHookean(1e3, 0.3, 2.0), dynamic=True,
-        dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))], body_force=(0.0, -G),
-        linear_solver="iterative", petsc_options={"ksp_max_it": 1, "pc_type": "none"},
-        min_step=0.005)
-    with pytest.raises(fe_mpm.ConvergenceError,
-                       match=r"step 1: the mass system of the initial acceleration did not "
-                             r"converge \(KSP reason -3\); nothing was updated"):
+        mesh,
+        points,
+        fe_mpm.NeoHookean(1e3, 0.3, 2.0),
+        dynamic=True,
+        dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))],
+        body_force=(0.0, -G),
+        linear_solver="iterative",
+        petsc_options={"ksp_max_it": 1, "pc_type": "none"},
+        min_step=0.005,
+    )
+    with pytest.raises(
+        fe_mpm.ConvergenceError,
+        match=r"step 1: the mass system of the initial acceleration did not "
+        r"converge \(KSP reason -3\); nothing was updated",
+    ):
         sim.run(0.01, 1, progress=False)
     assert sim.step_number == 0
-

@@ -33,10 +33,17 @@ def _fem_solve(mesh, facet_tags, loaded, clamped, material, density, b, t, degre
     fdim = g - 1
     dofs = dfx.fem.locate_dofs_topological(V, fdim, facet_tags.find(clamped))
     bc = dfx.fem.dirichletbc(np.zeros(g), dofs, V)
-    options = {"snes_type": "newtonls", "snes_linesearch_type": "basic", "ksp_type": "preonly",
-               "pc_type": "lu", "pc_factor_mat_solver_type": "mumps", **TIGHT}
+    options = {
+        "snes_type": "newtonls",
+        "snes_linesearch_type": "basic",
+        "ksp_type": "preonly",
+        "pc_type": "lu",
+        "pc_factor_mat_solver_type": "mumps",
+        **TIGHT,
+    }
     problem = dolfinx.fem.petsc.NonlinearProblem(
-        R, u, bcs=[bc], petsc_options_prefix="fem_ref_", petsc_options=options)
+        R, u, bcs=[bc], petsc_options_prefix="fem_ref_", petsc_options=options
+    )
     problem.solve()
     assert problem.solver.getConvergedReason() > 0
     return u.x.array.copy()
@@ -45,9 +52,14 @@ def _fem_solve(mesh, facet_tags, loaded, clamped, material, density, b, t, degre
 def _mpm_solve(mesh, facet_tags, loaded, clamped, material, density, b, t, per_cell):
     points = fe_mpm.seed(mesh, per_cell=per_cell, density=density)
     sim = fe_mpm.Simulation(
-        mesh, points, material, facet_tags=facet_tags,
-        dirichlet=[fe_mpm.Dirichlet(clamped)], tractions=[fe_mpm.Traction(loaded, t)],
-        body_force=b, petsc_options=TIGHT,
+        mesh,
+        points,
+        material,
+        facet_tags=facet_tags,
+        dirichlet=[fe_mpm.Dirichlet(clamped)],
+        tractions=[fe_mpm.Traction(loaded, t)],
+        body_force=b,
+        petsc_options=TIGHT,
     )
     sim.run(n_steps=1, progress=False)
     return sim.w.x.array.copy(), points
@@ -69,8 +81,16 @@ def _box_3d():
 @pytest.mark.parametrize("per_cell,degree", [(1, 1), (3, 2)])
 def test_cook_one_step_equals_fem(per_cell, degree):
     scene = meshes.cook_membrane(n=8)
-    args = (scene.mesh, scene.facet_tags, meshes.COOK_LOADED, meshes.COOK_CLAMPED,
-            fe_mpm.NeoHookean(E=70.0, nu=0.4), 2.0, (0.0, -0.005), (0.0, 1 / 16))
+    args = (
+        scene.mesh,
+        scene.facet_tags,
+        meshes.COOK_LOADED,
+        meshes.COOK_CLAMPED,
+        fe_mpm.NeoHookean(E=70.0, nu=0.4),
+        2.0,
+        (0.0, -0.005),
+        (0.0, 1 / 16),
+    )
     u_mpm, points = _mpm_solve(*args, per_cell)
     u_fem = _fem_solve(*args, degree)
     assert len(points) == per_cell * scene.mesh.topology.index_map(2).size_local
@@ -80,8 +100,16 @@ def test_cook_one_step_equals_fem(per_cell, degree):
 @pytest.mark.parametrize("per_cell,degree", [(1, 1), (4, 2)])
 def test_3d_beam_one_step_equals_fem(per_cell, degree):
     mesh, tags, loaded, clamped = _box_3d()
-    args = (mesh, tags, loaded, clamped, fe_mpm.NeoHookean(E=100.0, nu=0.3), 1.0,
-            (0.0, 0.0, -0.5), (0.0, 0.3, 1.0))
+    args = (
+        mesh,
+        tags,
+        loaded,
+        clamped,
+        fe_mpm.NeoHookean(E=100.0, nu=0.3),
+        1.0,
+        (0.0, 0.0, -0.5),
+        (0.0, 0.3, 1.0),
+    )
     u_mpm, _ = _mpm_solve(*args, per_cell)
     u_fem = _fem_solve(*args, degree)
     assert np.abs(u_fem).max() > 0.05, "want a finite-strain case"

@@ -15,15 +15,18 @@ from fe_mpm.particles import MaterialPoints
 def _simulation(points):
     mesh = rectangle_mesh((0.0, 0.0), (4.0, 1.0), (16, 4))
     return fe_mpm.Simulation(
-        mesh, points, fe_mpm.NeoHookean(E=100.0, nu=0.3),
+        mesh,
+        points,
+        fe_mpm.NeoHookean(E=100.0, nu=0.3),
         dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))],
         body_force=(0.5, -2.0),
     )
 
 
 def _copy(points):
-    return MaterialPoints(x=points.x.copy(), volume=points.volume.copy(),
-                          mass=points.mass.copy(), F=points.F.copy())
+    return MaterialPoints(
+        x=points.x.copy(), volume=points.volume.copy(), mass=points.mass.copy(), F=points.F.copy()
+    )
 
 
 def test_step_after_points_enter_empty_cells_equals_a_fresh_start():

@@ -32,7 +32,7 @@ def test_held_points_read_their_old_cells_field_extended_exactly():
 
     def point_values(rebin):
         forms, layout, *_ = sim.prepare_step(1.0, rebin=rebin)
-        sim.w.interpolate(lambda x: (a[:, None] + B @ x[:2]))
+        sim.w.interpolate(lambda x: a[:, None] + B @ x[:2])
         values = forms.update.evaluate(layout)
         return values[:, :2], values[:, 2:6].reshape(-1, 2, 2)
 

@@ -137,8 +137,13 @@ def test_yield_function_is_the_deviatoric_norm_against_the_hardened_radius():
     law = fe_mpm.J2Plasticity(1e3, 0.3, yield_stress=2.0, hardening=10.0)
     alpha = np.array([0.0, 0.1, 0.0])
     uniaxial = np.diag([2.0 + 10.0 * 0.1, 0.0, 0.0])
-    tau = np.array([np.diag([2.0, 0.0, 0.0]), uniaxial + 7.0 * np.eye(3),
-                    np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 0.0]]) - 5 * np.eye(3)])
+    tau = np.array(
+        [
+            np.diag([2.0, 0.0, 0.0]),
+            uniaxial + 7.0 * np.eye(3),
+            np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 0.0]]) - 5 * np.eye(3),
+        ]
+    )
     f = law.yield_function(tau, alpha)
     assert f[:2] == pytest.approx([0.0, 0.0], abs=1e-14)
     assert f[2] == pytest.approx(np.sqrt(2.0) - np.sqrt(2 / 3) * 2.0, rel=1e-14)

@@ -16,8 +16,9 @@ from fe_mpm.meshes import rectangle_mesh
 
 
 def _cook(formulation, solver):
-    sim = scenes.cook_membrane(16, 0.33 if formulation == "u" else 0.499, formulation,
-                               linear_solver=solver)
+    sim = scenes.cook_membrane(
+        16, 0.33 if formulation == "u" else 0.499, formulation, linear_solver=solver
+    )
     (report,) = sim.run(progress=False)
     return scenes.tip_deflection(sim), report, sim
 
@@ -37,13 +38,19 @@ def test_iterative_cook_matches_direct(formulation):
 @pytest.mark.parametrize("formulation", ["u", "up"])
 def test_iterative_3d_block_under_gravity(formulation):
     """A 3D block on a fixed base: six rigid body modes; base reaction = weight."""
+
     def run(solver):
         mesh = rectangle_mesh((0.0, 0.0, 0.0), (1.0, 1.0, 1.0), (4, 4, 4))
         sim = fe_mpm.Simulation(
-            mesh, fe_mpm.seed(mesh, 4, density=1000.0), fe_mpm.NeoHookean(1e6, 0.3, 1000.0),
-            formulation, dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[2], 0.0))],
-            body_force=(0.0, 0.0, -9.81), reactions={"base": lambda x: np.isclose(x[2], 0.0)},
-            linear_solver=solver)
+            mesh,
+            fe_mpm.seed(mesh, 4, density=1000.0),
+            fe_mpm.NeoHookean(1e6, 0.3, 1000.0),
+            formulation,
+            dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[2], 0.0))],
+            body_force=(0.0, 0.0, -9.81),
+            reactions={"base": lambda x: np.isclose(x[2], 0.0)},
+            linear_solver=solver,
+        )
         report = sim.step(1.0)
         return sim, report
 
@@ -58,5 +65,4 @@ def test_iterative_3d_block_under_gravity(formulation):
 def test_unknown_linear_solver_is_named():
     mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (2, 2))
     with pytest.raises(ValueError, match="linear_solver"):
-        fe_mpm.Simulation(mesh, fe_mpm.seed(mesh), fe_mpm.NeoHookean(1.0, 0.3),
-                          linear_solver="cg")
+        fe_mpm.Simulation(mesh, fe_mpm.seed(mesh), fe_mpm.NeoHookean(1.0, 0.3), linear_solver="cg")

@@ -38,10 +38,12 @@ def test_cook_tags_and_margin():
         assert plain.facet_tags.find(tag).size > 0 and scene.facet_tags.find(tag).size > 0
     loaded = scene.facet_tags.find(meshes.COOK_LOADED)
     assert loaded.size == n  # only the body's right edge carries the load
+
     # The body cells of the grid with margins are the cells of the plain grid.
     def centroids(s, cells):
         c = s.mesh.geometry.x[s.mesh.geometry.dofmaps[0][cells], :2].mean(axis=1)
         return c[np.lexsort(c.T)]
+
     all_plain = np.arange(plain.mesh.topology.index_map(2).size_local)
     assert np.allclose(centroids(plain, all_plain), centroids(scene, meshes.body_cells(scene)))
 
@@ -74,9 +76,15 @@ def test_granular_column_tags_the_column_exactly():
         assert np.allclose(x[nodes.ravel(), axis], 0.0)
 
 
-@pytest.mark.parametrize("a, runout, height, duration", [
-    (1.2, 0.264, None, 0.35), (3, 0.505, 0.14, 0.55), (5, 0.673, 0.172, 0.71),
-    (7, 0.819, 0.197, 0.838)])
+@pytest.mark.parametrize(
+    "a, runout, height, duration",
+    [
+        (1.2, 0.264, None, 0.35),
+        (3, 0.505, 0.14, 0.55),
+        (5, 0.673, 0.172, 0.71),
+        (7, 0.819, 0.197, 0.838),
+    ],
+)
 def test_lube_laws_reproduce_thesis_table_6_5(a, runout, height, duration):
     """Table 6.5 of the thesis, with d_i = 0.0905 m (which it implies); 3-digit values."""
     d_i = 0.0905

@@ -19,7 +19,10 @@ def tip(formulation, per_cell):
     mesh = rectangle_mesh((0, 0, 0), (L, 1, 1), (8, 2, 2))
     points = fe_mpm.seed(mesh, per_cell=per_cell)
     sim = fe_mpm.Simulation(
-        mesh, points, fe_mpm.NeoHookean(E, 0.4999), formulation,
+        mesh,
+        points,
+        fe_mpm.NeoHookean(E, 0.4999),
+        formulation,
         dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0))],
         tractions=[fe_mpm.Traction(lambda x: np.isclose(x[0], L), (0.0, 0.0, F))],
     )
@@ -28,11 +31,14 @@ def tip(formulation, per_cell):
     return sim.marker("tip")[2] - 0.5, report.newton_iterations
 
 
-@pytest.mark.parametrize("formulation,per_cell,low,high", [
-    ("u", 1, 0.0, 0.1),        # locked
-    ("up", 1, 0.75, 0.9),      # P1/P1 + PPP, coarse
-    ("up-p2p1", 4, 0.88, 1.0),  # Taylor–Hood
-])
+@pytest.mark.parametrize(
+    "formulation,per_cell,low,high",
+    [
+        ("u", 1, 0.0, 0.1),  # locked
+        ("up", 1, 0.75, 0.9),  # P1/P1 + PPP, coarse
+        ("up-p2p1", 4, 0.88, 1.0),  # Taylor–Hood
+    ],
+)
 @pytest.mark.slow
 def test_cantilever_tip_against_timoshenko(formulation, per_cell, low, high):
     w, iterations = tip(formulation, per_cell)

@@ -95,8 +95,9 @@ def test_plane_strain_compression_reaches_the_analytical_limit_on_the_plane(phi)
 
 
 @pytest.mark.parametrize("phi", [30.0, 0.0])
-@pytest.mark.parametrize("path, line", [("triaxial compression", LINE_1),
-                                        ("triaxial extension", LINE_2)])
+@pytest.mark.parametrize(
+    "path, line", [("triaxial compression", LINE_1), ("triaxial extension", LINE_2)]
+)
 def test_triaxial_paths_end_on_the_lines(path, line, phi):
     mat = fe_mpm.MohrCoulomb(**SOIL, friction_angle=phi, dilatancy_angle=phi / 3)
     limit = -(k_of(phi) * P0 + 2 * SOIL["cohesion"] * np.sqrt(k_of(phi)))
@@ -158,8 +159,7 @@ def test_associative_return_is_the_energy_closest_point(phi, c):
 
 def test_non_associative_plastic_strain_follows_the_active_potentials():
     """Δεᵖ = a⁻¹(τ^tr − τ) is a non-negative combination of the active ∂g (ψ < φ)."""
-    mat = fe_mpm.MohrCoulomb(E=1e4, nu=0.3, cohesion=10.0, friction_angle=30.0,
-                             dilatancy_angle=5.0)
+    mat = fe_mpm.MohrCoulomb(E=1e4, nu=0.3, cohesion=10.0, friction_angle=30.0, dilatancy_angle=5.0)
     surface = mat.surface
     m = surface.m
     strain = _random_trials(surface, 4000, np.random.default_rng(2), 0.004)
@@ -208,9 +208,9 @@ def test_virgin_tangent_is_linear_elasticity():
     lam = mat.bulk_modulus - 2 * mat.mu / 3
     I = np.eye(3)
     C = lam * np.einsum("ij,kl->ijkl", I, I) + mat.mu * (
-        np.einsum("ik,jl->ijkl", I, I) + np.einsum("il,jk->ijkl", I, I))
+        np.einsum("ik,jl->ijkl", I, I) + np.einsum("il,jk->ijkl", I, I)
+    )
     assert np.allclose(D, C, rtol=0, atol=1e-10 * mat.E)
-
 
 
 def _plane_tensors(n: int) -> np.ndarray:
@@ -299,9 +299,14 @@ def test_a_step_runs_the_return_map_once_per_residual_and_the_tangent_once_per_j
 
     mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (4, 4))
     sim = fe_mpm.Simulation(
-        mesh, fe_mpm.seed(mesh, 3), Counted(**SOIL, friction_angle=30.0), "u",
-        dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0)),
-                   fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 1.0), lambda t: (0.0, -0.01 * t))],
+        mesh,
+        fe_mpm.seed(mesh, 3),
+        Counted(**SOIL, friction_angle=30.0),
+        "u",
+        dirichlet=[
+            fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0)),
+            fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 1.0), lambda t: (0.0, -0.01 * t)),
+        ],
     )
     report = sim.step(1.0)
     assert np.any(sim._current.return_map.result.region != ELASTIC)
@@ -312,8 +317,11 @@ def test_a_step_runs_the_return_map_once_per_residual_and_the_tangent_once_per_j
 
 @pytest.mark.parametrize("phi", [20.0, 0.5])
 def test_mixed_formulation_refuses_a_frictional_law(phi):
-    with pytest.raises(ValueError, match="MohrCoulomb: the u-p formulations need a pressure-"
-                       "independent, isochoric law, i.e. friction_angle = dilatancy_angle = 0"):
+    with pytest.raises(
+        ValueError,
+        match="MohrCoulomb: the u-p formulations need a pressure-"
+        "independent, isochoric law, i.e. friction_angle = dilatancy_angle = 0",
+    ):
         _simulation(2, "up", material=fe_mpm.MohrCoulomb(10.0, 0.3, 0.05, friction_angle=phi))
 
 
@@ -321,10 +329,15 @@ def test_the_ufl_stress_needs_the_simulations_linearisation():
     """The law is evaluated in numpy; its UFL stress exists only as the linearisation the
     simulation packs, and asking without one says so."""
     F = ufl.Identity(2)
-    for stress in (fe_mpm.MohrCoulomb.tresca(1e4, 0.3, 10.0).kirchhoff,
-                   fe_mpm.MohrCoulomb.tresca(1e4, 0.3, 10.0).kirchhoff_deviatoric):
-        with pytest.raises(ValueError, match="MohrCoulomb: the state has no linearisation "
-                           "slot fields; the law is evaluated in numpy"):
+    for stress in (
+        fe_mpm.MohrCoulomb.tresca(1e4, 0.3, 10.0).kirchhoff,
+        fe_mpm.MohrCoulomb.tresca(1e4, 0.3, 10.0).kirchhoff_deviatoric,
+    ):
+        with pytest.raises(
+            ValueError,
+            match="MohrCoulomb: the state has no linearisation "
+            "slot fields; the law is evaluated in numpy",
+        ):
             stress(F, None)
 
 
@@ -339,17 +352,23 @@ def test_a_collapsed_trial_step_gives_a_non_finite_stress_quietly():
     assert np.all(np.isfinite(result.tau[0])) and not np.all(np.isfinite(result.tau[1]))
 
 
-@pytest.mark.parametrize("bad, match", [
-    (dict(friction_angle=95.0), "friction_angle must lie in"),
-    (dict(friction_angle=90.0), "friction_angle must lie in"),
-    (dict(friction_angle=-1.0), "friction_angle must lie in"),
-    (dict(friction_angle=20.0, dilatancy_angle=25.0), "dilatancy_angle must lie in"),
-    (dict(cohesion=-1.0), "cohesion must lie in"),
-    (dict(cohesion=0.0), r"MohrCoulomb: cohesion must be > 0 when friction_angle = 0 \(the "
-                         r"material would have no strength\), got 0"),
-    (dict(density=0.0), "density must lie in"),
-    (dict(density=-5.0), "density must lie in"),
-])
+@pytest.mark.parametrize(
+    "bad, match",
+    [
+        (dict(friction_angle=95.0), "friction_angle must lie in"),
+        (dict(friction_angle=90.0), "friction_angle must lie in"),
+        (dict(friction_angle=-1.0), "friction_angle must lie in"),
+        (dict(friction_angle=20.0, dilatancy_angle=25.0), "dilatancy_angle must lie in"),
+        (dict(cohesion=-1.0), "cohesion must lie in"),
+        (
+            dict(cohesion=0.0),
+            r"MohrCoulomb: cohesion must be > 0 when friction_angle = 0 \(the "
+            r"material would have no strength\), got 0",
+        ),
+        (dict(density=0.0), "density must lie in"),
+        (dict(density=-5.0), "density must lie in"),
+    ],
+)
 def test_bad_parameters_are_named(bad, match):
     with pytest.raises(ValueError, match=match):
         fe_mpm.MohrCoulomb(**{**dict(E=1e4, nu=0.3, cohesion=10.0), **bad})
@@ -357,7 +376,8 @@ def test_bad_parameters_are_named(bad, match):
 
 def test_tresca_is_mohr_coulomb_without_friction_or_dilatancy():
     assert fe_mpm.MohrCoulomb.tresca(2e4, 0.45, 12.0, density=1800.0) == fe_mpm.MohrCoulomb(
-        2e4, 0.45, 12.0, friction_angle=0.0, dilatancy_angle=0.0, density=1800.0)
+        2e4, 0.45, 12.0, friction_angle=0.0, dilatancy_angle=0.0, density=1800.0
+    )
     assert fe_mpm.MohrCoulomb.tresca(2e4, 0.45, 12.0).density is None
 
 
@@ -368,8 +388,7 @@ def test_history_of_a_plastic_step_is_consistent_with_its_stress():
     returned stresses lie on the surface (f = 0) or inside (f < 0, elastic)."""
     law = fe_mpm.MohrCoulomb(**SOIL, friction_angle=30.0, dilatancy_angle=10.0)
     history = {"be": np.tile(np.eye(3), (3, 1, 1)), "plastic_strain": np.array([0.0, 0.2, 0.1])}
-    dF = np.array([np.diag([1.0 + 1e-6, 1.0]), np.diag([0.97, 1.01]),
-                   [[1.0, 0.04], [0.0, 0.99]]])
+    dF = np.array([np.diag([1.0 + 1e-6, 1.0]), np.diag([0.97, 1.01]), [[1.0, 0.04], [0.0, 0.99]]])
     result = law.return_map(dF, history)
     assert result.region[0] == ELASTIC and np.all(result.region[1:] != ELASTIC)
     f = law.yield_function(result.tau)
@@ -385,13 +404,18 @@ def test_history_of_a_plastic_step_is_consistent_with_its_stress():
     assert np.allclose(elastic, from_tau, rtol=0, atol=1e-12)
     increment = np.sqrt(2 / 3) * np.linalg.norm(trial - elastic, axis=1)
     assert increment[0] == pytest.approx(0.0, abs=1e-12) and np.all(increment[1:] > 1e-3)
-    assert np.allclose(result.history["plastic_strain"] - history["plastic_strain"], increment,
-                       rtol=1e-9, atol=0)
+    assert np.allclose(
+        result.history["plastic_strain"] - history["plastic_strain"], increment, rtol=1e-9, atol=0
+    )
     assert result.history["plastic_strain"][0] == 0.0
 
 
 def test_parameters_at_the_edge_of_their_range_are_accepted():
-    for ok in (dict(friction_angle=89.9, dilatancy_angle=89.9), dict(cohesion=0.0,
-               friction_angle=0.1), dict(density=0.5), dict(friction_angle=0.0)):
+    for ok in (
+        dict(friction_angle=89.9, dilatancy_angle=89.9),
+        dict(cohesion=0.0, friction_angle=0.1),
+        dict(density=0.5),
+        dict(friction_angle=0.0),
+    ):
         law = fe_mpm.MohrCoulomb(**{**dict(E=1e4, nu=0.3, cohesion=10.0), **ok})
         assert all(getattr(law, k) == v for k, v in ok.items())

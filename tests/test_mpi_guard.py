@@ -48,12 +48,19 @@ def _run(tmp_path, comm):
     """Exit code and output of ``mpiexec -n 2``, and what each rank wrote (rank order)."""
     script = tmp_path / "scene.py"
     script.write_text(SCRIPT)
-    done = subprocess.run([_mpiexec(), "-n", "2", sys.executable, str(script), comm,
-                           str(tmp_path)], capture_output=True, text=True, timeout=120,
-                          env=dict(os.environ))
+    done = subprocess.run(
+        [_mpiexec(), "-n", "2", sys.executable, str(script), comm, str(tmp_path)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env=dict(os.environ),
+    )
     ranks = [tmp_path / f"rank{r}.txt" for r in range(2)]
-    return done.returncode, done.stdout + done.stderr, [
-        p.read_text() if p.exists() else "" for p in ranks]
+    return (
+        done.returncode,
+        done.stdout + done.stderr,
+        [p.read_text() if p.exists() else "" for p in ranks],
+    )
 
 
 def test_a_distributed_mesh_is_refused_on_every_rank(tmp_path):

@@ -26,27 +26,40 @@ def _block(law, formulation="u", dim=2, ramp=False, **options):
         mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (8, 8))
         gravity, per_cell = (0.0, -G), 3
     else:
-        mesh = dolfinx.mesh.create_box(MPI.COMM_SELF, [[0, 0, 0], [1, 1, 1]], [4, 4, 4],
-                                       dolfinx.mesh.CellType.tetrahedron)
+        mesh = dolfinx.mesh.create_box(
+            MPI.COMM_SELF, [[0, 0, 0], [1, 1, 1]], [4, 4, 4], dolfinx.mesh.CellType.tetrahedron
+        )
         gravity, per_cell = (0.0, -G, 0.0), 4
     points = fe_mpm.seed(mesh, per_cell=per_cell)  # the density comes from the law
     extra = {"body_force_scale": lambda t: t} if ramp else {}
-    sim = fe_mpm.Simulation(mesh, points, law, formulation, body_force=gravity,
-                            dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))],
-                            reactions={"base": lambda x: np.isclose(x[1], 0.0)},
-                            **extra, **options)
+    sim = fe_mpm.Simulation(
+        mesh,
+        points,
+        law,
+        formulation,
+        body_force=gravity,
+        dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))],
+        reactions={"base": lambda x: np.isclose(x[1], 0.0)},
+        **extra,
+        **options,
+    )
     return sim, points
 
 
 LAWS = {
     "NeoHookean": lambda: fe_mpm.NeoHookean(E=1e7, nu=0.3, density=RHO),
     "J2": lambda: fe_mpm.J2Plasticity(E=1e7, nu=0.3, yield_stress=1e5, density=RHO),
-    "MohrCoulomb": lambda: fe_mpm.MohrCoulomb(E=1e7, nu=0.3, cohesion=5e3, friction_angle=20.0,
-                                              density=RHO),
+    "MohrCoulomb": lambda: fe_mpm.MohrCoulomb(
+        E=1e7, nu=0.3, cohesion=5e3, friction_angle=20.0, density=RHO
+    ),
 }
 CASES = [(law, "u", 2) for law in LAWS] + [
-    ("NeoHookean", "up", 2), ("J2", "up", 2), ("NeoHookean", "u", 3), ("MohrCoulomb", "u", 3),
-    ("J2", "up", 3)]
+    ("NeoHookean", "up", 2),
+    ("J2", "up", 2),
+    ("NeoHookean", "u", 3),
+    ("MohrCoulomb", "u", 3),
+    ("J2", "up", 3),
+]
 
 
 @pytest.mark.parametrize("ramp", [False, True], ids=["constant", "ramped"])
@@ -108,8 +121,12 @@ def test_the_pressure_rows_are_judged_against_the_nodal_volumes():
     mesh = sim.mesh
     mesh.topology.create_connectivity(0, 2)
     vertex_cells = mesh.topology.connectivity(0, 2)
-    V = np.array([sim.tracker.volumes[vertex_cells.links(v)].sum() / 3.0
-                  for v in range(mesh.topology.index_map(0).size_local)])
+    V = np.array(
+        [
+            sim.tracker.volumes[vertex_cells.links(v)].sum() / 3.0
+            for v in range(mesh.topology.index_map(0).size_local)
+        ]
+    )
     bary = sim.tracker.barycentric(points.x, layout.cell)
     volume = sim.fields.pressure_volume(layout.cell, bary, points.volume)
     assert volume == pytest.approx(np.linalg.norm(V), rel=1e-12)
@@ -132,8 +149,7 @@ def test_a_residual_not_yet_small_fails_the_step_and_updates_nothing():
     forces: the step fails with the force scale and the accepted bound in its message,
     and nothing is updated. (That no other PETSc reason can accept a step is
     ``test_petsc_step_length_test_cannot_end_a_solve``.)"""
-    sim, points = _block(LAWS["J2"](), petsc_options={"snes_max_it": 1},
-                         fallback_line_search=None)
+    sim, points = _block(LAWS["J2"](), petsc_options={"snes_max_it": 1}, fallback_line_search=None)
     x = points.x.copy()
     with pytest.raises(fe_mpm.ConvergenceError, match=r"against the force scale .*accepted"):
         sim.step(1.0)
@@ -146,8 +162,11 @@ def test_a_static_step_that_moves_a_point_many_cells_is_rejected():
     accepted."""
     soft = fe_mpm.NeoHookean(E=5e4, nu=0.3, density=RHO)
     sim, points = _block(soft, max_step_cells=0.5, fallback_hold_cells=False)
-    with pytest.raises(fe_mpm.ConvergenceError, match=r"would move .* cell sizes .* static step 1 "
-                       r".* more than max_step_cells = 0\.5: .* Nothing was updated\.$"):
+    with pytest.raises(
+        fe_mpm.ConvergenceError,
+        match=r"would move .* cell sizes .* static step 1 "
+        r".* more than max_step_cells = 0\.5: .* Nothing was updated\.$",
+    ):
         sim.step(1.0)
     assert sim.step_number == 0
     sim, points = _block(soft)

@@ -15,9 +15,14 @@ from fe_mpm.particles import MaterialPoints
 def _points(g: int, n: int = 7, seed: int = 3) -> MaterialPoints:
     rng = np.random.default_rng(seed)
     x0 = rng.random((n, g))
-    points = MaterialPoints(x=x0 + 0.1 * rng.random((n, g)), volume=rng.random(n) + 0.5,
-                            mass=rng.random(n) + 2.0, F=np.eye(g) + 0.1 * rng.random((n, g, g)),
-                            x0=x0, velocity=rng.standard_normal((n, g)))
+    points = MaterialPoints(
+        x=x0 + 0.1 * rng.random((n, g)),
+        volume=rng.random(n) + 0.5,
+        mass=rng.random(n) + 2.0,
+        F=np.eye(g) + 0.1 * rng.random((n, g, g)),
+        x0=x0,
+        velocity=rng.standard_normal((n, g)),
+    )
     stress = rng.standard_normal((n, 3, 3))
     points.stress = stress + np.swapaxes(stress, 1, 2)
     points.cell = rng.integers(0, 50, n).astype(np.int32)
@@ -64,8 +69,9 @@ def test_every_field_is_written_as_the_points_carry_it(tmp_path, g):
     if g == 2:
         assert np.all(F[:, 2, :2] == 0) and np.all(F[:, :2, 2] == 0) and np.all(F[:, 2, 2] == 1)
     assert np.array_equal(data["stress"].reshape(n, 3, 3), points.stress)
-    assert np.allclose(data["pressure"], -np.trace(points.stress, axis1=1, axis2=2) / 3,
-                       rtol=0, atol=1e-15)
+    assert np.allclose(
+        data["pressure"], -np.trace(points.stress, axis1=1, axis2=2) / 3, rtol=0, atol=1e-15
+    )
     assert np.array_equal(data["cell"], points.cell)
     assert np.array_equal(data["plastic_strain"], points.history["plastic_strain"])
     assert np.array_equal(data["be"].reshape(n, 3, 3), points.history["be"])
@@ -73,7 +79,8 @@ def test_every_field_is_written_as_the_points_carry_it(tmp_path, g):
 
 
 def test_the_collection_lists_every_frame_with_its_time_and_a_new_writer_clears_old_frames(
-        tmp_path):
+    tmp_path,
+):
     points = _points(2)
     writer = ParticleWriter(tmp_path)
     times = (0.0, 0.1 + 1e-9, 2.5)
@@ -98,8 +105,9 @@ def test_a_run_writes_the_state_of_its_points_at_every_step(tmp_path):
     """Cook, J2, u-p, 3 steps with output: the frames hold t = 0 and each step's time,
     and the last frame is the points' final state (stress, F, plastic strain, position)."""
     material = fe_mpm.J2Plasticity(70.0, 0.499, 0.243, 0.135)
-    sim = scenes.cook_membrane(4, formulation="up", material=material, traction=0.1125,
-                               output_dir=tmp_path)
+    sim = scenes.cook_membrane(
+        4, formulation="up", material=material, traction=0.1125, output_dir=tmp_path
+    )
     sim.run(1.0, 3, progress=False)
     frames = _frames(tmp_path / "particles.pvd")
     assert [t for t, _ in frames] == pytest.approx([0.0, 1 / 3, 2 / 3, 1.0], rel=1e-9)
@@ -109,7 +117,8 @@ def test_a_run_writes_the_state_of_its_points_at_every_step(tmp_path):
     points, n = sim.points, len(sim.points)
     assert np.array_equal(last.points[:, :2], points.x)
     assert np.array_equal(last.point_data["stress"].reshape(n, 3, 3), points.stress)
-    assert np.array_equal(last.point_data["deformation_gradient"].reshape(n, 3, 3)[:, :2, :2],
-                          points.F)
+    assert np.array_equal(
+        last.point_data["deformation_gradient"].reshape(n, 3, 3)[:, :2, :2], points.F
+    )
     assert np.array_equal(last.point_data["plastic_strain"], points.history["plastic_strain"])
     assert last.point_data["plastic_strain"].max() > 0

@@ -64,8 +64,9 @@ def test_two_steps_compose_their_increments_in_order():
     def M(t):
         return t * first if t <= 1.0 else first + (t - 1.0) * second
 
-    everywhere = fe_mpm.Dirichlet(lambda x: np.ones(x.shape[1], dtype=bool),
-                                  profile=lambda x, t: M(t) @ x[:2])
+    everywhere = fe_mpm.Dirichlet(
+        lambda x: np.ones(x.shape[1], dtype=bool), profile=lambda x, t: M(t) @ x[:2]
+    )
     mat = fe_mpm.NeoHookean(E=50.0, nu=0.35)
     x0, V0 = points.x.copy(), points.volume.copy()
     sim = fe_mpm.Simulation(mesh, points, mat, dirichlet=[everywhere])

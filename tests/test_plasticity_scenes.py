@@ -19,11 +19,17 @@ def tension(formulation, nu, steps=20):
     scene = meshes.tension_specimen(W, H, 0.001)
     points = fe_mpm.seed(scene.mesh, per_cell=3)
     sim = fe_mpm.Simulation(
-        scene.mesh, points, fe_mpm.J2Plasticity(E, nu, SIGMA_Y), formulation,
+        scene.mesh,
+        points,
+        fe_mpm.J2Plasticity(E, nu, SIGMA_Y),
+        formulation,
         facet_tags=scene.facet_tags,
-        dirichlet=[fe_mpm.Dirichlet(meshes.TENSION_BOTTOM),
-                   fe_mpm.Dirichlet(meshes.TENSION_TOP, value=lambda t: np.array([0.0, U * t]))],
-        reactions={"top": meshes.TENSION_TOP})
+        dirichlet=[
+            fe_mpm.Dirichlet(meshes.TENSION_BOTTOM),
+            fe_mpm.Dirichlet(meshes.TENSION_TOP, value=lambda t: np.array([0.0, U * t])),
+        ],
+        reactions={"top": meshes.TENSION_TOP},
+    )
     reports = sim.run(1.0, steps, progress=False)
     force = np.array([r.reactions["top"][1] for r in reports])
     return sim, reports, force
@@ -68,8 +74,10 @@ def test_elastoplastic_cook_membrane_newton_stays_quadratic_over_twenty_steps():
         norms = np.array(r.residual_norms)
         # quadratic at the end: the last ratio well below the one before
         if len(norms) >= 4:
-            assert norms[-1] / norms[-2] < 1e-2 * max(norms[-2] / norms[-3], 1e-6) or \
-                norms[-1] < 1e-8 * norms[0]
+            assert (
+                norms[-1] / norms[-2] < 1e-2 * max(norms[-2] / norms[-3], 1e-6)
+                or norms[-1] < 1e-8 * norms[0]
+            )
     assert sim.points.history["plastic_strain"].max() > 0.01
     # round-off moves the tip by 3e-13 (benchmarks/roundoff_spread.py); a regression value
     assert abs(tip_deflection(sim) / 0.69987 - 1) < 1e-3

@@ -28,13 +28,23 @@ def _platen_run(components=(1,), penalty=1e5, formulation="u", steps=4):
     points.keep((points.x[:, 0] < 1.0) & (points.x[:, 1] < 1.0))
     n = 20
     xb = np.column_stack([(np.arange(n) + 0.5) / n, np.ones(n)])
-    platen = fe_mpm.PointDirichlet("platen", xb, np.full(n, 1.0 / n),
-                                   lambda t: np.array([0.0, (STRETCH - 1) * t]),
-                                   penalty=penalty, components=components)
+    platen = fe_mpm.PointDirichlet(
+        "platen",
+        xb,
+        np.full(n, 1.0 / n),
+        lambda t: np.array([0.0, (STRETCH - 1) * t]),
+        penalty=penalty,
+        components=components,
+    )
     sim = fe_mpm.Simulation(
-        mesh, points, fe_mpm.NeoHookean(E, NU), formulation,
-        dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0), component=1),
-                   fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0), component=0)],
+        mesh,
+        points,
+        fe_mpm.NeoHookean(E, NU),
+        formulation,
+        dirichlet=[
+            fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0), component=1),
+            fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0), component=0),
+        ],
         point_dirichlet=[platen],
     )
     reports = sim.run(1.0, steps, progress=False)
@@ -79,20 +89,32 @@ def test_platen_gap_falls_like_one_over_the_penalty_and_does_not_accumulate():
     assert gaps[1e5] < gaps[1e3] / 50
 
 
-@pytest.mark.parametrize("bad, match", [
-    (dict(penalty=0.0), "penalty must lie in"),
-    (dict(weight=np.zeros(2)), "every weight must be > 0"),
-    (dict(x=np.zeros((2, 3))), "x must have shape"),
-    (dict(components=(2,)), "components must lie in"),
-])
+@pytest.mark.parametrize(
+    "bad, match",
+    [
+        (dict(penalty=0.0), "penalty must lie in"),
+        (dict(weight=np.zeros(2)), "every weight must be > 0"),
+        (dict(x=np.zeros((2, 3))), "x must have shape"),
+        (dict(components=(2,)), "components must lie in"),
+    ],
+)
 def test_bad_point_conditions_are_named(bad, match):
     mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (2, 2))
-    spec = dict(name="p", x=np.array([[0.2, 0.5], [0.6, 0.5]]), weight=np.ones(2),
-                value=lambda t: (0.0, 0.0), penalty=1.0)
+    spec = dict(
+        name="p",
+        x=np.array([[0.2, 0.5], [0.6, 0.5]]),
+        weight=np.ones(2),
+        value=lambda t: (0.0, 0.0),
+        penalty=1.0,
+    )
     spec.update(bad)
     with pytest.raises(ValueError, match=match):
-        fe_mpm.Simulation(mesh, fe_mpm.seed(mesh), fe_mpm.NeoHookean(1.0, 0.3),
-                          point_dirichlet=[fe_mpm.PointDirichlet(**spec)])
+        fe_mpm.Simulation(
+            mesh,
+            fe_mpm.seed(mesh),
+            fe_mpm.NeoHookean(1.0, 0.3),
+            point_dirichlet=[fe_mpm.PointDirichlet(**spec)],
+        )
 
 
 def _split_law_platen() -> tuple[float, float]:

@@ -20,11 +20,11 @@ def test_mass_weighted_projection_weights_each_point_by_its_mass():
     rng = np.random.default_rng(5)
     mesh = rectangle_mesh((0, 0), (1, 1), (5, 5))
     points = fe_mpm.seed(mesh, per_cell=3, cells=np.arange(20), density=1000.0)
-    sim = fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1e4, 0.3, density=1000.0),
-                            dynamic=True)
+    sim = fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1e4, 0.3, density=1000.0), dynamic=True)
     points.mass *= rng.uniform(0.2, 2.0, len(points))
-    values = np.column_stack([np.sin(4 * points.x[:, 0]), points.x[:, 1] ** 2,
-                              rng.standard_normal(len(points))])
+    values = np.column_stack(
+        [np.sin(4 * points.x[:, 0]), points.x[:, 1] ** 2, rng.standard_normal(len(points))]
+    )
     layout = sim._track()
     V = sim.dynamics.space
     bary = sim.tracker.barycentric(points.x, layout.cell)
@@ -39,6 +39,7 @@ def test_mass_weighted_projection_weights_each_point_by_its_mass():
     reached = expected_mass > 0
     assert 0 < reached.sum() < nodes
     assert np.allclose(mass, expected_mass, rtol=1e-12, atol=0)
-    assert np.allclose(nodal[reached], moment[reached] / expected_mass[reached, None],
-                       rtol=1e-12, atol=1e-15)
+    assert np.allclose(
+        nodal[reached], moment[reached] / expected_mass[reached, None], rtol=1e-12, atol=1e-15
+    )
     assert np.all(nodal[~reached] == 0.0)

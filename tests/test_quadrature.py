@@ -146,8 +146,11 @@ def test_a_layout_for_another_slot_count_is_refused_naming_both():
     _, mesh, pts, layout, q = _setup(2)
     other = SlotLayout.from_cells(layout.cell, layout.nslot + 1)
     tracker = Tracker(mesh)
-    with pytest.raises(ValueError, match=rf"layout has {other.nslot} slots per entity, "
-                                         rf"the rule {q.nslot}"):
+    with pytest.raises(
+        ValueError,
+        match=rf"layout has {other.nslot} slots per entity, "
+        rf"the rule {q.nslot}",
+    ):
         q.pack_geometry(pts.x, pts.volume, other, tracker.centroids, tracker.volumes)
 
 
@@ -197,8 +200,11 @@ def test_slot_count_balances_empty_slots_against_entities():
     assert slot_count(np.zeros(3, dtype=int), current=4) == 4
     # more points in a cell than the largest bucket: refused, naming the limit
     too_many = SLOT_BUCKETS[-1] + 1
-    with pytest.raises(ValueError, match=f"{too_many} material points in one cell exceeds the "
-                                         f"supported {SLOT_BUCKETS[-1]}; refine the background"):
+    with pytest.raises(
+        ValueError,
+        match=f"{too_many} material points in one cell exceeds the "
+        f"supported {SLOT_BUCKETS[-1]}; refine the background",
+    ):
         bucket(too_many)
 
 
@@ -252,8 +258,9 @@ def test_taylor_hood_up_residual_and_stress_equal_particle_sums(dim):
     q.pack(F_n, layout, pts.F, empty=np.eye(dim))
     q.pack(rho, layout, pts.density)
     b = np.arange(1.0, dim + 1.0)
-    R = mixed_up.residual(du, p, w, q_test, q, F_n, rho, mat, None,
-                          body_force=ufl.as_vector(b), u_degree=2)
+    R = mixed_up.residual(
+        du, p, w, q_test, q, F_n, rho, mat, None, body_force=ufl.as_vector(b), u_degree=2
+    )
     R_mp = _assemble(R, mesh, layout, q)
     dF_p = ufl.Identity(dim) + q.grad_at_points(du, 2)
     A = rng.uniform(-1.0, 1.0, (3, 3))
@@ -311,11 +318,14 @@ def test_inertia_equals_particle_sum(dim, lumped):
         r = [X[nodes] - x for (nodes, _, _), x in zip(bases, pts.x)]
         C = np.array([np.einsum("v,vi,vj->ij", N, r_k, r_k) for (_, N, _), r_k in zip(bases, r)])
         q.pack(lumping, layout, C)
-    R_mp = _assemble(inertia.inertia(du, ufl.TestFunction(V), q, rho, nm, lumping),
-                     mesh, layout, q)
+    R_mp = _assemble(inertia.inertia(du, ufl.TestFunction(V), q, rho, nm, lumping), mesh, layout, q)
 
-    a_nodes = (c_a * du.x.array - 2 * c_v * v_n.x.array - a_n.x.array
-               + alpha * (c_v * du.x.array - v_n.x.array)).reshape(-1, dim)
+    a_nodes = (
+        c_a * du.x.array
+        - 2 * c_v * v_n.x.array
+        - a_n.x.array
+        + alpha * (c_v * du.x.array - v_n.x.array)
+    ).reshape(-1, dim)
     R_bf = np.zeros_like(R_mp).reshape(-1, dim)
     for (nodes, N, _), m in zip(bases, pts.mass):
         if lumped:

@@ -9,19 +9,25 @@ from fe_mpm.retry import Attempt, RetryLadder, StepLength
 
 def test_a_static_step_gets_four_attempts_in_the_documented_order():
     attempts = RetryLadder("bt", hold_cells=True).attempts("basic", can_hold=True)
-    assert attempts == [Attempt(True, None), Attempt(True, "bt"),
-                        Attempt(False, None), Attempt(False, "bt")]
+    assert attempts == [
+        Attempt(True, None),
+        Attempt(True, "bt"),
+        Attempt(False, None),
+        Attempt(False, "bt"),
+    ]
 
 
-@pytest.mark.parametrize("ladder, configured, can_hold, expected", [
-    (RetryLadder("bt", True), "basic", False, [(True, None), (True, "bt")]),
-    (RetryLadder("bt", True), "bt", True, [(True, None), (False, None)]),
-    (RetryLadder(None, True), "basic", True, [(True, None), (False, None)]),
-    (RetryLadder("bt", False), "basic", True, [(True, None), (True, "bt")]),
-    (RetryLadder(None, False), "basic", True, [(True, None)]),
-])
-def test_attempts_drop_what_the_run_cannot_or_need_not_try(ladder, configured, can_hold,
-                                                            expected):
+@pytest.mark.parametrize(
+    "ladder, configured, can_hold, expected",
+    [
+        (RetryLadder("bt", True), "basic", False, [(True, None), (True, "bt")]),
+        (RetryLadder("bt", True), "bt", True, [(True, None), (False, None)]),
+        (RetryLadder(None, True), "basic", True, [(True, None), (False, None)]),
+        (RetryLadder("bt", False), "basic", True, [(True, None), (True, "bt")]),
+        (RetryLadder(None, False), "basic", True, [(True, None)]),
+    ],
+)
+def test_attempts_drop_what_the_run_cannot_or_need_not_try(ladder, configured, can_hold, expected):
     """No hold in a dynamic run or before the first step; no fallback equal to Newton's
     own line search; each option switched off on its own."""
     attempts = ladder.attempts(configured, can_hold)
@@ -56,7 +62,7 @@ def _newton(outcomes):
     def solve(search):
         converged, iterations = outcomes[len(calls)]
         calls.append(search)
-        norms = [10.0 ** -k for k in range(-1, iterations)]
+        norms = [10.0**-k for k in range(-1, iterations)]
         return NewtonResult(converged, iterations, "stand-in", norms)
 
     return solve, calls
@@ -84,5 +90,6 @@ def test_cut_after_a_failure_names_the_last_step_length_and_the_floor():
     assert length.dt == 0.5
     with pytest.raises(ConvergenceError) as info:
         length.cut_after(ConvergenceError("Newton failed."))
-    assert str(info.value) == ("Newton failed. The step was cut to 0.5 without success, "
-                               "and the floor is min_step = 0.3.")
+    assert str(info.value) == (
+        "Newton failed. The step was cut to 0.5 without success, and the floor is min_step = 0.3."
+    )

@@ -48,8 +48,9 @@ def test_cook_under_five_and_ten_times_the_load_over_many_steps(factor):
     solve), so the check is that every contraction beats the one before."""
     tips = []
     for steps in (1, 40):
-        sim = scenes.cook_membrane(16, 0.499, "up", traction=factor / 16, margin=16,
-                                   load="points", per_cell=3)
+        sim = scenes.cook_membrane(
+            16, 0.499, "up", traction=factor / 16, margin=16, load="points", per_cell=3
+        )
         reports = sim.run(1.0, steps, progress=False)
         assert len(reports) == steps  # no step was cut
         for r in reports:
@@ -74,8 +75,9 @@ def test_grid_traction_left_behind_by_the_body_warns():
     """Under ten times the load the tip rises off the loaded grid edge: its top node is
     pinned from t = 0.2 and the load there would vanish silently."""
     sim = scenes.cook_membrane(16, 0.499, "up", traction=10 / 16, margin=16)
-    with pytest.warns(UserWarning, match=r"Traction 0: 1 of its 17 grid nodes .* PointTraction"
-                      ) as record:
+    with pytest.warns(
+        UserWarning, match=r"Traction 0: 1 of its 17 grid nodes .* PointTraction"
+    ) as record:
         sim.run(1.0, 20, progress=False)
     assert {w.filename for w in record} == {__file__}  # the user's line, however deep
 
@@ -87,9 +89,20 @@ def test_dynamic_time_step_sweep_converges_and_huge_steps_stay_bounded(tmp_path)
     Max error / static deflection, measured: 0.387, 0.179, 0.073 for 20, 40, 80 steps;
     with 1, 2 or 4 steps (one step per 2, 1, 1/2 periods) the trapezoidal rule stays
     bounded at 1.94, 1.81, 2.00 (the exact response swings between 0 and 2)."""
+
     def error(steps):
-        out = last_json(run_demo("elastic_column.py", "--ny", "16", "--dynamic", "--steps",
-                                 str(steps), "--json", cwd=tmp_path))
+        out = last_json(
+            run_demo(
+                "elastic_column.py",
+                "--ny",
+                "16",
+                "--dynamic",
+                "--steps",
+                str(steps),
+                "--json",
+                cwd=tmp_path,
+            )
+        )
         return out["error"]
 
     errors = [error(s) for s in (20, 40, 80)]
@@ -143,16 +156,23 @@ def pathological_column(formulation, nu):
     surface_row = ((c[:, 1] > DEPTH) & (c[:, 1] < DEPTH + 0.1)).astype(int)
     surface, _ = random_points(mesh, rng, surface_row, fill=False)
     surface.volume[:] = 0.005 / 2000  # a cell is 0.005 m²
-    vertex = MaterialPoints(x=np.array([[0.3, 0.2]]), volume=np.array([0.002]),
-                            mass=np.array([0.0]))
+    vertex = MaterialPoints(
+        x=np.array([[0.3, 0.2]]), volume=np.array([0.002]), mass=np.array([0.0])
+    )
     points = fe_mpm.merge(body, surface, vertex)
     points.mass[:] = RHO * points.volume
     sim = fe_mpm.Simulation(
-        mesh, points, fe_mpm.NeoHookean(1e7, nu, RHO), formulation,
-        dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0)),
-                   fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0) | np.isclose(x[0], 1.0),
-                                    component=0)],
-        body_force=(0.0, -G), reactions={"base": lambda x: np.isclose(x[1], 0.0)})
+        mesh,
+        points,
+        fe_mpm.NeoHookean(1e7, nu, RHO),
+        formulation,
+        dirichlet=[
+            fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0)),
+            fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0) | np.isclose(x[0], 1.0), component=0),
+        ],
+        body_force=(0.0, -G),
+        reactions={"base": lambda x: np.isclose(x[1], 0.0)},
+    )
     return sim, points
 
 
@@ -181,11 +201,20 @@ def test_impossible_or_nan_load_stops_cleanly_and_keeps_the_last_good_output(tmp
     mesh = rectangle_mesh((0, 0), (1, 1), (4, 4))
     points = fe_mpm.seed(mesh, per_cell=1)
     sim = fe_mpm.Simulation(
-        mesh, points, fe_mpm.NeoHookean(1.0, 0.3),
+        mesh,
+        points,
+        fe_mpm.NeoHookean(1.0, 0.3),
         dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0))],
-        tractions=[fe_mpm.Traction(lambda x: np.isclose(x[0], 1.0), (0.01, 0.0),
-                                   scale=lambda t: 1.0 if t <= 0.5 else bad)],
-        petsc_options={"snes_max_it": 8}, output_dir=tmp_path)
+        tractions=[
+            fe_mpm.Traction(
+                lambda x: np.isclose(x[0], 1.0),
+                (0.01, 0.0),
+                scale=lambda t: 1.0 if t <= 0.5 else bad,
+            )
+        ],
+        petsc_options={"snes_max_it": 8},
+        output_dir=tmp_path,
+    )
     if np.isfinite(bad):
         error, match = fe_mpm.ConvergenceError, r"step 2 \(t = 0.5 -> .*DIVERGED_MAX_IT"
     else:
@@ -221,9 +250,14 @@ def test_a_dropped_simulation_is_freed_with_its_solver(solver):
     gc.collect()
     registered = (len(SLOT_FIELDS), len(PER_ENTITY_FIELDS))
     mesh = rectangle_mesh((0, 0), (1, 1), (2, 2))
-    sim = fe_mpm.Simulation(mesh, fe_mpm.seed(mesh), fe_mpm.NeoHookean(1.0, 0.3), "up",
-                            dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0))],
-                            linear_solver=solver)
+    sim = fe_mpm.Simulation(
+        mesh,
+        fe_mpm.seed(mesh),
+        fe_mpm.NeoHookean(1.0, 0.3),
+        "up",
+        dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0))],
+        linear_solver=solver,
+    )
     sim.step(1.0)
     assert len(SLOT_FIELDS) > registered[0] and len(PER_ENTITY_FIELDS) > registered[1]
     alive = (weakref.ref(sim), weakref.ref(sim._newton))

@@ -33,7 +33,10 @@ def _simulation(dim, formulation, seed=3, material=None):
     traction = np.zeros(dim)
     traction[1] = 0.3
     sim = fe_mpm.Simulation(
-        mesh, pts, material or fe_mpm.NeoHookean(E=10.0, nu=0.3), formulation,
+        mesh,
+        pts,
+        material or fe_mpm.NeoHookean(E=10.0, nu=0.3),
+        formulation,
         dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0))],
         tractions=[fe_mpm.Traction(lambda x: np.isclose(x[0], 2.0), traction)],
         body_force=-np.ones(dim),
@@ -61,8 +64,9 @@ def test_taylor_test_detects_an_inconsistent_jacobian():
     ufl_R = forms.residual.ufl_form
     # A Jacobian of a different residual: the same form with the stress scaled by 1.01.
     wrong = ufl.derivative(1.01 * ufl_R, sim.w, ufl.TrialFunction(sim.fields.W))
-    J_wrong = StepForm(wrong, sim.mesh, sim.conditions.traction_facets,
-                       quadratures={OCCUPIED: forms.q}).bind(layout)
+    J_wrong = StepForm(
+        wrong, sim.mesh, sim.conditions.traction_facets, quadratures={OCCUPIED: forms.q}
+    ).bind(layout)
     sim.w.x.array[:] = rng.uniform(-0.02, 0.02, sim.w.x.array.size)
     d = rng.uniform(-1.0, 1.0, sim.w.x.array.size)
     _, r1 = taylor_remainders(R, J_wrong, sim.w, d, EPS)

@@ -89,8 +89,13 @@ def _translating_block(points_leaving):
     points = fe_mpm.seed(mesh, per_cell=1, cells=np.flatnonzero(centroid_x > 1.0))
     everywhere = lambda x: np.ones(x.shape[1], dtype=bool)  # noqa: E731
     move = fe_mpm.Dirichlet(everywhere, value=lambda t: (0.6 * t, 0.0))
-    sim = fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(E=1.0, nu=0.3),
-                            dirichlet=[move], points_leaving=points_leaving)
+    sim = fe_mpm.Simulation(
+        mesh,
+        points,
+        fe_mpm.NeoHookean(E=1.0, nu=0.3),
+        dirichlet=[move],
+        points_leaving=points_leaving,
+    )
     return sim, points
 
 
@@ -129,8 +134,9 @@ def test_markers_follow_their_hosts_renumbered_after_a_drop():
     np.testing.assert_allclose(markers.position("b"), [3.75, 2.5], rtol=0, atol=1e-15)
     lost = Markers()
     lost.add("c", np.array([0.25, 0.0]), x)  # nearest: point 0, which goes
-    with pytest.raises(fe_mpm.PointsOutsideError,
-                       match=r"^the host point of marker 'c' left the grid$"):
+    with pytest.raises(
+        fe_mpm.PointsOutsideError, match=r"^the host point of marker 'c' left the grid$"
+    ):
         lost.keep_hosts(keep)
 
 
@@ -147,8 +153,9 @@ def test_snap_to_moves_points_into_the_nearest_allowed_cell_within_the_tolerance
     x = np.array([[0.5, 0.4], [0.53, 0.6], [0.9, 0.5], [0.2, 0.3], [0.7, 0.7]])
     right = np.flatnonzero(~allowed)
     cells = tracker.locate(x)
-    on_right = [right[_inside(mesh, np.repeat(x[i:i + 1], right.size, 0), right)][0]
-                for i in (0, 1)]
+    on_right = [
+        right[_inside(mesh, np.repeat(x[i : i + 1], right.size, 0), right)][0] for i in (0, 1)
+    ]
     cells[:2] = on_right
     cells[4] = -1
     snapped = tracker.snap_to(x, cells, allowed, tol=0.5)
@@ -177,7 +184,7 @@ def _snapped_by_hand(mesh, x, cells, allowed, tol):
         if touching.size == 0:
             out.append({-1})
             continue
-        worst = _barycentric(mesh, np.repeat(x[i:i + 1], touching.size, 0), touching).min(axis=1)
+        worst = _barycentric(mesh, np.repeat(x[i : i + 1], touching.size, 0), touching).min(axis=1)
         best = worst.max()
         out.append(set(touching[worst >= best - 1e-12]) if best >= -tol else {-1})
     return out
@@ -204,8 +211,11 @@ def test_snap_to_agrees_with_a_search_by_hand_over_a_whole_grid(first_two):
     cells = np.concatenate([isolated, np.arange(n), tracker.locate(on_facet), [-1]])
     assert isolated.size > 0 and cells.size == x.shape[0]
     for tol in (None, 0.3):
-        snapped = tracker.snap_to(x, cells, allowed) if tol is None else \
-            tracker.snap_to(x, cells, allowed, tol=tol)
+        snapped = (
+            tracker.snap_to(x, cells, allowed)
+            if tol is None
+            else tracker.snap_to(x, cells, allowed, tol=tol)
+        )
         expected = _snapped_by_hand(mesh, x, cells, allowed, 1e-6 if tol is None else tol)
         wrong = [i for i, (got, right) in enumerate(zip(snapped, expected)) if got not in right]
         assert not wrong and snapped.dtype == np.int32, wrong

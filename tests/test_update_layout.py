@@ -24,10 +24,10 @@ def test_columns_follow_the_documented_order_and_decode_reads_them_back(g, dynam
     values = np.arange(n * layout.width, dtype=float).reshape(n, layout.width)
     new = layout.decode(values)
     assert np.array_equal(new.du, values[:, :g])
-    assert np.array_equal(new.dF, values[:, g:g + g * g].reshape(n, g, g))
-    assert np.array_equal(new.stress, values[:, g + g * g:g + g * g + 9].reshape(n, 3, 3))
+    assert np.array_equal(new.dF, values[:, g : g + g * g].reshape(n, g, g))
+    assert np.array_equal(new.stress, values[:, g + g * g : g + g * g + 9].reshape(n, 3, 3))
     if dynamic:
-        assert np.array_equal(new.acceleration, values[:, g + g * g + 9:2 * g + g * g + 9])
+        assert np.array_equal(new.acceleration, values[:, g + g * g + 9 : 2 * g + g * g + 9])
     else:
         assert new.acceleration is None
     assert np.array_equal(new.history["be"], values[:, -10:-1])
@@ -46,7 +46,9 @@ def test_a_point_may_move_exactly_max_step_cells_and_no_farther():
     new = checked_update(values, layout, points, np.full(2, 0.5), 2.0, 3, 0.75)
     np.testing.assert_allclose(new.du, [[0.0, 0.0], [1.0, 0.0]], rtol=0, atol=0)
     values[1, 0] = 1.0 + 2.0**-40
-    with pytest.raises(ConvergenceError,
-                       match=r"^point 1 \(x = \[0\.75 0\.25\]\) would move 2 cell sizes \(1 m\) "
-                             r"in static step 3 \(t = 0\.75\), more than max_step_cells = 2"):
+    with pytest.raises(
+        ConvergenceError,
+        match=r"^point 1 \(x = \[0\.75 0\.25\]\) would move 2 cell sizes \(1 m\) "
+        r"in static step 3 \(t = 0\.75\), more than max_step_cells = 2",
+    ):
         checked_update(values, layout, points, np.full(2, 0.5), 2.0, 3, 0.75)

@@ -28,9 +28,14 @@ def test_the_law_density_is_the_mass_when_seed_has_none():
     (this used to weigh 1 kg/m³, with σ_yy = −9.2 Pa at the base for −18.4 kPa)."""
     mesh = _mesh()
     points = fe_mpm.seed(mesh, per_cell=3)
-    sim = fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1e7, 0.3, density=RHO),
-                            body_force=(0.0, -G), dirichlet=[_base()],
-                            reactions={"base": lambda x: np.isclose(x[1], 0.0)})
+    sim = fe_mpm.Simulation(
+        mesh,
+        points,
+        fe_mpm.NeoHookean(1e7, 0.3, density=RHO),
+        body_force=(0.0, -G),
+        dirichlet=[_base()],
+        reactions={"base": lambda x: np.isclose(x[1], 0.0)},
+    )
     assert np.allclose(points.density, RHO, rtol=1e-12)
     report = sim.step(1.0)
     assert abs(report.reactions["base"][1] / (RHO * G) - 1.0) < 1e-9
@@ -39,8 +44,11 @@ def test_the_law_density_is_the_mass_when_seed_has_none():
 def test_two_different_densities_are_refused_naming_both():
     mesh = _mesh()
     points = fe_mpm.seed(mesh, density=1000.0)
-    with pytest.raises(ValueError, match=r"material's density 2000 kg/m³ differs from the "
-                                         r"points' 1000 kg/m³"):
+    with pytest.raises(
+        ValueError,
+        match=r"material's density 2000 kg/m³ differs from the "
+        r"points' 1000 kg/m³",
+    ):
         fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1e7, 0.3, density=RHO))
     same = fe_mpm.seed(mesh, density=RHO)  # the same value in both places is fine
     fe_mpm.Simulation(mesh, same, fe_mpm.NeoHookean(1e7, 0.3, density=RHO))
@@ -48,43 +56,61 @@ def test_two_different_densities_are_refused_naming_both():
         fe_mpm.merge(fe_mpm.seed(mesh, density=RHO), fe_mpm.seed(mesh))
 
 
-@pytest.mark.parametrize(("dirichlet", "free"), [
-    ([], "x, y"),
-    ([fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0), component=0)], "y"),
-    # a support on the grid's edge, but the material sits in the middle: it holds nothing
-    ([fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 1.0))], "x, y"),
-])
+@pytest.mark.parametrize(
+    ("dirichlet", "free"),
+    [
+        ([], "x, y"),
+        ([fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0), component=0)], "y"),
+        # a support on the grid's edge, but the material sits in the middle: it holds nothing
+        ([fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 1.0))], "x, y"),
+    ],
+)
 def test_a_static_model_that_nothing_holds_is_refused(dirichlet, free):
     mesh = _mesh()
     middle = np.flatnonzero(mesh.geometry.x[mesh.geometry.dofmaps[0]][:, :, 1].max(axis=1) < 0.76)
     points = fe_mpm.seed(mesh, cells=middle, density=RHO)
-    sim = fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1e7, 0.3), body_force=(0.0, -G),
-                            dirichlet=dirichlet)
+    sim = fe_mpm.Simulation(
+        mesh, points, fe_mpm.NeoHookean(1e7, 0.3), body_force=(0.0, -G), dirichlet=dirichlet
+    )
     with pytest.raises(ValueError, match=rf"nothing holds the material in {free}: .*rigid-body"):
         sim.step(1.0)
-    dynamic = fe_mpm.Simulation(mesh, fe_mpm.seed(mesh, cells=middle, density=RHO),
-                                fe_mpm.NeoHookean(1e7, 0.3), body_force=(0.0, -G),
-                                dirichlet=dirichlet, dynamic=True)
+    dynamic = fe_mpm.Simulation(
+        mesh,
+        fe_mpm.seed(mesh, cells=middle, density=RHO),
+        fe_mpm.NeoHookean(1e7, 0.3),
+        body_force=(0.0, -G),
+        dirichlet=dirichlet,
+        dynamic=True,
+    )
     dynamic.step(1e-3)  # inertia holds a free body: falling is an answer
 
 
-@pytest.mark.parametrize(("options", "match"), [
-    ({"body_force": (0.0, np.nan)}, r"body_force\[1\] must lie in"),
-    ({"body_force": (0.0, "9.81")}, r"body_force\[1\] must be a number"),
-    ({"max_step_cells": 0.0}, r"max_step_cells must lie in \(0, inf\]"),
-])
+@pytest.mark.parametrize(
+    ("options", "match"),
+    [
+        ({"body_force": (0.0, np.nan)}, r"body_force\[1\] must lie in"),
+        ({"body_force": (0.0, "9.81")}, r"body_force\[1\] must be a number"),
+        ({"max_step_cells": 0.0}, r"max_step_cells must lie in \(0, inf\]"),
+    ],
+)
 def test_bad_simulation_options_are_refused(options, match):
     mesh = _mesh()
     with pytest.raises((ValueError, TypeError), match=match):
-        fe_mpm.Simulation(mesh, fe_mpm.seed(mesh), fe_mpm.NeoHookean(1e7, 0.3),
-                          dirichlet=[_base()], **options)
+        fe_mpm.Simulation(
+            mesh, fe_mpm.seed(mesh), fe_mpm.NeoHookean(1e7, 0.3), dirichlet=[_base()], **options
+        )
 
 
 def test_a_load_factor_that_turns_nan_stops_at_once_naming_it():
     mesh = _mesh()
-    sim = fe_mpm.Simulation(mesh, fe_mpm.seed(mesh, density=RHO), fe_mpm.NeoHookean(1e7, 0.3),
-                            dirichlet=[_base()], body_force=(0.0, -G),
-                            body_force_scale=lambda t: t if t <= 0.5 else np.nan)
+    sim = fe_mpm.Simulation(
+        mesh,
+        fe_mpm.seed(mesh, density=RHO),
+        fe_mpm.NeoHookean(1e7, 0.3),
+        dirichlet=[_base()],
+        body_force=(0.0, -G),
+        body_force_scale=lambda t: t if t <= 0.5 else np.nan,
+    )
     with pytest.raises(ValueError, match=r"body_force_scale\(t = 1\) must lie in"):
         sim.run(1.0, 2, progress=False)
     assert sim.step_number == 1  # no retries: the input is wrong, not the step
@@ -93,8 +119,9 @@ def test_a_load_factor_that_turns_nan_stops_at_once_naming_it():
 def test_a_marker_is_copied_not_moved_in_the_callers_array():
     mesh = _mesh()
     points = fe_mpm.seed(mesh, density=RHO)
-    sim = fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1e5, 0.3), body_force=(0.0, -G),
-                            dirichlet=[_base()])
+    sim = fe_mpm.Simulation(
+        mesh, points, fe_mpm.NeoHookean(1e5, 0.3), body_force=(0.0, -G), dirichlet=[_base()]
+    )
     mine = np.array([0.5, 1.0])
     sim.add_marker("top", mine)
     sim.step(1.0)
@@ -122,8 +149,9 @@ def test_material_points_copy_the_arrays_they_are_given():
     seeded = fe_mpm.seed(mesh, per_cell=3, density=RHO)
     x, volume, mass = seeded.x.copy(), seeded.volume.copy(), seeded.mass.copy()
     points = fe_mpm.MaterialPoints(x=x, volume=volume, mass=mass)
-    sim = fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1e5, 0.3), body_force=(0.0, -G),
-                            dirichlet=[_base()])
+    sim = fe_mpm.Simulation(
+        mesh, points, fe_mpm.NeoHookean(1e5, 0.3), body_force=(0.0, -G), dirichlet=[_base()]
+    )
     sim.step(1.0)
     assert not np.array_equal(points.x, x) and not np.array_equal(points.volume, volume)
     assert np.array_equal(x, seeded.x) and np.array_equal(volume, seeded.volume)
@@ -137,8 +165,9 @@ def test_seed_refuses_rules_with_negative_weights_or_points_on_faces(per_cell):
 
     from fe_mpm._dolfinx import dolfinx
 
-    box = dolfinx.mesh.create_box(MPI.COMM_SELF, [[0, 0, 0], [1, 1, 1]], [1, 1, 1],
-                                  dolfinx.mesh.CellType.tetrahedron)
+    box = dolfinx.mesh.create_box(
+        MPI.COMM_SELF, [[0, 0, 0], [1, 1, 1]], [1, 1, 1], dolfinx.mesh.CellType.tetrahedron
+    )
     with pytest.raises(ValueError, match=r"per_cell must be one of \[1, 4, 24, 57"):
         fe_mpm.seed(box, per_cell)
 
@@ -152,20 +181,37 @@ def test_a_history_field_declared_with_an_integer_is_stored_as_floats():
     assert HistoryField((2, 2), np.eye(2, dtype=int)).initial_values(2).dtype == np.float64
 
 
-@pytest.mark.parametrize("poison, match", [
-    ("nan", r"non-finite state at 2 material point\(s\) in step 1 \(t = 1\); first: point 3 at "
-            r"x = {x}\. Nothing was updated\."),
-    ("flattened", r"det\(ΔF\) <= 0 at point 3 \(x = {x}\) in step 1 \(t = 1\): the step inverts"),
-    ("inverted", r"det\(ΔF\) <= 0 at point 3 \(x = {x}\) in step 1 \(t = 1\): the step inverts"),
-])
+@pytest.mark.parametrize(
+    "poison, match",
+    [
+        (
+            "nan",
+            r"non-finite state at 2 material point\(s\) in step 1 \(t = 1\); first: point 3 at "
+            r"x = {x}\. Nothing was updated\.",
+        ),
+        (
+            "flattened",
+            r"det\(ΔF\) <= 0 at point 3 \(x = {x}\) in step 1 \(t = 1\): the step inverts",
+        ),
+        (
+            "inverted",
+            r"det\(ΔF\) <= 0 at point 3 \(x = {x}\) in step 1 \(t = 1\): the step inverts",
+        ),
+    ],
+)
 def test_a_bad_point_update_stops_the_step_naming_the_point(monkeypatch, poison, match):
     """The update the grid hands back is checked before any point moves: a NaN, or a
     ΔF with det = 0 or det < 0, at points 3 and 5 stops the step naming point 3, and
     the points keep their positions, deformation and volumes."""
     mesh = _mesh()
     points = fe_mpm.seed(mesh, per_cell=3)
-    sim = fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1e7, 0.3, density=RHO),
-                            body_force=(0.0, -G), dirichlet=[_base()])
+    sim = fe_mpm.Simulation(
+        mesh,
+        points,
+        fe_mpm.NeoHookean(1e7, 0.3, density=RHO),
+        body_force=(0.0, -G),
+        dirichlet=[_base()],
+    )
     before = [points.x.copy(), points.F.copy(), points.volume.copy()]
     evaluate = PointExpression.evaluate
 
@@ -190,13 +236,19 @@ def test_taylor_hood_warns_from_its_second_step():
     (docs/formulations.md):
     its first step is silent, the second says so."""
     mesh = _mesh()
-    sim = fe_mpm.Simulation(mesh, fe_mpm.seed(mesh, per_cell=3),
-                            fe_mpm.NeoHookean(1e7, 0.3, density=RHO), "up-p2p1",
-                            body_force=(0.0, -G), dirichlet=[_base()])
+    sim = fe_mpm.Simulation(
+        mesh,
+        fe_mpm.seed(mesh, per_cell=3),
+        fe_mpm.NeoHookean(1e7, 0.3, density=RHO),
+        "up-p2p1",
+        body_force=(0.0, -G),
+        dirichlet=[_base()],
+    )
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         sim.step(0.5)
-    with pytest.warns(UserWarning, match=r"'up-p2p1' beyond its first step is not yet trustworthy"
-                      ) as record:
+    with pytest.warns(
+        UserWarning, match=r"'up-p2p1' beyond its first step is not yet trustworthy"
+    ) as record:
         sim.step(1.0)
     assert record[0].filename == __file__  # the user's line, not fe_mpm's

@@ -68,8 +68,13 @@ MIN_STEP_FRACTION = 1 / 8
 
 
 def _settings(max_examples: int):
-    return settings(max_examples=max_examples, deadline=None, derandomize=True, database=None,
-                    suppress_health_check=[HealthCheck.too_slow])
+    return settings(
+        max_examples=max_examples,
+        deadline=None,
+        derandomize=True,
+        database=None,
+        suppress_health_check=[HealthCheck.too_slow],
+    )
 
 
 def _nonfinite(points) -> str:
@@ -112,8 +117,16 @@ def measure_any_scene(scene: Scene) -> dict:
     def on_step(report):
         seen["nonfinite"] = seen["nonfinite"] or _nonfinite(points)
         jump = float(np.linalg.norm(points.x - previous, axis=1).max()) / scene.h
-        seen["jumps"].append((report.step, report.t, jump, report.newton_iterations,
-                              report.residual_norms[0], report.residual_norms[-1]))
+        seen["jumps"].append(
+            (
+                report.step,
+                report.t,
+                jump,
+                report.newton_iterations,
+                report.residual_norms[0],
+                report.residual_norms[-1],
+            )
+        )
         previous[:] = points.x
 
     _run_recording(built, on_step, seen)
@@ -137,7 +150,8 @@ def test_any_scene_finishes_or_stops_with_a_named_error(scene):
         for step, t, jump, newton, r0, r1 in seen["jumps"]:
             assert jump <= MAX_CELLS_PER_STEP, (
                 f"a point moved {jump:.2f} cells in static step {step} (t = {t:g}; Newton "
-                f"{newton} iterations, ‖R‖ {r0:.3e} -> {r1:.3e})")
+                f"{newton} iterations, ‖R‖ {r0:.3e} -> {r1:.3e})"
+            )
 
 
 # -- 2 -------------------------------------------------------------------------------------------
@@ -165,9 +179,20 @@ def measure_balance(scene: Scene) -> dict:
         total = float(np.linalg.norm(reaction + load - inertia)) / scale
         # Rollers carry no vertical force: the base alone balances the vertical loads.
         vertical = abs(report.reactions["base"][1] + load[1] - inertia[1]) / scale
-        seen["steps"].append((report.step, report.t, total, vertical, report.newton_iterations,
-                              report.residual_norms[0], report.residual_norms[-1],
-                              reaction.tolist(), load.tolist(), inertia.tolist()))
+        seen["steps"].append(
+            (
+                report.step,
+                report.t,
+                total,
+                vertical,
+                report.newton_iterations,
+                report.residual_norms[0],
+                report.residual_norms[-1],
+                reaction.tolist(),
+                load.tolist(),
+                inertia.tolist(),
+            )
+        )
 
     _run_recording(built, on_step, seen)
     seen["nonfinite"] = _nonfinite(points)
@@ -185,15 +210,44 @@ STRONG = 3.0
 # Found by this test (shrunk) with Newton's old stopping test ‖R‖ ≤ 1e-10 ‖R₀‖, kept as
 # regressions. An elastic block under constant gravity: ‖R‖ of step 3 starts at the
 # re-binning imbalance (2e-3 N) and stalls at its round-off floor 5e-11 N, above 1e-10 ‖R₀‖.
-@example(Scene(dim=2, size=(0.5, 0.5), cells=(2, 2), diagonal="right", per_cell=1, body_rows=2,
-               slope=None, law=Law("NeoHookean", 1e6, 0.0), density=500.0, formulation="u",
-               ramp=False, traction=None, rollers=False, n_steps=3))
+@example(
+    Scene(
+        dim=2,
+        size=(0.5, 0.5),
+        cells=(2, 2),
+        diagonal="right",
+        per_cell=1,
+        body_rows=2,
+        slope=None,
+        law=Law("NeoHookean", 1e6, 0.0),
+        density=500.0,
+        formulation="u",
+        ramp=False,
+        traction=None,
+        rollers=False,
+        n_steps=3,
+    )
+)
 # Mohr-Coulomb (φ = 40°, 3.2x stronger than needed) on rollers, ramped gravity: step 1 stalls
 # at 8e-9 N from 5.5 N and is cut to the floor.
-@example(Scene(dim=3, size=(2.4, 0.5, 0.5), cells=(4, 3, 3), diagonal="right", per_cell=1,
-               body_rows=1, slope=None, law=Law("MohrCoulomb", 1e8, 0.4, 644.0, 40.0),
-               density=535.0, formulation="u", ramp=True, traction=None, rollers=True,
-               n_steps=3))
+@example(
+    Scene(
+        dim=3,
+        size=(2.4, 0.5, 0.5),
+        cells=(4, 3, 3),
+        diagonal="right",
+        per_cell=1,
+        body_rows=1,
+        slope=None,
+        law=Law("MohrCoulomb", 1e8, 0.4, 644.0, 40.0),
+        density=535.0,
+        formulation="u",
+        ramp=True,
+        traction=None,
+        rollers=True,
+        n_steps=3,
+    )
+)
 def test_accepted_steps_balance_the_forces_and_strong_bodies_finish(scene):
     """Every accepted step is an equilibrium of the grid's forces, so the forces of the
     supports balance the weight Σ m_p g and the top traction (times the load factor), and in
@@ -205,20 +259,21 @@ def test_accepted_steps_balance_the_forces_and_strong_bodies_finish(scene):
     property 4)."""
     seen = measure_balance(scene)
     event(seen["outcome"])
-    note(f"strength ratio {scene.strength_ratio:.3g}, outcome {seen['outcome']}: "
-         f"{seen['message']}")
+    note(f"strength ratio {scene.strength_ratio:.3g}, outcome {seen['outcome']}: {seen['message']}")
     assert not seen["nonfinite"], f"non-finite values in {seen['nonfinite']}"
     for step, t, total, vertical, newton, r0, r1, reaction, load, inertia in seen["steps"]:
         assert total <= BALANCE_RTOL and vertical <= BALANCE_RTOL, (
             f"step {step} (t = {t:g}) was accepted out of balance: reactions {reaction}, "
             f"applied loads {load}, inertia {inertia}: relative imbalance {total:.2e} (all "
             f"supports), {vertical:.2e} (base, vertical); Newton {newton} iterations, ‖R‖ "
-            f"{r0:.3e} -> {r1:.3e}")
+            f"{r0:.3e} -> {r1:.3e}"
+        )
     bulged = seen["outcome"] == "PointsOutsideError" and not scene.rollers
     if scene.strength_ratio >= STRONG and not bulged:
         assert seen["outcome"] == "finished", (
             f"a body {scene.strength_ratio:.3g} times stronger than its loads need stopped: "
-            f"{seen['outcome']}: {seen['message']}")
+            f"{seen['outcome']}: {seen['message']}"
+        )
 
 
 # -- 3 -------------------------------------------------------------------------------------------
@@ -236,15 +291,19 @@ def measure_step_count(scene: Scene) -> dict:
         finally:
             built.sim.close()
         if _nonfinite(built.points):
-            return {"outcome": "non-finite", "message": _nonfinite(built.points),
-                    "steps": n_steps}
+            return {"outcome": "non-finite", "message": _nonfinite(built.points), "steps": n_steps}
         answers.append(built.points)
     one, many = answers
     u = float(np.linalg.norm(one.x - one.x0, axis=1).max())
     sigma = float(np.abs(one.stress).max())
-    return {"outcome": "finished", "u": u, "u_cells": u / scene.h, "sigma": sigma,
-            "dx": float(np.linalg.norm(many.x - one.x, axis=1).max()) / u,
-            "dstress": float(np.abs(many.stress - one.stress).max()) / sigma}
+    return {
+        "outcome": "finished",
+        "u": u,
+        "u_cells": u / scene.h,
+        "sigma": sigma,
+        "dx": float(np.linalg.norm(many.x - one.x, axis=1).max()) / u,
+        "dstress": float(np.abs(many.stress - one.stress).max()) / sigma,
+    }
 
 
 @pytest.mark.slow
@@ -253,24 +312,57 @@ def measure_step_count(scene: Scene) -> dict:
 # Found by this test (shrunk) with Newton's old stopping test ‖R‖ ≤ 1e-10 ‖R₀‖, kept as
 # regressions: step 2 under constant gravity stalls at 5e-8 N from 1.6e-3 N; a stiff ramped
 # block stalls in step 1 at 3e-7 N from 82 N (4e-9 ‖R₀‖).
-@example(Scene(dim=2, size=(0.5, 0.5), cells=(2, 2), diagonal="right", per_cell=1, body_rows=2,
-               slope=None, law=Law("NeoHookean", 1e9, 0.0), density=500.0, formulation="u",
-               ramp=False, traction=None, rollers=False, n_steps=2))
-@example(Scene(dim=3, size=(1.7, 0.5, 0.5), cells=(3, 3, 2), diagonal="right", per_cell=1,
-               body_rows=2, slope=None, law=Law("NeoHookean", 5.01e9, 0.4), density=1300.0,
-               formulation="u", ramp=True, traction=None, rollers=True, n_steps=3))
+@example(
+    Scene(
+        dim=2,
+        size=(0.5, 0.5),
+        cells=(2, 2),
+        diagonal="right",
+        per_cell=1,
+        body_rows=2,
+        slope=None,
+        law=Law("NeoHookean", 1e9, 0.0),
+        density=500.0,
+        formulation="u",
+        ramp=False,
+        traction=None,
+        rollers=False,
+        n_steps=2,
+    )
+)
+@example(
+    Scene(
+        dim=3,
+        size=(1.7, 0.5, 0.5),
+        cells=(3, 3, 2),
+        diagonal="right",
+        per_cell=1,
+        body_rows=2,
+        slope=None,
+        law=Law("NeoHookean", 5.01e9, 0.4),
+        density=1300.0,
+        formulation="u",
+        ramp=True,
+        traction=None,
+        rollers=True,
+        n_steps=3,
+    )
+)
 def test_small_strain_elastic_answer_does_not_depend_on_the_number_of_load_steps(scene):
     """Neo-Hookean, E 1e9–1e10 Pa: strains ≤ ρgH/E ≈ 1e-4, no point crosses a cell. After 1
     step and after k steps the answer is the same equilibrium, up to the O(strain) change of
     the points' positions (the quadrature) between steps. Every step must converge."""
     seen = measure_step_count(scene)
     assert seen["outcome"] == "finished", (
-        f"the {seen['steps']}-step run: {seen['outcome']}: {seen['message']}")
+        f"the {seen['steps']}-step run: {seen['outcome']}: {seen['message']}"
+    )
     assert seen["u_cells"] < 1e-3, f"not a small-deformation scene: {seen}"
     assert seen["dx"] <= STEPS_RTOL_X, (
-        f"positions differ by {seen['dx']:.2e} of the displacement {seen['u']:.3e} m")
+        f"positions differ by {seen['dx']:.2e} of the displacement {seen['u']:.3e} m"
+    )
     assert seen["dstress"] <= STEPS_RTOL_STRESS, (
-        f"stresses differ by {seen['dstress']:.2e} of the stress {seen['sigma']:.3e} Pa")
+        f"stresses differ by {seen['dstress']:.2e} of the stress {seen['sigma']:.3e} Pa"
+    )
 
 
 # -- 4 -------------------------------------------------------------------------------------------
@@ -304,7 +396,8 @@ def test_block_on_a_fixed_base_between_rollers_never_leaves_its_grid(scene):
     if seen["message"]:
         note(f"stopped with {seen['outcome']}: {seen['message']}")
     assert seen["outcome"] in ("finished", "ConvergenceError"), (
-        f"{seen['outcome']}: {seen['message']}")
+        f"{seen['outcome']}: {seen['message']}"
+    )
     assert not seen["nonfinite"], f"non-finite values in {seen['nonfinite']}"
     assert seen["outside"] <= 1e-9, f"points got {seen['outside']:.3g} box sizes outside"
 
@@ -315,8 +408,14 @@ def test_block_on_a_fixed_base_between_rollers_never_leaves_its_grid(scene):
 def _sample(n: int, measure, strategy) -> list:  # pragma: no cover
     rows = []
 
-    @settings(max_examples=n, deadline=None, derandomize=True, database=None,
-              phases=[Phase.generate], suppress_health_check=list(HealthCheck))
+    @settings(
+        max_examples=n,
+        deadline=None,
+        derandomize=True,
+        database=None,
+        phases=[Phase.generate],
+        suppress_health_check=list(HealthCheck),
+    )
     @given(scene=strategy)
     def sample(scene):
         start = time.perf_counter()
@@ -335,8 +434,10 @@ def _measure(n: int) -> None:  # pragma: no cover  (a tool, run by hand)
     runs = {
         "1": (measure_any_scene, scenes()),
         "2": (measure_balance, scenes()),
-        "3": (measure_step_count, scenes(static=True, names=("NeoHookean",), E=(1e9, 1e10),
-                                         n_steps=(2, 8))),
+        "3": (
+            measure_step_count,
+            scenes(static=True, names=("NeoHookean",), E=(1e9, 1e10), n_steps=(2, 8)),
+        ),
         "4": (measure_containment, scenes(rollers=True, slopes=False)),
     }
     only = os.environ.get("FE_MPM_SCENE_PROPERTIES", "1234")
@@ -344,8 +445,10 @@ def _measure(n: int) -> None:  # pragma: no cover  (a tool, run by hand)
         if key not in only:
             continue
         rows = _sample(n, measure, strategy)
-        print(f"\n=== property {key}: {len(rows)} scenes, "
-              f"{sum(r[2] for r in rows):.1f} s (slowest {max(r[2] for r in rows):.1f} s)")
+        print(
+            f"\n=== property {key}: {len(rows)} scenes, "
+            f"{sum(r[2] for r in rows):.1f} s (slowest {max(r[2] for r in rows):.1f} s)"
+        )
         outcomes = {}
         for scene, seen, _ in rows:
             outcomes[seen["outcome"]] = outcomes.get(seen["outcome"], 0) + 1
@@ -356,13 +459,20 @@ def _measure(n: int) -> None:  # pragma: no cover  (a tool, run by hand)
             if seen["outcome"] != "finished":
                 print(f"  {seen['outcome']} ({seconds:.1f} s): {scene}\n    {seen['message']}")
         if key == "1":
-            jumps = [(j[2], scene) for scene, seen, _ in rows if not scene.dynamic
-                     for j in seen.get("jumps", [])]
+            jumps = [
+                (j[2], scene)
+                for scene, seen, _ in rows
+                if not scene.dynamic
+                for j in seen.get("jumps", [])
+            ]
             for jump, scene in sorted(jumps, key=lambda r: -r[0])[:3]:
                 print(f"  largest static step {jump:.3f} cells: {scene}")
         if key == "2":
-            done = [(max(s[2] for s in seen["steps"]), max(s[3] for s in seen["steps"]), scene)
-                    for scene, seen, _ in rows if seen.get("steps")]
+            done = [
+                (max(s[2] for s in seen["steps"]), max(s[3] for s in seen["steps"]), scene)
+                for scene, seen, _ in rows
+                if seen.get("steps")
+            ]
             print(f"  {len(done)} scenes with accepted steps; strong ones stopped:")
             for scene, seen, _ in rows:
                 if scene.strength_ratio >= STRONG and seen["outcome"] != "finished":
@@ -370,10 +480,18 @@ def _measure(n: int) -> None:  # pragma: no cover  (a tool, run by hand)
             for total, vertical, scene in sorted(done, key=lambda r: -r[0])[:5]:
                 print(f"  imbalance {total:.2e} (vertical {vertical:.2e}): {scene}")
         if key == "3":
-            done = [(seen["dx"], seen["dstress"], seen["u_cells"], scene)
-                    for scene, seen, _ in rows if seen["outcome"] == "finished"]
-            print("  worst dx {:.2e}, dstress {:.2e}, largest u {:.2e} cells".format(
-                *(max(d[i] for d in done) for i in range(3))) if done else "  none finished")
+            done = [
+                (seen["dx"], seen["dstress"], seen["u_cells"], scene)
+                for scene, seen, _ in rows
+                if seen["outcome"] == "finished"
+            ]
+            print(
+                "  worst dx {:.2e}, dstress {:.2e}, largest u {:.2e} cells".format(
+                    *(max(d[i] for d in done) for i in range(3))
+                )
+                if done
+                else "  none finished"
+            )
         if key == "4":
             print("  worst excursion", max(seen.get("outside", 0.0) for _, seen, _ in rows))
 

@@ -91,8 +91,9 @@ class PPPData:
         fill = dolfinx.fem.Function(dg0, name="fill")
         # In the material-point subdomain, so one kernel does both; the fill
         # is packed per entity (zero on a cell's copies), so each cell counts once.
-        dx2 = ufl.Measure("dx", domain=mesh, subdomain_id=OCCUPIED,
-                          metadata={"quadrature_degree": 2})
+        dx2 = ufl.Measure(
+            "dx", domain=mesh, subdomain_id=OCCUPIED, metadata={"quadrature_degree": 2}
+        )
         return cls(effective_alpha(alpha, g), centroid, fill, dx2)
 
 
@@ -147,9 +148,12 @@ def residual(
     if ppp is not None:
         x = ufl.SpatialCoordinate(mpq.mesh)
         r = x - ppp.centroid
-        R -= (ppp.alpha_eff / material.mu) * ppp.fill * (
-            ufl.dot(ufl.grad(q_test), r) * ufl.dot(ufl.grad(p), r)
-        ) * ppp.dx
+        R -= (
+            (ppp.alpha_eff / material.mu)
+            * ppp.fill
+            * (ufl.dot(ufl.grad(q_test), r) * ufl.dot(ufl.grad(p), r))
+            * ppp.dx
+        )
     loads = external_work(w, mpq, density, body_force, tractions, u_degree)
     return R if loads is None else R - loads
 

@@ -86,7 +86,8 @@ class J2Plasticity(IsotropicModuli):
         plastic = ufl.gt(f_trial, 0.0)
         # Both branches are compiled; ‖s_tr‖ only divides where it exceeds the radius > 0.
         dgamma = ufl.conditional(
-            plastic, f_trial / (2.0 * mu_bar + 2.0 * self.hardening / 3.0), 0.0)
+            plastic, f_trial / (2.0 * mu_bar + 2.0 * self.hardening / 3.0), 0.0
+        )
         scale = ufl.conditional(plastic, 1.0 - 2.0 * mu_bar * dgamma / norm, 1.0)
         return scale * s_trial, b_trial, dgamma
 

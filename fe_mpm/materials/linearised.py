@@ -66,8 +66,9 @@ class Linearisation:
 
         def entry(i, j):
             base = (3 * i + j) * g * g
-            return self.tau[i, j] + sum(D[base + g * k + m] * step[k, m]
-                                        for k in range(g) for m in range(g))
+            return self.tau[i, j] + sum(
+                D[base + g * k + m] * step[k, m] for k in range(g) for m in range(g)
+            )
 
         return ufl.as_matrix([[entry(i, j) for j in range(3)] for i in range(3)])
 

@@ -65,8 +65,10 @@ class MohrCoulomb(IsotropicModuli):
         if self.density is not None:
             self._check("density", lo=0.0, lo_open=True)
         if self.friction_angle == 0.0 and self.cohesion == 0.0:
-            raise ValueError("MohrCoulomb: cohesion must be > 0 when friction_angle = 0 "
-                             "(the material would have no strength), got 0")
+            raise ValueError(
+                "MohrCoulomb: cohesion must be > 0 when friction_angle = 0 "
+                "(the material would have no strength), got 0"
+            )
 
     @classmethod
     def tresca(
@@ -79,7 +81,9 @@ class MohrCoulomb(IsotropicModuli):
     def surface(self) -> MohrCoulombSurface:
         """The principal-space elasticity and yield surface."""
         return MohrCoulombSurface(
-            self.bulk_modulus, self.mu, self.cohesion,
+            self.bulk_modulus,
+            self.mu,
+            self.cohesion,
             math.sin(math.radians(self.friction_angle)),
             math.sin(math.radians(self.dilatancy_angle)),
         )
@@ -90,7 +94,8 @@ class MohrCoulomb(IsotropicModuli):
         return {
             "be": HistoryField((3, 3), np.eye(3), "elastic left Cauchy-Green bᵉ"),
             "plastic_strain": HistoryField(
-                (), 0.0, "equivalent plastic strain Σ √(2/3)‖Δεᵖ‖ (Hencky)"),
+                (), 0.0, "equivalent plastic strain Σ √(2/3)‖Δεᵖ‖ (Hencky)"
+            ),
         }
 
     def check_formulation(self, pressure: bool) -> None:
@@ -137,7 +142,9 @@ class MohrCoulomb(IsotropicModuli):
         increment = _SQRT_2_3 * np.linalg.norm(strain - strain_e, axis=1)
         increment[elastic] = 0.0
         return ReturnMapResult(
-            tau=tau, derivative=tangent, region=ret.region,
+            tau=tau,
+            derivative=tangent,
+            region=ret.region,
             history={"be": be, "plastic_strain": history["plastic_strain"] + increment},
         )
 
@@ -151,8 +158,10 @@ class MohrCoulomb(IsotropicModuli):
 
     def _linearised(self, state: PointState) -> ufl.core.expr.Expr:
         if state is None or state.linearisation is None:
-            raise ValueError("MohrCoulomb: the state has no linearisation slot fields; the "
-                             "law is evaluated in numpy (return_map) by the simulation")
+            raise ValueError(
+                "MohrCoulomb: the state has no linearisation slot fields; the "
+                "law is evaluated in numpy (return_map) by the simulation"
+            )
         return state.linearisation.kirchhoff(state.dF)
 
     def updated_history(self, F: ufl.core.expr.Expr, state: PointState) -> dict:

@@ -158,10 +158,12 @@ def mohr_coulomb_return(surface: MohrCoulombSurface, strain: np.ndarray) -> Prin
     breaks_23 = plane[:, 2] > plane[:, 1]
 
     p1, p2 = surface.line_points()
-    line1, line1_tangent = _line_return(surface, trial, p1, np.array([1.0, 1.0, k]),
-                                        np.array([1.0, 1.0, m]))
-    line2, line2_tangent = _line_return(surface, trial, p2, np.array([1.0, k, k]),
-                                        np.array([1.0, m, m]))
+    line1, line1_tangent = _line_return(
+        surface, trial, p1, np.array([1.0, 1.0, k]), np.array([1.0, 1.0, m])
+    )
+    line2, line2_tangent = _line_return(
+        surface, trial, p2, np.array([1.0, k, k]), np.array([1.0, m, m])
+    )
     # A line point is valid while its double value stays on the right side of the single one.
     beyond_1 = line1[:, 0] < line1[:, 2]
     beyond_2 = line2[:, 0] < line2[:, 1]

@@ -62,8 +62,13 @@ def from_principal(values: np.ndarray, Q: np.ndarray) -> np.ndarray:
 
 
 def derivative_wrt_dF(
-    x: np.ndarray, Q: np.ndarray, y: np.ndarray, dy_dx: np.ndarray,
-    dF: np.ndarray, b_n: np.ndarray, g: int = 3,
+    x: np.ndarray,
+    Q: np.ndarray,
+    y: np.ndarray,
+    dy_dx: np.ndarray,
+    dF: np.ndarray,
+    b_n: np.ndarray,
+    g: int = 3,
 ) -> np.ndarray:
     """∂τ_ij/∂ΔF_kl (n, 3, 3, g, g) of τ = Σ y_A(x) n_A⊗n_A with b^tr = ΔF b_n ΔFᵀ.
 

@@ -24,8 +24,7 @@ class HistoryField:
 
     def initial_values(self, n: int) -> np.ndarray:
         """Initial values for ``n`` points, shape ``(n, *shape)``."""
-        return np.broadcast_to(np.asarray(self.initial, dtype=np.float64),
-                               (n, *self.shape)).copy()
+        return np.broadcast_to(np.asarray(self.initial, dtype=np.float64), (n, *self.shape)).copy()
 
 
 @dataclass

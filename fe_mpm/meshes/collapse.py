@@ -54,11 +54,16 @@ def granular_column(
     check_range("granular_column", "aspect", aspect, lo=0.0, lo_open=True)
     h_i = aspect * d_i
     check_range("granular_column", "h", h, lo=0.0, hi=min(d_i, h_i), lo_open=True)
-    length = check_range("granular_column", "length",
-                         1.6 * lube_runout(d_i, aspect) + 5 * h if length is None else length,
-                         lo=d_i, lo_open=True)
-    height = check_range("granular_column", "height", h_i + 3 * h if height is None else height,
-                         lo=h_i, lo_open=True)
+    length = check_range(
+        "granular_column",
+        "length",
+        1.6 * lube_runout(d_i, aspect) + 5 * h if length is None else length,
+        lo=d_i,
+        lo_open=True,
+    )
+    height = check_range(
+        "granular_column", "height", h_i + 3 * h if height is None else height, lo=h_i, lo_open=True
+    )
     with gmsh_session("granular_column") as model:
         if comm.rank == 0:
             occ = model.occ

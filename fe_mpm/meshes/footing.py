@@ -71,18 +71,33 @@ def strip_footing(
         (:data:`FOOTING_SYMMETRY`, :data:`FOOTING_FAR_SIDE`, :data:`FOOTING_BASE`).
     """
     check_range("strip_footing", "B", B, lo=0.0, lo_open=True)
-    width = check_range("strip_footing", "width", 5 * B if width is None else width,
-                        lo=B / 2, lo_open=True)
-    depth = check_range("strip_footing", "depth", 5 * B if depth is None else depth,
-                        lo=0.0, lo_open=True)
-    margin = check_range("strip_footing", "margin", B if margin is None else margin,
-                         lo=0.0, lo_open=True)
-    near_width = check_range("strip_footing", "near_width",
-                             1.5 * B if near_width is None else near_width,
-                             lo=0.0, hi=width, lo_open=True, hi_open=True)
-    near_depth = check_range("strip_footing", "near_depth",
-                             3 * B if near_depth is None else near_depth,
-                             lo=0.0, hi=depth, lo_open=True, hi_open=True)
+    width = check_range(
+        "strip_footing", "width", 5 * B if width is None else width, lo=B / 2, lo_open=True
+    )
+    depth = check_range(
+        "strip_footing", "depth", 5 * B if depth is None else depth, lo=0.0, lo_open=True
+    )
+    margin = check_range(
+        "strip_footing", "margin", B if margin is None else margin, lo=0.0, lo_open=True
+    )
+    near_width = check_range(
+        "strip_footing",
+        "near_width",
+        1.5 * B if near_width is None else near_width,
+        lo=0.0,
+        hi=width,
+        lo_open=True,
+        hi_open=True,
+    )
+    near_depth = check_range(
+        "strip_footing",
+        "near_depth",
+        3 * B if near_depth is None else near_depth,
+        lo=0.0,
+        hi=depth,
+        lo_open=True,
+        hi_open=True,
+    )
     check_range("strip_footing", "h", h, lo=0.0, hi=min(near_width, margin), lo_open=True)
     h_far = check_range("strip_footing", "h_far", h if h_far is None else h_far, lo=h)
     with gmsh_session("strip_footing") as model:
@@ -135,8 +150,9 @@ def _tag_sides(model, width: float, depth: float) -> None:
         model.addPhysicalGroup(1, curves, tag, name=names[tag])
 
 
-def _refine_near_footing(model, near_width: float, near_depth: float, margin: float,
-                         h: float, h_far: float) -> None:
+def _refine_near_footing(
+    model, near_width: float, near_depth: float, margin: float, h: float, h_far: float
+) -> None:
     """Cell size h in the refined zone and the strip above it, growing to h_far away."""
     field = model.mesh.field
     box = field.add("Box")
