@@ -27,6 +27,8 @@ import numpy as np
 
 from fe_mpm.markers import Markers
 from fe_mpm.particles import MaterialPoints
+from fe_mpm.point_update import apply_update
+from fe_mpm.step_forms import PointUpdate
 
 
 def subdivision_centroids(m: int) -> np.ndarray:
@@ -120,17 +122,19 @@ class PointDomains:
         def mean(values: np.ndarray) -> np.ndarray:
             return values.reshape(n, k, *values.shape[1:]).mean(axis=1)
 
-        dF = mean(sub.F @ np.linalg.inv(F_sub))
-        du = mean(sub.x - x_sub)
-        markers.move(points.x, du, dF)
+        new = PointUpdate(
+            du=mean(sub.x - x_sub),
+            dF=mean(sub.F @ np.linalg.inv(F_sub)),
+            stress=mean(sub.stress),
+            acceleration=None,
+            history={name: mean(values) for name, values in sub.history.items()},
+        )
         relative = self.corners - points.x[:, None, :]
-        points.x = points.x + du
-        self.corners = points.x[:, None, :] + np.einsum("pij,pcj->pci", dF, relative)
-        points.F = dF @ points.F
-        points.volume = points.volume * np.linalg.det(dF)
-        points.stress = mean(sub.stress)
+        # The points' own update (x, F, V, σ, history, markers); the sub-points' Newmark
+        # velocities are already at t_{n+1}, so the points take their mean as it is.
+        apply_update(points, new, markers, dynamics=None, dt=0.0)
         points.velocity, points.acceleration = mean(sub.velocity), mean(sub.acceleration)
-        points.history = {name: mean(values) for name, values in sub.history.items()}
+        self.corners = points.x[:, None, :] + np.einsum("pij,pcj->pci", new.dF, relative)
         points.cell = sub.cell[::k].copy()  # a start for the next step's search
 
 

@@ -167,7 +167,7 @@ class Simulation:
         self.mesh, self.points, self.material = mesh, points, material
         self.formulation, self.gdim, self.dynamic = formulation, mesh.geometry.dim, bool(dynamic)
         self.petsc_options, self.linear_solver = petsc_options, linear_solver
-        self.max_step_cells, self.min_step, self.mass = max_step_cells, min_step, mass
+        self.max_step_cells, self.min_step = max_step_cells, min_step
         self.timings: dict[str, float] = {}
         self.history: list[StepReport] = []
         self.t, self.step_number = 0.0, 0
