@@ -103,6 +103,22 @@ class GridFields:
             bcs.append(dolfinx.fem.dirichletbc(zero, to_parent[~supported], sub))
         return bcs
 
+    def displacement_at(self, cells: np.ndarray, bary: np.ndarray) -> np.ndarray:
+        """Δu (n, g) in m at points with barycentric coordinates ``bary`` (n, 3) in ``cells`` (n,).
+
+        P1 displacements only; coordinates outside [0, 1] extrapolate the cell's field.
+        """
+        if self.spec.u_degree != 1:
+            raise NotImplementedError("displacement_at: P1 displacements only")
+        g = bary.shape[1] - 1
+        values = self.w.x.array
+        return np.column_stack(
+            [
+                np.einsum("nv,nv->n", bary, values[to_parent[collapsed.dofmap.list[cells]]])
+                for _, collapsed, to_parent, _ in self._pinnable[:g]
+            ]
+        )
+
     def start_from_rest(
         self, cells: np.ndarray, bary: np.ndarray, mass: np.ndarray, stress: np.ndarray
     ) -> None:

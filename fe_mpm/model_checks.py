@@ -12,7 +12,7 @@ import numpy as np
 
 from fe_mpm._dolfinx import dolfinx
 from fe_mpm.boundary import PointDirichlet
-from fe_mpm.checks import check_choice, check_int, check_range
+from fe_mpm.checks import check_choice, check_range
 from fe_mpm.formulations import FORMULATIONS, FormulationSpec
 from fe_mpm.materials.protocol import Law, MixedLaw, missing_members
 from fe_mpm.particles import MaterialPoints, simplex_cell_type
@@ -84,18 +84,26 @@ def check_grid_and_points(mesh: dolfinx.mesh.Mesh, points: MaterialPoints) -> No
         )
 
 
-def check_domains(point_domains: int, gdim: int, points_leaving: str) -> None:
-    """Point domains: m ≥ 1 sub-points per edge, in 2D, with every point kept."""
-    check_int("Simulation", "point_domains", point_domains, lo=1)
-    if point_domains > 1 and gdim != 2:
+def check_domains(
+    point_domains: bool, gdim: int, points_leaving: str, spec: FormulationSpec
+) -> None:
+    """Point domains: on or off, in 2D, with P1 displacements and every point kept."""
+    if not isinstance(point_domains, bool):
+        raise TypeError(f"Simulation: point_domains must be True or False, got {point_domains!r}")
+    if point_domains and gdim != 2:
         raise NotImplementedError(
-            "Simulation: point_domains > 1 works on triangles (2D) for now; in 3D use 1 "
-            "(standard MPM)"
+            "Simulation: point_domains works on triangles (2D) for now; in 3D leave it "
+            "False (standard MPM)"
         )
-    if point_domains > 1 and points_leaving != "raise":
+    if point_domains and spec.u_degree != 1:
+        raise NotImplementedError(
+            "Simulation: point_domains works with P1 displacements ('u', 'up') for now: "
+            "a piece's one sub-point integrates a P2 field's stress inexactly"
+        )
+    if point_domains and points_leaving != "raise":
         raise ValueError(
-            "Simulation: point_domains > 1 needs points_leaving='raise': a point whose "
-            "sub-points leave the grid cannot gather its step"
+            "Simulation: point_domains needs points_leaving='raise': a point whose "
+            "domain leaves the grid cannot take its step"
         )
 
 

@@ -158,3 +158,43 @@ def strip_footing(
         point_dirichlet=[footing],
         **options,
     )
+
+
+#: AMPLE's elastic column: height (m), Young's modulus (Pa), density (kg/m³), gravity (m/s²).
+COLUMN = {"L": 50.0, "E": 4e5, "density": 80.0, "g": 10.0}
+
+
+def elastic_column(ny: int, per_cell: int = 1, **options) -> Simulation:
+    """AMPLE's plane-strain column (1 m wide, ``ny`` cells high) under ramped self-weight.
+
+    Neo-Hookean with ν = 0, rollers on the base and sides, gravity scaled by ``t``
+    (10 % strain at the base at ``t = 1``). ``options`` go to :class:`Simulation`.
+    """
+    L, E, rho, g = COLUMN["L"], COLUMN["E"], COLUMN["density"], COLUMN["g"]
+    scene = meshes.column(1.0, L, 1, ny, margin=0)
+    return Simulation(
+        scene.mesh,
+        seed(scene.mesh, per_cell=per_cell, density=rho),
+        NeoHookean(E, 0.0, rho),
+        facet_tags=scene.facet_tags,
+        dirichlet=[
+            Dirichlet(meshes.COLUMN_BASE, component=1),
+            Dirichlet(meshes.COLUMN_SIDES, component=0),
+        ],
+        body_force=(0.0, -g),
+        body_force_scale=lambda t: t,
+        **options,
+    )
+
+
+def column_stress_error(sim: Simulation) -> float:
+    """AMPLE's error of :func:`elastic_column` at full load (dimensionless).
+
+    Σ_p |σ_yy,p + ρ₀ g (L − Y_p)| V_p / (ρ₀ g L Σ_p V_p), Y_p the initial height:
+    equilibrium gives σ_yy = −ρ₀ g (L − Y) exactly, for any law.
+    """
+    L, rho, g = COLUMN["L"], COLUMN["density"], COLUMN["g"]
+    pts = sim.points
+    exact = -rho * g * (L - pts.x0[:, 1])
+    error = np.sum(np.abs(pts.stress[:, 1, 1] - exact) * pts.volume)
+    return float(error / (rho * g * L * pts.volume.sum()))

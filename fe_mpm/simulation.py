@@ -117,9 +117,9 @@ class Simulation:
         max_step_cells: A static step that moves a point farther than this many sizes
             of its cell (> 0, default 10) is rejected and cut: a grid value blew up at
             a nearly unsupported node (:func:`fe_mpm.point_update.checked_update`).
-        point_domains: Sub-points per edge of each point's domain (2D): m > 1 spreads
-            a point's volume over the cells its domain covers (:mod:`fe_mpm.domains`);
-            1 (default) is standard MPM.
+        point_domains: True: each point's volume is spread over the cells its
+            convected domain covers (2D, :mod:`fe_mpm.domains`), against the
+            cell-crossing error; False (default): standard MPM.
     """
 
     def __init__(
@@ -150,7 +150,7 @@ class Simulation:
         fallback_hold_cells: bool = True,
         linear_solver: str = "direct",
         max_step_cells: float = 10.0,
-        point_domains: int = 1,
+        point_domains: bool = False,
     ):
         model_checks.check_grid_and_points(mesh, points)
         model_checks.check_choices(
@@ -158,8 +158,8 @@ class Simulation:
         )
         model_checks.check_ranges(max_step_cells, ppp_alpha, damping, output_every)
         model_checks.check_dynamics(dynamic, formulation, damping, mass)
-        model_checks.check_domains(point_domains, points.gdim, points_leaving)
         self.spec = FORMULATIONS[formulation]
+        model_checks.check_domains(point_domains, points.gdim, points_leaving, self.spec)
         model_checks.check_law(material, self.spec, formulation)
         model_checks.take_density(material, points)
         for name, h in material.history.items():
@@ -196,8 +196,8 @@ class Simulation:
         self.output = (
             None if output_dir is None else SimulationOutput(output_dir, self.fields, output_every)
         )
+        self.domains = PointDomains(points, self.tracker) if point_domains else None
         self._track()  # once now, so a bad initial layout fails at set-up
-        self.domains = PointDomains.of(points, mesh, point_domains)
 
     # -- public API ------------------------------------------------------------
 

@@ -53,6 +53,9 @@ class Tracker:
         self._nodes_of = nodes_of
         self._tree = None  # built on first need
         self._node_cells = None  # node -> cells (CSR), built on first need
+        self._vertex_neighbours = None  # built on first need
+        #: Vertices of every cell, shape (nc, t+1, g) in m.
+        self.cell_vertices = nodes
 
     def barycentric(self, x: np.ndarray, cells: np.ndarray) -> np.ndarray:
         """Barycentric coordinates of points ``x`` (n, g) in ``cells`` (n,), shape (n, t+1).
@@ -105,12 +108,7 @@ class Tracker:
             Cells (n,): the allowed cell, or -1 where none is close enough.
         """
         out = np.where(allowed[np.maximum(cells, 0)] & (cells >= 0), cells, -1).astype(np.int32)
-        if self._node_cells is None:
-            flat = self._nodes_of.ravel()
-            order = np.argsort(flat, kind="stable")
-            starts = np.searchsorted(flat[order], np.arange(flat.max() + 2))
-            self._node_cells = (order // self._nodes_of.shape[1], starts)
-        owner, starts = self._node_cells
+        owner, starts = self._cells_of_nodes()
         for i in np.flatnonzero((out < 0) & (cells >= 0)):
             nodes = self._nodes_of[cells[i]]
             candidates = np.unique(
@@ -124,6 +122,36 @@ class Tracker:
             if lam[best].min() >= -tol:
                 out[i] = candidates[best]
         return out
+
+    def vertex_neighbours(self) -> np.ndarray:
+        """The cells that share a vertex with each cell, itself included (nc, s), padded with -1.
+
+        Computed once; ``s`` is the largest such count in the grid.
+        """
+        if self._vertex_neighbours is None:
+            owner, starts = self._cells_of_nodes()
+            nodes = self._nodes_of.ravel()
+            counts = starts[nodes + 1] - starts[nodes]
+            first = np.repeat(starts[nodes], counts)
+            within = np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)
+            cell = np.repeat(np.arange(nodes.size) // self._nodes_of.shape[1], counts)
+            pairs = np.unique(cell.astype(np.int64) * self.num_cells + owner[first + within])
+            cell, other = np.divmod(pairs, self.num_cells)
+            per_cell = np.bincount(cell, minlength=self.num_cells)
+            column = np.arange(cell.size) - np.repeat(np.cumsum(per_cell) - per_cell, per_cell)
+            table = np.full((self.num_cells, per_cell.max()), -1, dtype=np.int32)
+            table[cell, column] = other
+            self._vertex_neighbours = table
+        return self._vertex_neighbours
+
+    def _cells_of_nodes(self) -> tuple[np.ndarray, np.ndarray]:
+        """Node -> cells as CSR: the cells of node v are ``owner[starts[v]:starts[v + 1]]``."""
+        if self._node_cells is None:
+            flat = self._nodes_of.ravel()
+            order = np.argsort(flat, kind="stable")
+            starts = np.searchsorted(flat[order], np.arange(flat.max() + 2))
+            self._node_cells = (order // self._nodes_of.shape[1], starts)
+        return self._node_cells
 
     def _walk(self, x: np.ndarray, cells: np.ndarray, active: np.ndarray) -> np.ndarray:
         """Walk the points ``active`` from ``cells`` in place; return those not settled."""

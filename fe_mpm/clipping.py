@@ -1,0 +1,93 @@
+"""Where a triangle overlaps the triangles of a grid: its pieces, their areas and centroids.
+
+A point's domain (:mod:`fe_mpm.domains`) is a triangle that may cover parts of
+several cells. Clipping it against each cell (Sutherland–Hodgman, against the
+cell's three edges) gives convex pieces; one quadrature point at a piece's centroid,
+weighted by its area, integrates every linear function over the piece exactly, and
+so the P1 internal force of a constant stress over the whole domain.
+
+The clipping is done in each cell's reference coordinates ξ (the cell is then
+``ξ₁, ξ₂ ≥ 0, ξ₁ + ξ₂ ≤ 1``), vectorised over all (domain, cell) pairs at once.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def _clip(polygon: np.ndarray, count: np.ndarray, distance: np.ndarray, size: int):
+    """Keep the part of each polygon where ``distance`` ≥ 0 (one Sutherland–Hodgman pass).
+
+    Args:
+        polygon: Vertices (n, k, 2), the first ``count`` of each row in order.
+        count: Vertices per polygon (n,).
+        distance: Signed distance of every vertex (n, k); the half-plane is ≥ 0.
+        size: Columns of the result (the most vertices a clipped polygon can have).
+
+    Returns:
+        The clipped polygons (n, size, 2) and their vertex counts (n,).
+    """
+    n, k = distance.shape
+    column = np.arange(k)
+    valid = column[None, :] < count[:, None]
+    following = (column[None, :] + 1) % np.maximum(count, 1)[:, None]
+    d_next = np.take_along_axis(distance, following, axis=1)
+    v_next = np.take_along_axis(polygon, following[..., None], axis=1)
+    inside = valid & (distance >= 0)
+    crossing = valid & (((distance > 0) & (d_next < 0)) | ((distance < 0) & (d_next > 0)))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        s = np.where(crossing, distance / (distance - d_next), 0.0)
+    cut = polygon + s[..., None] * (v_next - polygon)
+    # Each vertex emits itself if inside, then the crossing of its edge: in order.
+    emitted = np.stack([polygon, cut], axis=2).reshape(n, 2 * k, 2)
+    keep = np.stack([inside, crossing], axis=2).reshape(n, 2 * k)
+    order = np.argsort(~keep, axis=1, kind="stable")[:, :size]
+    return np.take_along_axis(emitted, order[..., None], axis=1), keep.sum(axis=1)
+
+
+def area_and_centroid(polygon: np.ndarray, count: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Signed area (n,) and centroid (n, 2) of polygons with ``count`` (n,) vertices.
+
+    Polygons with fewer than three vertices have area 0 and centroid 0.
+    """
+    k = polygon.shape[1]
+    column = np.arange(k)
+    following = (column[None, :] + 1) % np.maximum(count, 1)[:, None]
+    p, q = polygon, np.take_along_axis(polygon, following[..., None], axis=1)
+    cross = np.where(
+        column[None, :] < count[:, None], p[..., 0] * q[..., 1] - q[..., 0] * p[..., 1], 0.0
+    )
+    area = 0.5 * cross.sum(axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        centroid = np.einsum("nk,nkg->ng", cross, p + q) / (6.0 * area[:, None])
+    return area, np.where(np.abs(area)[:, None] > 0, centroid, 0.0)
+
+
+def clip_to_reference_cell(xi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The overlap of triangles with the reference cell ``ξ₁, ξ₂ ≥ 0, ξ₁ + ξ₂ ≤ 1``.
+
+    Args:
+        xi: The triangles' vertices in the reference coordinates of a cell (n, 3, 2).
+
+    Returns:
+        The overlaps' areas in reference units (n,) ≥ 0 (the whole cell is 1/2), and
+        their centroids ξ (n, 2) (0 where the area is 0).
+    """
+    half_planes = (
+        lambda p: p[..., 0],
+        lambda p: p[..., 1],
+        lambda p: 1.0 - p[..., 0] - p[..., 1],
+    )
+    distances = np.stack([d(xi) for d in half_planes])  # (3 edges, n, 3 vertices)
+    # Most pairs need no clipping: the triangle is wholly inside the cell, or wholly
+    # beyond one of its edges.
+    inside = np.all(distances >= 0, axis=(0, 2))
+    cut = ~inside & ~np.any(np.all(distances < 0, axis=2), axis=0)
+    area = np.zeros(len(xi))
+    centroid = np.zeros((len(xi), 2))
+    area[inside], centroid[inside] = area_and_centroid(xi[inside], np.full(inside.sum(), 3))
+    polygon, count = xi[cut], np.full(cut.sum(), 3)
+    for size, distance in zip((4, 5, 6), half_planes, strict=True):
+        polygon, count = _clip(polygon, count, distance(polygon), size)
+    area[cut], centroid[cut] = area_and_centroid(polygon, count)
+    return np.abs(area), centroid

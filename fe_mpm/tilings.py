@@ -1,0 +1,111 @@
+"""The first domains of the points: each cell tiled by as many equal triangles as it has points.
+
+:func:`fe_mpm.seed` gives the points of a cell equal shares of its area, so the cell
+can be cut into that many equal triangles, one per point: the domains then tile
+the body without gaps or overlaps. A cell with ``m²`` points is cut by the lines
+parallel to its edges at steps of 1/m; ``3 m²`` and ``6 m²`` points cut each of those
+triangles further, from its centroid to its corners (3) or to its corners and edge
+midpoints (6). A cell whose points do not share it equally, or hold a count not of
+those forms (7, 15), gives each point the cell shrunk to the point's volume around
+the point instead (these domains may overlap or reach past the body).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+#: Points of one cell share it equally when their volumes match to this tolerance.
+EQUAL_SHARES_TOL = 1e-9
+
+
+def _subdivision(m: int) -> list[np.ndarray]:
+    """The m² triangles of a triangle cut at steps of 1/m, as barycentric vertices (3, 3)."""
+    lattice = [(i, j) for i in range(m) for j in range(m - i)]
+    triangles = []
+    for i, j in lattice:
+        triangles.append([(i, j), (i + 1, j), (i, j + 1)])  # pointing up
+        if i + j < m - 1:
+            triangles.append([(i + 1, j), (i + 1, j + 1), (i, j + 1)])  # pointing down
+    out = []
+    for corners in triangles:
+        xi = np.array(corners, dtype=float) / m
+        out.append(np.column_stack([1.0 - xi.sum(axis=1), xi]))
+    return out
+
+
+def _fan(triangle: np.ndarray, pieces: int) -> list[np.ndarray]:
+    """A triangle (3, 3) cut from its centroid into 3 (to the corners) or 6 (and midpoints)."""
+    centre = triangle.mean(axis=0)
+    if pieces == 3:
+        ring = [triangle[0], triangle[1], triangle[2]]
+    else:
+        ring = []
+        for a in range(3):
+            ring += [triangle[a], 0.5 * (triangle[a] + triangle[(a + 1) % 3])]
+    return [np.array([centre, ring[i], ring[(i + 1) % len(ring)]]) for i in range(len(ring))]
+
+
+def equal_tiling(k: int) -> np.ndarray | None:
+    """``k`` triangles of equal area that tile a triangle, barycentric vertices (k, 3, 3).
+
+    None unless ``k`` is ``m²``, ``3 m²`` or ``6 m²``.
+    """
+    for fan in (1, 3, 6):
+        m = math.isqrt(k // fan)
+        if k % fan == 0 and m * m * fan == k:
+            triangles = _subdivision(m)
+            if fan > 1:
+                triangles = [piece for t in triangles for piece in _fan(t, fan)]
+            return np.array(triangles)
+    return None
+
+
+def initial_domains(
+    x: np.ndarray, volume: np.ndarray, cell: np.ndarray, cell_vertices: np.ndarray
+) -> np.ndarray:
+    """Every point's first domain, a triangle (n, 3, 2) in m.
+
+    Args:
+        x: The points' positions (n, 2) in m.
+        volume: Their volumes (areas) (n,) in m².
+        cell: Their cells (n,).
+        cell_vertices: The vertices of every cell of the grid (nc, 3, 2) in m.
+
+    Cells shared equally are tiled (:func:`equal_tiling`), and each of their points
+    takes the nearest free tile (greedy); other points take their cell shrunk to
+    their volume and centred on them.
+    """
+    own = cell_vertices[cell]
+    centre = own.mean(axis=1, keepdims=True)
+    cell_area = 0.5 * np.abs(np.linalg.det(own[:, 1:] - own[:, :1]))
+    corners = x[:, None, :] + np.sqrt(volume / cell_area)[:, None, None] * (own - centre)
+    order = np.argsort(cell, kind="stable")
+    cells, starts, counts = np.unique(cell[order], return_index=True, return_counts=True)
+    for k in np.unique(counts):
+        tiles = equal_tiling(int(k))
+        if tiles is None:
+            continue
+        group = np.flatnonzero(counts == k)
+        members = order[starts[group][:, None] + np.arange(k)]  # (cells, k) point indices
+        share = volume[members] / (cell_area[members[:, 0]] / k)[:, None]
+        equal = np.all(np.abs(share - 1.0) < EQUAL_SHARES_TOL, axis=1)
+        members = members[equal]
+        tile_corners = np.einsum("tcv,nvg->ntcg", tiles, cell_vertices[cells[group][equal]])
+        corners[members] = _assign(x[members], tile_corners)
+    return corners
+
+
+def _assign(x: np.ndarray, tiles: np.ndarray) -> np.ndarray:
+    """Each point of a cell (cells, k, 2) its nearest free tile of ``tiles`` (cells, k, 3, 2)."""
+    distance = np.linalg.norm(x[:, :, None, :] - tiles.mean(axis=2)[:, None, :, :], axis=-1)
+    taken = np.empty(x.shape[:2], dtype=np.int64)
+    rows = np.arange(len(x))
+    for _ in range(x.shape[1]):
+        flat = np.argmin(distance.reshape(len(x), -1), axis=1)
+        point, tile = np.divmod(flat, x.shape[1])
+        taken[rows, point] = tile
+        distance[rows, point, :] = np.inf
+        distance[rows, :, tile] = np.inf
+    return np.take_along_axis(tiles, taken[:, :, None, None], axis=1)

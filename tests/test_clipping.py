@@ -1,0 +1,94 @@
+"""The geometry under point domains: clipping a triangle by cells, and tiling a cell."""
+
+import numpy as np
+import pytest
+
+import fe_mpm
+from fe_mpm import meshes
+from fe_mpm.clipping import clip_to_reference_cell
+from fe_mpm.tilings import equal_tiling, initial_domains
+from fe_mpm.tracker import Tracker
+
+REFERENCE = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
+#: The unit square as the reference cell and its mirror image, in the reference
+#: cell's coordinates: a triangle inside the square is cut into exactly two pieces.
+MIRROR = np.array([[1.0, 1.0], [0.0, 1.0], [1.0, 0.0]])
+
+
+def _area_and_centroid(t):
+    e = t[:, 1:] - t[:, :1]
+    return 0.5 * np.abs(np.linalg.det(e)), t.mean(axis=1)
+
+
+@pytest.mark.parametrize(
+    ("triangle", "area", "centroid"),
+    [
+        (REFERENCE, 0.5, (1 / 3, 1 / 3)),  # the cell itself
+        (REFERENCE[::-1], 0.5, (1 / 3, 1 / 3)),  # clockwise
+        ([[-1, -1], [3, -1], [-1, 3]], 0.5, (1 / 3, 1 / 3)),  # covers the cell
+        ([[-0.5, 0], [0.5, 0], [0, 0.5]], 0.125, (1 / 6, 1 / 6)),  # half inside
+        ([[0.1, 0.1], [0.3, 0.1], [0.1, 0.3]], 0.02, (1 / 6, 1 / 6)),  # wholly inside
+        ([[2, 2], [3, 2], [2, 3]], 0.0, (0, 0)),  # disjoint
+        ([[1, 0], [2, 0], [1, 1]], 0.0, (0, 0)),  # touches a corner only
+        ([[0.5, 0.5], [1, 1], [0, 1]], 0.0, (0, 0)),  # shares an edge only
+    ],
+)
+def test_clipping_known_overlaps(triangle, area, centroid):
+    a, c = clip_to_reference_cell(np.array([triangle], dtype=float))
+    assert a[0] == pytest.approx(area, rel=1e-14, abs=1e-15)
+    assert np.allclose(c[0], centroid, rtol=0, atol=1e-14)
+
+
+def test_the_pieces_of_a_triangle_add_up_to_it():
+    """500 random triangles in the unit square, cut by its two halves: the pieces'
+    areas add up to the triangle's, and their area-weighted centroids give its
+    centroid (both to round-off), whatever the orientation."""
+    rng = np.random.default_rng(20261202)
+    t = rng.uniform(0.0, 1.0, (500, 3, 2))
+    a1, c1 = clip_to_reference_cell(t)
+    # The mirror half in its own reference coordinates: ξ' = (1, 1) − ξ.
+    a2, c2 = clip_to_reference_cell(1.0 - t)
+    c2 = 1.0 - c2
+    area, centroid = _area_and_centroid(t)
+    assert np.allclose(a1 + a2, area, rtol=1e-12, atol=1e-15)
+    both = (a1 > 0) & (a2 > 0)
+    assert both.sum() > 100  # most triangles cross the diagonal
+    weighted = (a1[:, None] * c1 + a2[:, None] * np.where(a2[:, None] > 0, c2, 0)) / area[:, None]
+    assert np.allclose(weighted, centroid, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("k", [1, 3, 4, 6, 9, 12, 16, 24])
+def test_a_cell_is_tiled_by_k_equal_triangles(k):
+    tiles = equal_tiling(k)
+    xi = tiles[..., 1:]
+    area, _ = _area_and_centroid(xi)
+    assert tiles.shape == (k, 3, 3)
+    assert np.allclose(area, 0.5 / k, rtol=1e-13, atol=0)
+    # Every tile lies in the cell, so equal areas adding up to the cell's leave no
+    # room for overlap: the tiles cover it once.
+    inside, _ = clip_to_reference_cell(xi)
+    assert np.allclose(inside, area, rtol=1e-13, atol=0)
+
+
+@pytest.mark.parametrize("k", [2, 5, 7, 15])
+def test_other_counts_have_no_equal_tiling(k):
+    assert equal_tiling(k) is None
+
+
+@pytest.mark.parametrize("per_cell", [1, 3, 6, 7])
+def test_the_first_domains_tile_the_body(per_cell):
+    """Seeded points share their cell equally: their domains are the cell's tiles
+    (each of the point's volume, inside its cell); the 7-point rule has no equal
+    tiling, and its points get the cell shrunk to their volume around them."""
+    mesh = meshes.rectangle_mesh((0.0, 0.0), (2.0, 1.0), (4, 3))
+    points = fe_mpm.seed(mesh, per_cell=per_cell)
+    tracker = Tracker(mesh)
+    corners = initial_domains(points.x, points.volume, points.cell, tracker.cell_vertices)
+    area, centroid = _area_and_centroid(corners)
+    assert np.allclose(area, points.volume, rtol=1e-12, atol=0)
+    xi = tracker.barycentric(corners.reshape(-1, 2), np.repeat(points.cell, 3))[:, 1:]
+    inside, _ = clip_to_reference_cell(xi.reshape(-1, 3, 2))
+    tiled = np.allclose(inside * 2 * tracker.volumes[points.cell], area, rtol=1e-12, atol=0)
+    assert tiled == (per_cell != 7)
+    if per_cell == 7:
+        assert np.allclose(centroid, points.x, rtol=0, atol=1e-14)
