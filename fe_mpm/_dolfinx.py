@@ -167,3 +167,16 @@ def tabulate_expression(
     dolfinx.cpp.fem.tabulate_expression(
         values, cpp, constants, coefficients, mesh._cpp_object, entities
     )
+
+
+def matrix_with_pattern_of(forms: list[dolfinx.fem.Form]):
+    """A PETSc matrix whose sparsity holds the entries of every bilinear form in ``forms``.
+
+    The forms share their argument spaces (e.g. cell integrals and interior-facet
+    integrals of one unknown).
+    """
+    pattern = dolfinx.fem.create_sparsity_pattern(forms[0])
+    for form in forms[1:]:
+        dolfinx.fem.build_sparsity_pattern(pattern, form)
+    pattern.finalize()
+    return dolfinx.cpp.la.petsc.create_matrix(forms[0].mesh.comm, pattern, None)

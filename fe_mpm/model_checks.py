@@ -85,9 +85,23 @@ def check_grid_and_points(mesh: dolfinx.mesh.Mesh, points: MaterialPoints) -> No
 
 
 def check_domains(
-    point_domains: bool, gdim: int, points_leaving: str, spec: FormulationSpec
+    point_domains: bool,
+    ghost_penalty: float,
+    points: MaterialPoints,
+    points_leaving: str,
+    spec: FormulationSpec,
 ) -> None:
-    """Point domains: on or off, in 2D, with P1 displacements and every point kept."""
+    """Point domains: on or off, in 2D, with P1 displacements and every point kept.
+
+    The ghost penalty: γ ≥ 0, with P1 displacements.
+    """
+    check_range("Simulation", "ghost_penalty", ghost_penalty, lo=0.0)
+    if ghost_penalty and spec.u_degree != 1:
+        raise NotImplementedError(
+            "Simulation: ghost_penalty works with P1 displacements ('u', 'up') for now: "
+            "P2 needs the jumps of its second derivatives too"
+        )
+    gdim = points.gdim
     if not isinstance(point_domains, bool):
         raise TypeError(f"Simulation: point_domains must be True or False, got {point_domains!r}")
     if point_domains and gdim != 2:

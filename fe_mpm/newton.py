@@ -18,7 +18,7 @@ from petsc4py import PETSc
 import dolfinx.fem.petsc as fem_petsc
 import numpy as np
 
-from fe_mpm._dolfinx import dolfinx
+from fe_mpm._dolfinx import dolfinx, matrix_with_pattern_of
 from fe_mpm.force_test import EPS, ROUND_OFF_FACTOR, ForceTest, NewtonResult
 from fe_mpm.formulations import collapse
 from fe_mpm.packing import BoundForm
@@ -72,6 +72,8 @@ class NewtonSolver:
             modes, and for a mixed unknown its dofs.
         length: Largest cell size h (m), the length of :class:`ForceTest`'s
             round-off floor.
+        coupling: A bilinear form whose entries the matrix must hold as well (the
+            ghost penalty over every interior facet), or None.
     """
 
     def __init__(
@@ -84,14 +86,17 @@ class NewtonSolver:
         linear_solver: str = "direct",
         displacement: dolfinx.fem.FunctionSpace | None = None,
         length: float = 1.0,
+        coupling: dolfinx.fem.Form | None = None,
     ):
         self.u = u
-        self.A = fem_petsc.create_matrix(sparsity_form)
+        patterns = [sparsity_form] if coupling is None else [sparsity_form, coupling]
+        self.A = matrix_with_pattern_of(patterns)
         # PETSc squeezes out preallocated entries never set before the first final
         # assembly, and later steps occupy cells that were empty in the first. So
         # set every entry of the pattern once (empty slots give explicit zeros),
         # and make any entry outside the pattern an error instead of a silent drop.
-        fem_petsc.assemble_matrix(self.A, sparsity_form)
+        for form in patterns:
+            fem_petsc.assemble_matrix(self.A, form)
         self.A.assemble()
         self.A.setOption(PETSc.Mat.Option.NEW_NONZERO_LOCATION_ERR, True)
         self.b = fem_petsc.create_vector(u.function_space)
@@ -135,6 +140,7 @@ class NewtonSolver:
         self.snes.setMonitor(_weak(self._monitor))
         self._F = self._J = None
         self._bcs: Sequence = ()
+        self._ghost = None
         self._before_residual: Callable[[], None] | None = None
         self._before_jacobian: Callable[[], None] | None = None
 
@@ -213,6 +219,8 @@ class NewtonSolver:
             b_local.set(0.0)
         fem_petsc.assemble_vector(b, self._F.form, coeffs=self._F.coefficients())
         b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        if self._ghost is not None:
+            self._ghost.full.multAdd(x, b, b)  # G Δu, linear in the increment
         # Before the conditions overwrite them, supported rows hold their reactions.
         rows = self._u_rows
         self.test.internal = self._norm(b.array_r[rows] + self._loads.array_r[rows])
@@ -260,6 +268,8 @@ class NewtonSolver:
             self._before_jacobian()
         t0 = time.perf_counter()
         self._J.assemble_matrix(A, self._bcs)
+        if self._ghost is not None:
+            A.axpy(1.0, self._ghost.constrained, PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
         A.getDiagonal(self._diagonal)
         diagonal = np.abs(self._diagonal.array_r[self._u_rows])
         self.test.round_off = ROUND_OFF_FACTOR * EPS * self.test.length * self._norm(diagonal)
@@ -275,6 +285,7 @@ class NewtonSolver:
         before_jacobian: Callable[[], None] | None = None,
         loads: BoundForm | None = None,
         pressure_volume: float = 0.0,
+        ghost=None,
     ) -> NewtonResult:
         """Solve from the current value of ``u``; on return ``u`` holds the last iterate.
 
@@ -283,13 +294,15 @@ class NewtonSolver:
         ``line_search`` (a SNES line-search type, e.g. ``"bt"``) replaces the
         configured one for this solve only. ``loads`` is the step's external
         force form f_ext and ``pressure_volume`` the norm of the pressure nodes'
-        volumes ‖V‖ (m³; m² in 2D), both for :class:`ForceTest`.
+        volumes ‖V‖ (m³; m² in 2D), both for :class:`ForceTest`. ``ghost`` (a
+        :class:`~fe_mpm.ghost.GhostStabilisation`, assembled for the step) adds its
+        penalty to the residual and the tangent.
 
         With ``pc_type redistribute`` every solve gets a fresh linear solver: the
         constrained dofs it removes change from step to step, but the matrix
         pattern does not, so PETSc would keep the last step's reduced system.
         """
-        self._F, self._J, self._bcs = F, J, bcs
+        self._F, self._J, self._bcs, self._ghost = F, J, bcs, ghost
         self._before_residual = before_residual
         self._before_jacobian = before_jacobian
         if self._options.get("pc_type") == "redistribute":

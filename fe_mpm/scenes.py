@@ -190,7 +190,7 @@ def elastic_column(ny: int, per_cell: int = 1, **options) -> Simulation:
 def column_stress_error(sim: Simulation) -> float:
     """AMPLE's error of :func:`elastic_column` at full load (dimensionless).
 
-    Σ_p |σ_yy,p + ρ₀ g (L − Y_p)| V_p / (ρ₀ g L Σ_p V_p), Y_p the initial height:
+    ``Σ_p abs(σ_yy,p + ρ₀ g (L − Y_p)) V_p / (ρ₀ g L Σ_p V_p)``, Y_p the initial height:
     equilibrium gives σ_yy = −ρ₀ g (L − Y) exactly, for any law.
     """
     L, rho, g = COLUMN["L"], COLUMN["density"], COLUMN["g"]

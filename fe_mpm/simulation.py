@@ -32,6 +32,7 @@ from fe_mpm.dynamics import NewmarkDynamics
 from fe_mpm.errors import ConvergenceError, PointsOutsideError, warn
 from fe_mpm.forms.mixed_up import PPPData
 from fe_mpm.formulations import FORMULATIONS, GridFields
+from fe_mpm.ghost import GhostStabilisation
 from fe_mpm.grid_conditions import GridConditions
 from fe_mpm.markers import Markers
 from fe_mpm.materials import ReturnMapResult
@@ -120,6 +121,8 @@ class Simulation:
         point_domains: True: each point's volume is spread over the cells its
             convected domain covers (2D, :mod:`fe_mpm.domains`), against the
             cell-crossing error; False (default): standard MPM.
+        ghost_penalty: γ ≥ 0 of the ghost penalty on the facets of poorly filled
+            cells (:mod:`fe_mpm.ghost`, P1 displacements); 0 (default): none.
     """
 
     def __init__(
@@ -151,6 +154,7 @@ class Simulation:
         linear_solver: str = "direct",
         max_step_cells: float = 10.0,
         point_domains: bool = False,
+        ghost_penalty: float = 0.0,
     ):
         model_checks.check_grid_and_points(mesh, points)
         model_checks.check_choices(
@@ -159,7 +163,7 @@ class Simulation:
         model_checks.check_ranges(max_step_cells, ppp_alpha, damping, output_every)
         model_checks.check_dynamics(dynamic, formulation, damping, mass)
         self.spec = FORMULATIONS[formulation]
-        model_checks.check_domains(point_domains, points.gdim, points_leaving, self.spec)
+        model_checks.check_domains(point_domains, ghost_penalty, points, points_leaving, self.spec)
         model_checks.check_law(material, self.spec, formulation)
         model_checks.take_density(material, points)
         for name, h in material.history.items():
@@ -197,6 +201,9 @@ class Simulation:
             None if output_dir is None else SimulationOutput(output_dir, self.fields, output_every)
         )
         self.domains = PointDomains(points, self.tracker) if point_domains else None
+        self.ghost = (
+            GhostStabilisation(self.fields, ghost_penalty, material.mu) if ghost_penalty else None
+        )
         self._track()  # once now, so a bad initial layout fails at set-up
 
     # -- public API ------------------------------------------------------------
@@ -379,11 +386,16 @@ class Simulation:
         if forms.pointwise:
             hooks["before_residual"] = lambda: self.refresh_material(tangent=False)
             hooks["before_jacobian"] = self.refresh_material
+        if self.ghost is not None:
+            self.ghost.update(current.layout.cell, pts.volume, self.tracker.volumes, bcs)
+            hooks["ghost"] = self.ghost
         if self._newton is None:  # its matrix has the pattern of every cell of the grid
             prefix = f"fe_mpm_{self.formulation.replace('-', '_')}_"
             pattern = forms.jacobian.bind_cells(np.arange(self.tracker.num_cells, dtype=np.int32))
             options = (self.petsc_options, self.timings, self.linear_solver, self.fields.U)
-            self._newton = NewtonSolver(self.w, pattern, prefix, *options, self.tracker.sizes.max())
+            coupling = None if self.ghost is None else self.ghost.pattern
+            size = self.tracker.sizes.max()
+            self._newton = NewtonSolver(self.w, pattern, prefix, *options, size, coupling)
 
         def attempt(search: str | None) -> NewtonResult:
             self._initial_guess()
@@ -445,3 +457,5 @@ class Simulation:
         if self._newton is not None:
             self._newton.destroy()
             self._newton = None
+        if self.ghost is not None:
+            self.ghost.destroy()

@@ -1,0 +1,66 @@
+"""Strip footing: the step-to-step jitter of q/c_u as points cross cells.
+
+The u-p footing of ``benchmarks/footing_step_count.py`` (h = 0.2 B near the footing,
+0.5 B far from it, 100 steps of 20 mm to s/B = 2), with standard MPM, with point
+domains, and with point domains and the ghost penalty. The jitter is the mean
+absolute second difference of q/c_u over the steps (a smooth curve has almost
+none); the window means of q/c_u over s/B ± 0.1 show what the curve does.
+
+Usage: ``./run python benchmarks/footing_jitter.py [--h 0.2] [--steps 100]``. Not a test.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+from footing_grids import window_means
+
+import fe_mpm
+from fe_mpm import scenes
+
+CENTRES = (0.5, 1.0, 1.5, 1.9)
+CASES = [
+    ("standard MPM", {}),
+    ("point domains", {"point_domains": True}),
+    ("domains + ghost 0.1", {"point_domains": True, "ghost_penalty": 0.1}),
+]
+
+
+def run(h: float, h_far: float, steps: int, options: dict) -> tuple[list[dict], float]:
+    """Every step's s/B and q/c_u, and the wall time."""
+    sim = scenes.strip_footing("up", h=h, h_far=h_far, settlement=2.0, **options)
+    t0 = time.perf_counter()
+    try:
+        sim.run(1.0, steps, progress=False)
+    except fe_mpm.ConvergenceError as err:
+        print(f"  stopped at s/B = {2.0 * sim.t:.2f}: {str(err).split(';')[0]}")
+    rows = [
+        {"s_over_B": 2.0 * r.t, "q_over_cu": -r.reactions["footing"][1] / 0.5 / 100.0}
+        for r in sim.history
+    ]
+    wall = time.perf_counter() - t0
+    sim.close()
+    return rows, wall
+
+
+def main() -> None:
+    """Print one row per case."""
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--h", type=float, default=0.2)
+    p.add_argument("--h-far", type=float, default=0.5)
+    p.add_argument("--steps", type=int, default=100)
+    args = p.parse_args()
+    print(f"h = {args.h}, h_far = {args.h_far}, {args.steps} steps to s/B = 2")
+    print(f"{'case':<22}{'jitter':>8}" + "".join(f"{c:>8}" for c in CENTRES) + f"{'wall s':>8}")
+    for label, options in CASES:
+        rows, wall = run(args.h, args.h_far, args.steps, options)
+        q = np.array([r["q_over_cu"] for r in rows])
+        jitter = np.abs(np.diff(q, 2)).mean()
+        means = "".join(f"{m:>8.2f}" for m in window_means(rows, CENTRES))
+        print(f"{label:<22}{jitter:>8.3f}{means}{wall:>8.0f}", flush=True)
+
+
+if __name__ == "__main__":
+    main()

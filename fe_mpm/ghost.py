@@ -1,0 +1,98 @@
+"""Ghost stabilisation in a step: which facets, and the penalty's matrices there.
+
+``Simulation(ghost_penalty=γ)`` adds the ghost penalty of :mod:`fe_mpm.forms.ghost`
+on every interior facet between two occupied cells at least one of which the
+material fills less than :data:`POORLY_FILLED` (the points' volume over the cell's).
+The penalty is linear in Δu, so each step assembles it once: as ``full`` (no
+conditions, for the residual ``G Δu``) and as ``constrained`` (the rows and
+columns of Dirichlet dofs zeroed, to add to the tangent).
+"""
+
+from __future__ import annotations
+
+import dolfinx.fem.petsc as fem_petsc
+import numpy as np
+import ufl
+
+from fe_mpm._dolfinx import FormFactory, dolfinx
+from fe_mpm.forms.ghost import GHOST_FACETS, ghost_penalty
+from fe_mpm.formulations import GridFields
+
+#: A cell filled less than this (points' volume / cell volume) is poorly filled.
+POORLY_FILLED = 0.5
+
+
+class GhostStabilisation:
+    """The ghost penalty of one grid, re-bound to the facets of every step.
+
+    Args:
+        fields: The grid unknown (P1 displacement, alone or with a pressure).
+        gamma: The penalty factor γ > 0 (dimensionless).
+        mu: The shear modulus μ of the material (Pa).
+
+    Attributes:
+        pattern: The penalty over every interior facet (a sparsity pattern).
+        full: G on the step's facets (PETSc matrix).
+        constrained: The same with the Dirichlet rows and columns zeroed.
+        facets: The step's ghost facets (local indices).
+    """
+
+    def __init__(self, fields: GridFields, gamma: float, mu: float):
+        W = fields.W
+        mesh = W.mesh
+        trial, test = ufl.TrialFunction(W), ufl.TestFunction(W)
+        if fields.spec.pressure:
+            trial, test = ufl.split(trial)[0], ufl.split(test)[0]
+        self.scale = dolfinx.fem.Constant(mesh, 2.0 * gamma * mu)
+        compiled = dolfinx.fem.compile_form(mesh.comm, ghost_penalty(trial, test, self.scale))
+        self._factory = FormFactory(compiled, [W, W], mesh, {}, {self.scale: self.scale})
+        tdim = mesh.topology.dim
+        mesh.topology.create_connectivity(tdim - 1, tdim)
+        mesh.topology.create_connectivity(tdim, tdim - 1)
+        self._topology = mesh.topology
+        facet_cells = mesh.topology.connectivity(tdim - 1, tdim)
+        owned = mesh.topology.index_map(tdim - 1).size_local
+        offsets = facet_cells.offsets
+        self._interior = np.flatnonzero(np.diff(offsets)[:owned] == 2).astype(np.int32)
+        first = offsets[self._interior]
+        self._cells = np.column_stack([facet_cells.array[first], facet_cells.array[first + 1]])
+        self.pattern = self._bind(self._interior)
+        self.full = fem_petsc.create_matrix(self.pattern)
+        self.constrained = fem_petsc.create_matrix(self.pattern)
+        for matrix in (self.full, self.constrained):
+            # Set every entry once, or PETSc drops those the first step leaves unset.
+            fem_petsc.assemble_matrix(matrix, self.pattern)
+            matrix.assemble()
+        self.facets = np.zeros(0, dtype=np.int32)
+
+    def _bind(self, facets: np.ndarray) -> dolfinx.fem.Form:
+        entities = dolfinx.fem.compute_integration_domains(
+            dolfinx.fem.IntegralType.interior_facet, self._topology, facets
+        )
+        return self._factory({dolfinx.fem.IntegralType.interior_facet: [(GHOST_FACETS, entities)]})
+
+    def update(
+        self, cells: np.ndarray, volume: np.ndarray, cell_volume: np.ndarray, bcs: list
+    ) -> None:
+        """Pick the step's ghost facets and assemble G there.
+
+        Args:
+            cells: The cell of each point (n,).
+            volume: The points' volumes (n,).
+            cell_volume: The volume of every cell (nc,).
+            bcs: The step's Dirichlet conditions.
+        """
+        fill = np.bincount(cells, weights=volume, minlength=cell_volume.size) / cell_volume
+        a, b = fill[self._cells[:, 0]], fill[self._cells[:, 1]]
+        ghost = (a > 0) & (b > 0) & (np.minimum(a, b) < POORLY_FILLED)
+        self.facets = self._interior[ghost]
+        form = self._bind(self.facets)
+        for matrix, conditions, diagonal in ((self.full, [], 1.0), (self.constrained, bcs, 0.0)):
+            matrix.zeroEntries()
+            fem_petsc.assemble_matrix(matrix, form, bcs=conditions, diag=diagonal)
+            matrix.assemble()
+
+    def destroy(self) -> None:
+        """Free the PETSc matrices."""
+        self.full.destroy()
+        self.constrained.destroy()
