@@ -26,7 +26,11 @@
 # c = √(E/ρ) and ω_n = (2n+1)π c/(2L) (Tielen et al.). The error is the largest
 # deviation over the run, relative to the static top displacement ρ g L²/(2E).
 #
-# Usage: `python demos/elastic_column.py --ny 32 --steps 10 [--dynamic] --json`.
+# With many load steps the points cross cells and the stress error of standard MPM
+# stalls near 5 %; `--point-domains` makes it converge at first order
+# ([Cell crossing](../docs/cell_crossing.md)).
+#
+# Usage: `python demos/elastic_column.py --ny 32 --steps 10 [--dynamic] [--point-domains] --json`.
 
 # +
 import time
@@ -70,6 +74,11 @@ def parse_args(argv=None):
         help="dynamic: mass-proportional Rayleigh damping α (1/s)",
     )
     p.add_argument("--mp-per-cell", type=int, default=1)
+    p.add_argument(
+        "--point-domains",
+        action="store_true",
+        help="spread each point over the cells its domain covers (docs/cell_crossing.md)",
+    )
     p.add_argument("--json", action="store_true", help="print a JSON summary as the last line")
     return p.parse_args(argv)
 
@@ -102,6 +111,7 @@ try:
         dynamic=args.dynamic,
         **({"mass": args.mass, "damping": args.damping} if args.dynamic else {}),
         reactions={"base": meshes.COLUMN_BASE},
+        point_domains=args.point_domains,
     )
 except ValueError as err:
     sys.exit(f"elastic_column.py: {err}")

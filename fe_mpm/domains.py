@@ -8,19 +8,21 @@ drifts with the number of load steps (Cook's membrane over 20 steps, n = 32: +25
 With ``Simulation(point_domains=True)`` each point carries a triangle, its domain;
 at the start the domains tile the body (:mod:`fe_mpm.tilings`). Every step cuts each
 domain by the cells it covers (:mod:`fe_mpm.clipping`) and integrates each piece
-with one sub-point at the piece's centroid, weighted by its area: exact for the P1
-internal force of a domain's stress, so a point that crosses a facet moves its
-weight to the next cell continuously. The sub-points take the point's deformation
-gradient, history and state, and the step.
+with one sub-point at the piece's centroid, carrying the piece's share (its area
+over the domain's) of the point's volume and mass: exact for the P1 internal force
+of a domain's stress, so a point that crosses a facet moves its weight to the next
+cell continuously. The sub-points take the point's deformation gradient, history
+and state, and the step.
 
 The domains' corners then move with the grid's displacement (as in CPDI2,
 Sadeghirad et al. 2013, and Nairn's convected particle domains), so the domains keep
-tiling the deformed body; each point's new ``F`` is the affine map of its domain's
-corners and its volume the domain's area. The stored deformation is thus that of a
-continuous piecewise-linear motion of the domains, and does not drift with the
-number of load steps as a mean of the sub-points' increments would (Cook, 5 N,
-n = 32, 80 steps: +0.3 % against +2.7 %). The point's position, stress, history,
-velocity and acceleration are the area-weighted means of its pieces'. Averaging the
+tiling the deformed body; each point's ``ΔF`` is the affine map of its domain's
+corners, so its volume and its domain's area change by the same factor. The stored
+deformation is thus that of one continuous piecewise-linear motion of the domains;
+the mean of the pieces' increments would drift further with the number of load
+steps (Cook, 5 N, n = 32, 80 steps: 1.3769 against 1.3910, converged 1.3542). The
+point's position is its domain's centroid; its stress, history,
+velocity and acceleration are the share-weighted means of its pieces'. Averaging the
 history is exact for elastic laws and an approximation for plastic ones (each piece
 returns from the point's own state).
 
@@ -48,11 +50,12 @@ from fe_mpm.tracker import Tracker
 COVERAGE_TOL = 1e-9
 #: A domain with less than this fraction of its area inside the grid has left it.
 MIN_INSIDE = 0.5
-#: Pieces smaller than this fraction of their domain are dropped (measured on Cook's
-#: membrane at 10 N, n = 32, 160 steps: with 1e-12 a cell held by a sliver of 4e-5 of
-#: its area stalls Newton in step 133; with 1e-3 or 1e-2 the run completes and the
-#: tip moves by 0.03 %).
-MIN_SHARE = 1e-3
+#: Pieces smaller than this fraction of their domain are dropped (slivers of
+#: round-off). Larger slivers stay: a corner's own cell must hold material, or its
+#: free nodes are pinned and hold the corner back, and the ghost penalty ties the
+#: nodes of a cell held by a sliver. Measured on Cook at 10 N, n = 32, 160 steps,
+#: without the penalty: a cell held by 4e-5 of its area stalls Newton in step 133.
+MIN_SHARE = 1e-9
 
 
 @dataclass
@@ -64,9 +67,10 @@ class Pieces:
         cell: Its cell (k,).
         share: Its fraction of its domain's area (k,); each point's add up to 1.
         x: Its centroid (k, 2) in m, where its sub-point integrates it.
-        corner_cell: The cell of each domain's corners (n × 3,), or the domain's last
-            cell for a corner past the grid's edge.
-        corner_bary: The corners' barycentric coordinates there (n × 3, 3).
+        corner_cell: The cell whose grid increment moves each domain corner (n × 3,):
+            its own, or for a corner past the grid's edge its domain's nearest piece's.
+        corner_bary: The corners' barycentric coordinates there (n × 3, 3), outside
+            [0, 1] for a corner outside that cell.
     """
 
     owner: np.ndarray
@@ -91,16 +95,22 @@ class PointDomains:
     """
 
     def __init__(self, points: MaterialPoints, tracker: Tracker):
-        self.corners = initial_domains(points.x, points.volume, points.cell, tracker.cell_vertices)
-        points.x = self.corners.mean(axis=1)
-        points.x0 = points.x.copy()
+        self.corners = initial_domains(points, tracker.cell_vertices)
         self.active = False
         self._pieces: Pieces | None = None  # those of the step being taken
+        self._moved = self.corners  # the corners after that step, once it converged
+        self._next: Pieces | None = None  # the pieces of the moved corners
+        self._ready: Pieces | None = None  # those of the current corners, if known
 
     def pieces(self, tracker: Tracker, guess: np.ndarray) -> Pieces:
-        """Each domain cut by the cells it covers.
+        """Each domain cut by the cells it covers (see :meth:`_cut`)."""
+        return self._cut(self.corners, tracker, guess)
+
+    def _cut(self, corners: np.ndarray, tracker: Tracker, guess: np.ndarray) -> Pieces:
+        """Each domain with ``corners`` (n, 3, 2) cut by the cells it covers.
 
         Args:
+            corners: The domains' corners.
             tracker: The grid's tracker.
             guess: A cell near each domain (n,), where the searches start.
 
@@ -114,11 +124,11 @@ class PointDomains:
             PointsOutsideError: Less than half of a domain is inside the grid.
             ConvergenceError: A domain reaches past the cells around its corners.
         """
-        n = len(self.corners)
-        corner_cells = tracker.locate(self.corners.reshape(-1, 2), np.repeat(guess, 3))
+        n = len(corners)
+        corner_cells = tracker.locate(corners.reshape(-1, 2), np.repeat(guess, 3))
         outside = corner_cells < 0
         # A corner that has left the grid (a body bulging past the grid's edge) is
-        # searched from the domain's last cell; its part outside the grid is lost.
+        # searched around the domain's last cell; its part outside the grid is lost.
         corner_cells = np.where(outside, np.repeat(guess, 3), corner_cells)
         neighbours = tracker.vertex_neighbours()
         candidates = np.sort(neighbours[corner_cells.reshape(n, 3)].reshape(n, -1), axis=1)
@@ -127,24 +137,24 @@ class PointDomains:
         owner, column = np.nonzero((candidates >= 0) & ~repeated)
         cell = candidates[owner, column]
         # Only the cells whose bounding boxes meet the domain's can overlap it.
-        low, high = self.corners.min(axis=1), self.corners.max(axis=1)
+        low, high = corners.min(axis=1), corners.max(axis=1)
         vertices = tracker.cell_vertices[cell]
         meets = np.all(
             (vertices.min(axis=1) <= high[owner]) & (vertices.max(axis=1) >= low[owner]), axis=1
         )
         owner, cell = owner[meets], cell[meets]
-        xi = tracker.barycentric(self.corners[owner].reshape(-1, 2), np.repeat(cell, 3)).reshape(
+        xi = tracker.barycentric(corners[owner].reshape(-1, 2), np.repeat(cell, 3)).reshape(
             -1, 3, 3
         )[..., 1:]
         area, centroid = clip_to_reference_cell(xi)
         area *= 2.0 * tracker.volumes[cell]
-        domain_area = 0.5 * np.abs(np.linalg.det(self.corners[:, 1:] - self.corners[:, :1]))
+        domain_area = 0.5 * np.abs(np.linalg.det(corners[:, 1:] - corners[:, :1]))
         covered = np.bincount(owner, weights=area, minlength=n) / domain_area
         partly_outside = np.any(outside.reshape(n, 3), axis=1)
         if np.any(covered < MIN_INSIDE):
             p = int(np.argmin(covered))
             raise PointsOutsideError(
-                f"the domain of point {p} (corners {self.corners[p].tolist()}) has left the "
+                f"the domain of point {p} (corners {corners[p].tolist()}) has left the "
                 f"grid ({covered[p]:.3g} of it inside); extend the grid around the body"
             )
         wrong = np.abs(covered - 1.0) > COVERAGE_TOL
@@ -155,23 +165,27 @@ class PointDomains:
                 f"the domain of point {p} covers more than the cells around its corners "
                 f"(found {covered[p]:.6f} of its area): it has distorted too far"
             )
-        # A sliver is dropped and its area shared by the domain's other pieces: alone
-        # in a cell it would hold that cell's nodes with almost no stiffness.
+        # A round-off sliver is dropped; the domain's other pieces share its area.
         keep = area > MIN_SHARE * domain_area[owner]
         owner, cell, area, centroid = owner[keep], cell[keep], area[keep], centroid[keep]
         bary = np.column_stack([1.0 - centroid.sum(axis=1), centroid])
+        # A corner moves with the field of its own cell: the same for every domain that
+        # shares it, so the domains keep tiling the body. Past the grid's edge it
+        # reads the field of its domain's nearest piece, extended linearly.
+        corner_cell = np.where(outside, _corner_cells(corners, tracker, owner, cell), corner_cells)
         return Pieces(
             owner=owner,
             cell=cell.astype(np.int32),
             share=area / np.bincount(owner, weights=area, minlength=n)[owner],
             x=np.einsum("kv,kvg->kg", bary, tracker.cell_vertices[cell]),
-            corner_cell=corner_cells,
-            corner_bary=tracker.barycentric(self.corners.reshape(-1, 2), corner_cells),
+            corner_cell=corner_cell,
+            corner_bary=tracker.barycentric(corners.reshape(-1, 2), corner_cell),
         )
 
     def sample(self, points: MaterialPoints, tracker: Tracker) -> MaterialPoints:
         """A sub-point for every piece of every domain, with its share of the point's state."""
-        self._pieces = p = self.pieces(tracker, points.cell)
+        p = self._ready if self._ready is not None else self.pieces(tracker, points.cell)
+        self._pieces, self._ready = p, None
         sub = MaterialPoints(
             p.x,
             points.volume[p.owner] * p.share,
@@ -185,21 +199,55 @@ class PointDomains:
         sub.history = {name: values[p.owner] for name, values in points.history.items()}
         return sub
 
-    def gather(
+    def move_corners(
         self,
-        points: MaterialPoints,
-        sub: MaterialPoints,
         grid_displacement: Callable[[np.ndarray, np.ndarray], np.ndarray],
-        markers: Markers,
+        tracker: Tracker,
+        step: int,
+        t: float,
     ) -> None:
-        """Move the domains with the grid and give each point its domain's step.
+        """The corners' positions after the converged step, checked before anything moves.
+
+        Args:
+            grid_displacement: The step's grid displacement Δu (k, g) at given cells
+                (k,) and barycentric coordinates (k, g + 1)
+                (:meth:`~fe_mpm.formulations.GridFields.displacement_at`).
+            tracker: The grid's tracker.
+            step: The step's number, for messages.
+            t: Its end time, for messages.
+
+        Raises:
+            ConvergenceError: A domain would turn inside out, or stretch past the
+                cells around its corners (the step is cut).
+            PointsOutsideError: A domain would leave the grid.
+        """
+        p, n, g = self._pieces, len(self.corners), self.corners.shape[2]
+        moved = self.corners + grid_displacement(p.corner_cell, p.corner_bary).reshape(n, 3, g)
+        before = np.linalg.det(self.corners[:, 1:] - self.corners[:, :1])
+        after = np.linalg.det(moved[:, 1:] - moved[:, :1])
+        if np.any(after / before <= 0):
+            bad = int(np.flatnonzero(after / before <= 0)[0])
+            raise ConvergenceError(
+                f"the domain of point {bad} (corners {self.corners[bad].tolist()}) would turn "
+                f"inside out in step {step} (t = {t:g}): take smaller steps, or the grid there "
+                "distorts it too far. Nothing was updated."
+            )
+        self._moved = moved
+        # The next step's pieces, now: a domain stretched past the cells around its
+        # corners then fails this step, which a shorter step may avoid.
+        try:
+            self._next = self._cut(moved, tracker, self._pieces.cell[self._heaviest()])
+        except ConvergenceError as err:
+            raise ConvergenceError(
+                f"{err} in step {step} (t = {t:g}). Nothing was updated."
+            ) from None
+
+    def gather(self, points: MaterialPoints, sub: MaterialPoints, markers: Markers) -> None:
+        """Give each point its domain's step (after :meth:`move_corners`).
 
         Args:
             points: The material points at the start of the step, updated here.
             sub: Their sub-points after the step.
-            grid_displacement: The step's grid displacement Δu (k, g) at given cells
-                (k,) and barycentric coordinates (k, g + 1)
-                (:meth:`~fe_mpm.formulations.GridFields.displacement_at`).
             markers: Moved with their host points.
         """
         n, p = len(points), self._pieces
@@ -210,8 +258,7 @@ class PointDomains:
             np.add.at(out, p.owner, weighted)
             return out
 
-        g = points.gdim
-        corners = self.corners + grid_displacement(p.corner_cell, p.corner_bary).reshape(n, 3, g)
+        corners = self._moved
         edges = corners[:, 1:] - corners[:, :1]
         old_edges = self.corners[:, 1:] - self.corners[:, :1]
         new = PointUpdate(
@@ -227,9 +274,14 @@ class PointDomains:
         # velocities are already at t_{n+1}, so the points take their mean as it is.
         apply_update(points, new, markers, dynamics=None, dt=0.0)
         points.velocity, points.acceleration = mean(sub.velocity), mean(sub.acceleration)
+        points.cell = sub.cell[self._heaviest()].copy()  # a start for the next search
+        self._ready = self._next
+
+    def _heaviest(self) -> np.ndarray:
+        """The index of each point's heaviest piece in this step (n,)."""
+        p, n = self._pieces, len(self.corners)
         by_weight = np.lexsort((-p.share, p.owner))  # by point, the heaviest piece first
-        heaviest = by_weight[np.searchsorted(p.owner[by_weight], np.arange(n))]
-        points.cell = sub.cell[heaviest].copy()  # a start for the next step's search
+        return by_weight[np.searchsorted(p.owner[by_weight], np.arange(n))]
 
 
 def step_with_domains(sim, t_new: float, rebin: bool):
@@ -247,7 +299,21 @@ def step_with_domains(sim, t_new: float, rebin: bool):
         report = sim.step(t_new, rebin)
     finally:
         sim.points, sim.markers, sim.output, domains.active = points, markers, output, False
-    domains.gather(points, sub, sim.fields.displacement_at, markers)
+    domains.gather(points, sub, markers)
     report.markers = markers.positions()
     sim._write_output()
     return report
+
+
+def _corner_cells(
+    corners: np.ndarray, tracker: Tracker, owner: np.ndarray, cell: np.ndarray
+) -> np.ndarray:
+    """For every corner (n × 3,), the cell of its domain's piece it is least outside of."""
+    n = len(corners)
+    lam = tracker.barycentric(corners[owner].reshape(-1, 2), np.repeat(cell, 3))
+    inside = lam.reshape(-1, 3, 3).min(axis=2)  # (pieces, corner)
+    corner_cell = np.empty((n, 3), dtype=np.int32)
+    for j in range(3):
+        order = np.lexsort((-inside[:, j], owner))  # by domain, the best piece first
+        corner_cell[:, j] = cell[order[np.searchsorted(owner[order], np.arange(n))]]
+    return corner_cell.reshape(-1)

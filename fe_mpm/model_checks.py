@@ -14,6 +14,7 @@ from fe_mpm._dolfinx import dolfinx
 from fe_mpm.boundary import PointDirichlet
 from fe_mpm.checks import check_choice, check_range
 from fe_mpm.formulations import FORMULATIONS, FormulationSpec
+from fe_mpm.ghost import WITH_DOMAINS
 from fe_mpm.materials.protocol import Law, MixedLaw, missing_members
 from fe_mpm.particles import MaterialPoints, simplex_cell_type
 
@@ -86,7 +87,7 @@ def check_grid_and_points(mesh: dolfinx.mesh.Mesh, points: MaterialPoints) -> No
 
 def check_domains(
     point_domains: bool,
-    ghost_penalty: float,
+    ghost_penalty: float | None,
     points: MaterialPoints,
     points_leaving: str,
     spec: FormulationSpec,
@@ -95,14 +96,15 @@ def check_domains(
 
     The ghost penalty: γ ≥ 0, with P1 displacements.
     """
-    check_range("Simulation", "ghost_penalty", ghost_penalty, lo=0.0)
+    if ghost_penalty is not None:
+        check_range("Simulation", "ghost_penalty", ghost_penalty, lo=0.0)
     if ghost_penalty and spec.u_degree != 1:
         raise NotImplementedError(
             "Simulation: ghost_penalty works with P1 displacements ('u', 'up') for now: "
             "P2 needs the jumps of its second derivatives too"
         )
     gdim = points.gdim
-    if not isinstance(point_domains, bool):
+    if not isinstance(point_domains, bool | np.bool_):
         raise TypeError(f"Simulation: point_domains must be True or False, got {point_domains!r}")
     if point_domains and gdim != 2:
         raise NotImplementedError(
@@ -119,6 +121,13 @@ def check_domains(
             "Simulation: point_domains needs points_leaving='raise': a point whose "
             "domain leaves the grid cannot take its step"
         )
+
+
+def ghost_factor(ghost_penalty: float | None, point_domains: bool) -> float:
+    """γ of the ghost penalty: as given, else :data:`~fe_mpm.ghost.WITH_DOMAINS` with domains."""
+    if ghost_penalty is None:
+        return WITH_DOMAINS if point_domains else 0.0
+    return float(ghost_penalty)
 
 
 def check_law(material, spec: FormulationSpec, formulation: str) -> None:

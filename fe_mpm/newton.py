@@ -238,6 +238,8 @@ class NewtonSolver:
             )
             lift.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
             b.axpy(1.0, lift)
+            if self._ghost is not None:  # its part of the lifting, G (g − x) on the bc dofs
+                self._ghost.full.multAdd(self._gap, b, b)
         fem_petsc.set_bc(b, self._bcs, x, -1.0)
         self.test.displacement_norm = self._norm(b.array_r[rows])
         self.test.pressure_norm = self._norm(b.array_r[self._p_rows])

@@ -122,7 +122,8 @@ class Simulation:
             convected domain covers (2D, :mod:`fe_mpm.domains`), against the
             cell-crossing error; False (default): standard MPM.
         ghost_penalty: γ ≥ 0 of the ghost penalty on the facets of poorly filled
-            cells (:mod:`fe_mpm.ghost`, P1 displacements); 0 (default): none.
+            cells (:mod:`fe_mpm.ghost`, P1 displacements); 0: none. Default:
+            :data:`fe_mpm.ghost.WITH_DOMAINS` (0.1) with point domains, else 0.
     """
 
     def __init__(
@@ -154,7 +155,7 @@ class Simulation:
         linear_solver: str = "direct",
         max_step_cells: float = 10.0,
         point_domains: bool = False,
-        ghost_penalty: float = 0.0,
+        ghost_penalty: float | None = None,
     ):
         model_checks.check_grid_and_points(mesh, points)
         model_checks.check_choices(
@@ -200,11 +201,10 @@ class Simulation:
         self.output = (
             None if output_dir is None else SimulationOutput(output_dir, self.fields, output_every)
         )
-        self.domains = PointDomains(points, self.tracker) if point_domains else None
-        self.ghost = (
-            GhostStabilisation(self.fields, ghost_penalty, material.mu) if ghost_penalty else None
-        )
         self._track()  # once now, so a bad initial layout fails at set-up
+        self.domains = PointDomains(points, self.tracker) if point_domains else None
+        gamma = model_checks.ghost_factor(ghost_penalty, point_domains)
+        self.ghost = GhostStabilisation(self.fields, gamma, material.mu) if gamma else None
 
     # -- public API ------------------------------------------------------------
 
@@ -244,7 +244,7 @@ class Simulation:
         nominal = (t_end - self.t) / int(n_steps)
         floor = DEFAULT_MIN_STEP * nominal if self.min_step is None else self.min_step
         length = StepLength(nominal, floor)
-        can_hold = not self.dynamic
+        can_hold = not self.dynamic and self.domains is None  # pieces differ per attempt
         bar, reports = ProgressBar(int(n_steps), progress), []
         if self.step_number == 0:
             self._write_output(force=True)  # the initial state as the t = 0 frame
@@ -296,7 +296,7 @@ class Simulation:
                 result, k, self.t, t_new, self.mesh, layout, self.tracker.centroids
             )
         self.refresh_material(tangent=False)  # the converged iterate's, for reactions and history
-        reactions = self.conditions.reactions(R.assemble_vector)
+        reactions = self.conditions.reactions(self._internal_force(R))
         # Update the points (the last check may still reject the step); the grid is reset.
         t0 = time.perf_counter()
         self._update_points(forms, layout, k, t_new, dt)
@@ -403,6 +403,12 @@ class Simulation:
 
         return self.ladder.solve(attempt, self._newton.line_search)
 
+    def _internal_force(self, R) -> Callable[[], np.ndarray]:
+        """The residual's assembly, with the ghost penalty's force G Δu when there is one."""
+        if self.ghost is None:
+            return R.assemble_vector
+        return lambda: R.assemble_vector() + self.ghost.force(self.w)
+
     def _initial_guess(self) -> None:
         """Δu = 0 and the projected pressure (:meth:`GridFields.start_from_rest`)."""
         current, pts = self._current, self.points
@@ -426,6 +432,8 @@ class Simulation:
         self, forms: StepForms, layout: SlotLayout, step: int, t: float, dt: float
     ) -> None:
         """The points take the converged state (:mod:`fe_mpm.point_update`)."""
+        if self.domains is not None:  # the sub-points' step: check their domains first
+            self.domains.move_corners(self.fields.displacement_at, self.tracker, step, t)
         values, pts, rm = forms.update.evaluate(layout), self.points, self._current.return_map
         limit = None if self.dynamic else self.max_step_cells
         sizes = self.tracker.sizes[layout.cell]

@@ -1,13 +1,16 @@
 """The first domains of the points: each cell tiled by as many equal triangles as it has points.
 
-:func:`fe_mpm.seed` gives the points of a cell equal shares of its area, so the cell
-can be cut into that many equal triangles, one per point: the domains then tile
-the body without gaps or overlaps. A cell with ``m²`` points is cut by the lines
-parallel to its edges at steps of 1/m; ``3 m²`` and ``6 m²`` points cut each of those
-triangles further, from its centroid to its corners (3) or to its corners and edge
-midpoints (6). A cell whose points do not share it equally, or hold a count not of
-those forms (7, 15), gives each point the cell shrunk to the point's volume around
-the point instead (these domains may overlap or reach past the body).
+A cell with ``m²`` points is cut by the lines parallel to its edges at steps of
+1/m; ``3 m²`` and ``6 m²`` points cut each of those triangles further, from its
+centroid to its corners (3) or to its corners and edge midpoints (6). Each point
+takes the nearest free tile as its domain, so the domains tile the body without
+gaps or overlaps, and the points of the cell share its points' volume and mass
+equally (:func:`fe_mpm.seed`'s Gauss weights differ for 6 and 12 points; unequal
+volumes on equal tiles would integrate a constant stress inexactly once the
+domains straddle cells). A point's volume and its domain's area then change
+together (both by det ΔF). A cell whose count has no such tiling
+(7 or 15 points) gives each point the cell shrunk to the point's volume around the
+point instead (these domains may overlap or reach past the body).
 """
 
 from __future__ import annotations
@@ -16,8 +19,7 @@ import math
 
 import numpy as np
 
-#: Points of one cell share it equally when their volumes match to this tolerance.
-EQUAL_SHARES_TOL = 1e-9
+from fe_mpm.particles import MaterialPoints
 
 
 def _subdivision(m: int) -> list[np.ndarray]:
@@ -62,21 +64,21 @@ def equal_tiling(k: int) -> np.ndarray | None:
     return None
 
 
-def initial_domains(
-    x: np.ndarray, volume: np.ndarray, cell: np.ndarray, cell_vertices: np.ndarray
-) -> np.ndarray:
-    """Every point's first domain, a triangle (n, 3, 2) in m.
+def initial_domains(points: MaterialPoints, cell_vertices: np.ndarray) -> np.ndarray:
+    """Every point's first domain, a triangle (n, 3, 2) in m; tiled points move.
 
     Args:
-        x: The points' positions (n, 2) in m.
-        volume: Their volumes (areas) (n,) in m².
-        cell: Their cells (n,).
+        points: The material points (2D), located in their cells. The points of a
+            tiled cell move to their tiles' centroids (``x`` and ``x0``) and share
+            the cell's points' volume and mass equally, so that the volume per area
+            is the same in every tile of the cell.
         cell_vertices: The vertices of every cell of the grid (nc, 3, 2) in m.
 
-    Cells shared equally are tiled (:func:`equal_tiling`), and each of their points
-    takes the nearest free tile (greedy); other points take their cell shrunk to
-    their volume and centred on them.
+    Cells whose point count has a tiling (:func:`equal_tiling`) are tiled, and each
+    of their points takes the nearest free tile (greedy); other points take their
+    cell shrunk to their volume and centred on them.
     """
+    x, volume, cell = points.x, points.volume, points.cell
     own = cell_vertices[cell]
     centre = own.mean(axis=1, keepdims=True)
     cell_area = 0.5 * np.abs(np.linalg.det(own[:, 1:] - own[:, :1]))
@@ -89,11 +91,12 @@ def initial_domains(
             continue
         group = np.flatnonzero(counts == k)
         members = order[starts[group][:, None] + np.arange(k)]  # (cells, k) point indices
-        share = volume[members] / (cell_area[members[:, 0]] / k)[:, None]
-        equal = np.all(np.abs(share - 1.0) < EQUAL_SHARES_TOL, axis=1)
-        members = members[equal]
-        tile_corners = np.einsum("tcv,nvg->ntcg", tiles, cell_vertices[cells[group][equal]])
+        tile_corners = np.einsum("tcv,nvg->ntcg", tiles, cell_vertices[cells[group]])
         corners[members] = _assign(x[members], tile_corners)
+        for values in (points.volume, points.mass):
+            values[members] = values[members].mean(axis=1, keepdims=True)
+    points.x = corners.mean(axis=1)
+    points.x0 = points.x.copy()
     return corners
 
 

@@ -75,20 +75,54 @@ def test_other_counts_have_no_equal_tiling(k):
     assert equal_tiling(k) is None
 
 
-@pytest.mark.parametrize("per_cell", [1, 3, 6, 7])
+@pytest.mark.parametrize("per_cell", [1, 3, 6, 7, 12])
 def test_the_first_domains_tile_the_body(per_cell):
-    """Seeded points share their cell equally: their domains are the cell's tiles
-    (each of the point's volume, inside its cell); the 7-point rule has no equal
-    tiling, and its points get the cell shrunk to their volume around them."""
+    """The points of a cell get the cell's equal tiles, one each, inside the cell,
+    and share its volume and mass equally (seed's Gauss weights differ for 6 and 12
+    points); they move to their tiles' centroids. The 7-point rule has no equal
+    tiling: its points keep their volumes and get the cell shrunk to them."""
     mesh = meshes.rectangle_mesh((0.0, 0.0), (2.0, 1.0), (4, 3))
-    points = fe_mpm.seed(mesh, per_cell=per_cell)
+    points = fe_mpm.seed(mesh, per_cell=per_cell, density=3.0)
+    volume, mass, x = points.volume.copy(), points.mass.copy(), points.x.copy()
     tracker = Tracker(mesh)
-    corners = initial_domains(points.x, points.volume, points.cell, tracker.cell_vertices)
+    corners = initial_domains(points, tracker.cell_vertices)
     area, centroid = _area_and_centroid(corners)
     assert np.allclose(area, points.volume, rtol=1e-12, atol=0)
+    assert np.allclose(centroid, points.x, rtol=0, atol=1e-14)
+    assert np.array_equal(points.x0, points.x)
+    assert points.mass.sum() == pytest.approx(mass.sum(), rel=1e-14)
+    assert np.allclose(points.mass, 3.0 * points.volume, rtol=1e-14, atol=0)
     xi = tracker.barycentric(corners.reshape(-1, 2), np.repeat(points.cell, 3))[:, 1:]
     inside, _ = clip_to_reference_cell(xi.reshape(-1, 3, 2))
-    tiled = np.allclose(inside * 2 * tracker.volumes[points.cell], area, rtol=1e-12, atol=0)
-    assert tiled == (per_cell != 7)
+    inside *= 2 * tracker.volumes[points.cell]
     if per_cell == 7:
-        assert np.allclose(centroid, points.x, rtol=0, atol=1e-14)
+        assert np.array_equal(points.volume, volume)
+        assert np.allclose(points.x, x, rtol=0, atol=1e-14)
+        assert not np.allclose(inside, area, rtol=1e-12, atol=0)
+    else:
+        assert np.allclose(area, tracker.volumes[points.cell] / per_cell, rtol=1e-12, atol=0)
+        assert np.allclose(inside, area, rtol=1e-12, atol=0)
+        # One tile each: no two points of a cell share a centroid.
+        for c in np.unique(points.cell):
+            mine = centroid[points.cell == c]
+            assert len(np.unique(np.round(mine, 12), axis=0)) == per_cell
+
+
+def test_cells_without_a_tiling_keep_shrunk_cells():
+    """Cells of 2 points (no equal tiling) take their cell shrunk to each point's
+    volume around it; the other cells are still tiled."""
+    mesh = meshes.rectangle_mesh((0.0, 0.0), (1.0, 1.0), (2, 2))
+    points = fe_mpm.seed(mesh, per_cell=3)
+    drop = np.zeros(len(points), dtype=bool)
+    drop[0] = True  # the first cell keeps 2 of its 3 points
+    points.keep(~drop)
+    x = points.x.copy()
+    tracker = Tracker(mesh)
+    corners = initial_domains(points, tracker.cell_vertices)
+    area, centroid = _area_and_centroid(corners)
+    pair = np.flatnonzero(points.cell == points.cell[0])
+    assert pair.size == 2
+    assert np.allclose(area[pair], points.volume[pair], rtol=1e-12, atol=0)
+    assert np.allclose(centroid[pair], x[pair], rtol=0, atol=1e-14)
+    others = np.setdiff1d(np.arange(len(points)), pair)
+    assert not np.allclose(centroid[others], x[others], rtol=0, atol=1e-3)
