@@ -42,6 +42,8 @@ def run(h: float, h_far: float, steps: int, options: dict) -> tuple[list[dict], 
         for r in sim.history
     ]
     wall = time.perf_counter() - t0
+    if sim.domains is not None:
+        print(f"  {sim.domains.resets} domain resets")
     sim.close()
     return rows, wall
 

@@ -28,7 +28,7 @@
 #
 # With many load steps the points cross cells and the stress error of standard MPM
 # stalls near 5 %; `--point-domains` makes it converge at first order
-# ([Cell crossing](../docs/cell_crossing.md)).
+# (`docs/cell_crossing.md`).
 #
 # Usage: `python demos/elastic_column.py --ny 32 --steps 10 [--dynamic] [--point-domains] --json`.
 

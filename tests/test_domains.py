@@ -10,7 +10,7 @@ from dolfinx.mesh import create_unit_cube
 
 import fe_mpm
 from fe_mpm import meshes, scenes
-from fe_mpm.domains import PointDomains
+from fe_mpm.domains import RESET_QUALITY, PointDomains, shape_quality
 from fe_mpm.errors import ConvergenceError, PointsOutsideError
 from fe_mpm.tracker import Tracker
 
@@ -164,19 +164,11 @@ def test_point_domains_must_be_a_bool(value):
         fe_mpm.Simulation(mesh, fe_mpm.seed(mesh), fe_mpm.NeoHookean(1.0, 0.3), point_domains=value)
 
 
-def test_point_domains_refuse_3d_p2_and_dropping_points():
+def test_point_domains_refuse_3d_and_dropping_points():
     cube = create_unit_cube(MPI.COMM_SELF, 1, 1, 1)
     with pytest.raises(NotImplementedError, match="point_domains works on triangles"):
         fe_mpm.Simulation(cube, fe_mpm.seed(cube), fe_mpm.NeoHookean(1.0, 0.3), point_domains=True)
     mesh = meshes.rectangle_mesh((0.0, 0.0), (1.0, 1.0), (2, 2))
-    with pytest.raises(NotImplementedError, match="point_domains works with P1"):
-        fe_mpm.Simulation(
-            mesh,
-            fe_mpm.seed(mesh, per_cell=3),
-            fe_mpm.NeoHookean(1.0, 0.3),
-            "up-p2p1",
-            point_domains=True,
-        )
     with pytest.raises(ValueError, match="points_leaving='raise'"):
         fe_mpm.Simulation(
             mesh,
@@ -236,3 +228,29 @@ def test_points_made_by_hand_are_located_before_their_domains_are_drawn():
     tracker = Tracker(mesh)
     assert np.array_equal(points.cell, seeded.cell)
     assert np.allclose(sim.domains.corners, tracker.cell_vertices[seeded.cell], atol=1e-14)
+
+
+def test_a_distorted_domain_is_redrawn_with_its_area_around_its_point():
+    mesh = meshes.rectangle_mesh((0.0, 0.0), (1.0, 1.0), (4, 4))
+    points = fe_mpm.seed(mesh)
+    tracker = Tracker(mesh)
+    domains = PointDomains(points, tracker)
+    x = points.x[6].copy()
+    sheared = domains.corners[6] - x
+    sheared[:, 0] += 6.0 * sheared[:, 1]  # x += 6 y: area kept, quality about 0.05
+    domains.corners[6] = x + sheared
+    assert shape_quality(domains.corners[6:7])[0] < RESET_QUALITY
+    area_before = shape_area(domains.corners[6])
+    untouched = np.delete(domains.corners, 6, axis=0).copy()
+    domains.sample(points, tracker)
+    assert domains.resets == 1
+    assert shape_quality(domains.corners[6:7])[0] == pytest.approx(
+        shape_quality(tracker.cell_vertices[points.cell[6]][None])[0], rel=1e-12
+    )
+    assert shape_area(domains.corners[6]) == pytest.approx(area_before, rel=1e-12)
+    assert np.allclose(domains.corners[6].mean(axis=0), x, rtol=0, atol=1e-14)
+    assert np.array_equal(np.delete(domains.corners, 6, axis=0), untouched)
+
+
+def shape_area(triangle):
+    return 0.5 * abs(np.linalg.det(triangle[1:] - triangle[:1]))
