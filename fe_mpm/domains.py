@@ -114,7 +114,7 @@ class PointDomains:
         self._pieces: Pieces | None = None  # those of the step being taken
         self._moved = self.corners  # the corners after that step, once it converged
         self._next: Pieces | None = None  # the pieces of the moved corners
-        self._ready: Pieces | None = None  # those of the current corners, if known
+        self._ready: tuple | None = None  # (corners, their pieces), cut ahead
         #: Domains redrawn so far because they had distorted (:data:`RESET_QUALITY`).
         self.resets = 0
         self._drawn_quality = shape_quality(self.corners)
@@ -153,8 +153,22 @@ class PointDomains:
         repeated[:, 1:] = candidates[:, 1:] == candidates[:, :-1]
         owner, column = np.nonzero((candidates >= 0) & ~repeated)
         cell = candidates[owner, column]
-        # Only the cells whose bounding boxes meet the domain's can overlap it.
         low, high = corners.min(axis=1), corners.max(axis=1)
+        partly_outside = np.any(outside.reshape(n, 3), axis=1)
+        if np.any(partly_outside):
+            # The cells around a last cell may miss where such a domain crosses the
+            # grid's edge: try every cell (few domains), so what is missing is outside.
+            box_low, box_high = tracker.cell_vertices.min(axis=1), tracker.cell_vertices.max(axis=1)
+            extra = [
+                (d, np.flatnonzero(np.all((box_low <= high[d]) & (box_high >= low[d]), axis=1)))
+                for d in np.flatnonzero(partly_outside)
+            ]
+            keep_own = ~partly_outside[owner]
+            owner = np.concatenate([owner[keep_own]] + [np.full(c.size, d) for d, c in extra])
+            cell = np.concatenate([cell[keep_own]] + [c for _, c in extra])
+            order = np.argsort(owner, kind="stable")
+            owner, cell = owner[order], cell[order]
+        # Only the cells whose bounding boxes meet the domain's can overlap it.
         vertices = tracker.cell_vertices[cell]
         meets = np.all(
             (vertices.min(axis=1) <= high[owner]) & (vertices.max(axis=1) >= low[owner]), axis=1
@@ -167,7 +181,6 @@ class PointDomains:
         area *= 2.0 * tracker.volumes[cell]
         domain_area = 0.5 * np.abs(np.linalg.det(corners[:, 1:] - corners[:, :1]))
         covered = np.bincount(owner, weights=area, minlength=n) / domain_area
-        partly_outside = np.any(outside.reshape(n, 3), axis=1)
         if np.any(covered < MIN_INSIDE):
             p = int(np.argmin(covered))
             raise PointsOutsideError(
@@ -201,10 +214,13 @@ class PointDomains:
 
     def sample(self, points: MaterialPoints, tracker: Tracker) -> MaterialPoints:
         """A sub-point for every piece of every domain, with its share of the point's state."""
-        if self._reset_distorted(points, tracker):
-            self._ready = None  # cut for the corners before the reset
-        p = self._ready if self._ready is not None else self.pieces(tracker, points.cell)
-        self._pieces, self._ready = p, None
+        self._reset_distorted(points, tracker)
+        ready, self._ready = self._ready, None
+        if ready is not None and np.array_equal(ready[0], self.corners):
+            p = ready[1]
+        else:  # none yet, or cut for corners that have changed since (a reset)
+            p = self.pieces(tracker, points.cell)
+        self._pieces = p
         sub = MaterialPoints(
             p.x,
             points.volume[p.owner] * p.share,
@@ -236,10 +252,15 @@ class PointDomains:
         area = 0.5 * np.abs(np.linalg.det(self.corners[bad, 1:] - self.corners[bad, :1]))
         cell_area = tracker.volumes[points.cell[bad]]
         scale = np.sqrt(area / cell_area)[:, None, None]
-        self.corners[bad] = points.x[bad, None, :] + scale * (own - centre)
-        self._drawn_quality[bad] = shape_quality(self.corners[bad])
+        redrawn = points.x[bad, None, :] + scale * (own - centre)
+        # A redrawn domain that would reach past the grid's edge keeps its old shape.
+        inside = tracker.locate(redrawn.reshape(-1, 2), np.repeat(points.cell[bad], 3)) >= 0
+        inside = np.all(inside.reshape(-1, 3), axis=1)
+        bad, redrawn = bad[inside], redrawn[inside]
+        self.corners[bad] = redrawn
+        self._drawn_quality[bad] = shape_quality(redrawn)
         self.resets += bad.size
-        return True
+        return bad.size > 0
 
     def move_corners(
         self,
@@ -278,7 +299,10 @@ class PointDomains:
         # The next step's pieces, now: a domain stretched past the cells around its
         # corners then fails this step, which a shorter step may avoid.
         try:
-            self._next = self._cut(moved, tracker, self._pieces.cell[self._heaviest()])
+            guess = self._pieces.cell[_heaviest(self._pieces, n)]
+            self._next = self._cut(moved, tracker, guess)
+        except PointsOutsideError as err:
+            raise PointsOutsideError(f"{err} (step {step}, t = {t:g})") from None
         except ConvergenceError as err:
             raise ConvergenceError(
                 f"{err} in step {step} (t = {t:g}). Nothing was updated."
@@ -316,14 +340,8 @@ class PointDomains:
         # velocities are already at t_{n+1}, so the points take their mean as it is.
         apply_update(points, new, markers, dynamics=None, dt=0.0)
         points.velocity, points.acceleration = mean(sub.velocity), mean(sub.acceleration)
-        points.cell = sub.cell[self._heaviest()].copy()  # a start for the next search
-        self._ready = self._next
-
-    def _heaviest(self) -> np.ndarray:
-        """The index of each point's heaviest piece in this step (n,)."""
-        p, n = self._pieces, len(self.corners)
-        by_weight = np.lexsort((-p.share, p.owner))  # by point, the heaviest piece first
-        return by_weight[np.searchsorted(p.owner[by_weight], np.arange(n))]
+        points.cell = self._next.cell[_heaviest(self._next, n)]  # where most of it lies
+        self._ready = (corners, self._next)
 
 
 def step_with_domains(sim, t_new: float, rebin: bool):
@@ -332,13 +350,14 @@ def step_with_domains(sim, t_new: float, rebin: bool):
     The sub-points take the step in the points' place (their markers and output
     wait); then the points gather the sub-points' step (:meth:`PointDomains.gather`),
     and the step's report and output are the points'. A failed step leaves the
-    points as they were.
+    points as they were. ``rebin`` is ignored: the sub-points are new every attempt,
+    so none can be held in a cell of the last step.
     """
     domains, points, markers, output = sim.domains, sim.points, sim.markers, sim.output
     sub = domains.sample(points, sim.tracker)
     sim.points, sim.markers, sim.output, domains.active = sub, Markers(), None, True
     try:
-        report = sim.step(t_new, rebin)
+        report = sim.step(t_new, True)  # never held: the pieces differ per attempt
     finally:
         sim.points, sim.markers, sim.output, domains.active = points, markers, output, False
     domains.gather(points, sub, markers)
@@ -359,3 +378,9 @@ def _corner_cells(
         order = np.lexsort((-inside[:, j], owner))  # by domain, the best piece first
         corner_cell[:, j] = cell[order[np.searchsorted(owner[order], np.arange(n))]]
     return corner_cell.reshape(-1)
+
+
+def _heaviest(pieces: Pieces, n: int) -> np.ndarray:
+    """The index of each of the ``n`` points' heaviest piece (n,)."""
+    by_weight = np.lexsort((-pieces.share, pieces.owner))  # by point, the heaviest first
+    return by_weight[np.searchsorted(pieces.owner[by_weight], np.arange(n))]

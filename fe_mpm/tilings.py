@@ -8,9 +8,10 @@ gaps or overlaps, and the points of the cell share its points' volume and mass
 equally (:func:`fe_mpm.seed`'s Gauss weights differ for 6 and 12 points; unequal
 volumes on equal tiles would integrate a constant stress inexactly once the
 domains straddle cells). A point's volume and its domain's area then change
-together (both by det ΔF). A cell whose count has no such tiling
-(7 or 15 points) gives each point the cell shrunk to the point's volume around the
-point instead (these domains may overlap or reach past the body).
+together (both by det ΔF). Only a cell its points fill is tiled. A cell whose
+count has no such tiling (7 or 15 points), or that a trimmed body fills in part,
+gives each point the cell shrunk to the point's volume around the point instead
+(these domains may overlap or reach past the body).
 """
 
 from __future__ import annotations
@@ -20,6 +21,9 @@ import math
 import numpy as np
 
 from fe_mpm.particles import MaterialPoints
+
+#: A cell is full when its points' volumes add up to its area to this tolerance.
+FULL_TOL = 1e-9
 
 
 def _subdivision(m: int) -> list[np.ndarray]:
@@ -74,9 +78,10 @@ def initial_domains(points: MaterialPoints, cell_vertices: np.ndarray) -> np.nda
             is the same in every tile of the cell.
         cell_vertices: The vertices of every cell of the grid (nc, 3, 2) in m.
 
-    Cells whose point count has a tiling (:func:`equal_tiling`) are tiled, and each
-    of their points takes the nearest free tile (greedy); other points take their
-    cell shrunk to their volume and centred on them.
+    Full cells whose point count has a tiling (:func:`equal_tiling`) are tiled, and
+    each of their points takes the nearest free tile (greedy); other points (a cell
+    that a trimmed body fills in part, or 7 or 15 points) take their cell shrunk to
+    their volume and centred on them.
     """
     x, volume, cell = points.x, points.volume, points.cell
     own = cell_vertices[cell]
@@ -91,6 +96,12 @@ def initial_domains(points: MaterialPoints, cell_vertices: np.ndarray) -> np.nda
             continue
         group = np.flatnonzero(counts == k)
         members = order[starts[group][:, None] + np.arange(k)]  # (cells, k) point indices
+        # Only a cell its points fill (their volumes add up to its area) is tiled: a
+        # body trimmed from a seeded grid leaves cells with some of their points.
+        full = np.abs(volume[members].sum(axis=1) / cell_area[members[:, 0]] - 1.0) < FULL_TOL
+        group, members = group[full], members[full]
+        if group.size == 0:
+            continue
         tile_corners = np.einsum("tcv,nvg->ntcg", tiles, cell_vertices[cells[group]])
         corners[members] = _assign(x[members], tile_corners)
         for values in (points.volume, points.mass):

@@ -126,3 +126,23 @@ def test_cells_without_a_tiling_keep_shrunk_cells():
     assert np.allclose(centroid[pair], x[pair], rtol=0, atol=1e-14)
     others = np.setdiff1d(np.arange(len(points)), pair)
     assert not np.allclose(centroid[others], x[others], rtol=0, atol=1e-3)
+
+
+def test_cells_a_trimmed_body_fills_in_part_keep_shrunk_cells():
+    """A disc trimmed from a grid seeded with 3 points per cell: its edge cells keep
+    1 or 2 of their points, whose volumes do not fill the cell; those points stay
+    where they are, with their cell shrunk to their volume; full cells are tiled."""
+    mesh = meshes.rectangle_mesh((0.0, 0.0), (1.0, 1.0), (8, 8))
+    points = fe_mpm.seed(mesh, per_cell=3)
+    points.keep(np.linalg.norm(points.x - 0.5, axis=1) < 0.4)
+    x, volume = points.x.copy(), points.volume.copy()
+    tracker = Tracker(mesh)
+    corners = initial_domains(points, tracker.cell_vertices)
+    area, centroid = _area_and_centroid(corners)
+    count = np.bincount(points.cell)[points.cell]
+    part = count < 3
+    assert part.sum() > 8 and (~part).sum() > 100
+    assert np.allclose(points.x[part], x[part], rtol=0, atol=1e-14)
+    assert np.allclose(area, volume, rtol=1e-12, atol=0)
+    assert np.allclose(centroid[part], x[part], rtol=0, atol=1e-14)
+    assert not np.allclose(points.x[~part], x[~part], rtol=0, atol=1e-3)

@@ -254,3 +254,34 @@ def test_a_distorted_domain_is_redrawn_with_its_area_around_its_point():
 
 def shape_area(triangle):
     return 0.5 * abs(np.linalg.det(triangle[1:] - triangle[:1]))
+
+
+def test_a_domain_partly_past_the_grid_edge_keeps_all_its_pieces_inside():
+    """A long domain with one corner just below the grid: the cells it covers are
+    found wherever they are (not only around its last cell), so its pieces reach
+    its far end."""
+    mesh = meshes.rectangle_mesh((0.0, 0.0), (1.0, 1.0), (16, 16))
+    points = fe_mpm.seed(mesh)
+    tracker = Tracker(mesh)
+    domains = PointDomains(points, tracker)
+    k = int(np.argmin(np.linalg.norm(points.x - (0.52, 0.06), axis=1)))
+    domains.corners[k] = [[0.5, 0.05], [0.55, 0.1], [0.8, -0.002]]
+    p = domains.pieces(tracker, points.cell)
+    mine = p.owner == k
+    assert p.x[mine, 0].max() > 0.7
+    assert p.share[mine].sum() == pytest.approx(1.0, rel=1e-12)
+
+
+def test_a_redrawn_domain_must_stay_in_the_grid():
+    """A sliver along the grid's edge would be redrawn past it: it keeps its shape."""
+    mesh = meshes.rectangle_mesh((0.0, 0.0), (1.0, 1.0), (4, 4))
+    points = fe_mpm.seed(mesh)
+    tracker = Tracker(mesh)
+    domains = PointDomains(points, tracker)
+    k = int(np.argmin(np.linalg.norm(points.x - (0.95, 0.6), axis=1)))
+    sliver = np.array([[1.0, 0.3], [1.0, 0.7], [0.97, 0.8]])
+    domains.corners[k] = sliver
+    points.x[k] = sliver.mean(axis=0)
+    domains.sample(points, tracker)
+    assert domains.resets == 0
+    assert np.array_equal(domains.corners[k], sliver)
