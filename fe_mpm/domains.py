@@ -26,8 +26,11 @@ velocity and acceleration are the share-weighted means of its pieces'. Averaging
 history is exact for elastic laws and an approximation for plastic ones (each piece
 returns from the point's own state).
 
-Not yet: 3D (tetrahedral domains), and splitting a domain that has distorted too
-far (a domain wider than the cells around its corners stops the run with a message).
+A domain that has distorted too far (:func:`shape_quality`) is redrawn around its
+point at the start of a step, which breaks the tiling there; the ghost penalty
+(:mod:`fe_mpm.ghost`, on by default with domains) ties the cells the domains fill
+in part. Not yet: 3D (tetrahedral domains), P2 displacements, and splitting a
+distorted domain into smaller ones. The measurements: ``docs/cell_crossing.md``.
 """
 
 from __future__ import annotations
