@@ -121,6 +121,8 @@ class PointDomains:
         #: Domains redrawn so far because they had distorted (:data:`RESET_QUALITY`).
         self.resets = 0
         self._drawn_quality = shape_quality(self.corners)
+        # The cells' bounding boxes (lower and upper corners, each (nc, 2)).
+        self._boxes = (tracker.cell_vertices.min(axis=1), tracker.cell_vertices.max(axis=1))
 
     def pieces(self, tracker: Tracker, guess: np.ndarray) -> Pieces:
         """Each domain cut by the cells it covers (see :meth:`_cut`)."""
@@ -161,7 +163,7 @@ class PointDomains:
         if np.any(partly_outside):
             # The cells around a last cell may miss where such a domain crosses the
             # grid's edge: try every cell (few domains), so what is missing is outside.
-            box_low, box_high = tracker.cell_vertices.min(axis=1), tracker.cell_vertices.max(axis=1)
+            box_low, box_high = self._boxes
             extra = [
                 (d, np.flatnonzero(np.all((box_low <= high[d]) & (box_high >= low[d]), axis=1)))
                 for d in np.flatnonzero(partly_outside)
@@ -172,10 +174,8 @@ class PointDomains:
             order = np.argsort(owner, kind="stable")
             owner, cell = owner[order], cell[order]
         # Only the cells whose bounding boxes meet the domain's can overlap it.
-        vertices = tracker.cell_vertices[cell]
-        meets = np.all(
-            (vertices.min(axis=1) <= high[owner]) & (vertices.max(axis=1) >= low[owner]), axis=1
-        )
+        box_low, box_high = self._boxes
+        meets = np.all((box_low[cell] <= high[owner]) & (box_high[cell] >= low[owner]), axis=1)
         owner, cell = owner[meets], cell[meets]
         xi = tracker.barycentric(corners[owner].reshape(-1, 2), np.repeat(cell, 3)).reshape(
             -1, 3, 3
@@ -205,7 +205,11 @@ class PointDomains:
         # A corner moves with the field of its own cell: the same for every domain that
         # shares it, so the domains keep tiling the body. Past the grid's edge it
         # reads the field of its domain's nearest piece, extended linearly.
-        corner_cell = np.where(outside, _corner_cells(corners, tracker, owner, cell), corner_cells)
+        corner_cell = corner_cells
+        if np.any(outside):
+            corner_cell = np.where(
+                outside, _corner_cells(corners, tracker, owner, cell), corner_cells
+            )
         return Pieces(
             owner=owner,
             cell=cell.astype(np.int32),
