@@ -200,3 +200,25 @@ def test_the_base_reaction_carries_the_weight_with_the_penalty(gamma):
     if gamma:
         assert sim.ghost.facets.size > 0
     assert report.reactions["base"][1] == pytest.approx(weight, rel=1e-9)
+
+
+def test_a_prescribed_shift_next_to_ghost_facets_takes_one_newton_iteration():
+    """The base of a block is shifted rigidly; its lowest row of cells is a third full,
+    so ghost facets reach the shifted nodes. The answer is a rigid translation, which
+    the penalty does not resist, and Newton's first update (the Dirichlet lifting,
+    which must hold the penalty's part G (g − x) too) lands on it: one iteration
+    (measured: 4 when the lifting leaves the penalty out)."""
+    mesh = meshes.rectangle_mesh((0.0, 0.0), (1.0, 1.0), (4, 4))
+    points = fe_mpm.seed(mesh, per_cell=3, density=2.0)
+    y = points.x[:, 1]
+    first_of_cell = np.r_[True, points.cell[1:] != points.cell[:-1]]
+    points.keep(((y > 0.25) & (y < 0.75)) | ((y < 0.25) & first_of_cell))
+    base = fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0), lambda t: (0.02 * t, 0.01 * t))
+    x0 = points.x.copy()
+    sim = fe_mpm.Simulation(
+        mesh, points, fe_mpm.NeoHookean(1e3, 0.3, density=2.0), dirichlet=[base], ghost_penalty=1.0
+    )
+    report = sim.run(1.0, 1, progress=False)[-1]
+    assert sim.ghost.facets.size > 0
+    assert report.newton_iterations == 1
+    assert np.allclose(points.x - x0, (0.02, 0.01), rtol=0, atol=1e-12)
