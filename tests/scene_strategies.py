@@ -350,41 +350,10 @@ def scenes(
     formulation = draw(st.sampled_from(forms))
     has_rollers = draw(st.booleans()) if rollers is None else rollers
     steps = draw(st.integers(*n_steps))
+    fields = (dim, size, cells, diagonal, per_cell, body_rows, slope, law, density)
+    fields += (formulation, ramp, traction, has_rollers, steps)
     if is_static:
-        return Scene(
-            dim,
-            size,
-            cells,
-            diagonal,
-            per_cell,
-            body_rows,
-            slope,
-            law,
-            density,
-            formulation,
-            ramp,
-            traction,
-            has_rollers,
-            steps,
-        )
+        return Scene(*fields)
     t_end = draw(grid(0.01, 0.05, 0.01))
     damping = draw(st.sampled_from((0.0, 0.0, 0.5, 1.5)))
-    return Scene(
-        dim,
-        size,
-        cells,
-        diagonal,
-        per_cell,
-        body_rows,
-        slope,
-        law,
-        density,
-        formulation,
-        ramp,
-        traction,
-        has_rollers,
-        steps,
-        dynamic=True,
-        t_end=t_end,
-        damping=damping,
-    )
+    return Scene(*fields, dynamic=True, t_end=t_end, damping=damping)

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import fe_mpm
-from fe_mpm import meshes
+from fe_mpm import meshes, scenes
 from fe_mpm.meshes import rectangle_mesh
 
 G = 9.81
@@ -328,29 +328,14 @@ def test_mixed_up_vibrating_bar_converges_at_second_order():
     assert abs(0.5 * np.ptp(tops[:, 1]) / amplitude - 1) < 0.02
 
 
-def column(ny, steps=1, E=4e5, rho=80.0, L=50.0):
-    scene = meshes.column(1.0, L, 1, ny)
-    points = fe_mpm.seed(scene.mesh, density=rho)
-    sim = fe_mpm.Simulation(
-        scene.mesh,
-        points,
-        fe_mpm.NeoHookean(E, 0.0, rho),
-        facet_tags=scene.facet_tags,
-        dirichlet=[
-            fe_mpm.Dirichlet(meshes.COLUMN_BASE, component=1),
-            fe_mpm.Dirichlet(meshes.COLUMN_SIDES, component=0),
-        ],
-        body_force=(0.0, -10.0),
-        body_force_scale=lambda t: t,
-        reactions={"base": meshes.COLUMN_BASE},
-    )
+def column(ny, steps=1):
+    """AMPLE's column (``scenes.elastic_column``) in ``steps`` static steps."""
+    sim = scenes.elastic_column(ny, reactions={"base": meshes.COLUMN_BASE})
+    L, E, rho, g = (scenes.COLUMN[key] for key in ("L", "E", "density", "g"))
     sim.add_marker("top", (0.5, L))
     reports = sim.run(n_steps=steps, progress=False)
-    Y = points.x0[:, 1]
-    stress_error = np.sum(np.abs(points.stress[:, 1, 1] + rho * 10.0 * (L - Y)) * points.volume) / (
-        rho * 10.0 * L * points.volume.sum()
-    )
-    a = rho * 10.0 / E
+    stress_error = scenes.column_stress_error(sim)
+    a = rho * g / E
     f = lambda s: -(s**2) + s * np.sqrt(1 + s**2) + np.arcsinh(s)  # noqa: E731
     top_exact = (f(a * L) - f(0.0)) / (2 * a)
     return stress_error, sim.marker("top")[1] - top_exact, reports
