@@ -7,9 +7,13 @@ n = 16, 32, 64, extrapolated (geometric Richardson). One load step of the MPM is
 finite element solve with the points as Gauss points; over 20 steps the points cross
 cells, and standard MPM drifts (issue 19). ``point_domains=True`` spreads each point's
 volume over the cells its convected domain covers (:mod:`fe_mpm.domains`), with the
-ghost penalty γ = 0.1 by default (:mod:`fe_mpm.ghost`; the γ = 0 row leaves it out).
+ghost penalty by default (γ = 0.1 for P1, 0.01 for P2, :mod:`fe_mpm.ghost`; the
+γ = 0 rows leave it out).
 
-Usage: ``./run python benchmarks/cell_crossing.py [--quick] [--nu 0.499 0.33]``.
+Usage: ``./run python benchmarks/cell_crossing.py [--quick] [--nu 0.499 0.33]
+[--formulations up up-p2p1]``. P2/P1 rows: standard MPM needs three points in every
+cell; the ghost penalty ties cells left with fewer (:mod:`fe_mpm.ghost`); with domains
+each piece has three sub-points, so one point per cell is enough.
 Prints the tip displacement, its error against the converged answer and the wall time
 of every case. Not a test.
 """
@@ -24,13 +28,18 @@ from fe_mpm import scenes
 
 #: Total load on the right edge (N): large enough that points cross cells.
 LOAD = 5.0
-#: (label, points per cell, options of Simulation).
+#: (label, formulation, points per cell, options of Simulation).
 CASES = [
-    ("standard, 1 point", 1, {}),
-    ("standard, 3 points", 3, {}),
-    ("domains γ=0, 1 point", 1, {"point_domains": True, "ghost_penalty": 0.0}),
-    ("domains, 1 point", 1, {"point_domains": True}),
-    ("domains, 3 points", 3, {"point_domains": True}),
+    ("standard, 1 point", "up", 1, {}),
+    ("standard, 3 points", "up", 3, {}),
+    ("domains γ=0, 1 point", "up", 1, {"point_domains": True, "ghost_penalty": 0.0}),
+    ("domains, 1 point", "up", 1, {"point_domains": True}),
+    ("domains, 3 points", "up", 3, {"point_domains": True}),
+    ("P2 standard, 3 points", "up-p2p1", 3, {}),
+    ("P2 standard γ=0.1, 3 pts", "up-p2p1", 3, {"ghost_penalty": 0.1}),
+    ("P2 domains γ=0, 1 point", "up-p2p1", 1, {"point_domains": True, "ghost_penalty": 0.0}),
+    ("P2 domains, 1 point", "up-p2p1", 1, {"point_domains": True}),
+    ("P2 domains, 3 points", "up-p2p1", 3, {"point_domains": True}),
 ]
 
 
@@ -42,8 +51,12 @@ def tip(
     steps: int,
     options: dict | None = None,
     load: str = "points",
+    margin: int | None = None,
 ) -> tuple[float, float]:
-    """Cook's tip displacement (m; NaN if the run stops) and the wall time of the run (s)."""
+    """Cook's tip displacement (m; NaN if the run stops) and the wall time of the run (s).
+
+    ``margin``: rows of empty cells above and below the body (default n / 2).
+    """
     t0 = time.perf_counter()
     sim = scenes.cook_membrane(
         n,
@@ -52,7 +65,7 @@ def tip(
         per_cell=per_cell,
         traction=LOAD / 16,
         load=load,
-        margin=n // 2,
+        margin=n // 2 if margin is None else margin,
         **(options or {}),
     )
     try:
@@ -76,6 +89,7 @@ def main() -> None:
     p.add_argument("--quick", action="store_true", help="n = 16 and 32 only")
     p.add_argument("--nu", type=float, nargs="+", default=[0.499, 0.33])
     p.add_argument("--steps", type=int, default=20)
+    p.add_argument("--formulations", nargs="+", default=["up", "up-p2p1"])
     args = p.parse_args()
     sizes = (16, 32) if args.quick else (16, 32, 64)
     for nu in args.nu:
@@ -90,10 +104,12 @@ def main() -> None:
             f"{'one step (FEM at n)':<24}"
             + "".join(f"{u:>10.4f} {100 * (u / limit - 1):+6.1f} %    " for u in one_step)
         )
-        for label, per_cell, options in CASES:
+        for label, formulation, per_cell, options in CASES:
+            if formulation not in args.formulations:
+                continue
             cells = []
             for n in sizes:
-                u, wall = tip(n, nu, "up", per_cell, args.steps, options)
+                u, wall = tip(n, nu, formulation, per_cell, args.steps, options)
                 cells.append(f"{u:>10.4f} {100 * (u / limit - 1):+6.1f} % {wall:4.0f}s")
             print(f"{label:<24}" + "".join(f"{c:>22}" for c in cells), flush=True)
 

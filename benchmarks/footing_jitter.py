@@ -3,7 +3,9 @@
 The u-p footing of ``benchmarks/footing_step_count.py`` (h = 0.2 B near the footing,
 0.5 B far from it, 100 steps of 20 mm to s/B = 2), with standard MPM, with point
 domains without the ghost penalty, and with point domains and their default
-ghost penalty. The jitter is the mean
+ghost penalty; with the footing's default two base points per cell width and with
+more (``strip_footing(base_points_per_cell=...)``), and without the footing's body
+points (``footing_thickness=0``). The jitter is the mean
 absolute second difference of q/c_u over the steps (a smooth curve has almost
 none); the window means of q/c_u over s/B ± 0.1 show what the curve does.
 
@@ -24,8 +26,15 @@ from fe_mpm import scenes
 CENTRES = (0.5, 1.0, 1.5, 1.9)
 CASES = [
     ("standard MPM", {}),
+    ("standard, 8 base/cell", {"base_points_per_cell": 8}),
+    ("standard, 32 base/cell", {"base_points_per_cell": 32}),
     ("domains, γ = 0", {"point_domains": True, "ghost_penalty": 0.0}),
     ("domains (γ = 0.1)", {"point_domains": True}),
+    ("domains, 32 base/cell", {"point_domains": True, "base_points_per_cell": 32}),
+    (
+        "domains, 32, no body",
+        {"point_domains": True, "base_points_per_cell": 32, "footing_thickness": 0.0},
+    ),
 ]
 
 
@@ -56,13 +65,13 @@ def main() -> None:
     p.add_argument("--steps", type=int, default=100)
     args = p.parse_args()
     print(f"h = {args.h}, h_far = {args.h_far}, {args.steps} steps to s/B = 2")
-    print(f"{'case':<22}{'jitter':>8}" + "".join(f"{c:>8}" for c in CENTRES) + f"{'wall s':>8}")
+    print(f"{'case':<24}{'jitter':>8}" + "".join(f"{c:>8}" for c in CENTRES) + f"{'wall s':>8}")
     for label, options in CASES:
         rows, wall = run(args.h, args.h_far, args.steps, options)
         q = np.array([r["q_over_cu"] for r in rows])
         jitter = np.abs(np.diff(q, 2)).mean()
         means = "".join(f"{m:>8.2f}" for m in window_means(rows, CENTRES))
-        print(f"{label:<22}{jitter:>8.3f}{means}{wall:>8.0f}", flush=True)
+        print(f"{label:<24}{jitter:>8.3f}{means}{wall:>8.0f}", flush=True)
 
 
 if __name__ == "__main__":

@@ -70,15 +70,12 @@ def area_and_centroid(polygon: np.ndarray, count: np.ndarray) -> tuple[np.ndarra
     return area, np.where(np.abs(area)[:, None] > 0, centroid, 0.0)
 
 
-def clip_to_reference_cell(xi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The overlap of triangles with the reference cell ``ξ₁, ξ₂ ≥ 0, ξ₁ + ξ₂ ≤ 1``.
-
-    Args:
-        xi: The triangles' vertices in the reference coordinates of a cell (n, 3, 2).
+def _pieces_in_reference_cell(xi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The overlaps of triangles ``xi`` (n, 3, 2) with the reference cell, as polygons.
 
     Returns:
-        The overlaps' areas in reference units (n,) ≥ 0 (the whole cell is 1/2), and
-        their centroids ξ (n, 2) (0 where the area is 0).
+        Their vertices (n, 6, 2) in order, and their counts (n,): 0 where there is no
+        overlap.
     """
     half_planes = (
         lambda p: p[..., 0],
@@ -90,11 +87,93 @@ def clip_to_reference_cell(xi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     # beyond one of its edges.
     inside = np.all(distances >= 0, axis=(0, 2))
     cut = ~inside & ~np.any(np.all(distances < 0, axis=2), axis=0)
-    area = np.zeros(len(xi))
-    centroid = np.zeros((len(xi), 2))
-    area[inside], centroid[inside] = area_and_centroid(xi[inside], np.full(inside.sum(), 3))
+    polygons = np.zeros((len(xi), 6, 2))
+    counts = np.zeros(len(xi), dtype=np.int64)
+    polygons[inside, :3], counts[inside] = xi[inside], 3
     polygon, count = xi[cut], np.full(cut.sum(), 3)
     for size, distance in zip((4, 5, 6), half_planes, strict=True):
         polygon, count = _clip(polygon, count, distance(polygon), size)
-    area[cut], centroid[cut] = area_and_centroid(polygon, count)
+    polygons[cut], counts[cut] = polygon, count
+    return polygons, counts
+
+
+def clip_to_reference_cell(xi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The overlap of triangles with the reference cell ``ξ₁, ξ₂ ≥ 0, ξ₁ + ξ₂ ≤ 1``.
+
+    Args:
+        xi: The triangles' vertices in the reference coordinates of a cell (n, 3, 2).
+
+    Returns:
+        The overlaps' areas in reference units (n,) ≥ 0 (the whole cell is 1/2), and
+        their centroids ξ (n, 2) (0 where the area is 0).
+    """
+    area, centroid = area_and_centroid(*_pieces_in_reference_cell(xi))
     return np.abs(area), centroid
+
+
+def piece_rule(xi: np.ndarray, degree: int) -> tuple[np.ndarray, np.ndarray]:
+    """A quadrature rule on each overlap of triangles with the reference cell.
+
+    Degree 1: the overlap's centroid. Degree 2: three points of equal weight that
+    match the overlap's area, centroid and second moments, hence integrate every
+    quadratic exactly: ``c + √2 Σ^½ u_k`` with Σ the overlap's covariance and the
+    ``u_k`` unit vectors 120° apart, the first towards the overlap's first vertex. In
+    the coordinates where Σ = I the points lie on the circle of radius √2, which a
+    convex polygon with its centroid at the origin contains (Kannan, Lovász and
+    Simonovits 1995, Lemma 5.1; a triangle touches it at its edges' midpoints), so
+    the points lie in the overlap; on a triangle they are its usual rule
+    ``c + (v_i − c)/2``, strictly inside.
+
+    Args:
+        xi: The triangles' vertices in the reference coordinates of a cell (n, 3, 2).
+        degree: 1 or 2.
+
+    Returns:
+        The overlaps' areas in reference units (n,) ≥ 0, and the rule's points ξ
+        (n, q, 2) with q = 1 or 3, each weighted by area / q (0 where the area is 0).
+    """
+    polygons, counts = _pieces_in_reference_cell(xi)
+    if degree == 1:
+        area, centroid = area_and_centroid(polygons, counts)
+        return np.abs(area), centroid[:, None, :]
+    if degree != 2:
+        raise ValueError(f"piece_rule: degree must be 1 or 2, got {degree}")
+    # Moments about each polygon's first vertex, against cancellation on small pieces.
+    origin = polygons[:, :1, :].copy()
+    local = np.where(np.arange(6)[None, :, None] < counts[:, None, None], polygons - origin, 0.0)
+    area, centroid, covariance = _second_moments(local, counts)
+    points = np.zeros((len(xi), 3, 2))
+    has = np.abs(area) > 0
+    values, vectors = np.linalg.eigh(covariance[has])
+    values = np.maximum(values, np.finfo(float).tiny)
+    root = vectors * np.sqrt(values)[:, None, :]  # Σ^½ = V Λ^½ Vᵀ, applied as V Λ^½ (Vᵀ·)
+    towards = np.einsum("ngk,ng->nk", vectors, -centroid[has]) / np.sqrt(values)
+    angle = np.arctan2(towards[:, 1], towards[:, 0])[:, None] + 2.0 * np.pi / 3.0 * np.arange(3)
+    u = np.sqrt(2.0) * np.stack([np.cos(angle), np.sin(angle)], axis=2)  # (m, 3, 2)
+    points[has] = centroid[has, None, :] + np.einsum("ngk,nqk->nqg", root, u)
+    points += origin
+    return np.abs(area), np.where(has[:, None, None], points, 0.0)
+
+
+def _second_moments(
+    polygon: np.ndarray, count: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Signed area (n,), centroid (n, 2) and covariance (n, 2, 2) of polygons (n, k, 2)."""
+    area, centroid = area_and_centroid(polygon, count)
+    n, k = polygon.shape[:2]
+    column = np.arange(k)
+    following = (column[None, :] + 1) % np.maximum(count, 1)[:, None]
+    p, q = polygon, polygon.reshape(-1, 2)[following + k * np.arange(n)[:, None]]
+    valid = column[None, :] < count[:, None]
+    cross = np.where(valid, p[..., 0] * q[..., 1] - q[..., 0] * p[..., 1], 0.0)
+    # ∫ x_a x_b over a polygon: Σ cross (2 p_a p_b + p_a q_b + q_a p_b + 2 q_a q_b) / 24.
+    pair = (
+        2.0 * np.einsum("nka,nkb->nkab", p, p)
+        + np.einsum("nka,nkb->nkab", p, q)
+        + np.einsum("nka,nkb->nkab", q, p)
+        + 2.0 * np.einsum("nka,nkb->nkab", q, q)
+    )
+    second = np.einsum("nk,nkab->nab", cross, pair) / 24.0
+    with np.errstate(invalid="ignore", divide="ignore"):
+        covariance = second / area[:, None, None] - np.einsum("na,nb->nab", centroid, centroid)
+    return area, centroid, np.where(np.abs(area)[:, None, None] > 0, covariance, 0.0)

@@ -29,8 +29,10 @@ returns from the point's own state).
 A domain that has distorted too far (:func:`shape_quality`) is redrawn around its
 point at the start of a step, which breaks the tiling there; the ghost penalty
 (:mod:`fe_mpm.ghost`, on by default with domains) ties the cells the domains fill
-in part. Not yet: 3D (tetrahedral domains), P2 displacements, and splitting a
-distorted domain into smaller ones. The measurements: ``docs/cell_crossing.md``.
+in part. With P2 displacements each piece has three sub-points that integrate
+quadratics exactly (:func:`~fe_mpm.clipping.piece_rule`). Not yet: 3D (tetrahedral
+domains), and splitting a distorted domain into smaller ones. The measurements:
+``docs/cell_crossing.md``.
 """
 
 from __future__ import annotations
@@ -40,7 +42,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fe_mpm.clipping import clip_to_reference_cell
+from fe_mpm.clipping import piece_rule
 from fe_mpm.errors import ConvergenceError, PointsOutsideError
 from fe_mpm.markers import Markers
 from fe_mpm.particles import MaterialPoints
@@ -70,13 +72,16 @@ RESET_QUALITY = 0.2
 
 @dataclass
 class Pieces:
-    """The domains cut by the cells of the grid, for one step.
+    """The domains cut by the cells of the grid, for one step: their sub-points.
+
+    A piece has one sub-point (at its centroid) or three (P2, see
+    :func:`~fe_mpm.clipping.piece_rule`); the arrays run over the sub-points.
 
     Attributes:
-        owner: The point of each piece (k,), in increasing order.
+        owner: The point of each sub-point (k,), in increasing order.
         cell: Its cell (k,).
         share: Its fraction of its domain's area (k,); each point's add up to 1.
-        x: Its centroid (k, 2) in m, where its sub-point integrates it.
+        x: Its position (k, 2) in m.
         corner_cell: The cell whose grid increment moves each domain corner (n × 3,):
             its own, or for a corner past the grid's edge its domain's nearest piece's.
         corner_bary: The corners' barycentric coordinates there (n × 3, 3), outside
@@ -105,14 +110,19 @@ class PointDomains:
         points: The material points (2D), located in their cells. Points that tile
             their cell move to the centroids of their tiles.
         tracker: The grid's tracker.
+        degree: The displacement's degree: 1 integrates each piece with one sub-point
+            at its centroid, 2 with three that integrate quadratics exactly
+            (:func:`~fe_mpm.clipping.piece_rule`), so that every P2 cell a domain
+            covers sees a full-rank stiffness.
 
     Attributes:
         corners: The domains' vertices (n, 3, 2) in m.
         active: True while the pieces take a step in the points' place.
     """
 
-    def __init__(self, points: MaterialPoints, tracker: Tracker):
+    def __init__(self, points: MaterialPoints, tracker: Tracker, degree: int = 1):
         self.corners = initial_domains(points, tracker.cell_vertices)
+        self.degree = degree
         self.active = False
         self._pieces: Pieces | None = None  # those of the step being taken
         self._moved = self.corners  # the corners after that step, once it converged
@@ -180,7 +190,7 @@ class PointDomains:
         xi = tracker.barycentric(corners[owner].reshape(-1, 2), np.repeat(cell, 3)).reshape(
             -1, 3, 3
         )[..., 1:]
-        area, centroid = clip_to_reference_cell(xi)
+        area, rule = piece_rule(xi, self.degree)
         area *= 2.0 * tracker.volumes[cell]
         domain_area = 0.5 * np.abs(np.linalg.det(corners[:, 1:] - corners[:, :1]))
         covered = np.bincount(owner, weights=area, minlength=n) / domain_area
@@ -200,8 +210,7 @@ class PointDomains:
             )
         # A round-off sliver is dropped; the domain's other pieces share its area.
         keep = area > MIN_SHARE * domain_area[owner]
-        owner, cell, area, centroid = owner[keep], cell[keep], area[keep], centroid[keep]
-        bary = np.column_stack([1.0 - centroid.sum(axis=1), centroid])
+        owner, cell, area, rule = owner[keep], cell[keep], area[keep], rule[keep]
         # A corner moves with the field of its own cell: the same for every domain that
         # shares it, so the domains keep tiling the body. Past the grid's edge it
         # reads the field of its domain's nearest piece, extended linearly.
@@ -210,11 +219,16 @@ class PointDomains:
             corner_cell = np.where(
                 outside, _corner_cells(corners, tracker, owner, cell), corner_cells
             )
+        # Each piece's rule has q points of equal weight, each a sub-point.
+        q = rule.shape[1]
+        bary = np.concatenate([1.0 - rule.sum(axis=2, keepdims=True), rule], axis=2)
+        x = np.einsum("kqv,kvg->kqg", bary, tracker.cell_vertices[cell]).reshape(-1, 2)
+        share = area / np.bincount(owner, weights=area, minlength=n)[owner]
         return Pieces(
-            owner=owner,
-            cell=cell.astype(np.int32),
-            share=area / np.bincount(owner, weights=area, minlength=n)[owner],
-            x=np.einsum("kv,kvg->kg", bary, tracker.cell_vertices[cell]),
+            owner=np.repeat(owner, q),
+            cell=np.repeat(cell, q).astype(np.int32),
+            share=np.repeat(share / q, q),
+            x=x,
             corner_cell=corner_cell,
             corner_bary=tracker.barycentric(corners.reshape(-1, 2), corner_cell),
         )

@@ -42,8 +42,8 @@ class FormulationSpec:
             "trustworthy: points away from their Gauss positions do not integrate "
             "the gradients of the P2 shape functions exactly, and a homogeneous "
             "stress then leaves spurious nodal forces (the patch test fails; see "
-            "docs/formulations.md, 'P2/P1 once the points have moved'). Use 'up' for "
-            "runs of many steps."
+            "docs/formulations.md, 'P2/P1 once the points have moved'). Use "
+            "point_domains=True, or 'up', for runs of many steps."
         )
 
 
@@ -82,6 +82,7 @@ class GridFields:
             self.U = self.W
             self.Q = None
         self.w = dolfinx.fem.Function(self.W, name="unknown")
+        self._scalar_element = basix.ufl.element("Lagrange", cell, spec.u_degree)
         if spec.pressure:
             self.du, self.p = ufl.split(self.w)
         else:
@@ -104,17 +105,19 @@ class GridFields:
         return bcs
 
     def displacement_at(self, cells: np.ndarray, bary: np.ndarray) -> np.ndarray:
-        """Δu (n, g) in m at points with barycentric coordinates ``bary`` (n, 3) in ``cells`` (n,).
+        """Δu (n, g) in m at barycentric coordinates ``bary`` (n, g + 1) in ``cells`` (n,).
 
-        P1 displacements only; coordinates outside [0, 1] extrapolate the cell's field.
+        P1 or P2; coordinates outside [0, 1] extrapolate the cell's polynomial.
         """
-        if self.spec.u_degree != 1:
-            raise NotImplementedError("displacement_at: P1 displacements only")
         g = bary.shape[1] - 1
+        if self.spec.u_degree == 1:
+            basis = bary  # the P1 shape functions are the barycentric coordinates
+        else:
+            basis = self._scalar_element.tabulate(0, np.ascontiguousarray(bary[:, 1:]))[0]
         values = self.w.x.array
         return np.column_stack(
             [
-                np.einsum("nv,nv->n", bary, values[to_parent[collapsed.dofmap.list[cells]]])
+                np.einsum("nv,nv->n", basis, values[to_parent[collapsed.dofmap.list[cells]]])
                 for _, collapsed, to_parent, _ in self._pinnable[:g]
             ]
         )

@@ -2,7 +2,8 @@
 
 ``Simulation(ghost_penalty=γ)`` adds the ghost penalty of :mod:`fe_mpm.forms.ghost`
 on every interior facet between two occupied cells at least one of which the
-material fills less than :data:`POORLY_FILLED` (the points' volume over the cell's).
+material fills less than :data:`POORLY_FILLED` (the points' volume over the cell's)
+or that holds fewer points than its displacement needs (3 for P2).
 The penalty is linear in Δu, so each step assembles it once: as ``full`` (no
 conditions, for the residual ``G Δu``) and as ``constrained`` (the rows and
 columns of Dirichlet dofs zeroed, to add to the tangent).
@@ -20,18 +21,21 @@ from fe_mpm.formulations import GridFields
 
 #: A cell filled less than this (points' volume / cell volume) is poorly filled.
 POORLY_FILLED = 0.5
-#: γ when point domains are on and ``ghost_penalty`` is not given. Measured on Cook
-#: at 5 N, n = 32: without it the tip drifts on with the number of steps (1.3649,
-#: 1.3769, 1.3924, 1.4358 after 20, 80, 160, 320 steps), with it it settles (1.3529,
-#: 1.3597, 1.3616, 1.3613; converged FEM 1.3542).
-WITH_DOMAINS = 0.1
+#: γ when point domains are on and ``ghost_penalty`` is not given, by the
+#: displacement's degree. P1, measured on Cook at 5 N, n = 32: without it the tip
+#: drifts on with the number of steps (1.3649, 1.3769, 1.3924, 1.4358 after 20, 80,
+#: 160, 320 steps), with it it settles (1.3529, 1.3597, 1.3616, 1.3613; converged
+#: FEM 1.3542). P2, Cook at 10 N, n = 16, one point per cell: without it Newton
+#: fails in step 157 of 160; 0.01 finishes (−1.3 %, 0.1 gives −1.7 %), and costs
+#: 0.5 % at 5 N over 20 steps (1.3357 against 1.3422).
+WITH_DOMAINS = {1: 0.1, 2: 0.01}
 
 
 class GhostStabilisation:
     """The ghost penalty of one grid, re-bound to the facets of every step.
 
     Args:
-        fields: The grid unknown (P1 displacement, alone or with a pressure).
+        fields: The grid unknown (displacement, alone or with a pressure).
         gamma: The penalty factor γ > 0 (dimensionless).
         mu: The shear modulus μ of the material (Pa).
 
@@ -49,7 +53,8 @@ class GhostStabilisation:
         if fields.spec.pressure:
             trial, test = ufl.split(trial)[0], ufl.split(test)[0]
         self.scale = dolfinx.fem.Constant(mesh, 2.0 * gamma * mu)
-        compiled = dolfinx.fem.compile_form(mesh.comm, ghost_penalty(trial, test, self.scale))
+        form = ghost_penalty(trial, test, self.scale, fields.spec.u_degree)
+        compiled = dolfinx.fem.compile_form(mesh.comm, form)
         self._factory = FormFactory(compiled, [W, W], mesh, {}, {self.scale: self.scale})
         tdim = mesh.topology.dim
         mesh.topology.create_connectivity(tdim - 1, tdim)
@@ -69,6 +74,7 @@ class GhostStabilisation:
             fem_petsc.assemble_matrix(matrix, self.pattern)
             matrix.assemble()
         self.facets = np.zeros(0, dtype=np.int32)
+        self._tied = np.zeros(0, dtype=np.int32)
 
     def _bind(self, facets: np.ndarray) -> dolfinx.fem.Form:
         entities = dolfinx.fem.compute_integration_domains(
@@ -77,7 +83,12 @@ class GhostStabilisation:
         return self._factory({dolfinx.fem.IntegralType.interior_facet: [(GHOST_FACETS, entities)]})
 
     def update(
-        self, cells: np.ndarray, volume: np.ndarray, cell_volume: np.ndarray, bcs: list
+        self,
+        cells: np.ndarray,
+        volume: np.ndarray,
+        cell_volume: np.ndarray,
+        bcs: list,
+        min_points: int = 1,
     ) -> None:
         """Pick the step's ghost facets and assemble G there.
 
@@ -86,16 +97,25 @@ class GhostStabilisation:
             volume: The points' volumes (n,).
             cell_volume: The volume of every cell (nc,).
             bcs: The step's Dirichlet conditions.
+            min_points: A cell with fewer points than this is poorly filled too
+                (3 for P2: fewer leave some of its strain modes unseen).
         """
         fill = np.bincount(cells, weights=volume, minlength=cell_volume.size) / cell_volume
-        a, b = fill[self._cells[:, 0]], fill[self._cells[:, 1]]
-        ghost = (a > 0) & (b > 0) & (np.minimum(a, b) < POORLY_FILLED)
+        count = np.bincount(cells, minlength=cell_volume.size)
+        poor = (fill < POORLY_FILLED) | (count < min_points)
+        a, b = self._cells[:, 0], self._cells[:, 1]
+        ghost = (count[a] > 0) & (count[b] > 0) & (poor[a] | poor[b])
         self.facets = self._interior[ghost]
+        self._tied = np.unique(self._cells[ghost])
         form = self._bind(self.facets)
         for matrix, conditions, diagonal in ((self.full, [], 1.0), (self.constrained, bcs, 0.0)):
             matrix.zeroEntries()
             fem_petsc.assemble_matrix(matrix, form, bcs=conditions, diag=diagonal)
             matrix.assemble()
+
+    def tied_cells(self) -> np.ndarray:
+        """The cells that share a ghost facet this step (sorted)."""
+        return self._tied
 
     def force(self, w: dolfinx.fem.Function) -> np.ndarray:
         """The penalty's nodal force G Δu at the unknown ``w`` (every local dof)."""

@@ -90,19 +90,10 @@ def check_domains(
     ghost_penalty: float | None,
     points: MaterialPoints,
     points_leaving: str,
-    spec: FormulationSpec,
 ) -> None:
-    """Point domains: on or off, in 2D, with P1 displacements and every point kept.
-
-    The ghost penalty: γ ≥ 0, with P1 displacements.
-    """
+    """Point domains: on or off, in 2D, with every point kept. The ghost penalty: γ ≥ 0."""
     if ghost_penalty is not None:
         check_range("Simulation", "ghost_penalty", ghost_penalty, lo=0.0)
-    if ghost_penalty and spec.u_degree != 1:
-        raise NotImplementedError(
-            "Simulation: ghost_penalty works with P1 displacements ('u', 'up') for now: "
-            "P2 needs the jumps of its second derivatives too"
-        )
     gdim = points.gdim
     if not isinstance(point_domains, bool | np.bool_):
         raise TypeError(f"Simulation: point_domains must be True or False, got {point_domains!r}")
@@ -111,11 +102,6 @@ def check_domains(
             "Simulation: point_domains works on triangles (2D) for now; in 3D leave it "
             "False (standard MPM)"
         )
-    if point_domains and spec.u_degree != 1:
-        raise NotImplementedError(
-            "Simulation: point_domains works with P1 displacements ('u', 'up') for now: "
-            "a piece's one sub-point integrates a P2 field's stress inexactly"
-        )
     if point_domains and points_leaving != "raise":
         raise ValueError(
             "Simulation: point_domains needs points_leaving='raise': a point whose "
@@ -123,10 +109,10 @@ def check_domains(
         )
 
 
-def ghost_factor(ghost_penalty: float | None, point_domains: bool) -> float:
+def ghost_factor(ghost_penalty: float | None, point_domains: bool, degree: int) -> float:
     """γ of the ghost penalty: as given, else :data:`~fe_mpm.ghost.WITH_DOMAINS` with domains."""
     if ghost_penalty is None:
-        return WITH_DOMAINS if point_domains else 0.0
+        return WITH_DOMAINS[degree] if point_domains else 0.0
     return float(ghost_penalty)
 
 

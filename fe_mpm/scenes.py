@@ -9,6 +9,8 @@ import numpy as np
 
 from fe_mpm import meshes
 from fe_mpm.boundary import Dirichlet, PointDirichlet, PointTraction, Traction
+from fe_mpm.checks import check_int
+from fe_mpm.formulations import FORMULATIONS
 from fe_mpm.materials import MohrCoulomb, NeoHookean
 from fe_mpm.particles import merge, seed
 from fe_mpm.simulation import Simulation
@@ -49,8 +51,8 @@ def cook_membrane(
         load: ``"grid"``: a :class:`Traction` on the right grid edge (the thesis's
             set-up; it stays there, so it suits one step or small motion);
             ``"points"``: a :class:`PointTraction` on points at the edge's facet
-            midpoints, which follow the body (for large motion over many steps;
-            in one step it equals the grid load).
+            midpoints (two Gauss points per facet for P2), which follow the body
+            (for large motion over many steps; in one step it equals the grid load).
         options: Passed on to :class:`~fe_mpm.simulation.Simulation`.
     """
     scene = meshes.cook_membrane(n=n, structured=structured, h=h, margin=margin)
@@ -59,7 +61,8 @@ def cook_membrane(
     if load == "grid":
         loads["tractions"] = [Traction(meshes.COOK_LOADED, (0.0, traction), scale=lambda t: t)]
     elif load == "points":
-        x, weight = meshes.facet_points(scene.mesh, scene.facet_tags.find(meshes.COOK_LOADED))
+        loaded = scene.facet_tags.find(meshes.COOK_LOADED)
+        x, weight = meshes.facet_points(scene.mesh, loaded, FORMULATIONS[formulation].u_degree)
         loads["point_tractions"] = [
             PointTraction("load", x, weight, (0.0, traction), scale=lambda t: t)
         ]
@@ -101,6 +104,7 @@ def strip_footing(
     smooth: bool = False,
     footing_thickness: float | None = None,
     penalty: float | None = None,
+    base_points_per_cell: int = 2,
     **options,
 ) -> Simulation:
     """The rigid strip footing of Iaconeta (2019) §6.2 on weightless Tresca soil.
@@ -126,6 +130,11 @@ def strip_footing(
         smooth: Smooth footing (vertical constraint only) instead of rough.
         footing_thickness: Height of the footing's body points (m); default 2h.
         penalty: Penalty stiffness of the footing points (Pa/m); default 1e3 E/h.
+        base_points_per_cell: Penalty points on the footing's base per cell width h
+            (≥ 1). Each carries its share of the base; a point that crosses into the
+            next cell moves that share at once, which is most of the step-to-step
+            jitter of q (``benchmarks/footing_jitter.py``: 2 per cell, the default,
+            0.562; 8 per cell 0.332).
         options: Passed on to :class:`~fe_mpm.simulation.Simulation`.
     """
     scene = meshes.strip_footing(B, h=h, h_far=h_far, near_width=near_width, near_depth=near_depth)
@@ -135,7 +144,13 @@ def strip_footing(
         seed(scene.mesh, points_near, cells=near), seed(scene.mesh, points_far, cells=far)
     )
     thickness = 2 * h if footing_thickness is None else footing_thickness
-    x_f, w_f = meshes.footing_points(B, max(4, int(round(B / h))), thickness)
+    per_cell = check_int("strip_footing", "base_points_per_cell", base_points_per_cell, lo=1)
+    n = max(4, int(round(B / h)))  # the body's lattice: two points per cell width
+    x_f, w_f = meshes.footing_points(B, n, thickness)
+    if per_cell != 2:
+        body = x_f[:, 1] > 0.0
+        x_b, w_b = meshes.footing_points(B, max(1, n * per_cell // 2))
+        x_f, w_f = np.concatenate([x_b, x_f[body]]), np.concatenate([w_b, w_f[body]])
     footing = PointDirichlet(
         "footing",
         x_f,

@@ -122,8 +122,9 @@ class Simulation:
             convected domain covers (2D, :mod:`fe_mpm.domains`), against the
             cell-crossing error; False (default): standard MPM.
         ghost_penalty: γ ≥ 0 of the ghost penalty on the facets of poorly filled
-            cells (:mod:`fe_mpm.ghost`, P1 displacements); 0: none. Default:
-            :data:`fe_mpm.ghost.WITH_DOMAINS` (0.1) with point domains, else 0.
+            cells (:mod:`fe_mpm.ghost`); 0: none. Default:
+            :data:`fe_mpm.ghost.WITH_DOMAINS` with point domains (0.1 for P1, 0.01
+            for P2), else 0.
     """
 
     def __init__(
@@ -164,7 +165,7 @@ class Simulation:
         model_checks.check_ranges(max_step_cells, ppp_alpha, damping, output_every)
         model_checks.check_dynamics(dynamic, formulation, damping, mass)
         self.spec = FORMULATIONS[formulation]
-        model_checks.check_domains(point_domains, ghost_penalty, points, points_leaving, self.spec)
+        model_checks.check_domains(point_domains, ghost_penalty, points, points_leaving)
         model_checks.check_law(material, self.spec, formulation)
         model_checks.take_density(material, points)
         for name, h in material.history.items():
@@ -202,8 +203,10 @@ class Simulation:
             None if output_dir is None else SimulationOutput(output_dir, self.fields, output_every)
         )
         self._track()  # once now, so a bad initial layout fails at set-up
-        self.domains = PointDomains(points, self.tracker) if point_domains else None
-        gamma = model_checks.ghost_factor(ghost_penalty, point_domains)
+        self.domains = None
+        if point_domains:
+            self.domains = PointDomains(points, self.tracker, self.spec.u_degree)
+        gamma = model_checks.ghost_factor(ghost_penalty, point_domains, self.spec.u_degree)
         self.ghost = GhostStabilisation(self.fields, gamma, material.mu) if gamma else None
 
     # -- public API ------------------------------------------------------------
@@ -283,7 +286,7 @@ class Simulation:
         if self.domains is not None and not self.domains.active:
             return step_with_domains(self, t_new, rebin)
         k, dt = self.step_number + 1, t_new - self.t
-        if k == 2 and self.spec.u_degree == 2:
+        if k == 2 and self.spec.u_degree == 2 and self.domains is None:
             warn(self.spec.multi_step_warning())
         # Track, lay out, pack, impose (and project the points' motion, in dynamics).
         forms, layout, R, J, bcs = self.prepare_step(t_new, rebin=rebin)
@@ -327,10 +330,16 @@ class Simulation:
         layout = self._track(
             self.step_number + 1, t_new, hold=None if rebin else self._cells_of_last_step
         )
-        check_points_per_cell(layout, self.spec, self.step_number, self.tracker.centroids)
         if self.step_number == 0 and not self.dynamic:
             model_checks.check_supports(self.conditions, self._boundary, layout.occupied)
         self.conditions.check_loaded_facets(layout.occupied, t_new)
+        bcs = self.conditions.impose(layout.occupied, self.t, t_new)
+        tied = None  # cells the ghost penalty ties to a neighbour need fewer points
+        if self.ghost is not None:
+            need, volume = self.spec.min_points_per_cell, self.points.volume
+            self.ghost.update(layout.cell, volume, self.tracker.volumes, bcs, need)
+            tied = self.ghost.tied_cells()
+        check_points_per_cell(layout, self.spec, self.step_number, self.tracker.centroids, tied)
 
         t0 = time.perf_counter()
         boundary = None if self._boundary is None else self._boundary.locate(layout.occupied, t_new)
@@ -345,7 +354,6 @@ class Simulation:
             self._boundary.pack(forms, t_new)
         R, J = forms.residual.bind(layout, boundary), forms.jacobian.bind(layout, boundary)
         loads = None if forms.loads is None else forms.loads.bind(layout, boundary)
-        bcs = self.conditions.impose(layout.occupied, self.t, t_new)
         if self.dynamics is not None:
             self.dynamics.project(
                 layout.cell, bary, pts.mass, pts.velocity, pts.acceleration, t_new - self.t
@@ -387,7 +395,6 @@ class Simulation:
             hooks["before_residual"] = lambda: self.refresh_material(tangent=False)
             hooks["before_jacobian"] = self.refresh_material
         if self.ghost is not None:
-            self.ghost.update(current.layout.cell, pts.volume, self.tracker.volumes, bcs)
             hooks["ghost"] = self.ghost
         if self._newton is None:  # its matrix has the pattern of every cell of the grid
             prefix = f"fe_mpm_{self.formulation.replace('-', '_')}_"

@@ -103,12 +103,18 @@ class PointTracking:
 
 
 def check_points_per_cell(
-    layout: SlotLayout, spec: FormulationSpec, step_number: int, centroids: np.ndarray
+    layout: SlotLayout,
+    spec: FormulationSpec,
+    step_number: int,
+    centroids: np.ndarray,
+    tied: np.ndarray | None = None,
 ) -> None:
     """Refuse a layout with fewer points in an occupied cell than the formulation needs.
 
     ``spec.min_points_per_cell`` is 3 for P2/P1 (the rank of the P2 strain) and 1
-    otherwise; ``centroids`` (cells, g) locate the cell named in the message.
+    otherwise; ``centroids`` (cells, g) locate the cell named in the message. Cells
+    in ``tied`` (those the ghost penalty ties to a neighbour, :mod:`fe_mpm.ghost`)
+    may hold fewer.
 
     Raises:
         ValueError: At set-up (``step_number`` 0): seed more points.
@@ -120,6 +126,8 @@ def check_points_per_cell(
     if need <= 1:
         return
     counts = np.bincount(layout.cell)[layout.occupied]
+    if tied is not None:
+        counts[np.isin(layout.occupied, tied)] = need
     if counts.min() >= need:
         return
     few = int(np.sum(counts < need))
@@ -127,14 +135,15 @@ def check_points_per_cell(
     message = (
         f"formulation {formulation!r} needs at least {need} material points in "
         f"every occupied cell, but {few} cell(s) hold fewer (e.g. cell {worst} near x = "
-        f"{centroids[worst]} holds {counts.min()}): the quadratic "
-        "displacement then has strain modes no point sees."
+        f"{centroids[worst]} holds {counts.min()}) and no ghost facet ties it to a "
+        "neighbour: the quadratic displacement then has strain modes no point sees."
     )
     if step_number == 0:
         raise ValueError(f"Simulation: {message} Seed more points per cell.")
     raise ConvergenceError(
         f"step {step_number + 1}: {message} The points no longer support the "
-        "unknowns; use the 'up' (P1) formulation or more points per cell."
+        "unknowns; use point_domains=True, a ghost_penalty > 0, more points per "
+        "cell, or the 'up' (P1) formulation."
     )
 
 

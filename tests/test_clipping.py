@@ -5,7 +5,7 @@ import pytest
 
 import fe_mpm
 from fe_mpm import meshes
-from fe_mpm.clipping import clip_to_reference_cell
+from fe_mpm.clipping import clip_to_reference_cell, piece_rule
 from fe_mpm.tilings import equal_tiling, initial_domains
 from fe_mpm.tracker import Tracker
 
@@ -55,6 +55,38 @@ def test_the_pieces_of_a_triangle_add_up_to_it():
     assert both.sum() > 100  # most triangles cross the diagonal
     weighted = (a1[:, None] * c1 + a2[:, None] * np.where(a2[:, None] > 0, c2, 0)) / area[:, None]
     assert np.allclose(weighted, centroid, rtol=0, atol=1e-12)
+
+
+def _quadratic(x):
+    return x[..., 0] ** 2 + 0.3 * x[..., 0] * x[..., 1] - x[..., 1] ** 2 + x[..., 0] - 0.7
+
+
+def test_the_three_point_rule_integrates_quadratics_over_the_pieces_from_inside():
+    """5 000 random triangles cut by the unit square's two halves: the degree-2 rule
+    on the two pieces integrates a full quadratic over the triangle to round-off (its
+    exact integral from the triangle's own three-point rule); every point lies
+    strictly inside its piece's cell, and on a triangle the rule is the usual one."""
+    rng = np.random.default_rng(20261202)
+    t = rng.uniform(0.0, 1.0, (5000, 3, 2))
+    a1, p1 = piece_rule(t, 2)
+    a2, p2 = piece_rule(1.0 - t, 2)
+    p2 = 1.0 - p2
+    integral = a1 * _quadratic(p1).mean(axis=1) + a2 * _quadratic(p2).mean(axis=1)
+    area, centroid = _area_and_centroid(t)
+    exact = area * _quadratic(centroid[:, None] + 0.5 * (t - centroid[:, None])).mean(axis=1)
+    assert np.allclose(integral, exact, rtol=0, atol=1e-15)
+    cut = (a1 > 0) & (a2 > 0)
+    assert cut.sum() > 2000  # most triangles cross the diagonal
+    for a, p in ((a1, p1), (a2, 1.0 - p2)):
+        lam = np.concatenate([1.0 - p.sum(axis=2, keepdims=True), p], axis=2)
+        assert lam[a > 0].min() > 0.0
+    assert np.allclose(piece_rule(t, 1)[0], a1, rtol=1e-12, atol=1e-15)
+    inside = np.array([[[0.1, 0.1], [0.5, 0.2], [0.2, 0.6]]])
+    c = inside.mean(axis=1)
+    usual = c + 0.5 * (inside[0] - c)
+    assert np.allclose(np.sort(piece_rule(inside, 2)[1][0], axis=0), np.sort(usual, axis=0))
+    with pytest.raises(ValueError, match="degree must be 1 or 2"):
+        piece_rule(t, 3)
 
 
 @pytest.mark.parametrize("k", [1, 3, 4, 6, 9, 12, 16, 24])

@@ -56,3 +56,17 @@ def test_load_steps_with_cell_crossing_stay_close():
     assert reports[-1].occupied_cells < 2048 and reports[-1].nslot == 1
     assert abs(two / one - 1) < 0.01
     assert all(r.newton_iterations <= 4 for r in reports)
+
+
+@pytest.mark.parametrize(("formulation", "per_cell"), [("up", 1), ("up-p2p1", 3)])
+def test_a_load_on_boundary_points_is_the_grid_load_in_one_step(formulation, per_cell):
+    """Before anything moves, ``load="points"`` integrates the traction of the loaded
+    edge as the grid traction does: to round-off for P1 (midpoints) and for P2 (two
+    Gauss points per facet; the midpoints alone put the whole load on the facets'
+    middle nodes and the edge bulges between them)."""
+    tips = []
+    for load in ("grid", "points"):
+        sim = scenes.cook_membrane(8, 0.33, formulation, per_cell=per_cell, load=load)
+        sim.run(1.0, 1, progress=False)
+        tips.append(scenes.tip_deflection(sim))
+    assert tips[1] == pytest.approx(tips[0], rel=1e-10)

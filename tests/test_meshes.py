@@ -104,3 +104,29 @@ def test_footing_points_fill_the_body_with_equal_weights():
     assert np.allclose(base, x[:5])
     with pytest.raises(ValueError, match="thickness"):
         meshes.footing_points(1.0, 5, thickness=-0.1)
+
+
+@pytest.mark.parametrize("degree", [1, 2])
+def test_facet_points_integrate_along_each_facet(degree):
+    """On every loaded facet of Cook's grid the points integrate polynomials of
+    degree 2·degree − 1 along the facet exactly (the midpoint rule: linear; two
+    Gauss points: cubic), which a P1 or P2 test function times a constant traction
+    needs; the midpoint rule misses a quadratic by L³/12."""
+    scene = meshes.cook_membrane(n=4)
+    facets = scene.facet_tags.find(meshes.COOK_LOADED)
+    x, w = meshes.facet_points(scene.mesh, facets, degree)
+    q = 1 if degree == 1 else 2
+    assert x.shape == (q * facets.size, 2)
+    # The loaded edge is x = 48, y from 44 to 60: s = y − 44 along it.
+    s = x[:, 1].reshape(-1, q) - 44.0
+    w = w.reshape(-1, q)
+    ends = np.sort(np.column_stack([s.min(axis=1), s.max(axis=1)]), axis=1)
+    lo, hi = np.floor(ends[:, 0] / 4.0) * 4.0, np.floor(ends[:, 0] / 4.0) * 4.0 + 4.0
+    for power in range(2 * degree):
+        exact = (hi ** (power + 1) - lo ** (power + 1)) / (power + 1)
+        assert np.allclose((w * s**power).sum(axis=1), exact, rtol=1e-13, atol=1e-12)
+    quadratic = (hi**3 - lo**3) / 3.0
+    missed = np.abs((w * s**2).sum(axis=1) - quadratic)
+    assert np.allclose(missed, 0.0 if degree == 2 else 4.0**3 / 12.0, rtol=1e-12, atol=1e-9)
+    with pytest.raises(ValueError, match="degree must be 1 or 2"):
+        meshes.facet_points(scene.mesh, facets, 3)

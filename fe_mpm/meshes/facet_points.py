@@ -1,4 +1,4 @@
-"""Boundary points at the midpoints of tagged facets, for loads that follow the body."""
+"""Boundary points on tagged facets (their quadrature points), for loads that follow the body."""
 
 from __future__ import annotations
 
@@ -7,21 +7,32 @@ import numpy as np
 from fe_mpm._dolfinx import dolfinx
 
 
-def facet_points(mesh: dolfinx.mesh.Mesh, facets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Midpoints of straight facets and their measures.
+def facet_points(
+    mesh: dolfinx.mesh.Mesh, facets: np.ndarray, degree: int = 1
+) -> tuple[np.ndarray, np.ndarray]:
+    """Quadrature points of straight facets and their weights.
 
-    With one point per facet at its midpoint, weighted by its length (or area),
-    ``Σ_b w_b t·δu(x_b)`` integrates a constant traction against a P1 test
-    function exactly: what :class:`~fe_mpm.boundary.PointTraction` needs to
-    reproduce a grid traction on those facets.
+    With ``degree=1``, one point per facet at its midpoint, weighted by its length
+    (or area): ``Σ_b w_b t·δu(x_b)`` then integrates a constant traction against a
+    P1 test function exactly, what :class:`~fe_mpm.boundary.PointTraction` needs to
+    reproduce a grid traction on those facets. A P2 test function needs
+    ``degree=2``: the midpoint rule would put the whole load of a facet on its
+    middle node (a quadratic vertex function vanishes there), and the body then
+    bulges between the loaded points. Degree 2 takes the two Gauss points of each
+    edge (2D) or the three points ``(2/3, 1/6, 1/6)`` of each triangle (3D), each
+    with an equal share of the facet's measure.
 
     Args:
         mesh: Affine simplex mesh.
         facets: Local facet indices, e.g. ``facet_tags.find(tag)``, shape (m,).
+        degree: 1 or 2, the degree of the displacement the points load.
 
     Returns:
-        ``(x, weight)``: midpoints (m, g) in m and lengths (2D) or areas (3D) (m,).
+        ``(x, weight)``: the points (m q, g) in m, facet by facet, and their weights
+        (m q,) in m (2D) or m² (3D), with q = 1 or the rule's points per facet.
     """
+    if degree not in (1, 2):
+        raise ValueError(f"facet_points: degree must be 1 or 2, got {degree!r}")
     g = mesh.geometry.dim
     fdim = mesh.topology.dim - 1
     nodes = dolfinx.mesh.entities_to_geometry(mesh, fdim, np.asarray(facets, dtype=np.int32))
@@ -31,4 +42,12 @@ def facet_points(mesh: dolfinx.mesh.Mesh, facets: np.ndarray) -> tuple[np.ndarra
         weight = np.linalg.norm(edges[:, 0], axis=1)
     else:
         weight = 0.5 * np.linalg.norm(np.cross(edges[:, 0], edges[:, 1]), axis=1)
-    return corners.mean(axis=1), weight
+    if degree == 1:
+        return corners.mean(axis=1), weight
+    if fdim == 1:
+        a = 0.5 / np.sqrt(3.0)
+        bary = np.array([[0.5 + a, 0.5 - a], [0.5 - a, 0.5 + a]])
+    else:
+        bary = np.full((3, 3), 1.0 / 6.0) + 0.5 * np.eye(3)
+    x = np.einsum("qv,mvg->mqg", bary, corners).reshape(-1, g)
+    return x, np.repeat(weight / len(bary), len(bary))
