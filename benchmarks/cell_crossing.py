@@ -11,9 +11,11 @@ ghost penalty by default (γ = 0.1 for P1, 0.01 for P2, :mod:`fe_mpm.ghost`; the
 γ = 0 rows leave it out).
 
 Usage: ``./run python benchmarks/cell_crossing.py [--quick] [--nu 0.499 0.33]
-[--formulations up up-p2p1]``. P2/P1 rows: standard MPM needs three points in every
-cell; the ghost penalty ties cells left with fewer (:mod:`fe_mpm.ghost`); with domains
-each piece has three sub-points, so one point per cell is enough.
+[--formulations up up-p2p1] [--load 5] [--sizes 16 32 64] [--steps 20]``; above 5 N
+the grid's margins are n rows instead of n / 2. P2/P1 rows: standard MPM needs three
+points in every cell; the ghost penalty ties cells left with fewer
+(:mod:`fe_mpm.ghost`); with domains each piece has three sub-points, so one point per
+cell is enough.
 Prints the tip displacement, its error against the converged answer and the wall time
 of every case. Not a test.
 """
@@ -26,7 +28,7 @@ import time
 import fe_mpm
 from fe_mpm import scenes
 
-#: Total load on the right edge (N): large enough that points cross cells.
+#: Total load on the right edge (N) by default: large enough that points cross cells.
 LOAD = 5.0
 #: (label, formulation, points per cell, options of Simulation).
 CASES = [
@@ -52,10 +54,12 @@ def tip(
     options: dict | None = None,
     load: str = "points",
     margin: int | None = None,
+    force: float = LOAD,
 ) -> tuple[float, float]:
     """Cook's tip displacement (m; NaN if the run stops) and the wall time of the run (s).
 
-    ``margin``: rows of empty cells above and below the body (default n / 2).
+    ``margin``: rows of empty cells above and below the body (default n / 2);
+    ``force``: the total load on the right edge (N).
     """
     t0 = time.perf_counter()
     sim = scenes.cook_membrane(
@@ -63,7 +67,7 @@ def tip(
         nu,
         formulation,
         per_cell=per_cell,
-        traction=LOAD / 16,
+        traction=force / 16,
         load=load,
         margin=n // 2 if margin is None else margin,
         **(options or {}),
@@ -76,9 +80,9 @@ def tip(
     return scenes.tip_deflection(sim), time.perf_counter() - t0
 
 
-def converged_fem(nu: float, sizes=(16, 32, 64)) -> float:
+def converged_fem(nu: float, force: float = LOAD, sizes=(16, 32, 64)) -> float:
     """The Taylor–Hood finite element limit of the tip displacement (Richardson)."""
-    a, b, c = (tip(n, nu, "up-p2p1", 3, 1, load="grid")[0] for n in sizes)
+    a, b, c = (tip(n, nu, "up-p2p1", 3, 1, load="grid", force=force)[0] for n in sizes)
     ratio = (b - a) / (c - b)
     return c + (c - b) / (ratio - 1)
 
@@ -90,16 +94,19 @@ def main() -> None:
     p.add_argument("--nu", type=float, nargs="+", default=[0.499, 0.33])
     p.add_argument("--steps", type=int, default=20)
     p.add_argument("--formulations", nargs="+", default=["up", "up-p2p1"])
+    p.add_argument("--load", type=float, default=LOAD, help="total load (N)")
+    p.add_argument("--sizes", type=int, nargs="+", default=None, help="grids n (16 32 64)")
     args = p.parse_args()
-    sizes = (16, 32) if args.quick else (16, 32, 64)
+    sizes = args.sizes or ((16, 32) if args.quick else (16, 32, 64))
+    margin = {n: n // 2 if args.load <= LOAD else n for n in sizes}  # room to move
     for nu in args.nu:
-        limit = converged_fem(nu)
+        limit = converged_fem(nu, args.load)
         print(
             f"\nν = {nu}: converged Taylor–Hood FEM u_A,y = {limit:.4f} "
             f"(P2/P1, 3 points per triangle, one step, n = 16, 32, 64, Richardson)"
         )
         print(f"{'case':<24}" + "".join(f"{'n = ' + str(n):>22}" for n in sizes))
-        one_step = [tip(n, nu, "up", 1, 1)[0] for n in sizes]
+        one_step = [tip(n, nu, "up", 1, 1, force=args.load)[0] for n in sizes]
         print(
             f"{'one step (FEM at n)':<24}"
             + "".join(f"{u:>10.4f} {100 * (u / limit - 1):+6.1f} %    " for u in one_step)
@@ -109,7 +116,16 @@ def main() -> None:
                 continue
             cells = []
             for n in sizes:
-                u, wall = tip(n, nu, formulation, per_cell, args.steps, options)
+                u, wall = tip(
+                    n,
+                    nu,
+                    formulation,
+                    per_cell,
+                    args.steps,
+                    options,
+                    margin=margin[n],
+                    force=args.load,
+                )
                 cells.append(f"{u:>10.4f} {100 * (u / limit - 1):+6.1f} % {wall:4.0f}s")
             print(f"{label:<24}" + "".join(f"{c:>22}" for c in cells), flush=True)
 

@@ -4,7 +4,8 @@ A point's domain (:mod:`fe_mpm.domains`) is a triangle that may cover parts of
 several cells. Clipping it against each cell (Sutherland–Hodgman, against the
 cell's three edges) gives convex pieces; one quadrature point at a piece's centroid,
 weighted by its area, integrates every linear function over the piece exactly, and
-so the P1 internal force of a constant stress over the whole domain.
+so the P1 internal force of a constant stress over the whole domain. For P2, three
+points per piece integrate every quadratic exactly (:func:`piece_rule`).
 
 The clipping is done in each cell's reference coordinates ξ (the cell is then
 ``ξ₁, ξ₂ ≥ 0, ξ₁ + ξ₂ ≤ 1``), vectorised over all (domain, cell) pairs at once.
@@ -117,7 +118,8 @@ def piece_rule(xi: np.ndarray, degree: int) -> tuple[np.ndarray, np.ndarray]:
     Degree 1: the overlap's centroid. Degree 2: three points of equal weight that
     match the overlap's area, centroid and second moments, hence integrate every
     quadratic exactly: ``c + √2 Σ^½ u_k`` with Σ the overlap's covariance and the
-    ``u_k`` unit vectors 120° apart, the first towards the overlap's first vertex. In
+    ``u_k`` unit vectors 120° apart, the first towards the overlap's vertex farthest
+    from its centroid in the coordinates where Σ = I. In
     the coordinates where Σ = I the points lie on the circle of radius √2, which a
     convex polygon with its centroid at the origin contains (Kannan, Lovász and
     Simonovits 1995, Lemma 5.1; a triangle touches it at its edges' midpoints), so
@@ -147,7 +149,12 @@ def piece_rule(xi: np.ndarray, degree: int) -> tuple[np.ndarray, np.ndarray]:
     values, vectors = np.linalg.eigh(covariance[has])
     values = np.maximum(values, np.finfo(float).tiny)
     root = vectors * np.sqrt(values)[:, None, :]  # Σ^½ = V Λ^½ Vᵀ, applied as V Λ^½ (Vᵀ·)
-    towards = np.einsum("ngk,ng->nk", vectors, -centroid[has]) / np.sqrt(values)
+    # Each vertex in the coordinates where Σ = I; the rule points at the farthest,
+    # which keeps its points off the polygon's edges.
+    white = np.einsum("ngk,nvg->nvk", vectors, local[has] - centroid[has, None, :])
+    white /= np.sqrt(values)[:, None, :]
+    reach = np.where(np.arange(6) < counts[has, None], np.einsum("nvk,nvk->nv", white, white), -1)
+    towards = white[np.arange(len(white)), np.argmax(reach, axis=1)]
     angle = np.arctan2(towards[:, 1], towards[:, 0])[:, None] + 2.0 * np.pi / 3.0 * np.arange(3)
     u = np.sqrt(2.0) * np.stack([np.cos(angle), np.sin(angle)], axis=2)  # (m, 3, 2)
     points[has] = centroid[has, None, :] + np.einsum("ngk,nqk->nqg", root, u)

@@ -213,7 +213,7 @@ class PointDomains:
         owner, cell, area, rule = owner[keep], cell[keep], area[keep], rule[keep]
         # A corner moves with the field of its own cell: the same for every domain that
         # shares it, so the domains keep tiling the body. Past the grid's edge it
-        # reads the field of its domain's nearest piece, extended linearly.
+        # reads the field of its domain's nearest piece, extended (its polynomial).
         corner_cell = corner_cells
         if np.any(outside):
             corner_cell = np.where(

@@ -106,7 +106,13 @@ class GhostStabilisation:
         a, b = self._cells[:, 0], self._cells[:, 1]
         ghost = (count[a] > 0) & (count[b] > 0) & (poor[a] | poor[b])
         self.facets = self._interior[ghost]
-        self._tied = np.unique(self._cells[ghost])
+        # The penalty makes the cells it joins share one polynomial, so a cell with
+        # too few points is held only if its group has a cell with enough.
+        group = connected_groups(self._cells[ghost], cell_volume.size)
+        held = np.zeros(cell_volume.size, dtype=bool)
+        held[group[count >= min_points]] = True
+        tied = np.unique(self._cells[ghost])
+        self._tied = tied[held[group[tied]]]
         form = self._bind(self.facets)
         for matrix, conditions, diagonal in ((self.full, [], 1.0), (self.constrained, bcs, 0.0)):
             matrix.zeroEntries()
@@ -114,7 +120,11 @@ class GhostStabilisation:
             matrix.assemble()
 
     def tied_cells(self) -> np.ndarray:
-        """The cells that share a ghost facet this step (sorted)."""
+        """The cells held by the penalty this step (sorted).
+
+        Those on a ghost facet whose group of cells joined by ghost facets holds a
+        cell with enough points.
+        """
         return self._tied
 
     def force(self, w: dolfinx.fem.Function) -> np.ndarray:
@@ -129,3 +139,20 @@ class GhostStabilisation:
         """Free the PETSc matrices."""
         self.full.destroy()
         self.constrained.destroy()
+
+
+def connected_groups(edges: np.ndarray, n: int) -> np.ndarray:
+    """The group of each of ``n`` nodes joined by ``edges`` (k, 2): its lowest member.
+
+    Label propagation with pointer jumping, vectorised over the edges.
+    """
+    label = np.arange(n)
+    while True:
+        low = np.minimum(label[edges[:, 0]], label[edges[:, 1]])
+        new = label.copy()
+        np.minimum.at(new, edges[:, 0], low)
+        np.minimum.at(new, edges[:, 1], low)
+        new = new[new]
+        if np.array_equal(new, label):
+            return label
+        label = new

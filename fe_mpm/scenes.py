@@ -62,7 +62,8 @@ def cook_membrane(
         loads["tractions"] = [Traction(meshes.COOK_LOADED, (0.0, traction), scale=lambda t: t)]
     elif load == "points":
         loaded = scene.facet_tags.find(meshes.COOK_LOADED)
-        x, weight = meshes.facet_points(scene.mesh, loaded, FORMULATIONS[formulation].u_degree)
+        spec = FORMULATIONS.get(formulation)  # an unknown one is Simulation's to refuse
+        x, weight = meshes.facet_points(scene.mesh, loaded, spec.u_degree if spec else 1)
         loads["point_tractions"] = [
             PointTraction("load", x, weight, (0.0, traction), scale=lambda t: t)
         ]
@@ -137,6 +138,7 @@ def strip_footing(
             0.562; 8 per cell 0.332).
         options: Passed on to :class:`~fe_mpm.simulation.Simulation`.
     """
+    per_cell = check_int("strip_footing", "base_points_per_cell", base_points_per_cell, lo=1)
     scene = meshes.strip_footing(B, h=h, h_far=h_far, near_width=near_width, near_depth=near_depth)
     near = scene.cell_tags.find(meshes.FOOTING_SOIL_NEAR)
     far = scene.cell_tags.find(meshes.FOOTING_SOIL)
@@ -144,7 +146,6 @@ def strip_footing(
         seed(scene.mesh, points_near, cells=near), seed(scene.mesh, points_far, cells=far)
     )
     thickness = 2 * h if footing_thickness is None else footing_thickness
-    per_cell = check_int("strip_footing", "base_points_per_cell", base_points_per_cell, lo=1)
     n = max(4, int(round(B / h)))  # the body's lattice: two points per cell width
     x_f, w_f = meshes.footing_points(B, n, thickness)
     if per_cell != 2:

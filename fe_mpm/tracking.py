@@ -142,8 +142,9 @@ def check_points_per_cell(
         raise ValueError(f"Simulation: {message} Seed more points per cell.")
     raise ConvergenceError(
         f"step {step_number + 1}: {message} The points no longer support the "
-        "unknowns; use point_domains=True, a ghost_penalty > 0, more points per "
-        "cell, or the 'up' (P1) formulation."
+        "unknowns; use point_domains=True, a ghost_penalty > 0 (it holds a cell tied "
+        "by facets to cells with enough points), more points per cell, or the 'up' "
+        "(P1) formulation."
     )
 
 

@@ -8,7 +8,7 @@ import pytest
 import fe_mpm
 from fe_mpm import meshes, scenes
 from fe_mpm.formulations import FORMULATIONS, GridFields
-from fe_mpm.ghost import POORLY_FILLED, WITH_DOMAINS, GhostStabilisation
+from fe_mpm.ghost import POORLY_FILLED, WITH_DOMAINS, GhostStabilisation, connected_groups
 from fe_mpm.tracker import Tracker
 
 
@@ -177,11 +177,57 @@ def test_a_p2_cell_left_with_too_few_points_is_tied_by_the_penalty():
             report = sim.step(2.0)
             assert report.newton_iterations <= 5
             assert sim.ghost.facets.size > 0
-    alone = fe_mpm.seed(mesh, per_cell=3)
-    alone.keep(alone.cell == alone.cell[0])
-    alone.keep(np.arange(len(alone)) < 2)
-    with pytest.raises(ValueError, match="needs at least 3"):
-        fe_mpm.Simulation(mesh, alone, law, "up-p2p1", dirichlet=base, ghost_penalty=0.1).step(1.0)
+    # Cells tied only to each other share one quadratic that their points must see:
+    # one cell with 2 points, or the two cells of a square with one point each
+    # (together 2, and the penalty makes them one quadratic) are still refused.
+    tracker = Tracker(mesh)
+    square = np.flatnonzero(np.all(tracker.centroids < 0.5, axis=1))
+    assert square.size == 2
+    for cells, per_cell in (([0], 2), (square, 1)):
+        few = fe_mpm.seed(mesh, per_cell=3 if per_cell == 2 else 1, cells=np.asarray(cells))
+        few.keep(np.arange(len(few)) < per_cell * len(cells))
+        sim = fe_mpm.Simulation(mesh, few, law, "up-p2p1", dirichlet=base, ghost_penalty=0.1)
+        with pytest.raises(ValueError, match="needs at least 3"):
+            sim.step(1.0)
+
+
+def test_cells_joined_by_ghost_facets_form_groups():
+    """connected_groups labels every node with the lowest node of its group, the
+    same partition as a plain union–find, on random graphs."""
+    rng = np.random.default_rng(5)
+    for _ in range(20):
+        n = int(rng.integers(2, 300))
+        edges = rng.integers(0, n, (int(rng.integers(0, 400)), 2))
+        parent = list(range(n))
+
+        def root(x):
+            while parent[x] != x:
+                parent[x] = parent[parent[x]]
+                x = parent[x]
+            return x
+
+        for a, b in edges:
+            parent[root(a)] = root(b)
+        roots = np.array([root(i) for i in range(n)])
+        lowest = np.array([np.flatnonzero(roots == roots[i]).min() for i in range(n)])
+        assert np.array_equal(connected_groups(edges, n), lowest)
+
+
+def test_the_p2_penalty_sees_the_jump_of_the_second_derivative():
+    """A C¹ displacement, (max(x − ½, 0)², 0), has no gradient jump on the 4 × 4
+    grid, only a jump of ∂ₓₓ = 2 across the four vertical facets at x = ½: the P2
+    penalty gives Δuᵀ G Δu = γ 2μ h³ 2² |F| · 4 exactly (h the facets' cells'
+    diameter √2/4, |F| = ¼), and the P1 part alone would give 0."""
+    mesh, fields, ghost = _ghost("up-p2p1", gamma=0.5, mu=3.0)
+    G = _all_facets(mesh, ghost).full
+    sub = fields.w.sub(0)
+    sub.interpolate(lambda x: np.stack([np.maximum(x[0] - 0.5, 0.0) ** 2, 0.0 * x[0]]))
+    fields.w.x.array[:] = sub.x.array
+    v = fields.w.x.petsc_vec.copy()
+    y = v.duplicate()
+    G.mult(v, y)
+    h = np.sqrt(2.0) / 4.0
+    assert v.dot(y) == pytest.approx(2 * 0.5 * 3.0 * h**3 * 4.0 * 0.25 * 4, rel=1e-12)
 
 
 def test_point_domains_bring_the_ghost_penalty_unless_told_otherwise():

@@ -130,3 +130,25 @@ def test_facet_points_integrate_along_each_facet(degree):
     assert np.allclose(missed, 0.0 if degree == 2 else 4.0**3 / 12.0, rtol=1e-12, atol=1e-9)
     with pytest.raises(ValueError, match="degree must be 1 or 2"):
         meshes.facet_points(scene.mesh, facets, 3)
+
+
+def test_the_footing_takes_more_base_points_when_asked():
+    """``strip_footing(base_points_per_cell=8)`` on h = 0.2: 8 base points per cell
+    width (20 on the half-width 0.5), each with its share 0.025 of the base, and the
+    same body lattice as the default; 0 or 2.5 points are refused by name."""
+    from fe_mpm import scenes
+
+    points = {}
+    for per_cell in (2, 8):
+        sim = scenes.strip_footing("up", h=0.2, h_far=0.5, base_points_per_cell=per_cell)
+        footing = sim._boundary.points
+        points[per_cell] = (footing.x.copy(), footing.weight.copy())
+    (x2, w2), (x8, w8) = points[2], points[8]
+    assert np.allclose(w2[np.isclose(x2[:, 1], 0.0)], 0.1)
+    base2, base8 = np.isclose(x2[:, 1], 0.0), np.isclose(x8[:, 1], 0.0)
+    assert base2.sum() == 5 and base8.sum() == 20
+    assert np.allclose(w8[base8], 0.025) and w8[base8].sum() == pytest.approx(0.5)
+    assert np.array_equal(x2[~base2], x8[~base8])
+    for bad, error in ((0, ValueError), (2.5, TypeError)):
+        with pytest.raises(error, match="base_points_per_cell"):
+            scenes.strip_footing("up", h=0.2, base_points_per_cell=bad)
