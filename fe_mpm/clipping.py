@@ -118,13 +118,13 @@ def piece_rule(xi: np.ndarray, degree: int) -> tuple[np.ndarray, np.ndarray]:
     Degree 1: the overlap's centroid. Degree 2: three points of equal weight that
     match the overlap's area, centroid and second moments, hence integrate every
     quadratic exactly: ``c + √2 Σ^½ u_k`` with Σ the overlap's covariance and the
-    ``u_k`` unit vectors 120° apart, the first towards the overlap's vertex farthest
-    from its centroid in the coordinates where Σ = I. In
-    the coordinates where Σ = I the points lie on the circle of radius √2, which a
-    convex polygon with its centroid at the origin contains (Kannan, Lovász and
-    Simonovits 1995, Lemma 5.1; a triangle touches it at its edges' midpoints), so
-    the points lie in the overlap; on a triangle they are its usual rule
-    ``c + (v_i − c)/2``, strictly inside.
+    ``u_k`` unit vectors 120° apart. In the coordinates where Σ = I the points lie
+    on the circle of radius √2, which a convex polygon with its centroid at the
+    origin contains (Kannan, Lovász and Simonovits 1995, Lemma 5.1; a triangle
+    touches it at its edges' midpoints), so the points lie in the overlap. The first
+    points at the overlap's vertex farthest from its centroid in those coordinates:
+    on a triangle the rule is then its usual ``c + (v_i − c)/2``, strictly inside,
+    and it stays so on a triangle clipped with a vertex near an edge's midpoint.
 
     Args:
         xi: The triangles' vertices in the reference coordinates of a cell (n, 3, 2).

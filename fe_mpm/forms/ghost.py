@@ -28,9 +28,10 @@ Burman (2010), which sums the jumps of the normal derivatives of order 1 to
 
 which vanishes for any increment that is one quadratic polynomial on both cells.
 (The jump of the whole Hessian, tried first, also penalises the mixed derivative,
-whose jump the gradient term already controls; on Cook's membrane with point
-domains, n = 16, 20 steps, it cost 3.1 % of the tip displacement against 2.0 % for
-the normal part alone, both at γ = 0.1.)
+whose jump is the tangential derivative of the gradient's jump; on Cook's membrane
+with point domains, n = 16, 20 steps, it cost 3.1 % of the tip displacement against
+2.0 % for the normal part alone, both at γ = 0.1, measured with one load point per
+facet.)
 """
 
 from __future__ import annotations
