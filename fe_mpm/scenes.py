@@ -135,7 +135,9 @@ def strip_footing(
             (≥ 1). Each carries its share of the base; a point that crosses into the
             next cell moves that share at once, which is most of the step-to-step
             jitter of q (``benchmarks/footing_jitter.py``: 2 per cell, the default,
-            0.562; 8 per cell 0.332).
+            0.562; 8 per cell 0.332). More points also hold the grid more stiffly:
+            on stiff soil (E/c_u = 1000, h = 0.1) 16 per cell raise the mean q over
+            s/B = 0.02–0.05 from 1.12 to 1.27 × (2 + π).
         options: Passed on to :class:`~fe_mpm.simulation.Simulation`.
     """
     per_cell = check_int("strip_footing", "base_points_per_cell", base_points_per_cell, lo=1)
