@@ -17,8 +17,8 @@ def facet_points(
     P1 test function exactly, what :class:`~fe_mpm.boundary.PointTraction` needs to
     reproduce a grid traction on those facets. A P2 test function needs
     ``degree=2``: the midpoint rule would put the whole load of a facet on its
-    middle node (a quadratic vertex function vanishes there), and the body then
-    bulges between the loaded points. Degree 2 takes the two Gauss points of each
+    middle node (a quadratic vertex function vanishes there), and the edge is then
+    loaded unevenly. Degree 2 takes the two Gauss points of each
     edge (2D) or the three points ``(2/3, 1/6, 1/6)`` of each triangle (3D), each
     with an equal share of the facet's measure.
 
