@@ -53,6 +53,11 @@ def _clip(polygon: np.ndarray, count: np.ndarray, distance: np.ndarray, size: in
     return out, keep.sum(axis=1)
 
 
+def triangle_areas(corners: np.ndarray) -> np.ndarray:
+    """Areas (n,) of triangles with vertices ``corners`` (n, 3, 2), either orientation."""
+    return 0.5 * np.abs(np.linalg.det(corners[:, 1:] - corners[:, :1]))
+
+
 def area_and_centroid(polygon: np.ndarray, count: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Signed area (n,) and centroid (n, 2) of polygons with ``count`` (n,) vertices.
 

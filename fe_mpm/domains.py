@@ -42,7 +42,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fe_mpm.clipping import piece_rule
+from fe_mpm.clipping import piece_rule, triangle_areas
 from fe_mpm.errors import ConvergenceError, PointsOutsideError
 from fe_mpm.markers import Markers
 from fe_mpm.particles import MaterialPoints
@@ -99,8 +99,7 @@ class Pieces:
 def shape_quality(corners: np.ndarray) -> np.ndarray:
     """4√3 A / Σ edge² of triangles (n, 3, 2): 1 for an equilateral one, 0 for a flat one."""
     edges = corners[:, [1, 2, 0]] - corners
-    area = 0.5 * np.abs(np.linalg.det(corners[:, 1:] - corners[:, :1]))
-    return 4.0 * np.sqrt(3.0) * area / np.einsum("ncg,ncg->n", edges, edges)
+    return 4.0 * np.sqrt(3.0) * triangle_areas(corners) / np.einsum("ncg,ncg->n", edges, edges)
 
 
 class PointDomains:
@@ -169,11 +168,11 @@ class PointDomains:
         owner, column = np.nonzero((candidates >= 0) & ~repeated)
         cell = candidates[owner, column]
         low, high = corners.min(axis=1), corners.max(axis=1)
+        box_low, box_high = self._boxes
         partly_outside = np.any(outside.reshape(n, 3), axis=1)
         if np.any(partly_outside):
             # The cells around a last cell may miss where such a domain crosses the
             # grid's edge: try every cell (few domains), so what is missing is outside.
-            box_low, box_high = self._boxes
             extra = [
                 (d, np.flatnonzero(np.all((box_low <= high[d]) & (box_high >= low[d]), axis=1)))
                 for d in np.flatnonzero(partly_outside)
@@ -184,7 +183,6 @@ class PointDomains:
             order = np.argsort(owner, kind="stable")
             owner, cell = owner[order], cell[order]
         # Only the cells whose bounding boxes meet the domain's can overlap it.
-        box_low, box_high = self._boxes
         meets = np.all((box_low[cell] <= high[owner]) & (box_high[cell] >= low[owner]), axis=1)
         owner, cell = owner[meets], cell[meets]
         xi = tracker.barycentric(corners[owner].reshape(-1, 2), np.repeat(cell, 3)).reshape(
@@ -192,7 +190,7 @@ class PointDomains:
         )[..., 1:]
         area, rule = piece_rule(xi, self.degree)
         area *= 2.0 * tracker.volumes[cell]
-        domain_area = 0.5 * np.abs(np.linalg.det(corners[:, 1:] - corners[:, :1]))
+        domain_area = triangle_areas(corners)
         covered = np.bincount(owner, weights=area, minlength=n) / domain_area
         if np.any(covered < MIN_INSIDE):
             p = int(np.argmin(covered))
@@ -270,7 +268,7 @@ class PointDomains:
             return False
         own = tracker.cell_vertices[points.cell[bad]]
         centre = own.mean(axis=1, keepdims=True)
-        area = 0.5 * np.abs(np.linalg.det(self.corners[bad, 1:] - self.corners[bad, :1]))
+        area = triangle_areas(self.corners[bad])
         cell_area = tracker.volumes[points.cell[bad]]
         scale = np.sqrt(area / cell_area)[:, None, None]
         redrawn = points.x[bad, None, :] + scale * (own - centre)

@@ -20,6 +20,7 @@ import math
 
 import numpy as np
 
+from fe_mpm.clipping import triangle_areas
 from fe_mpm.particles import MaterialPoints
 
 #: A cell is full when its points' volumes add up to its area to this tolerance.
@@ -86,7 +87,7 @@ def initial_domains(points: MaterialPoints, cell_vertices: np.ndarray) -> np.nda
     x, volume, cell = points.x, points.volume, points.cell
     own = cell_vertices[cell]
     centre = own.mean(axis=1, keepdims=True)
-    cell_area = 0.5 * np.abs(np.linalg.det(own[:, 1:] - own[:, :1]))
+    cell_area = triangle_areas(own)
     corners = x[:, None, :] + np.sqrt(volume / cell_area)[:, None, None] * (own - centre)
     order = np.argsort(cell, kind="stable")
     cells, starts, counts = np.unique(cell[order], return_index=True, return_counts=True)
