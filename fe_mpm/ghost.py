@@ -106,13 +106,15 @@ class GhostStabilisation:
         a, b = self._cells[:, 0], self._cells[:, 1]
         ghost = (count[a] > 0) & (count[b] > 0) & (poor[a] | poor[b])
         self.facets = self._interior[ghost]
-        # The penalty makes the cells it joins share one polynomial, so a cell with
-        # too few points is held only if its group has a cell with enough.
-        group = connected_groups(self._cells[ghost], cell_volume.size)
-        held = np.zeros(cell_volume.size, dtype=bool)
-        held[group[count >= min_points]] = True
         tied = np.unique(self._cells[ghost])
-        self._tied = tied[held[group[tied]]]
+        if min_points > 1:
+            # The penalty makes the cells it joins share one polynomial, so a cell
+            # with too few points is held only if its group has a cell with enough.
+            group = connected_groups(self._cells[ghost], cell_volume.size)
+            held = np.zeros(cell_volume.size, dtype=bool)
+            held[group[count >= min_points]] = True
+            tied = tied[held[group[tied]]]
+        self._tied = tied
         form = self._bind(self.facets)
         for matrix, conditions, diagonal in ((self.full, [], 1.0), (self.constrained, bcs, 0.0)):
             matrix.zeroEntries()
