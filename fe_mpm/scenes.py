@@ -149,11 +149,10 @@ def strip_footing(
     )
     thickness = 2 * h if footing_thickness is None else footing_thickness
     n = max(4, int(round(B / h)))  # the body's lattice: two points per cell width
-    x_f, w_f = meshes.footing_points(B, n, thickness)
-    if per_cell != 2:
-        body = x_f[:, 1] > 0.0
-        x_b, w_b = meshes.footing_points(B, max(1, n * per_cell // 2))
-        x_f, w_f = np.concatenate([x_b, x_f[body]]), np.concatenate([w_b, w_f[body]])
+    x_body, w_body = meshes.footing_points(B, n, thickness)
+    body = x_body[:, 1] > 0.0
+    x_b, w_b = meshes.footing_points(B, max(1, n * per_cell // 2))
+    x_f, w_f = np.concatenate([x_b, x_body[body]]), np.concatenate([w_b, w_body[body]])
     footing = PointDirichlet(
         "footing",
         x_f,
