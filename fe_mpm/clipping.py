@@ -13,7 +13,11 @@ The clipping is done in each cell's reference coordinates ξ (the cell is then
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
+
+from fe_mpm.tet_clipping import clip_to_reference_tet
 
 
 def _clip(polygon: np.ndarray, count: np.ndarray, distance: np.ndarray, size: int):
@@ -53,9 +57,13 @@ def _clip(polygon: np.ndarray, count: np.ndarray, distance: np.ndarray, size: in
     return out, keep.sum(axis=1)
 
 
-def triangle_areas(corners: np.ndarray) -> np.ndarray:
-    """Areas (n,) of triangles with vertices ``corners`` (n, 3, 2), either orientation."""
-    return 0.5 * np.abs(np.linalg.det(corners[:, 1:] - corners[:, :1]))
+def simplex_volumes(corners: np.ndarray) -> np.ndarray:
+    """Areas or volumes (n,) of simplices with vertices ``corners`` (n, d + 1, d).
+
+    Triangles (d = 2) or tetrahedra (d = 3), either orientation.
+    """
+    d = corners.shape[2]
+    return np.abs(np.linalg.det(corners[:, 1:] - corners[:, :1])) / math.factorial(d)
 
 
 def area_and_centroid(polygon: np.ndarray, count: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -118,7 +126,7 @@ def clip_to_reference_cell(xi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def piece_rule(xi: np.ndarray, degree: int) -> tuple[np.ndarray, np.ndarray]:
-    """A quadrature rule on each overlap of triangles with the reference cell.
+    """A quadrature rule on each overlap of simplices with the reference cell.
 
     Degree 1: the overlap's centroid. Degree 2: three points of equal weight that
     match the overlap's area, centroid and second moments, hence integrate every
@@ -131,14 +139,25 @@ def piece_rule(xi: np.ndarray, degree: int) -> tuple[np.ndarray, np.ndarray]:
     on a triangle the rule is then its usual ``c + (v_i − c)/2``, strictly inside,
     and it stays so on a triangle clipped with a vertex near an edge's midpoint.
 
+    On tetrahedra (:mod:`fe_mpm.tet_clipping`) degree 1 only.
+
     Args:
-        xi: The triangles' vertices in the reference coordinates of a cell (n, 3, 2).
+        xi: The triangles' vertices in the reference coordinates of a cell (n, 3, 2),
+            or the tetrahedra's (n, 4, 3).
         degree: 1 or 2.
 
     Returns:
-        The overlaps' areas in reference units (n,) ≥ 0, and the rule's points ξ
-        (n, q, 2) with q = 1 or 3, each weighted by area / q (0 where the area is 0).
+        The overlaps' areas (volumes) in reference units (n,) ≥ 0, and the rule's
+        points ξ (n, q, d) with q = 1 or 3, each weighted by area / q (0 where the
+        area is 0).
     """
+    if xi.shape[-1] == 3:  # tetrahedra
+        if degree != 1:
+            raise NotImplementedError(
+                "piece_rule: on tetrahedra only degree 1 (one point per piece) for now"
+            )
+        volume, centroid = clip_to_reference_tet(xi)
+        return volume, centroid[:, None, :]
     polygons, counts = _pieces_in_reference_cell(xi)
     if degree == 1:
         area, centroid = area_and_centroid(polygons, counts)

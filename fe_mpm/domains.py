@@ -37,12 +37,13 @@ domains), and splitting a distorted domain into smaller ones. The measurements:
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
-from fe_mpm.clipping import piece_rule, triangle_areas
+from fe_mpm.clipping import piece_rule, simplex_volumes
 from fe_mpm.errors import ConvergenceError, PointsOutsideError
 from fe_mpm.markers import Markers
 from fe_mpm.particles import MaterialPoints
@@ -81,10 +82,11 @@ class Pieces:
         owner: The point of each sub-point (k,), in increasing order.
         cell: Its cell (k,).
         share: Its fraction of its domain's area (k,); each point's add up to 1.
-        x: Its position (k, 2) in m.
-        corner_cell: The cell whose grid increment moves each domain corner (n × 3,):
-            its own, or for a corner past the grid's edge its domain's nearest piece's.
-        corner_bary: The corners' barycentric coordinates there (n × 3, 3), outside
+        x: Its position (k, d) in m.
+        corner_cell: The cell whose grid increment moves each domain corner
+            (n × (d + 1),): its own, or for a corner past the grid's edge its
+            domain's nearest piece's.
+        corner_bary: The corners' barycentric coordinates there (n × (d + 1), d + 1), outside
             [0, 1] for a corner outside that cell.
     """
 
@@ -97,9 +99,17 @@ class Pieces:
 
 
 def shape_quality(corners: np.ndarray) -> np.ndarray:
-    """4√3 A / Σ edge² of triangles (n, 3, 2): 1 for an equilateral one, 0 for a flat one."""
-    edges = corners[:, [1, 2, 0]] - corners
-    return 4.0 * np.sqrt(3.0) * triangle_areas(corners) / np.einsum("ncg,ncg->n", edges, edges)
+    """The mean-ratio quality of simplices (n, d + 1, d): 1 if regular, 0 if flat.
+
+    Triangles: 4√3 A / Σ edge²; tetrahedra: 12 (3V)^(2/3) / Σ edge² (over the six edges).
+    """
+    d = corners.shape[2]
+    i, j = np.triu_indices(d + 1, k=1)
+    edges = corners[:, i] - corners[:, j]
+    squares = np.einsum("ncg,ncg->n", edges, edges)
+    if d == 2:
+        return 4.0 * np.sqrt(3.0) * simplex_volumes(corners) / squares
+    return 12.0 * (3.0 * simplex_volumes(corners)) ** (2.0 / 3.0) / squares
 
 
 class PointDomains:
@@ -115,7 +125,7 @@ class PointDomains:
             covers sees a full-rank stiffness.
 
     Attributes:
-        corners: The domains' vertices (n, 3, 2) in m.
+        corners: The domains' vertices (n, d + 1, d) in m.
         active: True while the pieces take a step in the points' place.
     """
 
@@ -130,7 +140,7 @@ class PointDomains:
         #: Domains redrawn so far because they had distorted (:data:`RESET_QUALITY`).
         self.resets = 0
         self._drawn_quality = shape_quality(self.corners)
-        # The cells' bounding boxes (lower and upper corners, each (nc, 2)).
+        # The cells' bounding boxes (lower and upper corners, each (nc, d)).
         self._boxes = (tracker.cell_vertices.min(axis=1), tracker.cell_vertices.max(axis=1))
 
     def pieces(self, tracker: Tracker, guess: np.ndarray) -> Pieces:
@@ -138,7 +148,7 @@ class PointDomains:
         return self._cut(self.corners, tracker, guess)
 
     def _cut(self, corners: np.ndarray, tracker: Tracker, guess: np.ndarray) -> Pieces:
-        """Each domain with ``corners`` (n, 3, 2) cut by the cells it covers.
+        """Each domain with ``corners`` (n, d + 1, d) cut by the cells it covers.
 
         Args:
             corners: The domains' corners.
@@ -155,21 +165,21 @@ class PointDomains:
             PointsOutsideError: Less than half of a domain is inside the grid.
             ConvergenceError: A domain reaches past the cells around its corners.
         """
-        n = len(corners)
-        corner_cells = tracker.locate(corners.reshape(-1, 2), np.repeat(guess, 3))
+        n, v, g = corners.shape
+        corner_cells = tracker.locate(corners.reshape(-1, g), np.repeat(guess, v))
         outside = corner_cells < 0
         # A corner that has left the grid (a body bulging past the grid's edge) is
         # searched around the domain's last cell; its part outside the grid is lost.
-        corner_cells = np.where(outside, np.repeat(guess, 3), corner_cells)
+        corner_cells = np.where(outside, np.repeat(guess, v), corner_cells)
         neighbours = tracker.vertex_neighbours()
-        candidates = np.sort(neighbours[corner_cells.reshape(n, 3)].reshape(n, -1), axis=1)
+        candidates = np.sort(neighbours[corner_cells.reshape(n, v)].reshape(n, -1), axis=1)
         repeated = np.zeros_like(candidates, dtype=bool)
         repeated[:, 1:] = candidates[:, 1:] == candidates[:, :-1]
         owner, column = np.nonzero((candidates >= 0) & ~repeated)
         cell = candidates[owner, column]
         low, high = corners.min(axis=1), corners.max(axis=1)
         box_low, box_high = self._boxes
-        partly_outside = np.any(outside.reshape(n, 3), axis=1)
+        partly_outside = np.any(outside.reshape(n, v), axis=1)
         if np.any(partly_outside):
             # The cells around a last cell may miss where such a domain crosses the
             # grid's edge: try every cell (few domains), so what is missing is outside.
@@ -185,12 +195,16 @@ class PointDomains:
         # Only the cells whose bounding boxes meet the domain's can overlap it.
         meets = np.all((box_low[cell] <= high[owner]) & (box_high[cell] >= low[owner]), axis=1)
         owner, cell = owner[meets], cell[meets]
-        xi = tracker.barycentric(corners[owner].reshape(-1, 2), np.repeat(cell, 3)).reshape(
-            -1, 3, 3
+        # Nor can a cell whose vertices all lie beyond one face of the domain (most of
+        # the rest in 3D, where cutting is dear; a cell beyond one of its own faces is
+        # cut away at once).
+        owner, cell = _beyond_a_face_dropped(corners, tracker.cell_vertices, owner, cell)
+        xi = tracker.barycentric(corners[owner].reshape(-1, g), np.repeat(cell, v)).reshape(
+            -1, v, v
         )[..., 1:]
         area, rule = piece_rule(xi, self.degree)
-        area *= 2.0 * tracker.volumes[cell]
-        domain_area = triangle_areas(corners)
+        area *= math.factorial(g) * tracker.volumes[cell]  # reference → physical
+        domain_area = simplex_volumes(corners)
         covered = np.bincount(owner, weights=area, minlength=n) / domain_area
         if np.any(covered < MIN_INSIDE):
             p = int(np.argmin(covered))
@@ -220,7 +234,7 @@ class PointDomains:
         # Each piece's rule has q points of equal weight, each a sub-point.
         q = rule.shape[1]
         bary = np.concatenate([1.0 - rule.sum(axis=2, keepdims=True), rule], axis=2)
-        x = np.einsum("kqv,kvg->kqg", bary, tracker.cell_vertices[cell]).reshape(-1, 2)
+        x = np.einsum("kqv,kvg->kqg", bary, tracker.cell_vertices[cell]).reshape(-1, g)
         share = area / np.bincount(owner, weights=area, minlength=n)[owner]
         return Pieces(
             owner=np.repeat(owner, q),
@@ -228,7 +242,7 @@ class PointDomains:
             share=np.repeat(share / q, q),
             x=x,
             corner_cell=corner_cell,
-            corner_bary=tracker.barycentric(corners.reshape(-1, 2), corner_cell),
+            corner_bary=tracker.barycentric(corners.reshape(-1, g), corner_cell),
         )
 
     def sample(self, points: MaterialPoints, tracker: Tracker) -> MaterialPoints:
@@ -268,13 +282,14 @@ class PointDomains:
             return False
         own = tracker.cell_vertices[points.cell[bad]]
         centre = own.mean(axis=1, keepdims=True)
-        area = triangle_areas(self.corners[bad])
+        area = simplex_volumes(self.corners[bad])
         cell_area = tracker.volumes[points.cell[bad]]
-        scale = np.sqrt(area / cell_area)[:, None, None]
+        g = own.shape[2]
+        scale = ((area / cell_area) ** (1.0 / g))[:, None, None]
         redrawn = points.x[bad, None, :] + scale * (own - centre)
         # A redrawn domain that would reach past the grid's edge keeps its old shape.
-        inside = tracker.locate(redrawn.reshape(-1, 2), np.repeat(points.cell[bad], 3)) >= 0
-        inside = np.all(inside.reshape(-1, 3), axis=1)
+        inside = tracker.locate(redrawn.reshape(-1, g), np.repeat(points.cell[bad], g + 1)) >= 0
+        inside = np.all(inside.reshape(-1, g + 1), axis=1)
         bad, redrawn = bad[inside], redrawn[inside]
         self.corners[bad] = redrawn
         self._drawn_quality[bad] = shape_quality(redrawn)
@@ -304,7 +319,7 @@ class PointDomains:
             PointsOutsideError: A domain would leave the grid.
         """
         p, n, g = self._pieces, len(self.corners), self.corners.shape[2]
-        moved = self.corners + grid_displacement(p.corner_cell, p.corner_bary).reshape(n, 3, g)
+        moved = self.corners + grid_displacement(p.corner_cell, p.corner_bary).reshape(n, g + 1, g)
         before = np.linalg.det(self.corners[:, 1:] - self.corners[:, :1])
         after = np.linalg.det(moved[:, 1:] - moved[:, :1])
         if np.any(after / before <= 0):
@@ -388,12 +403,12 @@ def step_with_domains(sim, t_new: float, rebin: bool):
 def _corner_cells(
     corners: np.ndarray, tracker: Tracker, owner: np.ndarray, cell: np.ndarray
 ) -> np.ndarray:
-    """For every corner (n × 3,), the cell of its domain's piece it is least outside of."""
-    n = len(corners)
-    lam = tracker.barycentric(corners[owner].reshape(-1, 2), np.repeat(cell, 3))
-    inside = lam.reshape(-1, 3, 3).min(axis=2)  # (pieces, corner)
-    corner_cell = np.empty((n, 3), dtype=np.int32)
-    for j in range(3):
+    """For every corner (n × (d + 1),), the cell of its domain's piece it is least outside of."""
+    n, v, g = corners.shape
+    lam = tracker.barycentric(corners[owner].reshape(-1, g), np.repeat(cell, v))
+    inside = lam.reshape(-1, v, v).min(axis=2)  # (pieces, corner)
+    corner_cell = np.empty((n, v), dtype=np.int32)
+    for j in range(v):
         order = np.lexsort((-inside[:, j], owner))  # by domain, the best piece first
         corner_cell[:, j] = cell[order[np.searchsorted(owner[order], np.arange(n))]]
     return corner_cell.reshape(-1)
@@ -403,3 +418,18 @@ def _heaviest(pieces: Pieces, n: int) -> np.ndarray:
     """The index of each of the ``n`` points' heaviest piece (n,)."""
     by_weight = np.lexsort((-pieces.share, pieces.owner))  # by point, the heaviest first
     return by_weight[np.searchsorted(pieces.owner[by_weight], np.arange(n))]
+
+
+def _beyond_a_face_dropped(
+    corners: np.ndarray, cell_vertices: np.ndarray, owner: np.ndarray, cell: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The (domain, cell) pairs without those whose cell lies wholly beyond a face of the domain."""
+    origin, edges = corners[:, 0], corners[:, 1:] - corners[:, :1]  # (n, d), (n, d, d)
+    # x = origin + ξ · edges, so ξ = (x − origin) · edges⁻¹ for each domain.
+    inverse = np.linalg.inv(edges)
+    xi = np.einsum("kvg,kgh->kvh", cell_vertices[cell] - origin[owner, None], inverse[owner])
+    # A cell touching the domain at a face, edge or vertex (ξ = 0 there up to
+    # round-off) meets it in nothing: the tolerance drops those too.
+    tol = 1e-12
+    beyond = np.any(np.all(xi < tol, axis=1), axis=1) | np.all(xi.sum(axis=2) > 1.0 - tol, axis=1)
+    return owner[~beyond], cell[~beyond]

@@ -90,17 +90,17 @@ def check_domains(
     ghost_penalty: float | None,
     points: MaterialPoints,
     points_leaving: str,
+    u_degree: int,
 ) -> None:
-    """Point domains: on or off, in 2D, with every point kept. The ghost penalty: γ ≥ 0."""
+    """Point domains: on or off, P2 in 2D only, with every point kept. Ghost penalty: γ ≥ 0."""
     if ghost_penalty is not None:
         check_range("Simulation", "ghost_penalty", ghost_penalty, lo=0.0)
-    gdim = points.gdim
     if not isinstance(point_domains, bool | np.bool_):
         raise TypeError(f"Simulation: point_domains must be True or False, got {point_domains!r}")
-    if point_domains and gdim != 2:
+    if point_domains and points.gdim == 3 and u_degree != 1:
         raise NotImplementedError(
-            "Simulation: point_domains works on triangles (2D) for now; in 3D leave it "
-            "False (standard MPM)"
+            "Simulation: point_domains on tetrahedra works with P1 displacements "
+            "(formulation 'u' or 'up') for now, not with P2 ('up-p2p1')"
         )
     if point_domains and points_leaving != "raise":
         raise ValueError(

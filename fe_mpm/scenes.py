@@ -5,9 +5,12 @@ The demos spell these set-ups out step by step; tests and benchmarks call them.
 
 from __future__ import annotations
 
+from mpi4py import MPI
+
 import numpy as np
 
 from fe_mpm import meshes
+from fe_mpm._dolfinx import dolfinx
 from fe_mpm.boundary import Dirichlet, PointDirichlet, PointTraction, Traction
 from fe_mpm.checks import check_int
 from fe_mpm.formulations import FORMULATIONS
@@ -29,6 +32,8 @@ def cook_membrane(
     material=None,
     traction: float = 1.0 / 16.0,
     load: str = "grid",
+    thickness: float | None = None,
+    layers: int = 1,
     **options,
 ) -> Simulation:
     """Cook's membrane as in Iaconeta (2019) Table 5.1, with marker ``"A"`` at (48, 60).
@@ -53,20 +58,29 @@ def cook_membrane(
             ``"points"``: a :class:`PointTraction` on points at the edge's facet
             midpoints (two Gauss points per facet for P2), which follow the body
             (for large motion over many steps; in one step it equals the grid load).
+        thickness: None: the 2D membrane. A length > 0: the membrane extruded by it
+            on a grid of tetrahedra, with rollers on its front and back faces
+            (plane strain, so its answer converges to the 2D one) and marker ``"A"``
+            at mid-thickness.
+        layers: Layers of cells across the thickness (3D only).
         options: Passed on to :class:`~fe_mpm.simulation.Simulation`.
     """
-    scene = meshes.cook_membrane(n=n, structured=structured, h=h, margin=margin)
+    scene = meshes.cook_membrane(
+        n=n, structured=structured, h=h, margin=margin, thickness=thickness, layers=layers
+    )
     points = seed(scene.mesh, per_cell=per_cell, cells=meshes.body_cells(scene))
+    shear = (0.0, traction) if thickness is None else (0.0, traction, 0.0)
+    supports = [Dirichlet(meshes.COOK_CLAMPED)]
+    if thickness is not None:
+        supports.append(Dirichlet(meshes.COOK_FACES, 0.0, component=2))
     loads = {}
     if load == "grid":
-        loads["tractions"] = [Traction(meshes.COOK_LOADED, (0.0, traction), scale=lambda t: t)]
+        loads["tractions"] = [Traction(meshes.COOK_LOADED, shear, scale=lambda t: t)]
     elif load == "points":
         loaded = scene.facet_tags.find(meshes.COOK_LOADED)
         spec = FORMULATIONS.get(formulation)  # an unknown one is Simulation's to refuse
         x, weight = meshes.facet_points(scene.mesh, loaded, spec.u_degree if spec else 1)
-        loads["point_tractions"] = [
-            PointTraction("load", x, weight, (0.0, traction), scale=lambda t: t)
-        ]
+        loads["point_tractions"] = [PointTraction("load", x, weight, shear, scale=lambda t: t)]
     else:
         raise ValueError(f"cook_membrane: load must be 'grid' or 'points', got {load!r}")
     sim = Simulation(
@@ -75,11 +89,11 @@ def cook_membrane(
         material or NeoHookean(E=E, nu=nu),
         formulation,
         facet_tags=scene.facet_tags,
-        dirichlet=[Dirichlet(meshes.COOK_CLAMPED)],
+        dirichlet=supports,
         **loads,
         **options,
     )
-    sim.add_marker("A", meshes.COOK_POINT_A)
+    sim.add_marker("A", meshes.COOK_POINT_A if thickness is None else (48.0, 60.0, thickness / 2))
     return sim
 
 
@@ -181,24 +195,45 @@ def strip_footing(
 COLUMN = {"L": 50.0, "E": 4e5, "density": 80.0, "g": 10.0}
 
 
-def elastic_column(ny: int, per_cell: int = 1, **options) -> Simulation:
-    """AMPLE's plane-strain column (1 m wide, ``ny`` cells high) under ramped self-weight.
+def elastic_column(ny: int, per_cell: int = 1, *, dim: int = 2, **options) -> Simulation:
+    """AMPLE's column (1 m wide, ``ny`` cells high) under ramped self-weight.
 
     Neo-Hookean with ν = 0, rollers on the base and sides, gravity scaled by ``t``
-    (10 % strain at the base at ``t = 1``). ``options`` go to :class:`Simulation`.
+    (10 % strain at the base at ``t = 1``). ``dim`` 2: plane strain on a grid of
+    triangles; 3: a 1 m × 1 m prism of tetrahedra (six per cube of
+    :func:`dolfinx.mesh.create_box`), one cell across, gravity along z.
+    ``options`` go to :class:`Simulation`.
     """
     L, E, rho, g = COLUMN["L"], COLUMN["E"], COLUMN["density"], COLUMN["g"]
-    scene = meshes.column(1.0, L, 1, ny, margin=0)
-    return Simulation(
-        scene.mesh,
-        seed(scene.mesh, per_cell=per_cell, density=rho),
-        NeoHookean(E, 0.0, rho),
-        facet_tags=scene.facet_tags,
-        dirichlet=[
+    dim = check_int("elastic_column", "dim", dim, lo=2, hi=3)
+    if dim == 2:
+        scene = meshes.column(1.0, L, 1, ny, margin=0)
+        mesh, tags = scene.mesh, scene.facet_tags
+        rollers = [
             Dirichlet(meshes.COLUMN_BASE, component=1),
             Dirichlet(meshes.COLUMN_SIDES, component=0),
-        ],
-        body_force=(0.0, -g),
+        ]
+    else:
+        ny = check_int("elastic_column", "ny", ny, lo=1)
+        mesh = dolfinx.mesh.create_box(
+            MPI.COMM_WORLD,
+            [[0.0, 0.0, 0.0], [1.0, 1.0, L]],
+            [1, 1, ny],
+            dolfinx.mesh.CellType.tetrahedron,
+        )
+        tags = None
+        rollers = [
+            Dirichlet(lambda x: np.isclose(x[2], 0.0), component=2),
+            Dirichlet(lambda x: np.isclose(x[0], 0.0) | np.isclose(x[0], 1.0), component=0),
+            Dirichlet(lambda x: np.isclose(x[1], 0.0) | np.isclose(x[1], 1.0), component=1),
+        ]
+    return Simulation(
+        mesh,
+        seed(mesh, per_cell=per_cell, density=rho),
+        NeoHookean(E, 0.0, rho),
+        facet_tags=tags,
+        dirichlet=rollers,
+        body_force=(0.0,) * (dim - 1) + (-g,),
         body_force_scale=lambda t: t,
         **options,
     )
@@ -207,11 +242,12 @@ def elastic_column(ny: int, per_cell: int = 1, **options) -> Simulation:
 def column_stress_error(sim: Simulation) -> float:
     """AMPLE's error of :func:`elastic_column` at full load (dimensionless).
 
-    ``Σ_p abs(σ_yy,p + ρ₀ g (L − Y_p)) V_p / (ρ₀ g L Σ_p V_p)``, Y_p the initial height:
-    equilibrium gives σ_yy = −ρ₀ g (L − Y) exactly, for any law.
+    ``Σ_p abs(σ_yy,p + ρ₀ g (L − Y_p)) V_p / (ρ₀ g L Σ_p V_p)``, Y_p the initial height
+    (along z in 3D): equilibrium gives σ_yy = −ρ₀ g (L − Y) exactly, for any law.
     """
     L, rho, g = COLUMN["L"], COLUMN["density"], COLUMN["g"]
     pts = sim.points
-    exact = -rho * g * (L - pts.x0[:, 1])
-    error = np.sum(np.abs(pts.stress[:, 1, 1] - exact) * pts.volume)
+    up = pts.gdim - 1
+    exact = -rho * g * (L - pts.x0[:, up])
+    error = np.sum(np.abs(pts.stress[:, up, up] - exact) * pts.volume)
     return float(error / (rho * g * L * pts.volume.sum()))

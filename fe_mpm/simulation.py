@@ -119,7 +119,7 @@ class Simulation:
             of its cell (> 0, default 10) is rejected and cut: a grid value blew up at
             a nearly unsupported node (:func:`fe_mpm.point_update.checked_update`).
         point_domains: True: each point's volume is spread over the cells its
-            convected domain covers (2D, :mod:`fe_mpm.domains`), against the
+            convected domain covers (:mod:`fe_mpm.domains`; P2 in 2D only), against the
             cell-crossing error; False (default): standard MPM.
         ghost_penalty: γ ≥ 0 of the ghost penalty on the facets of poorly filled
             cells (:mod:`fe_mpm.ghost`); 0: none. Default:
@@ -165,7 +165,9 @@ class Simulation:
         model_checks.check_ranges(max_step_cells, ppp_alpha, damping, output_every)
         model_checks.check_dynamics(dynamic, formulation, damping, mass)
         self.spec = FORMULATIONS[formulation]
-        model_checks.check_domains(point_domains, ghost_penalty, points, points_leaving)
+        model_checks.check_domains(
+            point_domains, ghost_penalty, points, points_leaving, self.spec.u_degree
+        )
         model_checks.check_law(material, self.spec, formulation)
         model_checks.take_density(material, points)
         for name, h in material.history.items():

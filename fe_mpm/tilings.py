@@ -1,26 +1,34 @@
-"""The first domains of the points: each cell tiled by as many equal triangles as it has points.
+"""The first domains of the points: each cell tiled by as many equal simplices as it has points.
 
-A cell with ``m²`` points is cut by the lines parallel to its edges at steps of
-1/m; ``3 m²`` and ``6 m²`` points cut each of those triangles further, from its
-centroid to its corners (3) or to its corners and edge midpoints (6). Each point
-takes the nearest free tile as its domain, so the domains tile the body without
-gaps or overlaps, and the points of the cell share its points' volume and mass
-equally (:func:`fe_mpm.seed`'s Gauss weights differ for 6 and 12 points; unequal
-volumes on equal tiles would integrate a constant stress inexactly once the
-domains straddle cells). A point's volume and its domain's area then change
-together (both by det ΔF). Only a cell its points fill is tiled. A cell whose
-count has no such tiling (7 or 15 points), or that a trimmed body fills in part,
-gives each point the cell shrunk to the point's volume around the point instead
-(these domains may overlap or reach past the body).
+Triangles: a cell with ``m²`` points is cut by the lines parallel to its edges at
+steps of 1/m; ``3 m²`` and ``6 m²`` points cut each of those triangles further,
+from its centroid to its corners (3) or to its corners and edge midpoints (6).
+Tetrahedra: ``8^L`` points cut the cell L times into eight by its edges' midpoints
+(Bey 1995: four corner tetrahedra and the inner octahedron split along one
+diagonal, all of equal volume); ``4·8^L`` and ``24·8^L`` points cut each of those
+further from its centroid, to its faces (4) or by its barycentric subdivision (24:
+corner, edge midpoint, face centroid, centroid). The counts cover
+:func:`fe_mpm.seed`'s 1, 4 and 24 points per tetrahedron.
+
+Each point takes the nearest free tile as its domain, so the domains tile the body
+without gaps or overlaps, and the points of the cell share its points' volume and
+mass equally (:func:`fe_mpm.seed`'s Gauss weights differ for 6 and 12 points;
+unequal volumes on equal tiles would integrate a constant stress inexactly once the
+domains straddle cells). A point's volume and its domain's change together (both by
+det ΔF). Only a cell its points fill is tiled. A cell whose count has no such
+tiling (7 or 15 points on triangles, 57 on tetrahedra), or that a trimmed body
+fills in part, gives each point the cell shrunk to the point's volume around the
+point instead (these domains may overlap or reach past the body).
 """
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
 
-from fe_mpm.clipping import triangle_areas
+from fe_mpm.clipping import simplex_volumes
 from fe_mpm.particles import MaterialPoints
 
 #: A cell is full when its points' volumes add up to its area to this tolerance.
@@ -54,11 +62,55 @@ def _fan(triangle: np.ndarray, pieces: int) -> list[np.ndarray]:
     return [np.array([centre, ring[i], ring[(i + 1) % len(ring)]]) for i in range(len(ring))]
 
 
-def equal_tiling(k: int) -> np.ndarray | None:
-    """``k`` triangles of equal area that tile a triangle, barycentric vertices (k, 3, 3).
+def _bey(tet: np.ndarray) -> list[np.ndarray]:
+    """A tetrahedron (4, 4) cut into 8 of equal volume by its edges' midpoints (Bey 1995)."""
+    x0, x1, x2, x3 = tet
+    m = {(i, j): 0.5 * (tet[i] + tet[j]) for i in range(4) for j in range(i + 1, 4)}
+    children = [
+        (x0, m[0, 1], m[0, 2], m[0, 3]),
+        (m[0, 1], x1, m[1, 2], m[1, 3]),
+        (m[0, 2], m[1, 2], x2, m[2, 3]),
+        (m[0, 3], m[1, 3], m[2, 3], x3),
+        # The octahedron, split along its diagonal m02–m13.
+        (m[0, 1], m[0, 2], m[0, 3], m[1, 3]),
+        (m[0, 1], m[0, 2], m[1, 2], m[1, 3]),
+        (m[0, 2], m[0, 3], m[1, 3], m[2, 3]),
+        (m[0, 2], m[1, 2], m[1, 3], m[2, 3]),
+    ]
+    return [np.array(c) for c in children]
 
-    None unless ``k`` is ``m²``, ``3 m²`` or ``6 m²``.
+
+def _tet_fan(tet: np.ndarray, pieces: int) -> list[np.ndarray]:
+    """A tetrahedron (4, 4) cut from its centroid to its faces (4) or barycentrically (24)."""
+    centre = tet.mean(axis=0)
+    if pieces == 4:
+        return [np.array([centre, *np.delete(tet, i, axis=0)]) for i in range(4)]
+    return [
+        np.array([tet[a], 0.5 * (tet[a] + tet[b]), (tet[a] + tet[b] + tet[c]) / 3.0, centre])
+        for a, b, c, _ in itertools.permutations(range(4))
+    ]
+
+
+def equal_tiling(k: int, dim: int = 2) -> np.ndarray | None:
+    """``k`` simplices of equal size that tile a simplex, barycentric vertices (k, d + 1, d + 1).
+
+    Triangles (``dim`` 2): None unless ``k`` is ``m²``, ``3 m²`` or ``6 m²``.
+    Tetrahedra (``dim`` 3): None unless ``k`` is ``8^L``, ``4·8^L`` or ``24·8^L``.
     """
+    if dim == 3:
+        for fan in (1, 4, 24):
+            if k % fan:
+                continue
+            levels = round(math.log(k // fan, 8))
+            if 8**levels != k // fan:
+                continue
+            tets = [np.eye(4)]
+            for _ in range(levels):
+                tets = [child for t in tets for child in _bey(t)]
+            if fan > 1:
+                tets = [piece for t in tets for piece in _tet_fan(t, fan)]
+            return np.array(tets)
+        return None
     for fan in (1, 3, 6):
         m = math.isqrt(k // fan)
         if k % fan == 0 and m * m * fan == k:
@@ -70,29 +122,30 @@ def equal_tiling(k: int) -> np.ndarray | None:
 
 
 def initial_domains(points: MaterialPoints, cell_vertices: np.ndarray) -> np.ndarray:
-    """Every point's first domain, a triangle (n, 3, 2) in m; tiled points move.
+    """Every point's first domain, a simplex (n, d + 1, d) in m; tiled points move.
 
     Args:
-        points: The material points (2D), located in their cells. The points of a
+        points: The material points, located in their cells. The points of a
             tiled cell move to their tiles' centroids (``x`` and ``x0``) and share
             the cell's points' volume and mass equally, so that the volume per area
             is the same in every tile of the cell.
-        cell_vertices: The vertices of every cell of the grid (nc, 3, 2) in m.
+        cell_vertices: The vertices of every cell of the grid (nc, d + 1, d) in m.
 
     Full cells whose point count has a tiling (:func:`equal_tiling`) are tiled, and
     each of their points takes the nearest free tile (greedy); other points (a cell
-    that a trimmed body fills in part, or 7 or 15 points) take their cell shrunk to
+    that a trimmed body fills in part, or a count with no tiling) take their cell shrunk to
     their volume and centred on them.
     """
     x, volume, cell = points.x, points.volume, points.cell
     own = cell_vertices[cell]
     centre = own.mean(axis=1, keepdims=True)
-    cell_area = triangle_areas(own)
-    corners = x[:, None, :] + np.sqrt(volume / cell_area)[:, None, None] * (own - centre)
+    cell_area = simplex_volumes(own)
+    shrink = (volume / cell_area) ** (1.0 / x.shape[1])
+    corners = x[:, None, :] + shrink[:, None, None] * (own - centre)
     order = np.argsort(cell, kind="stable")
     cells, starts, counts = np.unique(cell[order], return_index=True, return_counts=True)
     for k in np.unique(counts):
-        tiles = equal_tiling(int(k))
+        tiles = equal_tiling(int(k), x.shape[1])
         if tiles is None:
             continue
         group = np.flatnonzero(counts == k)

@@ -1,12 +1,9 @@
 """Point domains (``Simulation(point_domains=True)``): a point's volume spread over the
 cells its convected domain covers, integrated exactly piece by piece."""
 
-from mpi4py import MPI
-
 import meshio
 import numpy as np
 import pytest
-from dolfinx.mesh import create_unit_cube
 
 import fe_mpm
 from fe_mpm import meshes, scenes
@@ -182,10 +179,7 @@ def test_point_domains_must_be_a_bool(value):
         fe_mpm.Simulation(mesh, fe_mpm.seed(mesh), fe_mpm.NeoHookean(1.0, 0.3), point_domains=value)
 
 
-def test_point_domains_refuse_3d_and_dropping_points():
-    cube = create_unit_cube(MPI.COMM_SELF, 1, 1, 1)
-    with pytest.raises(NotImplementedError, match="point_domains works on triangles"):
-        fe_mpm.Simulation(cube, fe_mpm.seed(cube), fe_mpm.NeoHookean(1.0, 0.3), point_domains=True)
+def test_point_domains_refuse_dropping_points():
     mesh = meshes.rectangle_mesh((0.0, 0.0), (1.0, 1.0), (2, 2))
     with pytest.raises(ValueError, match="points_leaving='raise'"):
         fe_mpm.Simulation(

@@ -23,6 +23,7 @@ from fe_mpm.meshes.column import (
 from fe_mpm.meshes.cook import (
     COOK_BODY,
     COOK_CLAMPED,
+    COOK_FACES,
     COOK_FREE,
     COOK_LOADED,
     COOK_MARGIN,
@@ -68,6 +69,7 @@ __all__ = [
     "COOK_MARGIN",
     "body_cells",
     "COOK_CLAMPED",
+    "COOK_FACES",
     "COOK_FREE",
     "COOK_LOADED",
     "COOK_POINT_A",

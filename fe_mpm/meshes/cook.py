@@ -8,6 +8,11 @@ With several load steps the body moves out of a grid that fits it exactly
 (the top-right corner rises by about 0.3), so the grid can carry ``margin``
 extra rows of empty cells above the top edge and below the bottom edge. They
 extend the same bilinear map, so the cells of the body are unchanged.
+
+With a ``thickness`` the grid is the same trapezoid extruded in z into tetrahedra
+(``layers`` of them, three per prism), a 3D grid whose front and back faces
+(:data:`COOK_FACES`) take rollers for plane strain: its answer converges to the 2D
+one.
 """
 
 from __future__ import annotations
@@ -25,6 +30,8 @@ COOK_CLAMPED = 1
 COOK_LOADED = 2
 #: Facet tag of the other boundary facets.
 COOK_FREE = 3
+#: Facet tag of the front and back faces z = 0 and z = thickness (3D grid only).
+COOK_FACES = 4
 #: Cell tag of the membrane (where material points are seeded).
 COOK_BODY = 1
 #: Cell tag of the empty margin cells.
@@ -44,6 +51,8 @@ def cook_membrane(
     structured: bool = True,
     h: float | None = None,
     margin: int = 0,
+    thickness: float | None = None,
+    layers: int = 1,
     comm: MPI.Comm = MPI.COMM_WORLD,
 ):
     """Background grid of Cook's membrane.
@@ -55,18 +64,25 @@ def cook_membrane(
         structured: If False, an unstructured Delaunay mesh of size ``h``.
         h: Element size of the unstructured mesh (default ``44 / n``).
         margin: Rows of empty cells (of height 1/n in the map) above and below the body.
+        thickness: None: a 2D grid of triangles. A length > 0: the grid extruded by
+            it in z, into tetrahedra.
+        layers: Layers of prisms across the thickness (3D only), each cut into three
+            tetrahedra.
         comm: MPI communicator.
 
     Returns:
         ``dolfinx.io.gmsh.MeshData`` with ``mesh``, ``cell_tags`` (:data:`COOK_BODY`,
         :data:`COOK_MARGIN`) and ``facet_tags`` (:data:`COOK_CLAMPED`,
-        :data:`COOK_LOADED`, :data:`COOK_FREE`).
+        :data:`COOK_LOADED`, :data:`COOK_FREE`, and in 3D :data:`COOK_FACES`).
     """
     n = int(check_range("cook_membrane", "n", n, lo=1))
     margin = int(check_range("cook_membrane", "margin", margin, lo=0))
     if h is None:
         h = 44.0 / n
     check_range("cook_membrane", "h", h, lo=0.0, lo_open=True)
+    if thickness is not None:
+        check_range("cook_membrane", "thickness", thickness, lo=0.0, lo_open=True)
+        layers = int(check_range("cook_membrane", "layers", layers, lo=1))
     m = margin / n
     with gmsh_session("cook_membrane") as model:
         if comm.rank == 0:
@@ -94,18 +110,47 @@ def cook_membrane(
             if structured:
                 for line in across:
                     geo.mesh.setTransfiniteCurve(line, n + 1)
-            geo.synchronize()
             body = etas.index(0.0)
-            model.addPhysicalGroup(1, up_left, COOK_CLAMPED, name="clamped")
-            model.addPhysicalGroup(1, [up_right[body]], COOK_LOADED, name="loaded")
-            free = [across[0], across[-1]] + [c for i, c in enumerate(up_right) if i != body]
-            model.addPhysicalGroup(1, free, COOK_FREE, name="free")
-            model.addPhysicalGroup(2, [surfaces[body]], COOK_BODY, name="membrane")
-            if margin:
-                margins = [s for i, s in enumerate(surfaces) if i != body]
-                model.addPhysicalGroup(2, margins, COOK_MARGIN, name="margin")
-            model.mesh.generate(2)
-        return to_dolfinx(model, gdim=2, comm=comm)
+            if thickness is None:
+                geo.synchronize()
+                _tag(model, 1, body, surfaces, across, up_left, up_right)
+                model.mesh.generate(2)
+            else:
+                # Each strip's extrusion gives its back face, its volume, then the
+                # faces swept by its loop's curves in order: across[i], up_right[i],
+                # across[i + 1], up_left[i] (a shared curve's face appears twice).
+                swept = geo.extrude(
+                    [(2, s) for s in surfaces], 0, 0, thickness, [layers], recombine=False
+                )
+                strips = [swept[6 * i : 6 * i + 6] for i in range(len(surfaces))]
+                geo.synchronize()
+                volumes = [strip[1][1] for strip in strips]
+                faces = [strip[2 + k][1] for strip in strips for k in (0, 1, 2, 3)]
+                right = [strip[3][1] for strip in strips]
+                left = [strip[5][1] for strip in strips]
+                lower, upper = strips[0][2][1], strips[-1][4][1]
+                _tag(model, 2, body, volumes, [lower, upper], left, right)
+                back = [strip[0][1] for strip in strips]
+                model.addPhysicalGroup(2, surfaces + back, COOK_FACES, name="faces")
+                assert len(set(faces)) == 3 * len(surfaces) + 1  # the strips share faces
+                model.mesh.generate(3)
+        return to_dolfinx(model, gdim=2 if thickness is None else 3, comm=comm)
+
+
+def _tag(model, fdim: int, body: int, cells: list, edges: list, left: list, right: list):
+    """Physical groups of the strips' cells and of the boundary's left, right and other edges.
+
+    ``edges`` holds the lowest strip's lower edge first and the highest's upper edge
+    last (what lies between them is inside the grid).
+    """
+    model.addPhysicalGroup(fdim, left, COOK_CLAMPED, name="clamped")
+    model.addPhysicalGroup(fdim, [right[body]], COOK_LOADED, name="loaded")
+    free = [edges[0], edges[-1]] + [c for i, c in enumerate(right) if i != body]
+    model.addPhysicalGroup(fdim, free, COOK_FREE, name="free")
+    model.addPhysicalGroup(fdim + 1, [cells[body]], COOK_BODY, name="membrane")
+    if len(cells) > 1:
+        margins = [c for i, c in enumerate(cells) if i != body]
+        model.addPhysicalGroup(fdim + 1, margins, COOK_MARGIN, name="margin")
 
 
 def body_cells(scene) -> np.ndarray:
