@@ -16,6 +16,10 @@ the grid's margins are n rows instead of n / 2. P2/P1 rows: standard MPM needs t
 points in every cell; the ghost penalty ties cells left with fewer
 (:mod:`fe_mpm.ghost`); with domains each piece has three sub-points, so one point per
 cell is enough.
+``--dim 3`` runs the membrane extruded one cell deep into tetrahedra with
+plane-strain rollers (``cook_membrane(thickness=44 / n)``), u-p only, with 1 and 4
+points per cell (point domains on tetrahedra are P1 only); its answer converges to
+the same 2D limit.
 Prints the tip displacement, its error against the converged answer and the wall time
 of every case. Not a test.
 """
@@ -43,6 +47,13 @@ CASES = [
     ("P2 domains, 1 point", "up-p2p1", 1, {"point_domains": True}),
     ("P2 domains, 3 points", "up-p2p1", 3, {"point_domains": True}),
 ]
+#: The same on tetrahedra (``--dim 3``): 4 points per cell is seed's degree-2 rule.
+CASES_3D = [
+    ("standard, 1 point", "up", 1, {}),
+    ("standard, 4 points", "up", 4, {}),
+    ("domains, 1 point", "up", 1, {"point_domains": True}),
+    ("domains, 4 points", "up", 4, {"point_domains": True}),
+]
 
 
 def tip(
@@ -55,11 +66,13 @@ def tip(
     load: str = "points",
     margin: int | None = None,
     force: float = LOAD,
+    dim: int = 2,
 ) -> tuple[float, float]:
     """Cook's tip displacement (m; NaN if the run stops) and the wall time of the run (s).
 
     ``margin``: rows of empty cells above and below the body (default n / 2);
-    ``force``: the total load on the right edge (N).
+    ``force``: the total load on the right edge (N); ``dim`` 3: extruded one cell
+    deep into tetrahedra.
     """
     t0 = time.perf_counter()
     sim = scenes.cook_membrane(
@@ -70,6 +83,7 @@ def tip(
         traction=force / 16,
         load=load,
         margin=n // 2 if margin is None else margin,
+        thickness=None if dim == 2 else 44.0 / n,
         **(options or {}),
     )
     try:
@@ -96,7 +110,9 @@ def main() -> None:
     p.add_argument("--formulations", nargs="+", default=["up", "up-p2p1"])
     p.add_argument("--load", type=float, default=LOAD, help="total load (N)")
     p.add_argument("--sizes", type=int, nargs="+", default=None, help="grids n (16 32 64)")
+    p.add_argument("--dim", type=int, choices=(2, 3), default=2, help="3: on tetrahedra")
     args = p.parse_args()
+    cases = CASES if args.dim == 2 else CASES_3D
     sizes = args.sizes or ((16, 32) if args.quick else (16, 32, 64))
     margin = {n: n // 2 if args.load <= LOAD else n for n in sizes}  # room to move
     for nu in args.nu:
@@ -106,12 +122,12 @@ def main() -> None:
             f"(P2/P1, 3 points per triangle, one step, n = 16, 32, 64, Richardson)"
         )
         print(f"{'case':<24}" + "".join(f"{'n = ' + str(n):>22}" for n in sizes))
-        one_step = [tip(n, nu, "up", 1, 1, force=args.load)[0] for n in sizes]
+        one_step = [tip(n, nu, "up", 1, 1, force=args.load, dim=args.dim)[0] for n in sizes]
         print(
             f"{'one step (FEM at n)':<24}"
             + "".join(f"{u:>10.4f} {100 * (u / limit - 1):+6.1f} %    " for u in one_step)
         )
-        for label, formulation, per_cell, options in CASES:
+        for label, formulation, per_cell, options in cases:
             if formulation not in args.formulations:
                 continue
             cells = []
@@ -125,6 +141,7 @@ def main() -> None:
                     options,
                     margin=margin[n],
                     force=args.load,
+                    dim=args.dim,
                 )
                 cells.append(f"{u:>10.4f} {100 * (u / limit - 1):+6.1f} % {wall:4.0f}s")
             print(f"{label:<24}" + "".join(f"{c:>22}" for c in cells), flush=True)

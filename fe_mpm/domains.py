@@ -5,14 +5,15 @@ volume: as points cross facets, a cell's share of the body jumps by a point's vo
 at once, cells inside the body can end up with no point at all, and the answer
 drifts with the number of load steps (Cook's membrane over 20 steps, n = 32: +25 %).
 
-With ``Simulation(point_domains=True)`` each point carries a triangle, its domain;
-at the start the domains tile the body (:mod:`fe_mpm.tilings`). Every step cuts each
-domain by the cells it covers (:mod:`fe_mpm.clipping`) and integrates each piece
+With ``Simulation(point_domains=True)`` each point carries a triangle (2D) or a
+tetrahedron (3D), its domain; at the start the domains tile the body
+(:mod:`fe_mpm.tilings`). Every step cuts each domain by the cells it covers
+(:mod:`fe_mpm.clipping`, :mod:`fe_mpm.tet_clipping`) and integrates each piece
 with one sub-point at the piece's centroid, carrying the piece's share (its area
-over the domain's) of the point's volume and mass: exact for the P1 internal force
-of a domain's stress, so a point that crosses a facet moves its weight to the next
-cell continuously. The sub-points take the point's deformation gradient, history
-and state, and the step.
+over the domain's; "area" is volume in 3D throughout) of the point's volume and
+mass: exact for the P1 internal force of a domain's stress, so a point that
+crosses a facet moves its weight to the next cell continuously. The sub-points
+take the point's deformation gradient, history and state, and the step.
 
 The domains' corners then move with the grid's displacement (as in CPDI2,
 Sadeghirad et al. 2013, and Nairn's convected particle domains), so the domains keep
@@ -30,9 +31,9 @@ A domain that has distorted too far (:func:`shape_quality`) is redrawn around it
 point at the start of a step, which breaks the tiling there; the ghost penalty
 (:mod:`fe_mpm.ghost`, on by default with domains) ties the cells the domains fill
 in part. With P2 displacements each piece has three sub-points that integrate
-quadratics exactly (:func:`~fe_mpm.clipping.piece_rule`). Not yet: 3D (tetrahedral
-domains), and splitting a distorted domain into smaller ones. The measurements:
-``docs/cell_crossing.md``.
+quadratics exactly (:func:`~fe_mpm.clipping.piece_rule`; triangles only). Not yet:
+P2 on tetrahedra, and splitting a distorted domain into smaller ones. The
+measurements: ``docs/cell_crossing.md``.
 """
 
 from __future__ import annotations
@@ -116,7 +117,7 @@ class PointDomains:
     """The domain of every point, and the pieces that integrate it in a step.
 
     Args:
-        points: The material points (2D), located in their cells. Points that tile
+        points: The material points, located in their cells. Points that tile
             their cell move to the centroids of their tiles.
         tracker: The grid's tracker.
         degree: The displacement's degree: 1 integrates each piece with one sub-point

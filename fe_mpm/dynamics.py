@@ -168,7 +168,10 @@ class NewmarkDynamics:
             if ksp.getConvergedReason() < 0:
                 raise ConvergenceError(
                     "step 1: the mass system of the initial acceleration did not converge "
-                    f"(KSP reason {ksp.getConvergedReason()}); nothing was updated"
+                    f"(KSP reason {ksp.getConvergedReason()}); nothing was updated. A "
+                    "consistent mass is singular where the points cannot tell a cell's "
+                    "nodes apart (one point per tetrahedron): seed more points per cell "
+                    "or pass mass='lumped'"
                 )
         finally:
             ksp.destroy()

@@ -7,8 +7,9 @@ Tetrahedra: ``8^L`` points cut the cell L times into eight by its edges' midpoin
 (Bey 1995: four corner tetrahedra and the inner octahedron split along one
 diagonal, all of equal volume); ``4·8^L`` and ``24·8^L`` points cut each of those
 further from its centroid, to its faces (4) or by its barycentric subdivision (24:
-corner, edge midpoint, face centroid, centroid). The counts cover
-:func:`fe_mpm.seed`'s 1, 4 and 24 points per tetrahedron.
+corner, edge midpoint, face centroid, centroid). Of :func:`fe_mpm.seed`'s counts
+per tetrahedron these cover 1, 4 and 24 (the others, 57 and up, are Gauss rules
+of higher degree); 8, 32, 64, … serve points placed by hand.
 
 Each point takes the nearest free tile as its domain, so the domains tile the body
 without gaps or overlaps, and the points of the cell share its points' volume and
@@ -166,7 +167,10 @@ def initial_domains(points: MaterialPoints, cell_vertices: np.ndarray) -> np.nda
 
 
 def _assign(x: np.ndarray, tiles: np.ndarray) -> np.ndarray:
-    """Each point of a cell (cells, k, 2) its nearest free tile of ``tiles`` (cells, k, 3, 2)."""
+    """Each point of a cell (cells, k, d) its nearest free tile of ``tiles``.
+
+    ``tiles`` holds each cell's tiles (cells, k, d + 1, d); returns the points' own.
+    """
     distance = np.linalg.norm(x[:, :, None, :] - tiles.mean(axis=2)[:, None, :, :], axis=-1)
     taken = np.empty(x.shape[:2], dtype=np.int64)
     rows = np.arange(len(x))

@@ -53,7 +53,9 @@ def test_the_pieces_of_a_tetrahedron_add_up_to_it():
     bary = np.concatenate([1.0 - centroid.sum(axis=1, keepdims=True), centroid], axis=1)
     x = np.einsum("kv,kvg->kg", bary, np.repeat(tracker.cell_vertices, 300, axis=0))
     moment = np.einsum("ct,ctg->tg", volume, x.reshape(nc, 300, 3))
-    assert np.allclose(volume.sum(axis=0), tet_volumes(tets), rtol=1e-12, atol=0)
+    # Absolute round-off on the cube's scale: a random sliver's own volume carries a
+    # larger relative one (seed 16 has one of 1.65e-6, off by 4e-18).
+    assert np.allclose(volume.sum(axis=0), tet_volumes(tets), rtol=1e-12, atol=1e-15)
     assert np.allclose(moment / volume.sum(axis=0)[:, None], tets.mean(axis=1), atol=1e-12)
     assert np.mean(np.count_nonzero(volume, axis=0) > 1) > 0.9  # most cross facets
 
@@ -151,6 +153,7 @@ def test_the_3d_column_converges_with_domains_and_stalls_without():
     assert all(coarse / fine > 1.9 for coarse, fine in zip(domains, domains[1:]))
 
 
+@pytest.mark.slow
 def test_cook_on_tetrahedra_loses_its_drift_with_domains():
     """Cook's membrane extruded into tetrahedra with plane-strain rollers, u-p,
     ν = 0.499, 5 N over 20 steps, n = 16, against the converged 2D answer 1.3542:

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from fe_mpm import meshes
+from fe_mpm._dolfinx import dolfinx
 from fe_mpm.references import lube_height, lube_runout, lube_time
 
 
@@ -46,6 +47,36 @@ def test_cook_tags_and_margin():
 
     all_plain = np.arange(plain.mesh.topology.index_map(2).size_local)
     assert np.allclose(centroids(plain, all_plain), centroids(scene, meshes.body_cells(scene)))
+
+
+def test_cook_extruded_into_tetrahedra_has_its_volume_and_every_face_tagged():
+    """Cook in 3D: 6 tetrahedra per quad and layer, the membrane's volume, every
+    boundary facet tagged once (the strips' meshes conform), the load on the
+    membrane's right face only, the rollers' faces at z = 0 and z = thickness."""
+    n, margin, t, layers = 4, 2, 1.5, 2
+    scene = meshes.cook_membrane(n=n, margin=margin, thickness=t, layers=layers)
+    mesh = scene.mesh
+    assert mesh.geometry.dim == 3
+    assert meshes.body_cells(scene).size == 6 * n * n * layers
+    assert scene.cell_tags.find(meshes.COOK_MARGIN).size == 6 * 2 * n * margin * layers
+    x = mesh.geometry.x[mesh.geometry.dofmaps[0][meshes.body_cells(scene)]]
+    volume = np.abs(np.linalg.det(x[:, 1:] - x[:, :1])).sum() / 6.0
+    assert volume == pytest.approx(0.5 * (44.0 + 16.0) * 48.0 * t, rel=1e-12)
+    mesh.topology.create_connectivity(2, 3)
+    boundary = np.sort(dolfinx.mesh.exterior_facet_indices(mesh.topology))
+    assert np.array_equal(np.sort(scene.facet_tags.indices), boundary)
+
+    def centres(tag):
+        facets = scene.facet_tags.find(tag)
+        nodes = dolfinx.mesh.entities_to_geometry(mesh, 2, facets)
+        return mesh.geometry.x[nodes].mean(axis=1)
+
+    loaded, faces = centres(meshes.COOK_LOADED), centres(meshes.COOK_FACES)
+    assert np.allclose(loaded[:, 0], 48.0) and np.all((loaded[:, 1] > 44) & (loaded[:, 1] < 60))
+    assert np.all(np.isclose(faces[:, 2], 0.0) | np.isclose(faces[:, 2], t))
+    assert np.allclose(centres(meshes.COOK_CLAMPED)[:, 0], 0.0)
+    with pytest.raises(ValueError, match="layers is for a 3D grid"):
+        meshes.cook_membrane(n=2, layers=2)
 
 
 def _cell_areas(scene, cells):

@@ -21,7 +21,7 @@ from mpi4py import MPI
 
 import numpy as np
 
-from fe_mpm.checks import check_range
+from fe_mpm.checks import check_int, check_range
 from fe_mpm.meshes.gmsh_session import gmsh_session, to_dolfinx
 
 #: Facet tag of the clamped left edge x = 0 (the grid's whole left side).
@@ -80,9 +80,11 @@ def cook_membrane(
     if h is None:
         h = 44.0 / n
     check_range("cook_membrane", "h", h, lo=0.0, lo_open=True)
+    layers = check_int("cook_membrane", "layers", layers, lo=1)
     if thickness is not None:
         check_range("cook_membrane", "thickness", thickness, lo=0.0, lo_open=True)
-        layers = int(check_range("cook_membrane", "layers", layers, lo=1))
+    elif layers != 1:
+        raise ValueError("cook_membrane: layers is for a 3D grid; give a thickness too")
     m = margin / n
     with gmsh_session("cook_membrane") as model:
         if comm.rank == 0:
