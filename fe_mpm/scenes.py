@@ -145,6 +145,10 @@ def strip_footing(
         smooth: Smooth footing (vertical constraint only) instead of rough.
         footing_thickness: Height of the footing's body points (m); default 2h.
         penalty: Penalty stiffness of the footing points (Pa/m); default 1e3 E/h.
+            With ``point_domains=True``, 32 base points per cell and
+            ``footing_thickness=0``, 50 E/h cuts the step-to-step jitter of q
+            4.7-fold against standard MPM (``benchmarks/footing_jitter.py``); its gap
+            is then 2 % of a 20 mm step.
         base_points_per_cell: Penalty points on the footing's base per cell width h
             (≥ 1). Each carries its share of the base; a point that crosses into the
             next cell moves that share at once, which is most of the step-to-step
