@@ -159,12 +159,15 @@ class PointDomains:
         Returns:
             The pieces, and where the corners are.
 
-        A domain that reaches past the grid's edge keeps the pieces inside, and its
-        point's volume is shared among them.
+        The cells a domain may cover are those around its corners' cells; for a
+        domain stretched past them, or one that reaches past the grid's edge, every
+        cell whose bounding box meets the domain's. A domain that reaches past the
+        grid's edge keeps the pieces inside, and its point's volume is shared among
+        them.
 
         Raises:
             PointsOutsideError: Less than half of a domain is inside the grid.
-            ConvergenceError: A domain reaches past the cells around its corners.
+            ConvergenceError: A domain's pieces do not add up to it (a degenerate one).
         """
         n, v, g = corners.shape
         corner_cells = tracker.locate(corners.reshape(-1, g), np.repeat(guess, v))
@@ -178,35 +181,28 @@ class PointDomains:
         repeated[:, 1:] = candidates[:, 1:] == candidates[:, :-1]
         owner, column = np.nonzero((candidates >= 0) & ~repeated)
         cell = candidates[owner, column]
-        low, high = corners.min(axis=1), corners.max(axis=1)
-        box_low, box_high = self._boxes
         partly_outside = np.any(outside.reshape(n, v), axis=1)
-        if np.any(partly_outside):
-            # The cells around a last cell may miss where such a domain crosses the
-            # grid's edge: try every cell (few domains), so what is missing is outside.
-            extra = [
-                (d, np.flatnonzero(np.all((box_low <= high[d]) & (box_high >= low[d]), axis=1)))
-                for d in np.flatnonzero(partly_outside)
-            ]
-            keep_own = ~partly_outside[owner]
-            owner = np.concatenate([owner[keep_own]] + [np.full(c.size, d) for d, c in extra])
-            cell = np.concatenate([cell[keep_own]] + [c for _, c in extra])
-            order = np.argsort(owner, kind="stable")
-            owner, cell = owner[order], cell[order]
-        # Only the cells whose bounding boxes meet the domain's can overlap it.
-        meets = np.all((box_low[cell] <= high[owner]) & (box_high[cell] >= low[owner]), axis=1)
-        owner, cell = owner[meets], cell[meets]
-        # Nor can a cell whose vertices all lie beyond one face of the domain (most of
-        # the rest in 3D, where cutting is dear; a cell beyond one of its own faces is
-        # cut away at once).
-        owner, cell = _beyond_a_face_dropped(corners, tracker.cell_vertices, owner, cell)
-        xi = tracker.barycentric(corners[owner].reshape(-1, g), np.repeat(cell, v)).reshape(
-            -1, v, v
-        )[..., 1:]
-        area, rule = piece_rule(xi, self.degree)
-        area *= math.factorial(g) * tracker.volumes[cell]  # reference → physical
+        # The cells around a last cell may miss where a domain crosses the grid's
+        # edge: try every cell for those (few), so that what is missing is outside.
+        owner, cell = self._search_everywhere(corners, partly_outside, owner, cell)
+        area, rule = self._overlaps(corners, tracker, owner, cell)
         domain_area = simplex_volumes(corners)
         covered = np.bincount(owner, weights=area, minlength=n) / domain_area
+        # A domain stretched past the cells around its corners (a spreading flow)
+        # misses the cells between them: try every cell for those too.
+        short = (covered < 1.0 - COVERAGE_TOL) & ~partly_outside
+        if np.any(short):
+            empty = owner[:0]
+            more_owner, more_cell = self._search_everywhere(corners, short, empty, empty)
+            more_area, more_rule = self._overlaps(corners, tracker, more_owner, more_cell)
+            keep = ~short[owner]
+            owner = np.concatenate([owner[keep], more_owner])
+            order = np.argsort(owner, kind="stable")
+            owner = owner[order]
+            cell = np.concatenate([cell[keep], more_cell])[order]
+            area = np.concatenate([area[keep], more_area])[order]
+            rule = np.concatenate([rule[keep], more_rule])[order]
+            covered = np.bincount(owner, weights=area, minlength=n) / domain_area
         if np.any(covered < MIN_INSIDE):
             p = int(np.argmin(covered))
             raise PointsOutsideError(
@@ -215,11 +211,11 @@ class PointDomains:
             )
         wrong = np.abs(covered - 1.0) > COVERAGE_TOL
         wrong &= ~partly_outside | (covered > 1.0)
-        if np.any(wrong):
+        if np.any(wrong):  # only round-off on a degenerate domain can get here
             p = int(np.flatnonzero(wrong)[0])
             raise ConvergenceError(
-                f"the domain of point {p} covers more than the cells around its corners "
-                f"(found {covered[p]:.6f} of its area): it has distorted too far"
+                f"the pieces of the domain of point {p} add up to {covered[p]:.6f} of its "
+                "area: it has degenerated"
             )
         # A round-off sliver is dropped; the domain's other pieces share its area.
         keep = area > MIN_SHARE * domain_area[owner]
@@ -245,6 +241,53 @@ class PointDomains:
             corner_cell=corner_cell,
             corner_bary=tracker.barycentric(corners.reshape(-1, g), corner_cell),
         )
+
+    def _search_everywhere(
+        self, corners: np.ndarray, which: np.ndarray, owner: np.ndarray, cell: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """The (domain, cell) pairs, those of the domains ``which`` (n,) replaced.
+
+        They are replaced by every cell whose bounding box meets theirs; the pairs
+        come back sorted by domain.
+        """
+        if not np.any(which):
+            return owner, cell
+        low, high = corners.min(axis=1), corners.max(axis=1)
+        box_low, box_high = self._boxes
+        extra = [
+            (d, np.flatnonzero(np.all((box_low <= high[d]) & (box_high >= low[d]), axis=1)))
+            for d in np.flatnonzero(which)
+        ]
+        keep = ~which[owner]
+        owner = np.concatenate([owner[keep]] + [np.full(c.size, d) for d, c in extra])
+        cell = np.concatenate([cell[keep]] + [c for _, c in extra])
+        order = np.argsort(owner, kind="stable")
+        return owner[order], cell[order]
+
+    def _overlaps(
+        self, corners: np.ndarray, tracker: Tracker, owner: np.ndarray, cell: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """The overlap of each (domain, cell) pair: its area in m² (m³) and its rule.
+
+        The pairs come back as given (``owner``, ``cell`` are not changed); pairs that
+        cannot overlap get area 0 without being cut.
+        """
+        n, v, g = corners.shape
+        area = np.zeros(len(owner))
+        rule = np.zeros((len(owner), 1 if self.degree == 1 or g == 3 else 3, g))
+        low, high = corners.min(axis=1), corners.max(axis=1)
+        box_low, box_high = self._boxes
+        # Only the cells whose bounding boxes meet the domain's can overlap it, and
+        # not a cell whose vertices all lie beyond one face of the domain (most of the
+        # rest in 3D, where cutting is dear; a cell beyond one of its own faces is cut
+        # away at once).
+        meets = np.all((box_low[cell] <= high[owner]) & (box_high[cell] >= low[owner]), axis=1)
+        meets[meets] = _may_overlap(corners, tracker.cell_vertices, owner[meets], cell[meets])
+        o, c = owner[meets], cell[meets]
+        xi = tracker.barycentric(corners[o].reshape(-1, g), np.repeat(c, v))
+        area[meets], rule[meets] = piece_rule(xi.reshape(-1, v, v)[..., 1:], self.degree)
+        area *= math.factorial(g) * tracker.volumes[cell]  # reference → physical
+        return area, rule
 
     def sample(self, points: MaterialPoints, tracker: Tracker) -> MaterialPoints:
         """A sub-point for every piece of every domain, with its share of the point's state."""
@@ -315,8 +358,8 @@ class PointDomains:
             t: Its end time, for messages.
 
         Raises:
-            ConvergenceError: A domain would turn inside out, or stretch past the
-                cells around its corners (the step is cut).
+            ConvergenceError: A domain would turn inside out, or degenerate (the
+                step is cut).
             PointsOutsideError: A domain would leave the grid.
         """
         p, n, g = self._pieces, len(self.corners), self.corners.shape[2]
@@ -331,8 +374,8 @@ class PointDomains:
                 "distorts it too far. Nothing was updated."
             )
         self._moved = moved
-        # The next step's pieces, now: a domain stretched past the cells around its
-        # corners then fails this step, which a shorter step may avoid.
+        # The next step's pieces, now: a domain that degenerates or leaves the grid
+        # then fails this step, which a shorter step may avoid.
         try:
             guess = self._pieces.cell[_heaviest(self._pieces, n)]
             self._next = self._cut(moved, tracker, guess)
@@ -421,10 +464,10 @@ def _heaviest(pieces: Pieces, n: int) -> np.ndarray:
     return by_weight[np.searchsorted(pieces.owner[by_weight], np.arange(n))]
 
 
-def _beyond_a_face_dropped(
+def _may_overlap(
     corners: np.ndarray, cell_vertices: np.ndarray, owner: np.ndarray, cell: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """The (domain, cell) pairs without those whose cell lies wholly beyond a face of the domain."""
+) -> np.ndarray:
+    """False for the (domain, cell) pairs whose cell lies wholly beyond a face of the domain."""
     origin, edges = corners[:, 0], corners[:, 1:] - corners[:, :1]  # (n, d), (n, d, d)
     # x = origin + ξ · edges, so ξ = (x − origin) · edges⁻¹ for each domain.
     inverse = np.linalg.inv(edges)
@@ -433,4 +476,4 @@ def _beyond_a_face_dropped(
     # round-off) meets it in nothing: the tolerance drops those too.
     tol = 1e-12
     beyond = np.any(np.all(xi < tol, axis=1), axis=1) | np.all(xi.sum(axis=2) > 1.0 - tol, axis=1)
-    return owner[~beyond], cell[~beyond]
+    return ~beyond

@@ -7,6 +7,7 @@ import pytest
 
 import fe_mpm
 from fe_mpm import meshes, scenes
+from fe_mpm.clipping import clip_to_reference_cell
 from fe_mpm.domains import RESET_QUALITY, PointDomains, shape_quality
 from fe_mpm.errors import ConvergenceError, PointsOutsideError
 from fe_mpm.tracker import Tracker
@@ -98,7 +99,7 @@ def test_taylor_hood_with_domains_needs_one_point_per_cell_and_meets_cook():
     assert abs(scenes.tip_deflection(sim) / converged - 1) < 0.02
 
 
-def test_a_domain_that_leaves_the_grid_or_outgrows_its_cells_stops_the_run():
+def test_a_domain_that_leaves_the_grid_stops_the_run():
     mesh = meshes.rectangle_mesh((0.0, 0.0), (1.0, 1.0), (4, 4))
     points = fe_mpm.seed(mesh)
     tracker = Tracker(mesh)
@@ -106,11 +107,33 @@ def test_a_domain_that_leaves_the_grid_or_outgrows_its_cells_stops_the_run():
     domains.corners[5] += (2.0, 0.0)
     with pytest.raises(PointsOutsideError, match="domain of point 5 .* has left the grid"):
         domains.pieces(tracker, points.cell)
+
+
+@pytest.mark.parametrize("stretch", [3.0, 6.0])
+def test_a_domain_stretched_past_the_cells_around_its_corners_finds_all_its_cells(stretch):
+    """A domain grown about its centroid over 2 and 5 cells (a spreading flow): the
+    cells between its corners' neighbourhoods are found too, its pieces add up to
+    it and their centroids to its centroid, and the other domains keep theirs."""
+    mesh = meshes.rectangle_mesh((0.0, 0.0), (1.0, 1.0), (16, 16))
+    points = fe_mpm.seed(mesh)
+    tracker = Tracker(mesh)
     domains = PointDomains(points, tracker)
-    centre = domains.corners[7].mean(axis=0)
-    domains.corners[7] = centre + 3.0 * (domains.corners[7] - centre)  # over 2 cells wide
-    with pytest.raises(ConvergenceError, match="domain of point 7 covers more"):
-        domains.pieces(tracker, points.cell)
+    k = int(np.argmin(np.linalg.norm(points.x - 0.5, axis=1)))
+    centre = domains.corners[k].mean(axis=0)
+    domains.corners[k] = centre + stretch * (domains.corners[k] - centre)
+    p = domains.pieces(tracker, points.cell)
+    mine = p.owner == k
+    assert p.share[mine].sum() == pytest.approx(1.0, rel=1e-12)
+    assert np.allclose(p.share[mine] @ p.x[mine], centre, rtol=0, atol=1e-14)
+    # Against the domain cut by every cell of the grid.
+    nc = len(tracker.volumes)
+    xi = tracker.barycentric(np.tile(domains.corners[k], (nc, 1)), np.repeat(np.arange(nc), 3))
+    area, _ = clip_to_reference_cell(xi[:, 1:].reshape(nc, 3, 2))
+    area *= 2.0 * tracker.volumes
+    covers = np.flatnonzero(area > 1e-9 * area.sum())
+    assert np.array_equal(np.sort(p.cell[mine]), covers)
+    assert np.allclose(p.share[mine][np.argsort(p.cell[mine])], area[covers] / area.sum())
+    assert np.array_equal(p.owner[~mine], np.repeat(np.delete(np.arange(len(points)), k), 1))
 
 
 def test_free_fall_with_domains_is_exact():
