@@ -1,9 +1,12 @@
 """Point domains (``Simulation(point_domains=True)``): a point's volume spread over the
 cells its convected domain covers, integrated exactly piece by piece."""
 
+from mpi4py import MPI
+
 import meshio
 import numpy as np
 import pytest
+from dolfinx.mesh import CellType, create_box
 
 import fe_mpm
 from fe_mpm import meshes, scenes
@@ -136,14 +139,20 @@ def test_a_domain_stretched_past_the_cells_around_its_corners_finds_all_its_cell
     assert np.array_equal(p.owner[~mine], np.repeat(np.delete(np.arange(len(points)), k), 1))
 
 
-def test_free_fall_with_domains_is_exact():
+@pytest.mark.parametrize("dim", [2, 3])
+def test_free_fall_with_domains_is_exact(dim):
     """A body in free fall across several cells is an exact discrete solution of
     Newmark's rule for every point (x − x₀ = ½ g t², v = g t), so it stays one with
-    pieces: velocity, acceleration and the update pass through them and back."""
-    mesh = meshes.rectangle_mesh((0.0, 0.0), (4.0, 4.0), (8, 8))
-    points = fe_mpm.seed(mesh, per_cell=1, density=1000.0)
-    points.keep((points.x[:, 0] < 1.0) & (points.x[:, 1] > 3.0))
-    g = np.array([3.0, -9.0])
+    pieces: velocity, acceleration and the update pass through them and back. In 3D
+    with four points per tetrahedron (one would leave the consistent mass singular)."""
+    if dim == 2:
+        mesh = meshes.rectangle_mesh((0.0, 0.0), (4.0, 4.0), (8, 8))
+        g = np.array([3.0, -9.0])
+    else:
+        mesh = create_box(MPI.COMM_SELF, [[0, 0, 0], [4, 4, 4]], [4, 4, 4], CellType.tetrahedron)
+        g = np.array([3.0, 1.0, -9.0])
+    points = fe_mpm.seed(mesh, per_cell=1 if dim == 2 else 4, density=1000.0)
+    points.keep(np.all(points.x[:, :-1] < 1.0, axis=1) & (points.x[:, -1] > 3.0))
     sim = fe_mpm.Simulation(
         mesh,
         points,
@@ -157,7 +166,7 @@ def test_free_fall_with_domains_is_exact():
     assert np.allclose(points.x - x0, 0.5 * g * 0.6**2, rtol=1e-10, atol=0)
     assert np.allclose(points.velocity, g * 0.6, rtol=1e-10, atol=0)
     assert np.allclose(points.acceleration, g, rtol=1e-10, atol=0)
-    assert np.allclose(points.F, np.eye(2), rtol=0, atol=1e-12)
+    assert np.allclose(points.F, np.eye(dim), rtol=0, atol=1e-12)
 
 
 def test_a_plastic_law_gathers_its_history_from_the_pieces():

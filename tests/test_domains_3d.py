@@ -165,28 +165,6 @@ def test_cook_on_tetrahedra_loses_its_drift_with_domains():
     assert abs(_cook(16, 20, True) / converged - 1) < 0.025
 
 
-def test_free_fall_on_tetrahedra_with_domains_is_exact():
-    """A block in free fall across cells: an exact discrete solution of Newmark's
-    rule for every point, which the pieces must pass through and back."""
-    mesh = create_box(MPI.COMM_SELF, [[0, 0, 0], [4, 4, 4]], [4, 4, 4], CellType.tetrahedron)
-    points = fe_mpm.seed(mesh, per_cell=4, density=1000.0)
-    points.keep(np.all(points.x[:, :2] < 1.0, axis=1) & (points.x[:, 2] > 3.0))
-    g = np.array([3.0, 1.0, -9.0])
-    sim = fe_mpm.Simulation(
-        mesh,
-        points,
-        fe_mpm.NeoHookean(1e6, 0.3, density=1000.0),
-        dynamic=True,
-        body_force=g,
-        point_domains=True,
-    )
-    x0 = points.x.copy()
-    sim.run(0.6, 6, progress=False)
-    assert np.allclose(points.x - x0, 0.5 * g * 0.6**2, rtol=1e-10, atol=0)
-    assert np.allclose(points.velocity, g * 0.6, rtol=1e-10, atol=0)
-    assert np.allclose(points.F, np.eye(3), rtol=0, atol=1e-12)
-
-
 def test_point_domains_on_tetrahedra_refuse_p2():
     cube = create_box(MPI.COMM_SELF, [[0, 0, 0], [1, 1, 1]], [1, 1, 1], CellType.tetrahedron)
     with pytest.raises(NotImplementedError, match="tetrahedra works with P1"):
