@@ -76,13 +76,13 @@ def main() -> None:
     p.add_argument("--steps", type=int, default=100)
     args = p.parse_args()
     print(f"h = {args.h}, h_far = {args.h_far}, {args.steps} steps to s/B = 2")
-    print(f"{'case':<24}{'jitter':>8}" + "".join(f"{c:>8}" for c in CENTRES) + f"{'wall s':>8}")
+    print(f"{'case':<30}{'jitter':>8}" + "".join(f"{c:>8}" for c in CENTRES) + f"{'wall s':>8}")
     for label, options in CASES:
         rows, wall = run(args.h, args.h_far, args.steps, options)
         q = np.array([r["q_over_cu"] for r in rows])
         jitter = np.abs(np.diff(q, 2)).mean()
         means = "".join(f"{m:>8.2f}" for m in window_means(rows, CENTRES))
-        print(f"{label:<24}{jitter:>8.3f}{means}{wall:>8.0f}", flush=True)
+        print(f"{label:<30}{jitter:>8.3f}{means}{wall:>8.0f}", flush=True)
 
 
 if __name__ == "__main__":

@@ -162,8 +162,8 @@ class PointDomains:
         The cells a domain may cover are those around its corners' cells; for a
         domain stretched past them, or one that reaches past the grid's edge, every
         cell whose bounding box meets the domain's. A domain that reaches past the
-        grid's edge keeps the pieces inside, and its point's volume is shared among
-        them.
+        grid's edge (at a corner, or between corners where the grid has a notch)
+        keeps the pieces inside, and its point's volume is shared among them.
 
         Raises:
             PointsOutsideError: Less than half of a domain is inside the grid.
@@ -209,8 +209,11 @@ class PointDomains:
                 f"the domain of point {p} (corners {corners[p].tolist()}) has left the "
                 f"grid ({covered[p]:.3g} of it inside); extend the grid around the body"
             )
+        # Searched everywhere, a domain still short of its area reaches past the
+        # grid's edge between its corners (a grid with a notch): like one with a
+        # corner outside, it keeps the pieces inside.
         wrong = np.abs(covered - 1.0) > COVERAGE_TOL
-        wrong &= ~partly_outside | (covered > 1.0)
+        wrong &= ~(partly_outside | short) | (covered > 1.0)
         if np.any(wrong):  # only round-off on a degenerate domain can get here
             p = int(np.flatnonzero(wrong)[0])
             raise ConvergenceError(

@@ -6,7 +6,7 @@ from mpi4py import MPI
 import meshio
 import numpy as np
 import pytest
-from dolfinx.mesh import CellType, create_box
+from dolfinx.mesh import CellType, create_box, create_submesh
 
 import fe_mpm
 from fe_mpm import meshes, scenes
@@ -330,6 +330,25 @@ def test_a_domain_partly_past_the_grid_edge_keeps_all_its_pieces_inside():
     mine = p.owner == k
     assert p.x[mine, 0].max() > 0.7
     assert p.share[mine].sum() == pytest.approx(1.0, rel=1e-12)
+
+
+def test_a_domain_across_a_notch_of_the_grid_keeps_its_pieces_inside():
+    """An L-shaped grid, and a domain with its three corners inside it that crosses
+    the missing quadrant: like a domain with a corner outside, it keeps the pieces
+    inside the grid (71 % of its area), sharing its point's volume among them."""
+    full = meshes.rectangle_mesh((0.0, 0.0), (1.0, 1.0), (4, 4))
+    middle = full.geometry.x[full.geometry.dofmaps[0]].mean(axis=1)
+    keep = np.flatnonzero(~((middle[:, 0] > 0.5) & (middle[:, 1] > 0.5))).astype(np.int32)
+    mesh = create_submesh(full, 2, keep)[0]
+    points = fe_mpm.seed(mesh)
+    tracker = Tracker(mesh)
+    domains = PointDomains(points, tracker)
+    k = int(np.argmin(np.linalg.norm(points.x - 0.4, axis=1)))
+    domains.corners[k] = [[0.2, 0.2], [0.9, 0.45], [0.45, 0.9]]
+    p = domains.pieces(tracker, points.cell)
+    mine = p.owner == k
+    assert p.share[mine].sum() == pytest.approx(1.0, rel=1e-12)
+    assert np.all(np.any(p.x[mine] < 0.5, axis=1))  # none in the missing quadrant
 
 
 def test_a_redrawn_domain_must_stay_in_the_grid():
