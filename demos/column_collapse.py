@@ -76,6 +76,11 @@ def parse_args(argv=None):
         default="lumped",
         help="mass matrix of the points (the thesis: consistent)",
     )
+    p.add_argument(
+        "--point-domains",
+        action="store_true",
+        help="convected point domains (docs/cell_crossing.md: they stop this flow short)",
+    )
     p.add_argument("--output", default="column_collapse_output", help="output folder")
     p.add_argument("--no-output", action="store_true", help="write no files")
     p.add_argument("--json", action="store_true", help="print a JSON summary as the last line")
@@ -134,7 +139,9 @@ try:
         dynamic=True,
         damping=args.damping,
         mass=args.mass,
-        points_leaving="drop",
+        # A point domain cannot leave the grid; no point has left it in these runs.
+        points_leaving="raise" if args.point_domains else "drop",
+        point_domains=args.point_domains,
         output_dir=None if args.no_output else args.output,
         output_every=max(1, int(round(t_end / args.dt)) // 40),
     )
@@ -313,6 +320,7 @@ if args.json:
                 "dt": args.dt,
                 "newton_iterations_max": max(iterations),
                 "dropped_points": sim.dropped,
+                "point_domain_resets": None if sim.domains is None else sim.domains.resets,
                 "timings": sim.timings,
                 "check_passed": passed,
             }
