@@ -13,11 +13,9 @@ The clipping is done in each cell's reference coordinates ξ (the cell is then
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
-from fe_mpm.tet_clipping import clip_to_reference_tet
+from fe_mpm.tet_clipping import clip_to_reference_tet, tet_volumes
 
 
 def _clip(polygon: np.ndarray, count: np.ndarray, distance: np.ndarray, size: int):
@@ -62,8 +60,9 @@ def simplex_volumes(corners: np.ndarray) -> np.ndarray:
 
     Triangles (d = 2) or tetrahedra (d = 3), either orientation.
     """
-    d = corners.shape[2]
-    return np.abs(np.linalg.det(corners[:, 1:] - corners[:, :1])) / math.factorial(d)
+    if corners.shape[2] == 3:
+        return tet_volumes(corners)
+    return 0.5 * np.abs(np.linalg.det(corners[:, 1:] - corners[:, :1]))
 
 
 def area_and_centroid(polygon: np.ndarray, count: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

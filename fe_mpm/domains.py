@@ -50,7 +50,7 @@ from fe_mpm.markers import Markers
 from fe_mpm.particles import MaterialPoints
 from fe_mpm.point_update import apply_update
 from fe_mpm.step_forms import PointUpdate
-from fe_mpm.tilings import initial_domains
+from fe_mpm.tilings import initial_domains, shrunk_cells
 from fe_mpm.tracker import Tracker
 
 #: A domain's pieces must add up to its area to this relative tolerance.
@@ -182,26 +182,24 @@ class PointDomains:
         owner, column = np.nonzero((candidates >= 0) & ~repeated)
         cell = candidates[owner, column]
         partly_outside = np.any(outside.reshape(n, v), axis=1)
+        bounds = corners.min(axis=1), corners.max(axis=1)
         # The cells around a last cell may miss where a domain crosses the grid's
         # edge: try every cell for those (few), so that what is missing is outside.
-        owner, cell = self._search_everywhere(corners, partly_outside, owner, cell)
-        area, rule = self._overlaps(corners, tracker, owner, cell)
+        if np.any(partly_outside):
+            everywhere = self._cells_meeting(bounds, partly_outside)
+            owner, cell = _replaced(partly_outside, (owner, cell), everywhere)
+        area, rule = self._overlaps(corners, bounds, tracker, owner, cell)
         domain_area = simplex_volumes(corners)
         covered = np.bincount(owner, weights=area, minlength=n) / domain_area
         # A domain stretched past the cells around its corners (a spreading flow)
         # misses the cells between them: try every cell for those too.
         short = (covered < 1.0 - COVERAGE_TOL) & ~partly_outside
         if np.any(short):
-            empty = owner[:0]
-            more_owner, more_cell = self._search_everywhere(corners, short, empty, empty)
-            more_area, more_rule = self._overlaps(corners, tracker, more_owner, more_cell)
-            keep = ~short[owner]
-            owner = np.concatenate([owner[keep], more_owner])
-            order = np.argsort(owner, kind="stable")
-            owner = owner[order]
-            cell = np.concatenate([cell[keep], more_cell])[order]
-            area = np.concatenate([area[keep], more_area])[order]
-            rule = np.concatenate([rule[keep], more_rule])[order]
+            more_owner, more_cell = self._cells_meeting(bounds, short)
+            more = self._overlaps(corners, bounds, tracker, more_owner, more_cell)
+            owner, cell, area, rule = _replaced(
+                short, (owner, cell, area, rule), (more_owner, more_cell, *more)
+            )
             covered = np.bincount(owner, weights=area, minlength=n) / domain_area
         if np.any(covered < MIN_INSIDE):
             p = int(np.argmin(covered))
@@ -245,41 +243,37 @@ class PointDomains:
             corner_bary=tracker.barycentric(corners.reshape(-1, g), corner_cell),
         )
 
-    def _search_everywhere(
-        self, corners: np.ndarray, which: np.ndarray, owner: np.ndarray, cell: np.ndarray
+    def _cells_meeting(
+        self, bounds: tuple[np.ndarray, np.ndarray], which: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray]:
-        """The (domain, cell) pairs, those of the domains ``which`` (n,) replaced.
+        """The pairs (domain, cell) of the domains ``which`` (n,) with every cell.
 
-        They are replaced by every cell whose bounding box meets theirs; the pairs
-        come back sorted by domain.
+        Every cell whose bounding box meets the domain's (``bounds``: the domains'
+        lower and upper corners); the pairs come sorted by domain.
         """
-        if not np.any(which):
-            return owner, cell
-        low, high = corners.min(axis=1), corners.max(axis=1)
-        box_low, box_high = self._boxes
-        extra = [
-            (d, np.flatnonzero(np.all((box_low <= high[d]) & (box_high >= low[d]), axis=1)))
+        (low, high), (box_low, box_high) = bounds, self._boxes
+        found = [
+            np.flatnonzero(np.all((box_low <= high[d]) & (box_high >= low[d]), axis=1))
             for d in np.flatnonzero(which)
         ]
-        keep = ~which[owner]
-        owner = np.concatenate([owner[keep]] + [np.full(c.size, d) for d, c in extra])
-        cell = np.concatenate([cell[keep]] + [c for _, c in extra])
-        order = np.argsort(owner, kind="stable")
-        return owner[order], cell[order]
+        owner = np.repeat(np.flatnonzero(which), [c.size for c in found])
+        return owner, np.concatenate(found)
 
     def _overlaps(
-        self, corners: np.ndarray, tracker: Tracker, owner: np.ndarray, cell: np.ndarray
+        self,
+        corners: np.ndarray,
+        bounds: tuple[np.ndarray, np.ndarray],
+        tracker: Tracker,
+        owner: np.ndarray,
+        cell: np.ndarray,
     ) -> tuple[np.ndarray, np.ndarray]:
         """The overlap of each (domain, cell) pair: its area in m² (m³) and its rule.
 
-        The pairs come back as given (``owner``, ``cell`` are not changed); pairs that
-        cannot overlap get area 0 without being cut.
+        The pairs keep their order; pairs that cannot overlap get area 0 without
+        being cut. ``bounds``: the domains' lower and upper corners.
         """
         n, v, g = corners.shape
-        area = np.zeros(len(owner))
-        rule = np.zeros((len(owner), 1 if self.degree == 1 or g == 3 else 3, g))
-        low, high = corners.min(axis=1), corners.max(axis=1)
-        box_low, box_high = self._boxes
+        (low, high), (box_low, box_high) = bounds, self._boxes
         # Only the cells whose bounding boxes meet the domain's can overlap it, and
         # not a cell whose vertices all lie beyond one face of the domain (most of the
         # rest in 3D, where cutting is dear; a cell beyond one of its own faces is cut
@@ -288,7 +282,10 @@ class PointDomains:
         meets[meets] = _may_overlap(corners, tracker.cell_vertices, owner[meets], cell[meets])
         o, c = owner[meets], cell[meets]
         xi = tracker.barycentric(corners[o].reshape(-1, g), np.repeat(c, v))
-        area[meets], rule[meets] = piece_rule(xi.reshape(-1, v, v)[..., 1:], self.degree)
+        met_area, met_rule = piece_rule(xi.reshape(-1, v, v)[..., 1:], self.degree)
+        area = np.zeros(len(owner))
+        rule = np.zeros((len(owner), *met_rule.shape[1:]))
+        area[meets], rule[meets] = met_area, met_rule
         area *= math.factorial(g) * tracker.volumes[cell]  # reference → physical
         return area, rule
 
@@ -328,12 +325,8 @@ class PointDomains:
         if bad.size == 0:
             return False
         own = tracker.cell_vertices[points.cell[bad]]
-        centre = own.mean(axis=1, keepdims=True)
-        area = simplex_volumes(self.corners[bad])
-        cell_area = tracker.volumes[points.cell[bad]]
+        redrawn = shrunk_cells(points.x[bad], simplex_volumes(self.corners[bad]), own)
         g = own.shape[2]
-        scale = ((area / cell_area) ** (1.0 / g))[:, None, None]
-        redrawn = points.x[bad, None, :] + scale * (own - centre)
         # A redrawn domain that would reach past the grid's edge keeps its old shape.
         inside = tracker.locate(redrawn.reshape(-1, g), np.repeat(points.cell[bad], g + 1)) >= 0
         inside = np.all(inside.reshape(-1, g + 1), axis=1)
@@ -465,6 +458,20 @@ def _heaviest(pieces: Pieces, n: int) -> np.ndarray:
     """The index of each of the ``n`` points' heaviest piece (n,)."""
     by_weight = np.lexsort((-pieces.share, pieces.owner))  # by point, the heaviest first
     return by_weight[np.searchsorted(pieces.owner[by_weight], np.arange(n))]
+
+
+def _replaced(
+    which: np.ndarray, old: tuple[np.ndarray, ...], new: tuple[np.ndarray, ...]
+) -> tuple[np.ndarray, ...]:
+    """Per-pair arrays with the pairs of the domains ``which`` (n,) replaced.
+
+    ``old`` and ``new`` hold the same arrays, the pairs' domains first; the new ones
+    are those of the domains ``which``. The pairs come back sorted by domain.
+    """
+    keep = ~which[old[0]]
+    merged = [np.concatenate([a[keep], b]) for a, b in zip(old, new, strict=True)]
+    order = np.argsort(merged[0], kind="stable")
+    return tuple(a[order] for a in merged)
 
 
 def _may_overlap(

@@ -122,6 +122,12 @@ def equal_tiling(k: int, dim: int = 2) -> np.ndarray | None:
     return None
 
 
+def shrunk_cells(x: np.ndarray, size: np.ndarray, own: np.ndarray) -> np.ndarray:
+    """Cells ``own`` (n, d + 1, d) shrunk to ``size`` (n,) in m² (m³), centred on ``x`` (n, d)."""
+    scale = (size / simplex_volumes(own)) ** (1.0 / x.shape[1])
+    return x[:, None, :] + scale[:, None, None] * (own - own.mean(axis=1, keepdims=True))
+
+
 def initial_domains(points: MaterialPoints, cell_vertices: np.ndarray) -> np.ndarray:
     """Every point's first domain, a simplex (n, d + 1, d) in m; tiled points move.
 
@@ -138,11 +144,8 @@ def initial_domains(points: MaterialPoints, cell_vertices: np.ndarray) -> np.nda
     their volume and centred on them.
     """
     x, volume, cell = points.x, points.volume, points.cell
-    own = cell_vertices[cell]
-    centre = own.mean(axis=1, keepdims=True)
-    cell_area = simplex_volumes(own)
-    shrink = (volume / cell_area) ** (1.0 / x.shape[1])
-    corners = x[:, None, :] + shrink[:, None, None] * (own - centre)
+    cell_area = simplex_volumes(cell_vertices[cell])
+    corners = shrunk_cells(x, volume, cell_vertices[cell])
     order = np.argsort(cell, kind="stable")
     cells, starts, counts = np.unique(cell[order], return_index=True, return_counts=True)
     for k in np.unique(counts):
