@@ -252,6 +252,13 @@ class PointDirichlet:
             None constrains all (a rough footing).
         penalty: Penalty stiffness β (Pa/m), > 0. About 10³ E/h (E Young's modulus,
             h cell size) keeps the gap negligible and the tangent well conditioned.
+        reach: How far outside the material's cells a point still acts, in
+            barycentric units of the nearest occupied cell, ≥ 0: one number or one
+            per point. A body's surface lies between its points, often in a cell
+            whose points have moved on, so a point up to half a cell out (0.5, the
+            default) reads that cell's field extrapolated. Points inside a rigid
+            body need 0: one read half a cell out holds the cell's gradient too,
+            which stiffens the soil under a footing (its elastic slope by 13 %).
     """
 
     name: str
@@ -260,6 +267,7 @@ class PointDirichlet:
     value: Callable[[float], Sequence[float]]
     penalty: float
     components: tuple[int, ...] | None = None
+    reach: float | np.ndarray = 0.5
 
     def __post_init__(self) -> None:
         owner = f"PointDirichlet {self.name!r}"
@@ -278,12 +286,19 @@ class PointDirichlet:
                     f"such as (1,), got {reprlib.repr(components)}"
                 )
             components = tuple(check_int(owner, "components", c, lo=0, hi=2) for c in components)
+        reach = check_finite(owner, "reach", self.reach, what="point")
+        if reach.ndim > 1 or reach.size not in (1, x.shape[0]) or np.any(reach < 0):
+            raise ValueError(
+                f"{owner}: reach must be one number ≥ 0 or one per point (shape "
+                f"({x.shape[0]},)), got {reprlib.repr(self.reach)}"
+            )
         # object.__setattr__: the dataclass is frozen; keep the checked arrays and floats.
         for name, value in (
             ("x", x),
             ("weight", weight),
             ("penalty", penalty),
             ("components", components),
+            ("reach", np.broadcast_to(reach, (x.shape[0],)).copy()),
         ):
             object.__setattr__(self, name, value)
 

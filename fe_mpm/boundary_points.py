@@ -37,7 +37,7 @@ class BoundaryPoints:
 
     def __init__(self, conditions: Sequence[PointDirichlet | PointTraction], gdim: int):
         self.conditions = list(conditions)
-        xs, weights, owners, stiffness = [], [], [], []
+        xs, weights, owners, stiffness, reaches = [], [], [], [], []
         for i, c in enumerate(self.conditions):
             kind = type(c).__name__
             x = np.asarray(c.x, dtype=np.float64)
@@ -55,7 +55,9 @@ class BoundaryPoints:
             owners.append(np.full(x.shape[0], i))
             if isinstance(c, PointTraction):
                 stiffness.append(np.zeros((x.shape[0], gdim)))
+                reaches.append(np.full(x.shape[0], SNAP_REACH))
                 continue
+            reaches.append(c.reach)
             check_range(f"PointDirichlet {c.name!r}", "penalty", c.penalty, lo=0.0, lo_open=True)
             mask = np.zeros(gdim)
             for comp in range(gdim) if c.components is None else c.components:
@@ -67,6 +69,7 @@ class BoundaryPoints:
         self.weight = np.concatenate(weights)
         self.owner = np.concatenate(owners)
         self.stiffness = np.vstack(stiffness)
+        self.reach = np.concatenate(reaches)
         self.loaded = np.array([isinstance(c, PointTraction) for c in self.conditions])[self.owner]
 
     def __len__(self) -> int:
@@ -159,7 +162,7 @@ class BoundaryPointStep:
         occupied[occupied_cells] = True
         # The body's surface lies between its points, often in a cell whose points
         # have moved on: read the field of an occupied neighbour, up to half a cell out.
-        cells = tracker.snap_to(pp.x, cells, occupied, tol=SNAP_REACH)
+        cells = tracker.snap_to(pp.x, cells, occupied, tol=pp.reach)
         self._active = cells >= 0
         idle = ~self._active & pp.loaded
         if np.any(idle) and not self._warned:

@@ -89,7 +89,11 @@ class Tracker:
         return cells
 
     def snap_to(
-        self, x: np.ndarray, cells: np.ndarray, allowed: np.ndarray, tol: float = 1e-6
+        self,
+        x: np.ndarray,
+        cells: np.ndarray,
+        allowed: np.ndarray,
+        tol: float | np.ndarray = 1e-6,
     ) -> np.ndarray:
         """Move points whose cell is not ``allowed`` to an allowed cell touching it, if close.
 
@@ -102,12 +106,15 @@ class Tracker:
             x: Points (n, g).
             cells: Their cells (n,), from :meth:`locate`.
             allowed: Boolean mask over all cells.
-            tol: How far outside an allowed cell a point may be, in barycentric units.
+            tol: How far outside an allowed cell a point may be, in barycentric
+                units: one number or one per point (n,); a point on a facet (1e-6
+                out) always counts.
 
         Returns:
             Cells (n,): the allowed cell, or -1 where none is close enough.
         """
         out = np.where(allowed[np.maximum(cells, 0)] & (cells >= 0), cells, -1).astype(np.int32)
+        tol = np.maximum(np.broadcast_to(tol, cells.shape), 1e-6)
         owner, starts = self._cells_of_nodes()
         for i in np.flatnonzero((out < 0) & (cells >= 0)):
             nodes = self._nodes_of[cells[i]]
@@ -119,7 +126,7 @@ class Tracker:
                 continue
             lam = self.barycentric(np.repeat(x[i : i + 1], candidates.size, axis=0), candidates)
             best = np.argmax(lam.min(axis=1))
-            if lam[best].min() >= -tol:
+            if lam[best].min() >= -tol[i]:
                 out[i] = candidates[best]
         return out
 

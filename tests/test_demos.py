@@ -184,46 +184,6 @@ def test_strip_footing_contract_and_u_versus_up_stress(tmp_path):
     assert up["check_passed"] and not u["check_passed"] and u["check_error"] > 0.15
 
 
-@pytest.mark.slow
-def test_strip_footing_prandtl_plateau_rough_and_smooth(tmp_path):
-    """u-p, h = 0.1 B near the footing, 20 steps to s/B = 0.1 (16284 points).
-
-    With E/c_u = 100 the soil is soft: q/c_u passes 2 + π near s/B = 0.075 and
-    the issue's band 5.14 × [0.98, 1.10] holds from s/B = 0.08 to 0.1, for the
-    rough footing (measured 5.27–5.49; 5.50 at s/B = 0.1 with 200 steps of 10 mm)
-    and for the smooth one (5.33–5.47). On weightless Tresca soil both have the
-    same small-strain limit, 2 + π (Prandtl, Hill): the plateau means agree
-    within 2 % (measured 5.372 and 5.393, 0.4 %).
-    """
-    means = []
-    for roughness in ((), ("--smooth",)):
-        out = _last_json(
-            run_demo(
-                "strip_footing.py",
-                "--formulation",
-                "up",
-                "--steps",
-                "20",
-                "--settlement",
-                "0.1",
-                "--h",
-                "0.1",
-                "--h-far",
-                "0.4",
-                "--no-output",
-                "--json",
-                *roughness,
-                cwd=tmp_path,
-            )
-        )
-        s, q = np.array(out["settlement_over_B"]), np.array(out["q_over_cu"]) / (2 + np.pi)
-        plateau = q[s >= 0.08 - 1e-9]
-        assert plateau.size >= 4
-        assert np.all((plateau > 0.98) & (plateau < 1.10)), (roughness, plateau)
-        means.append(plateau.mean())
-    assert abs(means[1] / means[0] - 1) < 0.02, means
-
-
 def _coarse_footing_to_2B(tmp_path, steps: int) -> dict:
     """u-p on the coarse grid (h = 0.2 B) to s/B = 2 in ``steps`` steps: the demo's JSON."""
     return _last_json(

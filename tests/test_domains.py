@@ -367,14 +367,19 @@ def test_a_redrawn_domain_must_stay_in_the_grid():
 
 
 @pytest.mark.slow
-def test_the_footing_jitter_falls_threefold_with_domains_and_a_soft_dense_base():
+def test_the_footing_jitter_falls_with_domains_and_a_soft_dense_base():
     """The strip footing (u-p, h = 0.2 B, 30 steps of 20 mm to s/B = 0.6): the mean
-    absolute second difference of q/c_u over the steps is 0.440 with standard MPM
-    and 0.118 (3.7-fold less) with point domains, 32 penalty points per cell width on
-    the footing's base, no body points and a penalty of 50 E/h (a twentieth of the
-    default; the gap stays 2 % of a step). Unchanged to four digits when E moves by
-    1e-7. The full run (100 steps to s/B = 2): 0.562 → 0.119,
-    ``benchmarks/footing_jitter.py``."""
+    absolute second difference of q/c_u over the steps is 0.205 with standard MPM
+    and 0.159 (1.29-fold less) with point domains, 32 penalty points per cell width
+    on the footing's base, no body points and a penalty of 50 E/h (a twentieth of the
+    default; the gap stays 2 % of a step). Standard MPM unchanged to eight digits
+    when E moves by 1e-7. Most of the jitter measured when the cell-crossing issue
+    was filed came from the footing itself: standard MPM gave 0.440 here, and 0.313
+    once the footing's body points stopped acting through the soil's surface
+    (``PointDirichlet(reach=0)``), 0.205 once its edge lay on a grid line
+    (``edge_line``); the domains' run gave 0.118 with the first footing (3.7-fold
+    less than 0.440) and 0.159 now, 2.8-fold less than 0.440. The full run
+    (100 steps to s/B = 2): ``benchmarks/footing_jitter.py``."""
 
     def jitter(**options):
         sim = scenes.strip_footing("up", h=0.2, h_far=0.5, settlement=0.6, **options)
@@ -386,4 +391,4 @@ def test_the_footing_jitter_falls_threefold_with_domains_and_a_soft_dense_base()
     smooth = jitter(
         point_domains=True, base_points_per_cell=32, footing_thickness=0.0, penalty=50 * 1e4 / 0.2
     )
-    assert standard / smooth > 3.0
+    assert standard / smooth > 1.2

@@ -183,3 +183,51 @@ def test_the_footing_takes_more_base_points_when_asked():
     for bad, error in ((0, ValueError), (2.5, TypeError)):
         with pytest.raises(error, match="base_points_per_cell"):
             scenes.strip_footing("up", h=0.2, base_points_per_cell=bad)
+
+
+def test_the_footing_grid_is_finer_along_its_edges_path():
+    """``edge_size=0.05`` on h = 0.2: the cells around the footing's edge (B/2, 0)
+    and down its path (``edge_depth``) are h/4 across, those elsewhere in the
+    refined zone are not, the path is a grid line (``edge_line``), and the soil
+    still tiles [0, 5] x [−5, 0]. The scene
+    spaces the base points by the finer cells (2 per 0.05: 20 on the half-width)
+    and scales its penalty by them. Sizes out of range are refused by name."""
+    from fe_mpm import scenes
+
+    scene = meshes.strip_footing(
+        1.0, h=0.2, h_far=0.5, edge_size=0.05, edge_depth=0.5, edge_line=True
+    )
+    mesh = scene.mesh
+    tdim = mesh.topology.dim
+    cells = np.arange(mesh.topology.index_map(tdim).size_local, dtype=np.int32)
+    size = mesh.h(tdim, cells)
+    centre = dolfinx.mesh.compute_midpoints(mesh, tdim, cells)[:, :2]
+    on_path = (np.abs(centre[:, 0] - 0.5) < 0.1) & (centre[:, 1] > -0.6) & (centre[:, 1] < 0.1)
+    elsewhere = (centre[:, 0] < 0.5) & (centre[:, 1] < -1.5) & (centre[:, 1] > -2.5)
+    assert size[on_path].max() < 0.05 * 1.6, size[on_path].max()
+    assert size[elsewhere].min() > 0.2 * 0.8, size[elsewhere].min()
+    # The edge's path x = B/2 is a grid line, so the footing ends on a node.
+    x = mesh.geometry.x
+    column = np.isclose(x[:, 0], 0.5, atol=1e-12) & (x[:, 1] <= 1e-12) & (x[:, 1] >= -2.9)
+    assert np.any(np.isclose(x[column, 1], 0.0, atol=1e-12))
+    assert np.diff(np.sort(x[column, 1])).max() < 0.2 * 1.2
+    soil = np.concatenate(
+        [scene.cell_tags.find(meshes.FOOTING_SOIL_NEAR), scene.cell_tags.find(meshes.FOOTING_SOIL)]
+    )
+    vertices = mesh.geometry.x[dolfinx.mesh.entities_to_geometry(mesh, tdim, soil)][:, :, :2]
+    edges = vertices[:, 1:] - vertices[:, :1]
+    area = 0.5 * np.abs(np.linalg.det(edges)).sum()
+    assert area == pytest.approx(25.0, rel=1e-12)
+
+    sim = scenes.strip_footing("up", h=0.2, h_far=0.5, edge_size=0.05, settlement=0.5)
+    footing = sim._boundary.points
+    base = np.isclose(footing.x0[:, 1], 0.0)
+    assert base.sum() == 20 and footing.weight[base].sum() == pytest.approx(0.5)
+    assert footing.stiffness.max() == pytest.approx(1e3 * 1e4 / 0.05)
+    for bad, name in (
+        (dict(edge_size=0.3), "edge_size"),
+        (dict(edge_size=0.05, edge_radius=0.0), "edge_radius"),
+        (dict(edge_size=0.05, edge_depth=-1.0), "edge_depth"),
+    ):
+        with pytest.raises(ValueError, match=name):
+            meshes.strip_footing(1.0, h=0.2, **bad)

@@ -22,19 +22,25 @@ from fe_mpm.meshes import rectangle_mesh
 E, NU, STRETCH = 10.0, 0.3, 0.9
 
 
-def _platen_run(components=(1,), penalty=1e5, formulation="u", steps=4):
+def _platen_run(components=(1,), penalty=1e5, formulation="u", steps=4, above=None):
+    """The platen; ``above``: the reach of a second row of its points 0.1 above it."""
     mesh = rectangle_mesh((0.0, 0.0), (1.4, 1.2), (7, 6))
     points = fe_mpm.seed(mesh, per_cell=3)
     points.keep((points.x[:, 0] < 1.0) & (points.x[:, 1] < 1.0))
     n = 20
     xb = np.column_stack([(np.arange(n) + 0.5) / n, np.ones(n)])
+    reach = 0.5
+    if above is not None:  # half a cell above the body's top
+        xb = np.vstack([xb, xb + [0.0, 0.1]])
+        reach = np.r_[np.full(n, 0.5), np.full(n, above)]
     platen = fe_mpm.PointDirichlet(
         "platen",
         xb,
-        np.full(n, 1.0 / n),
+        np.full(len(xb), 1.0 / n),
         lambda t: np.array([0.0, (STRETCH - 1) * t]),
         penalty=penalty,
         components=components,
+        reach=reach,
     )
     sim = fe_mpm.Simulation(
         mesh,
@@ -89,6 +95,23 @@ def test_platen_gap_falls_like_one_over_the_penalty_and_does_not_accumulate():
     assert gaps[1e5] < gaps[1e3] / 50
 
 
+def test_points_inside_a_rigid_body_act_only_where_material_is():
+    """A footing's body points: read half a cell out of the body, they would hold
+    its cells' gradient too.
+
+    A second row of platen points half a cell above the body's top, in the empty
+    cells there: with ``reach=0`` it takes no part, and the run is the platen's
+    own to round-off; with the surface's ``reach=0.5`` it reads the top cells'
+    field extrapolated and stiffens them (measured: the force +18 %; the same
+    to every digit with reach 0).
+    """
+    alone = _platen_run()[2][-1].reactions["platen"][1]
+    inert = _platen_run(above=0.0)[2][-1].reactions["platen"][1]
+    reaching = _platen_run(above=0.5)[2][-1].reactions["platen"][1]
+    assert inert == pytest.approx(alone, rel=1e-9)
+    assert abs(reaching / alone - 1) > 0.01, (reaching, alone)
+
+
 @pytest.mark.parametrize(
     "bad, match",
     [
@@ -96,6 +119,8 @@ def test_platen_gap_falls_like_one_over_the_penalty_and_does_not_accumulate():
         (dict(weight=np.zeros(2)), "every weight must be > 0"),
         (dict(x=np.zeros((2, 3))), "x must have shape"),
         (dict(components=(2,)), "components must lie in"),
+        (dict(reach=-0.1), "reach must be one number ≥ 0 or one per point"),
+        (dict(reach=[0.5, 0.5, 0.5]), "reach must be one number ≥ 0 or one per point"),
     ],
 )
 def test_bad_point_conditions_are_named(bad, match):
