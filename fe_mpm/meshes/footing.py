@@ -68,10 +68,10 @@ def strip_footing(
         h: Cell size in the refined zone and the margin above it (m); 0.05 by default.
         h_far: Cell size far from it (m); ``h`` by default (a uniform grid).
         edge_size: Cell size at the footing's edge (m), ≤ h; None: h. The stresses
-            are singular at the edge, and on P1 cells of h = 0.1 B the collapse load
-            comes out 13 % above 2 + π; cells of h/4 there bring it within 3 %
-            (``benchmarks/footing_prandtl.py``), as finite element analyses of
-            Prandtl's footing refine at its edge.
+            are singular at the edge, and on uniform P1 cells of h = 0.1 B the
+            collapse load comes out 12.5 % above 2 + π; cells of h/4 there bring it
+            to 0.3–3.8 % (``benchmarks/footing_prandtl.py``), as finite element
+            analyses of Prandtl's footing refine at its edge.
         edge_radius: Half-width of the zone of ``edge_size`` cells around the edge
             (m); 0.4 B by default. The size grows back to h over as far again.
         edge_depth: How far down the edge will travel (m), ≥ 0: the zone reaches
