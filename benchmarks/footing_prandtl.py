@@ -94,7 +94,7 @@ def plot(rows: list[dict], cases: list[tuple[int, bool]], path: Path) -> None:
     plt = pyplot()
     if plt is None:
         return
-    fig, ax = plt.subplots(figsize=(5.5, 4))
+    fig, ax = plt.subplots(figsize=(8, 4))
     for E_over_cu, smooth in cases:
         for edge, style in ((False, "o-"), (True, "s--")):
             sel = series(rows, E_over_cu, smooth, edge)
@@ -109,7 +109,10 @@ def plot(rows: list[dict], cases: list[tuple[int, bool]], path: Path) -> None:
     ax.set_xlabel("h / B near the footing")
     ax.set_ylabel("|q / (2 + π) c_u − 1|")
     ax.axhline(0.03, color="k", lw=0.8, ls=":")
-    ax.legend(fontsize=7)
+    ticks = [0.025, 0.05, 0.1, 0.2]
+    ax.set_xticks(ticks, [str(t) for t in ticks])
+    ax.minorticks_off()
+    ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.02, 0.5))
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     print(f"wrote {path}")

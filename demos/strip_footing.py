@@ -205,22 +205,24 @@ if not args.no_output:
 #
 # On weightless Tresca soil the small-strain bearing capacity is q = (2 + π) c_u
 # (Prandtl; the same for a rough and a smooth footing, Hill). With E/c_u = 100 the
-# soil is soft: q/c_u reaches 2 + π near s/B = 0.1, and the footing then embeds and
-# q keeps rising. The check takes the mean of q/c_u over the steps with
-# 0.08 ≤ s/B ≤ 0.1, where the capacity is mobilised but the footing has barely
-# embedded. Measured (u-p, 10 mm steps): −1.9 % on the thesis grid (h = 0.05 B, as
-# by default: still rising through 2 + π there), +0.3 % (rough) and −0.7 % (smooth)
-# on h = 0.1 B, +9.4 % and +8.4 % on the coarse grid (h = 0.2 B) the tests use.
-# The u form locks and overshoots by about 65 %. Softer soil (E/c_u < 100) reaches
-# 2 + π later, and a run with no step in the window cannot show it; those are not
+# soil is soft: q/c_u reaches 2 + π near s/B = 0.1 on the thesis grid, and the
+# footing then embeds and q keeps rising. The check takes the mean of q/c_u over the
+# steps with 0.1 ≤ s/B ≤ 0.15, where the capacity is mobilised and the footing has
+# embedded by at most 0.15 B (Skempton's embedded factor: +3 %). Measured (u-p, 200
+# steps to 2B): +1.9 % on the thesis grid (h = 0.05 B, as by default), +5.0 % on
+# h = 0.1 B and +9.6 % on h = 0.2 B, falling with h. (Over 0.08–0.1, the window
+# used before the footing's body points stopped stiffening the soil, the thesis grid
+# is still mobilising: −5.3 %.) The u form locks and overshoots by about 65 %.
+# Softer soil (E/c_u < 100) reaches 2 + π later, and a run with no step in the
+# window cannot show it; those are not
 # checked. Stiff soil shows the collapse load itself: with E/c_u = 3000,
-# `benchmarks/footing_prandtl.py` measures 1.128 × (2 + π) on h = 0.1 B and 1.025
+# `benchmarks/footing_prandtl.py` measures 1.125 × (2 + π) on h = 0.1 B and 1.003
 # with cells of h/4 at the footing's edge, where the stresses are singular
 # (`--edge-size`).
 
 # +
 #: Window of settlements s/B over which q/c_u is averaged.
-WINDOW = (0.08, 0.1)
+WINDOW = (0.1, 0.15)
 #: Band for that mean over 2 + π: from 5 % below (the soil's elastic share on fine
 #: grids) to 15 % above (embedment and the coarse grid's overestimate).
 LOWER, UPPER = -0.05, 0.15
@@ -266,5 +268,5 @@ if args.json:
         )
     )
 if not passed:
-    sys.exit(f"strip_footing.py: q/c_u near s/B = 0.1 is {100 * check_error:+.1f} % from 2 + π")
+    sys.exit(f"strip_footing.py: q/c_u over s/B = 0.1–0.15 is {100 * check_error:+.1f} % off 2 + π")
 # -
