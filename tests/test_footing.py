@@ -40,6 +40,7 @@ def collapse_load(h: float, smooth: bool = False, E_factor: float = 1.0) -> floa
         h_far=0.2,
         near_depth=1.0,
         points_near=3,
+        points_far=1,  # elastic there: the test's time, not its answer (1.0007 against 1.0030)
         settlement=settlement,
         smooth=smooth,
         edge_size=h / 4,
@@ -54,8 +55,8 @@ def collapse_load(h: float, smooth: bool = False, E_factor: float = 1.0) -> floa
 @pytest.mark.slow
 def test_rough_footing_reaches_prandtls_load_within_3_percent_and_falls_as_h_halves():
     """Cells of h/4 within 0.4 B of the edge: 1.0559 × (2 + π) on h = 0.2 B and
-    1.0030 on h = 0.1 B; 1.0559 and 1.0002 when E moves by 1e-7. Halving h must cut
-    the error at least twofold (measured 19-fold)."""
+    1.0007 on h = 0.1 B; 1.0559 and 1.0037 when E moves by 1e-7. Halving h must cut
+    the error at least twofold (measured 80-fold)."""
     coarse, fine = collapse_load(0.2), collapse_load(0.1)
     assert 1.0 < coarse < 1.1, coarse
     assert 0.98 < fine < 1.03, fine
@@ -65,6 +66,6 @@ def test_rough_footing_reaches_prandtls_load_within_3_percent_and_falls_as_h_hal
 @pytest.mark.slow
 def test_smooth_footing_reaches_prandtls_load_within_3_percent():
     """Hill's smooth footing, h = 0.1 B with cells of 0.025 B within 0.4 B of the
-    edge: 1.0229 × (2 + π); 1.0215 when E moves by 1e-7."""
+    edge: 1.0213 × (2 + π); 1.0203 when E moves by 1e-7."""
     q = collapse_load(0.1, smooth=True)
     assert 0.98 < q < 1.03, q
