@@ -180,7 +180,7 @@ def strip_footing(
         edge_size=edge_size,
         edge_radius=edge_radius,
         edge_line=edge_line,
-        edge_depth=0.0 if edge_size is None else min(settlement, 0.9 * (near_depth or 3 * B)),
+        edge_depth=0.0 if edge_size is None else settlement,
     )
     near = scene.cell_tags.find(meshes.FOOTING_SOIL_NEAR)
     far = scene.cell_tags.find(meshes.FOOTING_SOIL)
@@ -192,7 +192,7 @@ def strip_footing(
     x_body, w_body = meshes.footing_points(B, n, thickness)
     body = x_body[:, 1] > 0.0
     finest = h if edge_size is None else edge_size
-    x_b, w_b = meshes.footing_points(B, max(1, max(4, int(round(B / finest))) * per_cell // 2))
+    x_b, w_b = meshes.footing_points(B, max(4, int(round(B / finest))) * per_cell // 2)
     x_f, w_f = np.concatenate([x_b, x_body[body]]), np.concatenate([w_b, w_body[body]])
     footing = PointDirichlet(
         "footing",

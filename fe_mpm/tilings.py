@@ -144,7 +144,6 @@ def initial_domains(points: MaterialPoints, cell_vertices: np.ndarray) -> np.nda
     their volume and centred on them.
     """
     x, volume, cell = points.x, points.volume, points.cell
-    cell_area = simplex_volumes(cell_vertices[cell])
     corners = shrunk_cells(x, volume, cell_vertices[cell])
     order = np.argsort(cell, kind="stable")
     cells, starts, counts = np.unique(cell[order], return_index=True, return_counts=True)
@@ -156,7 +155,8 @@ def initial_domains(points: MaterialPoints, cell_vertices: np.ndarray) -> np.nda
         members = order[starts[group][:, None] + np.arange(k)]  # (cells, k) point indices
         # Only a cell its points fill (their volumes add up to its area) is tiled: a
         # body trimmed from a seeded grid leaves cells with some of their points.
-        full = np.abs(volume[members].sum(axis=1) / cell_area[members[:, 0]] - 1.0) < FULL_TOL
+        area = simplex_volumes(cell_vertices[cells[group]])
+        full = np.abs(volume[members].sum(axis=1) / area - 1.0) < FULL_TOL
         group, members = group[full], members[full]
         if group.size == 0:
             continue

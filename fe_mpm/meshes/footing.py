@@ -74,8 +74,8 @@ def strip_footing(
             analyses of Prandtl's footing refine at its edge.
         edge_radius: Half-width of the zone of ``edge_size`` cells around the edge
             (m); 0.4 B by default. The size grows back to h over as far again.
-        edge_depth: How far down the edge will travel (m), ≥ 0: the zone reaches
-            this much deeper, so the edge stays in it.
+        edge_depth: How far down the edge will travel (m), from 0 to ``depth``: the
+            zone reaches this much deeper, so the edge stays in it.
         edge_line: Make the edge's path, x = B/2 through the margin and the refined
             zone, a grid line. The footing then ends on grid nodes at every
             settlement, whatever the number of its base points; otherwise the cell
@@ -131,7 +131,7 @@ def strip_footing(
                 hi=B / 2,
                 lo_open=True,
             ),
-            check_range("strip_footing", "edge_depth", edge_depth, lo=0.0, hi=near_depth),
+            check_range("strip_footing", "edge_depth", edge_depth, lo=0.0, hi=depth),
         )
     with gmsh_session("strip_footing") as model:
         if comm.rank == 0:
