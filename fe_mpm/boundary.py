@@ -17,6 +17,11 @@ import numpy as np
 from fe_mpm._dolfinx import dolfinx
 from fe_mpm.checks import check_finite, check_int, check_range
 
+#: A boundary point in an empty cell reads an occupied neighbour's field up to this
+#: far outside it (the least barycentric coordinate there): half a cell. The default
+#: of ``PointDirichlet(reach=)``, and the reach of every ``PointTraction`` point.
+SNAP_REACH = 0.5
+
 Where = int | Callable[[np.ndarray], np.ndarray]
 Value = float | Sequence[float] | Callable[[float], float | Sequence[float]]
 Profile = Callable[[np.ndarray, float], np.ndarray]
@@ -267,7 +272,7 @@ class PointDirichlet:
     value: Callable[[float], Sequence[float]]
     penalty: float
     components: tuple[int, ...] | None = None
-    reach: float | np.ndarray = 0.5
+    reach: float | np.ndarray = SNAP_REACH
 
     def __post_init__(self) -> None:
         owner = f"PointDirichlet {self.name!r}"

@@ -6,15 +6,11 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from fe_mpm.boundary import PointDirichlet, PointTraction
+from fe_mpm.boundary import SNAP_REACH, PointDirichlet, PointTraction
 from fe_mpm.checks import check_range
 from fe_mpm.errors import PointsOutsideError, warn
 from fe_mpm.quadrature import SlotLayout, slot_count
 from fe_mpm.tracker import Tracker
-
-#: A boundary point in an empty cell reads an occupied neighbour's field up to this
-#: far outside it (the least barycentric coordinate there): half a cell.
-SNAP_REACH = 0.5
 
 
 class BoundaryPoints:

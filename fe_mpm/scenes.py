@@ -11,7 +11,7 @@ import numpy as np
 
 from fe_mpm import meshes
 from fe_mpm._dolfinx import dolfinx
-from fe_mpm.boundary import Dirichlet, PointDirichlet, PointTraction, Traction
+from fe_mpm.boundary import SNAP_REACH, Dirichlet, PointDirichlet, PointTraction, Traction
 from fe_mpm.checks import check_int
 from fe_mpm.formulations import FORMULATIONS
 from fe_mpm.materials import MohrCoulomb, NeoHookean
@@ -204,7 +204,7 @@ def strip_footing(
         # The body's points act only in cells that soil has reached: read through
         # the surface from half a cell above, they held the soil under the base
         # rigid (+13 % on the elastic slope, +30 % once the base was h/2 down).
-        reach=np.r_[np.full(len(x_b), 0.5), np.zeros(int(body.sum()))],
+        reach=np.r_[np.full(len(x_b), SNAP_REACH), np.zeros(int(body.sum()))],
     )
     return Simulation(
         scene.mesh,
