@@ -14,7 +14,8 @@ principal space (Algorithm 4):
 
 The tangent :math:`\partial\tau/\partial\Delta F` is exact
 (:mod:`~fe_mpm.materials.spectral`), including repeated eigenvalues. The return
-runs in numpy at the points, and the forms see its linearisation
+runs at the points, compiled (:mod:`~fe_mpm.materials.compiled`; the numpy route of
+:mod:`~fe_mpm.materials.route` gives the same numbers), and the forms see its linearisation
 (:mod:`~fe_mpm.materials.linearised`). Tension is positive; the cohesion and
 friction angle are the usual soil parameters.
 """
@@ -27,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 import ufl
 
+from fe_mpm.materials import route
 from fe_mpm.materials.elastic import IsotropicModuli, in_plane
 from fe_mpm.materials.linearised import ReturnMapResult
 from fe_mpm.materials.principal_return import ELASTIC, MohrCoulombSurface, mohr_coulomb_return
@@ -118,6 +120,9 @@ class MohrCoulomb(IsotropicModuli):
             history: ``be`` (n, 3, 3) and ``plastic_strain`` (n,) at t_n.
         """
         n, g = dF.shape[0], dF.shape[1]
+        kernels = route.compiled()
+        if kernels is not None:
+            return self._compiled_return_map(kernels, dF, history)
         F3 = np.tile(np.eye(3), (n, 1, 1))
         F3[:, :g, :g] = dF
         b_n = history["be"]
@@ -146,6 +151,28 @@ class MohrCoulomb(IsotropicModuli):
             derivative=tangent,
             region=ret.region,
             history={"be": be, "plastic_strain": history["plastic_strain"] + increment},
+        )
+
+    def _compiled_return_map(self, kernels, dF: np.ndarray, history: dict) -> ReturnMapResult:
+        """:meth:`return_map` through :mod:`~fe_mpm.materials.compiled` (the same numbers)."""
+        b_n = history["be"]
+        out = kernels.mohr_coulomb_points(self.surface, dF, b_n)
+
+        def tangent() -> np.ndarray:
+            with np.errstate(invalid="ignore", divide="ignore"):
+                dy_dx = out["dy_deps"] / (2.0 * out["x"][:, None, :])
+            return kernels.spectral_derivative(
+                out["x"], out["Q"], out["y"], dy_dx, out["F3"], b_n, dF.shape[1]
+            )
+
+        return ReturnMapResult(
+            tau=out["tau"],
+            derivative=tangent,
+            region=out["region"],
+            history={
+                "be": out["be"],
+                "plastic_strain": history["plastic_strain"] + out["increment"],
+            },
         )
 
     def kirchhoff(self, F: ufl.core.expr.Expr, state: PointState) -> ufl.core.expr.Expr:

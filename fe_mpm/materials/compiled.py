@@ -1,0 +1,345 @@
+r"""The principal-space laws compiled point by point (numba), one fused pass each.
+
+The numpy route (:mod:`~fe_mpm.materials.spectral`,
+:mod:`~fe_mpm.materials.principal_return`) works on whole arrays, one operation at
+a time: clear, but each of its steps writes arrays of every point, and the
+tangent's (n, 9, g²) products dominate a plastic step. Here the same arithmetic runs
+per point in compiled loops:
+
+- :func:`mohr_coulomb_points`: b^tr, its eigen-decomposition (closed form in plane
+  strain; LAPACK's, from numpy, in 3D), the Mohr-Coulomb return, τ, b^e_{n+1} and
+  the plastic strain increment;
+- :func:`spectral_derivative`: ∂τ/∂ΔF of any isotropic function of b^tr, the
+  formula of :func:`~fe_mpm.materials.spectral.derivative_wrt_dF`.
+
+The numpy functions stay the reference: the suite checks that these agree with them
+to round-off (``tests/test_compiled_laws.py``). numba compiles on first use and
+caches the machine code on disk (``cache=True``, in ``__pycache__``), so only a
+machine's first run pays for it. It is imported here only, and this module only when
+a law first runs, so that scenes without such a law start without it.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from fe_mpm.materials.principal_return import (
+    APEX,
+    ELASTIC,
+    LINE_1,
+    LINE_2,
+    PLANE,
+    MohrCoulombSurface,
+)
+from fe_mpm.materials.spectral import REPEATED
+
+_SQRT_2_3 = math.sqrt(2.0 / 3.0)
+
+# error_model="numpy": a division by zero gives inf or nan, as on the numpy route
+# (and no branch per division to raise ZeroDivisionError).
+jit = numba.njit(cache=True, nogil=True, error_model="numpy")
+
+
+# numba's matrix products call BLAS through SciPy, which fe-mpm does not need, and
+# an array per point would cost more than its arithmetic: 3-vectors are tuples here,
+# and 3x3 products go into work arrays allocated once per call.
+@jit
+def _dot(u, v):
+    return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
+
+
+@jit
+def _matvec(a, v):
+    """The product a v of a (3, 3) array and a 3-tuple."""
+    return (
+        a[0, 0] * v[0] + a[0, 1] * v[1] + a[0, 2] * v[2],
+        a[1, 0] * v[0] + a[1, 1] * v[1] + a[1, 2] * v[2],
+        a[2, 0] * v[0] + a[2, 1] * v[1] + a[2, 2] * v[2],
+    )
+
+
+@jit
+def _vecmat(v, a):
+    """The product vᵀ a of a 3-tuple and a (3, 3) array."""
+    return (
+        v[0] * a[0, 0] + v[1] * a[1, 0] + v[2] * a[2, 0],
+        v[0] * a[0, 1] + v[1] * a[1, 1] + v[2] * a[2, 1],
+        v[0] * a[0, 2] + v[1] * a[1, 2] + v[2] * a[2, 2],
+    )
+
+
+@jit
+def _product(a, b, out, transpose_b):
+    """Write the product a b, or a bᵀ, of (3, 3) arrays into ``out``."""
+    for i in range(3):
+        for j in range(3):
+            if transpose_b:
+                out[i, j] = a[i, 0] * b[j, 0] + a[i, 1] * b[j, 1] + a[i, 2] * b[j, 2]
+            else:
+                out[i, j] = a[i, 0] * b[0, j] + a[i, 1] * b[1, j] + a[i, 2] * b[2, j]
+
+
+@jit
+def _plane_eigen(b, x, Q):
+    """Eigenvalues (descending) and eigenvectors of b whose 3rd axis is principal.
+
+    The arithmetic of :func:`~fe_mpm.materials.spectral._plane_decomposition`,
+    including its stable ordering of equal values.
+    """
+    half_gap = 0.5 * (b[0, 0] - b[1, 1])
+    shear = b[1, 0]
+    mean = 0.5 * (b[0, 0] + b[1, 1])
+    radius = math.hypot(half_gap, shear)
+    angle = 0.5 * math.atan2(shear, half_gap)
+    c, s = math.cos(angle), math.sin(angle)
+    values = (mean + radius, mean - radius, b[2, 2])
+    vectors = ((c, s, 0.0), (-s, c, 0.0), (0.0, 0.0, 1.0))
+    # The order np.argsort(-x, kind="stable") gives: ties keep their index order.
+    o0, o1, o2 = 0, 1, 2
+    if values[o0] < values[o1]:
+        o0, o1 = o1, o0
+    if values[o1] < values[o2]:
+        o1, o2 = o2, o1
+        if values[o0] < values[o1]:
+            o0, o1 = o1, o0
+    order = (o0, o1, o2)
+    for A in range(3):
+        x[A] = values[order[A]]
+        for i in range(3):
+            Q[i, A] = vectors[order[A]][i]
+
+
+@jit
+def _return(eps, a, C, k, m, two_c_sqrt_k, p1, p2, apex, has_apex, y, D):
+    """The Mohr-Coulomb return of one point (:func:`mohr_coulomb_return`); its region.
+
+    ``eps``, ``p1`` and ``p2`` are 3-tuples; ``y`` (3,) and ``D`` (3, 3) are written.
+    """
+    trial = _vecmat(eps, a)
+    f = k * trial[0] - trial[2] - two_c_sqrt_k
+    if not f > 0.0:
+        for A in range(3):
+            y[A] = trial[A]
+            for B in range(3):
+                D[A, B] = a[A, B]
+        return ELASTIC
+    df = (k, 0.0, -1.0)
+    dg = (m, 0.0, -1.0)
+    a_dg = _matvec(a, dg)
+    df_a = _vecmat(df, a)
+    denom = _dot(df, a_dg)
+    ratio = f / denom
+    plane = (trial[0] - ratio * a_dg[0], trial[1] - ratio * a_dg[1], trial[2] - ratio * a_dg[2])
+    breaks_12 = plane[1] > plane[0]
+    breaks_23 = plane[2] > plane[1]
+    if not (breaks_12 or breaks_23):
+        for A in range(3):
+            y[A] = plane[A]
+            for B in range(3):
+                D[A, B] = a[A, B] - a_dg[A] * df_a[B] / denom
+        return PLANE
+    if breaks_12:
+        region, point, direction, potential = LINE_1, p1, (1.0, 1.0, k), (1.0, 1.0, m)
+    else:
+        region, point, direction, potential = LINE_2, p2, (1.0, k, k), (1.0, m, m)
+    Cg = _matvec(C, potential)
+    den = _dot(direction, Cg)
+    t = _dot((trial[0] - point[0], trial[1] - point[1], trial[2] - point[2]), Cg) / den
+    line = (point[0] + t * direction[0], point[1] + t * direction[1], point[2] + t * direction[2])
+    if breaks_12:
+        on_apex = breaks_23 or line[0] < line[2]
+    else:
+        on_apex = line[0] < line[1]
+    if on_apex and has_apex:
+        for A in range(3):
+            y[A] = apex
+            for B in range(3):
+                D[A, B] = 0.0
+        return APEX
+    for A in range(3):
+        y[A] = line[A]
+        for B in range(3):
+            D[A, B] = direction[A] * potential[B] / den
+    return region
+
+
+@jit
+def _mohr_coulomb_loop(
+    dF, b_n, x_given, Q_given, plane, a, C, k, m, two_c_sqrt_k, p1, p2, apex, has_apex
+):
+    n, g = dF.shape[0], dF.shape[1]
+    tau = np.zeros((n, 3, 3))
+    be = np.zeros((n, 3, 3))
+    increment = np.zeros(n)
+    region = np.zeros(n, dtype=np.int8)
+    x = np.zeros((n, 3))
+    Q = np.zeros((n, 3, 3))
+    F3 = np.zeros((n, 3, 3))
+    y = np.zeros((n, 3))
+    D = np.zeros((n, 3, 3))
+    work, b = np.zeros((3, 3)), np.zeros((3, 3))
+    for p in range(n):
+        for i in range(3):
+            F3[p, i, i] = 1.0
+        for i in range(g):
+            for j in range(g):
+                F3[p, i, j] = dF[p, i, j]
+        _product(F3[p], b_n[p], work, False)
+        _product(work, F3[p], b, True)
+        if plane:
+            _plane_eigen(b, x[p], Q[p])
+        else:
+            for A in range(3):
+                x[p, A] = x_given[p, A]
+                for i in range(3):
+                    Q[p, i, A] = Q_given[p, i, A]
+        eps = (0.5 * math.log(x[p, 0]), 0.5 * math.log(x[p, 1]), 0.5 * math.log(x[p, 2]))
+        region[p] = _return(eps, a, C, k, m, two_c_sqrt_k, p1, p2, apex, has_apex, y[p], D[p])
+        for i in range(3):
+            for j in range(3):
+                tau[p, i, j] = (
+                    Q[p, i, 0] * y[p, 0] * Q[p, j, 0]
+                    + Q[p, i, 1] * y[p, 1] * Q[p, j, 1]
+                    + Q[p, i, 2] * y[p, 2] * Q[p, j, 2]
+                )
+        if region[p] == ELASTIC:  # b^e_{n+1} = b^tr, no plastic strain
+            for i in range(3):
+                for j in range(3):
+                    be[p, i, j] = b[i, j]
+        else:
+            strain_e = _vecmat((y[p, 0], y[p, 1], y[p, 2]), C)
+            stretch = (
+                math.exp(2.0 * strain_e[0]),
+                math.exp(2.0 * strain_e[1]),
+                math.exp(2.0 * strain_e[2]),
+            )
+            for i in range(3):
+                for j in range(3):
+                    be[p, i, j] = (
+                        Q[p, i, 0] * stretch[0] * Q[p, j, 0]
+                        + Q[p, i, 1] * stretch[1] * Q[p, j, 1]
+                        + Q[p, i, 2] * stretch[2] * Q[p, j, 2]
+                    )
+            s = 0.0
+            for A in range(3):
+                s += (eps[A] - strain_e[A]) ** 2
+            increment[p] = _SQRT_2_3 * math.sqrt(s)
+    return tau, be, increment, region, x, Q, F3, y, D
+
+
+def mohr_coulomb_points(
+    surface: MohrCoulombSurface, dF: np.ndarray, b_n: np.ndarray
+) -> dict[str, np.ndarray]:
+    """The Mohr-Coulomb step of every point, compiled.
+
+    Args:
+        surface: Elastic constants and yield surface.
+        dF: Deformation gradient increments (n, g, g).
+        b_n: b^e at t_n (n, 3, 3).
+
+    Returns:
+        ``tau`` (n, 3, 3) Pa, ``be`` (n, 3, 3), ``increment`` (n,) of the equivalent
+        plastic strain, ``region`` (n,) int8, and for :func:`spectral_derivative`
+        the eigenvalues ``x`` (n, 3), eigenvectors ``Q`` (n, 3, 3), ``F3`` (n, 3, 3),
+        principal stresses ``y`` (n, 3) and ``dy_deps`` = ∂y/∂ε^tr (n, 3, 3).
+    """
+    n, g = dF.shape[0], dF.shape[1]
+    dF = np.ascontiguousarray(dF, dtype=float)
+    b_n = np.ascontiguousarray(b_n, dtype=float)
+    plane = g == 2 and not (b_n[:, 2, :2].any() or b_n[:, :2, 2].any())
+    if plane:
+        x_given, Q_given = np.zeros((0, 3)), np.zeros((0, 3, 3))
+    else:  # LAPACK through numpy: numba's own needs SciPy
+        F3 = np.tile(np.eye(3), (n, 1, 1))
+        F3[:, :g, :g] = dF
+        x_given, Q_given = np.linalg.eigh(F3 @ b_n @ np.swapaxes(F3, 1, 2))
+        x_given = np.ascontiguousarray(x_given[:, ::-1])
+        Q_given = np.ascontiguousarray(Q_given[:, :, ::-1])
+    k, m = surface.k, surface.m
+    p1, p2 = surface.line_points()
+    apex = surface.apex()
+    out = _mohr_coulomb_loop(
+        dF,
+        b_n,
+        x_given,
+        Q_given,
+        plane,
+        surface.elastic,
+        surface.compliance,
+        k,
+        m,
+        2.0 * surface.cohesion * math.sqrt(k),
+        tuple(p1),
+        tuple(p2),
+        np.nan if apex is None else apex,
+        apex is not None,
+    )
+    names = ("tau", "be", "increment", "region", "x", "Q", "F3", "y", "dy_deps")
+    return dict(zip(names, out, strict=True))
+
+
+@jit
+def _derivative_loop(x, Q, y, dy_dx, F3, b_n, g):
+    n = x.shape[0]
+    out = np.zeros((n, 3, 3, g, g))
+    theta, db, dtau = np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3))
+    work, M, half = np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3))
+    for p in range(n):
+        scale = max(abs(x[p, 0]), abs(x[p, 1]), abs(x[p, 2]))
+        for A, B in ((0, 1), (0, 2), (1, 2)):
+            gap = x[p, A] - x[p, B]
+            if abs(gap) <= REPEATED * scale:
+                value = 0.5 * (dy_dx[p, A, A] - dy_dx[p, A, B] + dy_dx[p, B, B] - dy_dx[p, B, A])
+            else:
+                value = (y[p, A] - y[p, B]) / gap
+            theta[A, B] = theta[B, A] = value
+        _product(b_n[p], F3[p], work, True)
+        _product(work, Q[p], M, False)
+        for kk in range(g):
+            for ll in range(g):
+                for A in range(3):
+                    for B in range(3):
+                        db[A, B] = Q[p, kk, A] * M[ll, B] + Q[p, kk, B] * M[ll, A]
+                for A in range(3):
+                    s = 0.0
+                    for B in range(3):
+                        s += db[B, B] * dy_dx[p, A, B]
+                    dtau[A, A] = s
+                    for B in range(3):
+                        if B != A:
+                            dtau[A, B] = theta[A, B] * db[A, B]
+                # Q dτ' Qᵀ in two 3x3 products, the symmetric result's upper half only.
+                for A in range(3):
+                    for j in range(3):
+                        half[A, j] = (
+                            dtau[A, 0] * Q[p, j, 0]
+                            + dtau[A, 1] * Q[p, j, 1]
+                            + dtau[A, 2] * Q[p, j, 2]
+                        )
+                for i in range(3):
+                    for j in range(i, 3):
+                        s = (
+                            Q[p, i, 0] * half[0, j]
+                            + Q[p, i, 1] * half[1, j]
+                            + Q[p, i, 2] * half[2, j]
+                        )
+                        out[p, i, j, kk, ll] = s
+                        out[p, j, i, kk, ll] = s
+    return out
+
+
+def spectral_derivative(
+    x: np.ndarray,
+    Q: np.ndarray,
+    y: np.ndarray,
+    dy_dx: np.ndarray,
+    F3: np.ndarray,
+    b_n: np.ndarray,
+    g: int = 3,
+) -> np.ndarray:
+    """∂τ_ij/∂ΔF_kl (n, 3, 3, g, g), compiled; arguments as in ``derivative_wrt_dF``."""
+    arrays = (x, Q, y, dy_dx, F3, b_n)
+    return _derivative_loop(*(np.ascontiguousarray(v, dtype=float) for v in arrays), int(g))
