@@ -95,14 +95,19 @@ def plot(rows: list[dict], cases: list[tuple[int, bool]], path: Path) -> None:
     if plt is None:
         return
     fig, ax = plt.subplots(figsize=(8, 4))
+    # A colour per E/c_u, a marker per footing, dashed on the grids refined at the edge.
+    stiffnesses = sorted({E for E, _ in cases})
+    colours = dict(zip(stiffnesses, plt.cm.viridis(np.linspace(0.0, 0.85, len(stiffnesses)))))
     for E_over_cu, smooth in cases:
-        for edge, style in ((False, "o-"), (True, "s--")):
+        for edge in (False, True):
             sel = series(rows, E_over_cu, smooth, edge)
             if sel:
                 ax.loglog(
                     [r["h"] for r in sel],
                     [max(abs(r["q_over_prandtl"] - 1), 1e-4) for r in sel],
-                    style,
+                    marker="s" if smooth else "o",
+                    ls="--" if edge else "-",
+                    color=colours[E_over_cu],
                     label=f"E/c_u = {E_over_cu}, {'smooth' if smooth else 'rough'}"
                     + (", cells h/4 at the edge" if edge else ""),
                 )

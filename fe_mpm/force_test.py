@@ -29,6 +29,15 @@ EPS = float(np.finfo(float).eps)
 #: ``max(rtol, PRESSURE_ROUND_OFF) ‖V‖``, this many ε being their round-off floor.
 PRESSURE_ROUND_OFF = 1e3 * EPS
 
+#: A Newton solve whose ‖R‖ has grown this many times over the smallest ‖R‖ of its
+#: iterates 1, 2, … has diverged. Full Newton steps on a perfectly plastic body can
+#: run away once a few points reach the yield surface's corners (strip footing,
+#: thesis grid: from ‖R‖ ≈ 30 to 1e14 over 25 iterations); stopping at 1e4 ends
+#: such an attempt after 5–10 iterations, and the step's next attempt (the
+#: backtracking line search) starts sooner. Converging solves of the suite and of the
+#: footing never grew more than 20-fold over their smallest residual.
+DIVERGENCE_FACTOR = 1e4
+
 
 @dataclass
 class NewtonResult:
@@ -99,6 +108,7 @@ class ForceTest:
         self.displacement_norm = 0.0  # ‖R_u‖ at the last residual
         self.verdict = ""
         self.passed = False
+        self.smallest = np.inf  # the smallest ‖R‖ of iterates 1, 2, … of this solve
 
     @property
     def scale(self) -> float:
@@ -126,4 +136,14 @@ class ForceTest:
         if it >= self.max_it:
             self.verdict = "DIVERGED_MAX_IT"
             return Reason.DIVERGED_MAX_IT
+        if it == 0:
+            self.smallest = np.inf
+        elif fnorm > DIVERGENCE_FACTOR * self.smallest:
+            self.verdict = (
+                f"DIVERGED_DTOL: ‖R‖ = {fnorm:.3e} grew {DIVERGENCE_FACTOR:.0e}-fold over its "
+                f"smallest, {self.smallest:.3e}"
+            )
+            return Reason.DIVERGED_DTOL
+        else:
+            self.smallest = min(self.smallest, fnorm)
         return Reason.ITERATING

@@ -89,6 +89,7 @@ class NewtonSolver:
         coupling: dolfinx.fem.Form | None = None,
     ):
         self.u = u
+        self.iterations_total = 0  # over every solve, converged or not
         patterns = [sparsity_form] if coupling is None else [sparsity_form, coupling]
         self.A = matrix_with_pattern_of(patterns)
         # PETSc squeezes out preallocated entries never set before the first final
@@ -329,6 +330,7 @@ class NewtonSolver:
         finally:
             search.setType(configured)
         self._add_time("newton", t0)
+        self.iterations_total += self.snes.getIterationNumber()
         dolfinx.fem.petsc.assign(self.x, self.u)
         self.u.x.scatter_forward()
         reason = self.snes.getConvergedReason()

@@ -38,6 +38,11 @@ class StepReport:
         lost_load: Share of each grid ``Traction``'s load that acts on nodes with
             no material, so it is lost (``"Traction 0"`` -> share in [0, 1]);
             only tractions that lose some.
+        failed_iterations: Newton iterations spent since the last accepted step on
+            attempts that failed (a placement of the points whose Newton solves all
+            failed, or a step length that was then cut, see :mod:`fe_mpm.retry`);
+            ``newton_iterations`` counts those of the attempt accepted only. Set by
+            :meth:`Simulation.run <fe_mpm.Simulation.run>`.
     """
 
     step: int
@@ -54,6 +59,7 @@ class StepReport:
     force_scale: float = 0.0
     relative_residual: float = 0.0
     lost_load: dict[str, float] = field(default_factory=dict)
+    failed_iterations: int = 0
 
     @classmethod
     def of_step(

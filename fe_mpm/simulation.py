@@ -253,6 +253,7 @@ class Simulation:
         bar, reports = ProgressBar(int(n_steps), progress), []
         if self.step_number == 0:
             self._write_output(force=True)  # the initial state as the t = 0 frame
+        before = self.newton_iterations_total
         try:
             while t_end - self.t > END_OF_RUN * nominal:
                 t_new = min(self.t + length.dt, t_end)
@@ -266,6 +267,9 @@ class Simulation:
                 except ConvergenceError as failure:
                     length.cut_after(failure)
                     continue
+                spent = self.newton_iterations_total - before
+                report.failed_iterations = spent - report.newton_iterations
+                before += spent
                 reports.append(report)
                 if on_step is not None:
                     on_step(report)
@@ -456,6 +460,11 @@ class Simulation:
 
     def _add_time(self, key: str, t0: float) -> None:
         self.timings[key] = self.timings.get(key, 0.0) + time.perf_counter() - t0
+
+    @property
+    def newton_iterations_total(self) -> int:
+        """Newton iterations of every solve so far, failed attempts included."""
+        return 0 if self._newton is None else self._newton.iterations_total
 
     @property
     def dropped(self) -> int:

@@ -387,6 +387,12 @@ def test_failed_steps_are_cut_and_leave_no_trace():
     for r in reports:  # the same steps, none of them failing
         fixed.step(r.t)
     assert np.abs(cut.points.x - fixed.points.x).max() < 1e-9
+    # The failed attempts' iterations are reported with the step that followed them:
+    # each failed solve ran to its limit of 2, and all iterations are accounted for.
+    assert reports[0].failed_iterations > 0
+    assert all(r.failed_iterations % 2 == 0 for r in reports)
+    spent = sum(r.newton_iterations + r.failed_iterations for r in reports)
+    assert spent == cut.newton_iterations_total
 
 
 def test_step_cutting_stops_at_the_floor_with_a_message():

@@ -15,6 +15,7 @@ import pytest
 
 import fe_mpm
 from fe_mpm._dolfinx import dolfinx
+from fe_mpm.force_test import DIVERGENCE_FACTOR
 from fe_mpm.meshes import rectangle_mesh
 from fe_mpm.newton import ForceTest
 
@@ -110,6 +111,24 @@ def test_force_test_verdicts():
     assert empty(None, 0, (0.0, 0.0, 0.0)) == Reason.CONVERGED_FNORM_ABS
     empty.displacement_norm = 1e-300
     assert empty(None, 0, (0.0, 0.0, 1e-300)) == Reason.ITERATING
+
+
+def test_a_residual_grown_past_the_divergence_factor_stops_the_solve():
+    """Iterates 1, 2, … keep their smallest ‖R‖; one above DIVERGENCE_FACTOR times it is
+    divergence. Iterate 0 (the step's start, often large) does not count, and a new
+    solve forgets the last one's smallest."""
+    Reason = PETSc.SNES.ConvergedReason
+    test = ForceTest(rtol=1e-10, atol=0.0, max_it=25, length=1.0)
+    test.loads, test.displacement_norm = 1.0, 1.0  # never passes
+    assert test(None, 0, (0.0, 0.0, 1e9)) == Reason.ITERATING
+    assert test(None, 1, (0.0, 0.0, 2.0)) == Reason.ITERATING
+    assert test(None, 2, (0.0, 0.0, 1.0)) == Reason.ITERATING
+    assert test(None, 3, (0.0, 0.0, 0.999 * DIVERGENCE_FACTOR)) == Reason.ITERATING
+    assert test(None, 4, (0.0, 0.0, 1.001 * DIVERGENCE_FACTOR)) == Reason.DIVERGED_DTOL
+    assert "DIVERGED_DTOL" in test.verdict
+    assert test(None, 0, (0.0, 0.0, 1e9)) == Reason.ITERATING  # the next solve
+    assert test(None, 1, (0.0, 0.0, 5.0)) == Reason.ITERATING
+    assert test(None, 2, (0.0, 0.0, 4.0 * DIVERGENCE_FACTOR)) == Reason.ITERATING
 
 
 def test_the_pressure_rows_are_judged_against_the_nodal_volumes():
