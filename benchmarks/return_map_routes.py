@@ -73,18 +73,18 @@ def main() -> None:
     for name, flag in (("numpy", "0"), ("compiled", "1")):
         env = {**os.environ, "FE_MPM_COMPILED": flag}
         rows[name] = json.loads(run_child(CHILD, [str(args.h), str(args.steps)], env))
+    print(f"strip footing, h = {args.h}, {rows['numpy']['points']} points, {args.steps} steps")
     print(
-        f"strip footing, h = {args.h}, {rows['numpy']['points']} points, {args.steps} steps "
-        f"({rows['numpy']['iterations']} Newton iterations, {rows['numpy']['accepted']} of them "
-        "in the attempts accepted)"
+        "route      iterations (accepted placements)  s/iteration: return map  assembly  "
+        "Newton other    run   return map share"
     )
-    print("route      s/iteration: return map  assembly  Newton other   run    return map share")
     for name, r in rows.items():
         t, n = r["timings"], r["iterations"]
         other = t["newton"] - t["return_map"] - t["assembly"]
         print(
-            f"{name:10s} {'':13s}{t['return_map'] / n:9.3f} {t['assembly'] / n:9.3f} "
-            f"{other / n:12.3f} {r['wall']:7.1f} s {100 * t['return_map'] / r['wall']:6.1f} %"
+            f"{name:10s} {n:10d} ({r['accepted']:4d}){'':20s}{t['return_map'] / n:9.3f} "
+            f"{t['assembly'] / n:9.3f} {other / n:12.3f} {r['wall']:7.1f} s "
+            f"{100 * t['return_map'] / r['wall']:6.1f} %"
         )
     print(
         f"q/c_u after the last step: numpy {rows['numpy']['q']:.12f}, "

@@ -35,7 +35,8 @@ PRESSURE_ROUND_OFF = 1e3 * EPS
 #: thesis grid: from ‖R‖ ≈ 30 to 1e14 over 25 iterations); stopping at 1e4 ends
 #: such an attempt after 5–10 iterations, and the step's next attempt (the
 #: backtracking line search) starts sooner. Converging solves of the suite and of the
-#: footing never grew more than 20-fold over their smallest residual.
+#: footing never grew more than 20-fold over their smallest residual. Below the
+#: acceptance tolerance the smallest counts as the tolerance: round-off may wander.
 DIVERGENCE_FACTOR = 1e4
 
 
@@ -138,7 +139,7 @@ class ForceTest:
             return Reason.DIVERGED_MAX_IT
         if it == 0:
             self.smallest = np.inf
-        elif fnorm > DIVERGENCE_FACTOR * self.smallest:
+        elif fnorm > DIVERGENCE_FACTOR * max(self.smallest, self.tolerance):
             self.verdict = (
                 f"DIVERGED_DTOL: ‖R‖ = {fnorm:.3e} grew {DIVERGENCE_FACTOR:.0e}-fold over its "
                 f"smallest, {self.smallest:.3e}"

@@ -329,8 +329,8 @@ class NewtonSolver:
             self.snes.solve(None, self.x)
         finally:
             search.setType(configured)
+            self.iterations_total += self.snes.getIterationNumber()
         self._add_time("newton", t0)
-        self.iterations_total += self.snes.getIterationNumber()
         dolfinx.fem.petsc.assign(self.x, self.u)
         self.u.x.scatter_forward()
         reason = self.snes.getConvergedReason()

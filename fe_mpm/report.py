@@ -39,10 +39,11 @@ class StepReport:
             no material, so it is lost (``"Traction 0"`` -> share in [0, 1]);
             only tractions that lose some.
         failed_iterations: Newton iterations spent since the last accepted step on
-            attempts that failed (a placement of the points whose Newton solves all
+            set-ups that failed (a placement of the points whose Newton solves all
             failed, or a step length that was then cut, see :mod:`fe_mpm.retry`);
-            ``newton_iterations`` counts those of the attempt accepted only. Set by
-            :meth:`Simulation.run <fe_mpm.Simulation.run>`.
+            ``newton_iterations`` counts those of the accepted placement (both of
+            its line searches when the first failed). Set by
+            :meth:`Simulation.run <fe_mpm.Simulation.run>`; 0 for a direct ``step``.
     """
 
     step: int

@@ -129,6 +129,14 @@ def test_a_residual_grown_past_the_divergence_factor_stops_the_solve():
     assert test(None, 0, (0.0, 0.0, 1e9)) == Reason.ITERATING  # the next solve
     assert test(None, 1, (0.0, 0.0, 5.0)) == Reason.ITERATING
     assert test(None, 2, (0.0, 0.0, 4.0 * DIVERGENCE_FACTOR)) == Reason.ITERATING
+    # A small start does not count either: iterate 1 may exceed it by any factor.
+    assert test(None, 0, (0.0, 0.0, 1e-3)) == Reason.ITERATING
+    assert test(None, 1, (0.0, 0.0, 1.0)) == Reason.ITERATING
+    # Below the acceptance tolerance (rtol S = 1e-10 here) the smallest counts as it:
+    # a residual wandering in round-off is not divergence.
+    assert test(None, 2, (0.0, 0.0, 1e-14)) == Reason.ITERATING
+    assert test(None, 3, (0.0, 0.0, 0.5e-6)) == Reason.ITERATING
+    assert test(None, 4, (0.0, 0.0, 2e-6)) == Reason.DIVERGED_DTOL
 
 
 def test_the_pressure_rows_are_judged_against_the_nodal_volumes():

@@ -32,6 +32,7 @@ from fe_mpm.materials.principal_return import (
     LINE_1,
     LINE_2,
     PLANE,
+    YIELD_TOLERANCE,
     MohrCoulombSurface,
 )
 from fe_mpm.materials.spectral import REPEATED
@@ -113,14 +114,14 @@ def _plane_eigen(b, x, Q):
 
 
 @jit
-def _return(eps, a, C, k, m, two_c_sqrt_k, p1, p2, apex, has_apex, y, D):
+def _return(eps, a, C, k, m, two_c_sqrt_k, p1, p2, apex, has_apex, tolerance, y, D):
     """The Mohr-Coulomb return of one point (:func:`mohr_coulomb_return`); its region.
 
     ``eps``, ``p1`` and ``p2`` are 3-tuples; ``y`` (3,) and ``D`` (3, 3) are written.
     """
     trial = _vecmat(eps, a)
     f = k * trial[0] - trial[2] - two_c_sqrt_k
-    if not f > 0.0:
+    if not f > tolerance * (abs(k * trial[0]) + abs(trial[2]) + two_c_sqrt_k):
         for A in range(3):
             y[A] = trial[A]
             for B in range(3):
@@ -168,7 +169,7 @@ def _return(eps, a, C, k, m, two_c_sqrt_k, p1, p2, apex, has_apex, y, D):
 
 @jit
 def _mohr_coulomb_loop(
-    dF, b_n, x_given, Q_given, plane, a, C, k, m, two_c_sqrt_k, p1, p2, apex, has_apex
+    dF, b_n, x_given, Q_given, plane, a, C, k, m, two_c_sqrt_k, p1, p2, apex, has_apex, tolerance
 ):
     n, g = dF.shape[0], dF.shape[1]
     tau = np.zeros((n, 3, 3))
@@ -197,7 +198,9 @@ def _mohr_coulomb_loop(
                 for i in range(3):
                     Q[p, i, A] = Q_given[p, i, A]
         eps = (0.5 * math.log(x[p, 0]), 0.5 * math.log(x[p, 1]), 0.5 * math.log(x[p, 2]))
-        region[p] = _return(eps, a, C, k, m, two_c_sqrt_k, p1, p2, apex, has_apex, y[p], D[p])
+        region[p] = _return(
+            eps, a, C, k, m, two_c_sqrt_k, p1, p2, apex, has_apex, tolerance, y[p], D[p]
+        )
         for i in range(3):
             for j in range(3):
                 tau[p, i, j] = (
@@ -255,7 +258,12 @@ def mohr_coulomb_points(
     else:  # LAPACK through numpy: numba's own needs SciPy
         F3 = np.tile(np.eye(3), (n, 1, 1))
         F3[:, :g, :g] = dF
-        x_given, Q_given = np.linalg.eigh(F3 @ b_n @ np.swapaxes(F3, 1, 2))
+        b = F3 @ b_n @ np.swapaxes(F3, 1, 2)
+        # A non-finite trial (an inverted iterate) gives NaN, as in plane strain, for
+        # Newton to report; LAPACK would raise instead.
+        finite = np.isfinite(b).all(axis=(1, 2))
+        x_given, Q_given = np.full((n, 3), np.nan), np.full((n, 3, 3), np.nan)
+        x_given[finite], Q_given[finite] = np.linalg.eigh(b[finite])
         x_given = np.ascontiguousarray(x_given[:, ::-1])
         Q_given = np.ascontiguousarray(Q_given[:, :, ::-1])
     k, m = surface.k, surface.m
@@ -276,13 +284,14 @@ def mohr_coulomb_points(
         tuple(p2),
         np.nan if apex is None else apex,
         apex is not None,
+        YIELD_TOLERANCE,
     )
     names = ("tau", "be", "increment", "region", "x", "Q", "F3", "y", "dy_deps")
     return dict(zip(names, out, strict=True))
 
 
 @jit
-def _derivative_loop(x, Q, y, dy_dx, F3, b_n, g):
+def _derivative_loop(x, Q, y, dy_dx, F3, b_n, g, repeated):
     n = x.shape[0]
     out = np.zeros((n, 3, 3, g, g))
     theta, db, dtau = np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3))
@@ -291,7 +300,7 @@ def _derivative_loop(x, Q, y, dy_dx, F3, b_n, g):
         scale = max(abs(x[p, 0]), abs(x[p, 1]), abs(x[p, 2]))
         for A, B in ((0, 1), (0, 2), (1, 2)):
             gap = x[p, A] - x[p, B]
-            if abs(gap) <= REPEATED * scale:
+            if abs(gap) <= repeated * scale:
                 value = 0.5 * (dy_dx[p, A, A] - dy_dx[p, A, B] + dy_dx[p, B, B] - dy_dx[p, B, A])
             else:
                 value = (y[p, A] - y[p, B]) / gap
@@ -342,4 +351,8 @@ def spectral_derivative(
 ) -> np.ndarray:
     """∂τ_ij/∂ΔF_kl (n, 3, 3, g, g), compiled; arguments as in ``derivative_wrt_dF``."""
     arrays = (x, Q, y, dy_dx, F3, b_n)
-    return _derivative_loop(*(np.ascontiguousarray(v, dtype=float) for v in arrays), int(g))
+    # REPEATED (and YIELD_TOLERANCE above) go in as arguments: numba would freeze a
+    # global into its on-disk cache, which only this file's changes invalidate.
+    return _derivative_loop(
+        *(np.ascontiguousarray(v, dtype=float) for v in arrays), int(g), float(REPEATED)
+    )

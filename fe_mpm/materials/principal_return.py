@@ -35,6 +35,12 @@ import numpy as np
 #: Region codes returned by :func:`mohr_coulomb_return`.
 ELASTIC, PLANE, LINE_1, LINE_2, APEX = 0, 1, 2, 3, 4
 
+#: A trial stress is plastic when f > YIELD_TOLERANCE (|k τ₁| + |τ₃| + 2c√k). A point
+#: that ended the last step on the surface starts the next with f = 0 up to
+#: round-off; without a tolerance its elastic or plastic tangent would hang on the
+#: last bit of a logarithm (and differ between the numpy and compiled routes).
+YIELD_TOLERANCE = 1e-12
+
 
 @dataclass(frozen=True)
 class PrincipalReturn:
@@ -144,7 +150,8 @@ def mohr_coulomb_return(surface: MohrCoulombSurface, strain: np.ndarray) -> Prin
 
     k, m, c = surface.k, surface.m, surface.cohesion
     f_trial = k * trial[:, 0] - trial[:, 2] - 2.0 * c * np.sqrt(k)
-    plastic = f_trial > 0.0
+    scale = np.abs(k * trial[:, 0]) + np.abs(trial[:, 2]) + 2.0 * c * np.sqrt(k)
+    plastic = f_trial > YIELD_TOLERANCE * scale
     if not np.any(plastic):
         return PrincipalReturn(stress, tangent, region)
 
