@@ -35,7 +35,7 @@ import numpy as np
 #: Region codes returned by :func:`mohr_coulomb_return`.
 ELASTIC, PLANE, LINE_1, LINE_2, APEX = 0, 1, 2, 3, 4
 
-#: A trial stress is plastic when f > YIELD_TOLERANCE (|k τ₁| + |τ₃| + 2c√k). A point
+#: A trial stress is plastic when f > YIELD_TOLERANCE · (abs(k τ₁) + abs(τ₃) + 2c√k). A point
 #: that ended the last step on the surface starts the next with f = 0 up to
 #: round-off; without a tolerance its elastic or plastic tangent would hang on the
 #: last bit of a logarithm (and differ between the numpy and compiled routes).
