@@ -64,6 +64,7 @@ def run_grid(h: float, steps: int, h_far: float | None = None, progress: bool = 
             "s_over_B": 2.0 * r.t,
             "q_over_cu": -r.reactions["footing"][1] / 0.5 / 100.0,
             "newton": r.newton_iterations,
+            "failed": r.failed_iterations,
             "held": int(r.held_points > 0),
             "short": int(r.dt < 0.999 / steps),
             "wall_s": wall,
@@ -91,7 +92,7 @@ def report(rows: list[dict]) -> None:
     print(
         f"{'h':>6}{'points':>8}"
         + "".join(f"{c:>8}" for c in CENTRES)
-        + f"{'Newton':>8}{'held':>6}{'wall s':>8}"
+        + f"{'Newton':>8}{'failed':>8}{'held':>6}{'wall s':>8}"
     )
     means = {}
     for h in grids:
@@ -101,6 +102,7 @@ def report(rows: list[dict]) -> None:
             f"{h:>6}{mine[0]['points']:>8}"
             + "".join(f"{m:>8.2f}" for m in means[h])
             + f"{np.mean([r['newton'] for r in mine]):>8.1f}"
+            + f"{sum(r.get('failed', 0) for r in mine):>8d}"
             + f"{sum(r['held'] > 0 for r in mine):>6}{mine[0]['wall_s']:>8.0f}"
         )
     for coarse, fine in zip(grids, grids[1:]):

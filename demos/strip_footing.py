@@ -170,7 +170,11 @@ print(
     f"  σ_yy/c_u under the footing: [{sigma_yy.min():.2f}, {sigma_yy.max():.2f}]; "
     f"oscillation {oscillation:.3f}"
 )
-print(f"  Newton iterations per step: max {max(iterations)}, mean {np.mean(iterations):.2f}")
+failed = sum(r.failed_iterations for r in reports)
+print(
+    f"  Newton iterations per step: max {max(iterations)}, mean {np.mean(iterations):.2f}; "
+    f"{failed} more in attempts that failed (StepReport.failed_iterations)"
+)
 held = [r.step for r in reports if r.held_points]
 if held:
     print(f"  steps retried without re-binning (Simulation.step): {held}")
@@ -255,6 +259,7 @@ if args.json:
                 "steps": len(reports),
                 "newton_iterations_max": max(iterations),
                 "newton_iterations": iterations,
+                "failed_iterations": failed,
                 "steps_with_held_points": held,
                 "residual_norms": [r.residual_norms for r in reports],
                 "sigma_yy_over_cu_range": [float(sigma_yy.min()), float(sigma_yy.max())],
