@@ -19,6 +19,8 @@ from fe_mpm._dolfinx import dolfinx
 #: Barycentric coordinates down to ``-BARY_TOL`` count as inside: points on
 #: facets and vertices belong to any cell that touches them.
 BARY_TOL = 1e-12
+#: How far outside a cell (in barycentric units) a point on its facet may lie.
+ON_FACET = 1e-6
 
 
 class Tracker:
@@ -93,7 +95,7 @@ class Tracker:
         x: np.ndarray,
         cells: np.ndarray,
         allowed: np.ndarray,
-        tol: float | np.ndarray = 1e-6,
+        tol: float | np.ndarray = ON_FACET,
     ) -> np.ndarray:
         """Move points whose cell is not ``allowed`` to an allowed cell touching it, if close.
 
@@ -107,14 +109,14 @@ class Tracker:
             cells: Their cells (n,), from :meth:`locate`.
             allowed: Boolean mask over all cells.
             tol: How far outside an allowed cell a point may be, in barycentric
-                units: one number or one per point (n,); a point on a facet (1e-6
-                out) always counts.
+                units: one number or one per point (n,); a point on a facet
+                (``ON_FACET`` out) always counts.
 
         Returns:
             Cells (n,): the allowed cell, or -1 where none is close enough.
         """
         out = np.where(allowed[np.maximum(cells, 0)] & (cells >= 0), cells, -1).astype(np.int32)
-        tol = np.maximum(np.broadcast_to(tol, cells.shape), 1e-6)
+        tol = np.maximum(np.broadcast_to(tol, cells.shape), ON_FACET)
         owner, starts = self._cells_of_nodes()
         for i in np.flatnonzero((out < 0) & (cells >= 0)):
             nodes = self._nodes_of[cells[i]]

@@ -7,8 +7,8 @@ tangent's (n, 9, g²) products dominate a plastic step. Here the same arithmetic
 per point in compiled loops:
 
 - :func:`mohr_coulomb_points`: b^tr, its eigen-decomposition (closed form in plane
-  strain; LAPACK's, from numpy, in 3D), the Mohr-Coulomb return, τ, b^e_{n+1} and
-  the plastic strain increment;
+  strain; otherwise :func:`~fe_mpm.materials.spectral.spectral_decomposition`), the
+  Mohr-Coulomb return, τ, b^e_{n+1} and the plastic strain increment;
 - :func:`spectral_derivative`: ∂τ/∂ΔF of any isotropic function of b^tr, the
   formula of :func:`~fe_mpm.materials.spectral.derivative_wrt_dF`.
 
@@ -35,7 +35,7 @@ from fe_mpm.materials.principal_return import (
     YIELD_TOLERANCE,
     MohrCoulombSurface,
 )
-from fe_mpm.materials.spectral import REPEATED
+from fe_mpm.materials.spectral import REPEATED, spectral_decomposition
 
 _SQRT_2_3 = math.sqrt(2.0 / 3.0)
 
@@ -255,7 +255,7 @@ def mohr_coulomb_points(
     plane = g == 2 and not (b_n[:, 2, :2].any() or b_n[:, :2, 2].any())
     if plane:
         x_given, Q_given = np.zeros((0, 3)), np.zeros((0, 3, 3))
-    else:  # LAPACK through numpy: numba's own needs SciPy
+    else:  # the numpy route's decomposition (LAPACK: numba's own needs SciPy)
         F3 = np.tile(np.eye(3), (n, 1, 1))
         F3[:, :g, :g] = dF
         b = F3 @ b_n @ np.swapaxes(F3, 1, 2)
@@ -263,9 +263,7 @@ def mohr_coulomb_points(
         # Newton to report; LAPACK would raise instead.
         finite = np.isfinite(b).all(axis=(1, 2))
         x_given, Q_given = np.full((n, 3), np.nan), np.full((n, 3, 3), np.nan)
-        x_given[finite], Q_given[finite] = np.linalg.eigh(b[finite])
-        x_given = np.ascontiguousarray(x_given[:, ::-1])
-        Q_given = np.ascontiguousarray(Q_given[:, :, ::-1])
+        x_given[finite], Q_given[finite] = spectral_decomposition(b[finite])
     k, m = surface.k, surface.m
     p1, p2 = surface.line_points()
     apex = surface.apex()
