@@ -12,7 +12,6 @@ from __future__ import annotations
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
-import meshio
 import numpy as np
 
 from fe_mpm.particles import MaterialPoints
@@ -71,6 +70,8 @@ class ParticleWriter:
         data.update({k: np.asarray(v).reshape(n, -1) for k, v in fields.items()})
         cells = [("vertex", np.arange(n, dtype=np.int64).reshape(-1, 1))]
         fname = f"{self.name}_{len(self._entries):06d}.vtu"
+        import meshio  # here: a run that writes nothing need not import it (~60 ms)
+
         meshio.write(self.folder / fname, meshio.Mesh(xyz, cells, point_data=data))
         self._entries.append((t, fname))
         self._write_pvd()

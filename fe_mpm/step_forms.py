@@ -24,6 +24,7 @@ from fe_mpm.formulations import FormulationSpec, GridFields
 from fe_mpm.grid_conditions import GridConditions
 from fe_mpm.materials import Linearisation, PointState, ReturnMapResult
 from fe_mpm.materials.protocol import PointwiseLaw
+from fe_mpm.materials.runtime import with_runtime_parameters
 from fe_mpm.packing import BoundForm, PointExpression
 from fe_mpm.particles import MaterialPoints
 from fe_mpm.quadrature import BOUNDARY_POINTS, OCCUPIED, MaterialPointQuadrature, SlotLayout
@@ -127,6 +128,8 @@ class StepForms:
     ):
         mesh, g = fields.W.mesh, fields.W.mesh.geometry.dim
         self.mesh, self.spec, self.material, self.newmark = mesh, spec, material, newmark
+        # The forms read the law's parameters as constants: one kernel for all values.
+        self.law_in_forms = with_runtime_parameters(material, mesh)
         self.ppp = ppp
         self.q = q = MaterialPointQuadrature(mesh, nslot)
         self.F_n = q.function((g, g), "F_n", empty=np.eye(g))
@@ -204,7 +207,7 @@ class StepForms:
         self, fields: GridFields, conditions: GridConditions, ppp: mixed_up.PPPData | None
     ) -> ufl.Form:
         """The static residual of the material points and the grid's loads."""
-        q, material, state, deg = self.q, self.material, self.state, self.spec.u_degree
+        q, material, state, deg = self.q, self.law_in_forms, self.state, self.spec.u_degree
         if self.spec.pressure:
             w, q_test = ufl.TestFunctions(fields.W)
             return mixed_up.residual(
@@ -260,7 +263,7 @@ class StepForms:
 
     def _update(self, fields: GridFields) -> tuple[UpdateLayout, PointExpression]:
         """Δu_p, ΔF_p, the 3x3 Cauchy stress, [a_p] and the history at t_{n+1}, per point."""
-        q, material, state, g = self.q, self.material, self.state, fields.W.mesh.geometry.dim
+        q, material, state, g = self.q, self.law_in_forms, self.state, fields.W.mesh.geometry.dim
         F = self.dF * self.F_n
         if self.spec.pressure:
             sigma = mixed_up.cauchy_stress_3d(material, F, q.at_points(fields.p), state)

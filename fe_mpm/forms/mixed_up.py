@@ -68,13 +68,14 @@ class PPPData:
     """Per-cell data of the PPP term.
 
     Attributes:
-        alpha_eff: Effective α (dimensionless), see :func:`effective_alpha`.
+        alpha_eff: Effective α (dimensionless, a constant of the forms so that a new α
+            compiles nothing), see :func:`effective_alpha`.
         centroid: DG0 vector field of cell centroids x_c (m).
         fill: DG0 field φ_K, volume of the cell's points over the cell volume.
         dx: Cell measure with a degree-2 rule over the occupied cells.
     """
 
-    alpha_eff: float
+    alpha_eff: dolfinx.fem.Constant
     centroid: ufl.Coefficient
     fill: ufl.Coefficient
     dx: ufl.Measure
@@ -94,7 +95,8 @@ class PPPData:
         dx2 = ufl.Measure(
             "dx", domain=mesh, subdomain_id=OCCUPIED, metadata={"quadrature_degree": 2}
         )
-        return cls(effective_alpha(alpha, g), centroid, fill, dx2)
+        alpha_eff = dolfinx.fem.Constant(mesh, np.float64(effective_alpha(alpha, g)))
+        return cls(alpha_eff, centroid, fill, dx2)
 
 
 def stress_parts(material, F: ufl.core.expr.Expr, p: ufl.core.expr.Expr, state=None):
