@@ -24,9 +24,11 @@
 #
 # **Robustness.** After every step the grid is reset and the points are re-binned,
 # so the next step starts out of balance. On a perfectly plastic body Newton can
-# then fail whatever the step length. `Simulation.run` retries a failed step with a
-# backtracking line search, then with the points held in their last cells (no
-# re-binning, `Simulation.step(rebin=False)`), and only then cuts it.
+# then fail whatever the step length. For a plastic law Newton backtracks on ‖R‖²
+# (`line_search="auto"` gives `"bt"`): full steps make the active set chatter.
+# `Simulation.run` retries a failed step with full Newton steps, then with the points
+# held in their last cells (no re-binning, `Simulation.step(rebin=False)`), and only
+# then cuts it.
 #
 # Usage: `python demos/strip_footing.py --formulation up --steps 100 --json`.
 
@@ -83,10 +85,10 @@ def parse_args(argv=None):
     )
     p.add_argument(
         "--line-search",
-        choices=("basic", "bt", "l2"),
-        default="basic",
-        help="SNES line search (basic: full Newton steps); a failed step is "
-        "retried with bt before it is cut",
+        choices=("auto", "basic", "bt", "l2"),
+        default="auto",
+        help="SNES line search (auto: bt for a plastic law; basic: full Newton steps); "
+        "a failed step is retried with the other of bt and basic before it is cut",
     )
     p.add_argument("--output", default="strip_footing_output", help="output folder")
     p.add_argument("--no-output", action="store_true", help="write no files")
@@ -135,7 +137,7 @@ try:
         smooth=args.smooth,
         footing_thickness=args.footing_thickness,
         penalty=args.penalty,
-        petsc_options={"snes_linesearch_type": args.line_search},
+        line_search=args.line_search,
         output_dir=None if args.no_output else args.output,
         output_every=max(1, args.steps // 20),
     )

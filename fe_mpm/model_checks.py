@@ -30,6 +30,7 @@ def check_choices(
     mass: str,
     points_leaving: str,
     linear_solver: str,
+    line_search: str,
     fallback_line_search: str | None,
 ) -> None:
     """Refuse an option that is not one of its choices, naming it and the choices."""
@@ -37,8 +38,11 @@ def check_choices(
     check_choice("Simulation", "mass", mass, ("consistent", "lumped"))
     check_choice("Simulation", "points_leaving", points_leaving, ("raise", "drop"))
     check_choice("Simulation", "linear_solver", linear_solver, ("direct", "iterative"))
+    check_choice("Simulation", "line_search", line_search, ("auto", *LINE_SEARCHES))
     if fallback_line_search is not None:
-        check_choice("Simulation", "fallback_line_search", fallback_line_search, LINE_SEARCHES)
+        check_choice(
+            "Simulation", "fallback_line_search", fallback_line_search, ("auto", *LINE_SEARCHES)
+        )
 
 
 def check_ranges(

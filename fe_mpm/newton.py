@@ -226,6 +226,10 @@ class NewtonSolver:
         rows = self._u_rows
         self.test.internal = self._norm(b.array_r[rows] + self._loads.array_r[rows])
         if self._needs_lifting(x):
+            if self._before_jacobian is not None:
+                # The lifting assembles the tangent at this iterate: a pointwise law
+                # must have packed it (it is then reused by this iterate's Jacobian).
+                self._before_jacobian()
             lift = self._scratch
             with lift.localForm() as local:
                 local.set(0.0)

@@ -63,11 +63,12 @@ class RetryLadder:
     """The attempts at one step length, in order.
 
     Args:
-        fallback_line_search: Line search of the retry from the same start, or None.
+        fallback_line_search: Line search of the retry from the same start, or None;
+            ``"auto"``: ``"basic"`` when Newton's own is ``"bt"``, else ``"bt"``.
         hold_cells: Whether a static step is retried with the points held.
     """
 
-    fallback_line_search: str | None = "bt"
+    fallback_line_search: str | None = "auto"
     hold_cells: bool = True
 
     def placements(self, can_hold: bool) -> list[bool]:
@@ -86,9 +87,12 @@ class RetryLadder:
             configured: Newton's configured line search; a fallback equal to it adds
                 no attempt.
         """
-        if self.fallback_line_search in (None, configured):
+        fallback = self.fallback_line_search
+        if fallback == "auto":
+            fallback = "basic" if configured == "bt" else "bt"
+        if fallback in (None, configured):
             return [None]
-        return [None, self.fallback_line_search]
+        return [None, fallback]
 
     def take_step(self, step: Callable[[bool], T], can_hold: bool) -> T:
         """``step(rebin)`` with each placement of :meth:`placements` until one succeeds.

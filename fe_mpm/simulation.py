@@ -109,8 +109,15 @@ class Simulation:
         reactions: Boundaries whose reaction force is computed after every step,
             name -> facet tag or marker (see ``StepReport.reactions``).
         min_step: Shortest step :meth:`run` may cut to (s); default 1/1024 of nominal.
+        line_search: Newton's SNES line search: ``"basic"`` (full steps), ``"bt"``
+            (backtracking on ‖R‖²), ``"l2"``, ``"cp"``, or ``"auto"`` (default):
+            ``"bt"`` for a law with internal variables (plasticity: the active set
+            chatters under full steps), ``"basic"`` otherwise (an elastic step
+            converges quadratically from the first iterate). ``petsc_options``'s
+            ``snes_linesearch_type`` overrides it.
         fallback_line_search: SNES line search with which a failed step is retried
-            from its start before it is cut (None: cut at once; see :mod:`fe_mpm.retry`).
+            from its start before it is cut (None: cut at once; ``"auto"``, default:
+            ``"basic"`` after ``"bt"``, else ``"bt"``; see :mod:`fe_mpm.retry`).
         fallback_hold_cells: Whether :meth:`run` retries a failed static step with the
             points held in their last step's cells before it cuts the step.
         linear_solver: ``"direct"`` (MUMPS LU, default) or ``"iterative"`` (GMRES and
@@ -151,7 +158,8 @@ class Simulation:
         mass: str = "consistent",
         reactions: dict[str, int | Callable] | None = None,
         min_step: float | None = None,
-        fallback_line_search: str | None = "bt",
+        line_search: str = "auto",
+        fallback_line_search: str | None = "auto",
         fallback_hold_cells: bool = True,
         linear_solver: str = "direct",
         max_step_cells: float = 10.0,
@@ -160,7 +168,7 @@ class Simulation:
     ):
         model_checks.check_grid_and_points(mesh, points)
         model_checks.check_choices(
-            formulation, mass, points_leaving, linear_solver, fallback_line_search
+            formulation, mass, points_leaving, linear_solver, line_search, fallback_line_search
         )
         model_checks.check_ranges(max_step_cells, ppp_alpha, damping, output_every)
         model_checks.check_dynamics(dynamic, formulation, damping, mass)
@@ -174,7 +182,10 @@ class Simulation:
             points.history.setdefault(name, h.initial_values(len(points)))
         self.mesh, self.points, self.material = mesh, points, material
         self.formulation, self.gdim, self.dynamic = formulation, mesh.geometry.dim, bool(dynamic)
-        self.petsc_options, self.linear_solver = petsc_options, linear_solver
+        if line_search == "auto":
+            line_search = "bt" if material.history else "basic"
+        self.petsc_options = {"snes_linesearch_type": line_search, **(petsc_options or {})}
+        self.linear_solver = linear_solver
         self.max_step_cells, self.min_step = max_step_cells, min_step
         self.timings: dict[str, float] = {}
         self.history: list[StepReport] = []

@@ -120,6 +120,8 @@ def test_other_bad_values():
         fe_mpm.Simulation(mesh, points, material, mass="lumped")
     with pytest.raises(ValueError, match="unknown fallback_line_search 'newton'"):
         fe_mpm.Simulation(mesh, points, material, fallback_line_search="newton")
+    with pytest.raises(ValueError, match="unknown line_search 'newton'; choose one of auto, basic"):
+        fe_mpm.Simulation(mesh, points, material, line_search="newton")
     with pytest.raises(fe_mpm.PointsOutsideError, match="left the grid at set-up"):
         outside = fe_mpm.MaterialPoints(x=[[2.0, 2.0]], volume=[1.0], mass=[1.0])
         fe_mpm.Simulation(mesh, outside, fe_mpm.NeoHookean(1.0, 0.3))
