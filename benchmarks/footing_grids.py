@@ -62,7 +62,7 @@ def run_grid(h: float, steps: int, h_far: float | None = None, progress: bool = 
             "points": len(sim.points),
             "step": r.step,
             "s_over_B": 2.0 * r.t,
-            "q_over_cu": -r.reactions["footing"][1] / 0.5 / 100.0,
+            "q_over_cu": scenes.footing_pressure(r) / 100.0,
             "newton": r.newton_iterations,
             "failed": r.failed_iterations,
             "held": int(r.held_points > 0),

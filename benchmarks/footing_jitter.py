@@ -58,7 +58,7 @@ def run(h: float, h_far: float, steps: int, options: dict) -> tuple[list[dict], 
     except fe_mpm.ConvergenceError as err:
         print(f"  stopped at s/B = {2.0 * sim.t:.2f}: {str(err).split(';')[0]}")
     rows = [
-        {"s_over_B": 2.0 * r.t, "q_over_cu": -r.reactions["footing"][1] / 0.5 / 100.0}
+        {"s_over_B": 2.0 * r.t, "q_over_cu": scenes.footing_pressure(r) / 100.0}
         for r in sim.history
     ]
     wall = time.perf_counter() - t0

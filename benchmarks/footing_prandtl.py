@@ -55,7 +55,7 @@ def plateau(E_over_cu: float, h: float, smooth: bool, edge: bool) -> tuple[float
     reports = sim.run(1.0, STEPS, progress=False)
     wall = time.perf_counter() - t0
     s = np.array([settlement * r.t for r in reports])
-    q = np.array([-r.reactions["footing"][1] / 0.5 / 100.0 for r in reports]) / PRANDTL
+    q = np.array([scenes.footing_pressure(r) / 100.0 for r in reports]) / PRANDTL
     return float(q[s >= settlement / 2 - 1e-12].mean()), wall, np.column_stack([s, q]).tolist()
 
 

@@ -38,7 +38,7 @@ print(json.dumps({
     "iterations": sim.newton_iterations_total,
     "accepted": sum(r.newton_iterations for r in reports),
     "timings": sim.timings,
-    "q": -reports[-1].reactions["footing"][1] / 0.5 / 100.0,
+    "q": scenes.footing_pressure(reports[-1]) / 100.0,
 }))
 """
 

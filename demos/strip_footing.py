@@ -153,7 +153,7 @@ except (ValueError, fe_mpm.ConvergenceError, fe_mpm.PointsOutsideError) as err:
 
 # +
 settlement = np.array([args.settlement * r.t for r in reports])
-q = np.array([-r.reactions["footing"][1] / (B / 2) for r in reports])
+q = np.array([scenes.footing_pressure(r, B) for r in reports])
 s_over_B, q_over_cu = settlement / B, q / args.cu
 iterations = [r.newton_iterations for r in reports]
 # Vertical stress in the soil under the footing, within B/2 of its base.

@@ -16,6 +16,7 @@ from fe_mpm.checks import check_int
 from fe_mpm.formulations import FORMULATIONS
 from fe_mpm.materials import MohrCoulomb, NeoHookean
 from fe_mpm.particles import merge, seed
+from fe_mpm.report import StepReport
 from fe_mpm.simulation import Simulation
 
 
@@ -100,6 +101,16 @@ def cook_membrane(
 def tip_deflection(sim: Simulation) -> float:
     """Vertical displacement of Cook's point A (m)."""
     return float(sim.marker("A")[1] - meshes.COOK_POINT_A[1])
+
+
+def footing_pressure(report: StepReport, B: float = 1.0) -> float:
+    """The mean pressure q = −F_y / (B/2) (Pa) under the half footing of :func:`strip_footing`.
+
+    Args:
+        report: A step's report (its ``reactions["footing"]``, N per metre of strip).
+        B: The footing's full width (m); the model is its half.
+    """
+    return float(-report.reactions["footing"][1] / (B / 2))
 
 
 def strip_footing(

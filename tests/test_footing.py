@@ -48,7 +48,7 @@ def collapse_load(h: float, smooth: bool = False, E_factor: float = 1.0) -> floa
     )
     reports = sim.run(1.0, 20, progress=False)
     s = np.array([settlement * r.t for r in reports])
-    q = np.array([-r.reactions["footing"][1] / 0.5 / 100.0 for r in reports]) / PRANDTL
+    q = np.array([scenes.footing_pressure(r) / 100.0 for r in reports]) / PRANDTL
     return float(q[s >= settlement / 2 - 1e-12].mean())
 
 
