@@ -16,6 +16,7 @@ import numpy as np
 
 from fe_mpm._dolfinx import dolfinx
 from fe_mpm.checks import check_finite, check_int, check_range
+from fe_mpm.parallel import any_rank
 
 #: A boundary point in an empty cell reads an occupied neighbour's field up to this
 #: far outside it (the least barycentric coordinate there): half a cell. The default
@@ -221,12 +222,14 @@ def boundary_facets(
         if facet_tags is None:
             raise ValueError(f"boundary tag {where} given but the mesh has no facet tags")
         facets = facet_tags.find(int(where))
-        if facets.size == 0:
+        # On a distributed mesh a rank may hold none of them: only none anywhere is wrong.
+        if not any_rank(mesh.comm, facets.size > 0):
+            present = set(facet_tags.values.tolist())
+            present = set().union(*mesh.comm.allgather(present))
             raise ValueError(
-                f"boundary tag {where} selects no facets; tags present: "
-                f"{sorted(set(facet_tags.values.tolist()))}"
+                f"boundary tag {where} selects no facets; tags present: {sorted(present)}"
             )
-    if facets.size == 0:
+    if not any_rank(mesh.comm, facets.size > 0):
         raise ValueError("boundary marker selects no exterior facets")
     return np.asarray(facets, dtype=np.int32)
 

@@ -16,5 +16,12 @@ class PointsOutsideError(RuntimeError):
 
 
 def warn(message: str) -> None:
-    """A ``UserWarning`` attributed to the user's line that called into fe_mpm."""
-    warnings.warn(message, skip_file_prefixes=_PACKAGE)
+    """A ``UserWarning`` attributed to the user's line that called into fe_mpm.
+
+    Under MPI only rank 0 warns: fe-mpm reduces what it warns about over the ranks
+    first, so every rank would say the same.
+    """
+    from mpi4py import MPI  # here: importing the errors must stay light
+
+    if MPI.COMM_WORLD.rank == 0:
+        warnings.warn(message, skip_file_prefixes=_PACKAGE)

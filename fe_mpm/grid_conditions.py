@@ -14,11 +14,13 @@ from collections.abc import Callable, Sequence
 import numpy as np
 import ufl
 
+from fe_mpm import parallel
 from fe_mpm._dolfinx import dolfinx
 from fe_mpm.boundary import Dirichlet, Traction, boundary_facets
 from fe_mpm.checks import check_range
 from fe_mpm.errors import warn
 from fe_mpm.formulations import GridFields, constrained_space
+from fe_mpm.transfer import summed_over_ranks
 
 #: A traction's lost share is warned about again when it grows by this much.
 LOST_LOAD_WARNING_STEP = 0.005
@@ -44,7 +46,8 @@ def facet_node_weights(
         measure = 0.5 * np.linalg.norm(np.cross(edges[:, 0], edges[:, 1]), axis=1)
     nodes, index = np.unique(nodes_of, return_inverse=True)
     weights = np.bincount(index.ravel(), weights=np.repeat(measure / g, g), minlength=nodes.size)
-    return nodes, weights / weights.sum()
+    # Over every rank's facets (an exterior facet lies on one rank only).
+    return nodes, weights / parallel.total(mesh.comm, float(weights.sum()))
 
 
 class GridConditions:
@@ -194,7 +197,7 @@ class GridConditions:
         for (spec, _, _), nodes in zip(self.dirichlet, self.dirichlet_nodes, strict=True):
             if np.any(occupied_nodes[nodes]):
                 held[slice(None) if spec.component is None else spec.component] = True
-        return held
+        return parallel.total(self.mesh.comm, held.astype(np.int32)) > 0  # held on some rank
 
     def check_loaded_facets(self, occupied: np.ndarray, t_new: float) -> None:
         """Warn when a grid traction's nodes have no material: their load acts on nothing.
@@ -204,16 +207,22 @@ class GridConditions:
         """
         if not self._traction_nodes:
             return
-        active = np.zeros(self.mesh.geometry.x.shape[0], dtype=bool)
-        active[self.mesh.geometry.dofmaps[0][occupied]] = True
+        uses = np.bincount(
+            self.mesh.geometry.dofmaps[0][occupied].ravel(),
+            minlength=self.mesh.geometry.x.shape[0],
+        ).astype(np.float64)
+        active = summed_over_ranks(self.mesh.geometry.index_map(), uses) > 0
         for i, (nodes, weights) in self._traction_nodes.items():
             idle = ~active[nodes]
-            share = float(weights[idle].sum())
+            share = float(parallel.total(self.mesh.comm, float(weights[idle].sum())))
             self.lost_load[i] = share
             if share > self._warned_share.get(i, 0.0) + LOST_LOAD_WARNING_STEP:
                 self._warned_share[i] = share
+                n_idle, n_nodes = (
+                    parallel.total(self.mesh.comm, k) for k in (idle.sum(), idle.size)
+                )
                 warn(
-                    f"Traction {i - 1}: {idle.sum()} of its {nodes.size} grid nodes carry no "
+                    f"Traction {i - 1}: {n_idle} of its {n_nodes} grid nodes carry no "
                     f"material at the step to t = {t_new:g}, so {100 * share:.1f} % of its "
                     "load is lost (StepReport.lost_load). A grid traction stays on the grid; "
                     "use PointTraction for a load that follows the body."
@@ -229,7 +238,9 @@ class GridConditions:
         if not self.reaction_dofs:
             return {}
         b = residual()
-        return {
-            name: np.array([b[dofs].sum() for dofs in comps])
+        owned = self.fields.W.dofmap.index_map.size_local * self.fields.W.dofmap.index_map_bs
+        comm = self.mesh.comm
+        return {  # each dof once: ghost rows hold partial sums
+            name: np.array([parallel.total(comm, float(b[d[d < owned]].sum())) for d in comps])
             for name, comps in self.reaction_dofs.items()
         }

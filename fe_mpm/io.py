@@ -12,6 +12,8 @@ from __future__ import annotations
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
+from mpi4py import MPI
+
 import numpy as np
 
 from fe_mpm.particles import MaterialPoints
@@ -20,18 +22,29 @@ from fe_mpm.particles import MaterialPoints
 class ParticleWriter:
     """Writes material points as ``<folder>/<name>_NNNNNN.vtu`` plus ``<folder>/<name>.pvd``.
 
+    Under MPI each rank writes its own points as a piece, ``<name>_NNNNNN_rR.vtu``,
+    and rank 0 writes the ``.pvd``, which lists the pieces of a time as its parts
+    (ParaView shows them together); nothing is gathered on one rank.
+
     Args:
         folder: Output folder (created).
         name: File stem.
+        comm: The communicator of the points' grid.
     """
 
-    def __init__(self, folder: str | Path, name: str = "particles"):
+    def __init__(self, folder: str | Path, name: str = "particles", comm: MPI.Comm = MPI.COMM_SELF):
         self.folder = Path(folder)
-        self.folder.mkdir(parents=True, exist_ok=True)
+        self.comm = comm
+        if comm.rank == 0:
+            self.folder.mkdir(parents=True, exist_ok=True)
+            for pattern in ("", "_r*"):  # from an earlier run into the same folder
+                for stale in self.folder.glob(
+                    f"{name}_[0-9][0-9][0-9][0-9][0-9][0-9]{pattern}.vtu"
+                ):
+                    stale.unlink()
+        comm.Barrier()  # the folder exists and is clean before any rank writes
         self.name = name
-        self._entries: list[tuple[float, str]] = []
-        for stale in self.folder.glob(f"{name}_[0-9][0-9][0-9][0-9][0-9][0-9].vtu"):
-            stale.unlink()  # from an earlier run into the same folder
+        self._entries: list[tuple[float, list[str]]] = []
 
     @property
     def pvd(self) -> Path:
@@ -69,12 +82,19 @@ class ParticleWriter:
         data.update({k: v.reshape(n, -1) if v.ndim > 1 else v for k, v in points.history.items()})
         data.update({k: np.asarray(v).reshape(n, -1) for k, v in fields.items()})
         cells = [("vertex", np.arange(n, dtype=np.int64).reshape(-1, 1))]
-        fname = f"{self.name}_{len(self._entries):06d}.vtu"
+        stem = f"{self.name}_{len(self._entries):06d}"
+        names = (
+            [f"{stem}.vtu"]
+            if self.comm.size == 1
+            else [f"{stem}_r{rank}.vtu" for rank in range(self.comm.size)]
+        )
         import meshio  # here: a run that writes nothing need not import it (~60 ms)
 
+        fname = names[self.comm.rank]
         meshio.write(self.folder / fname, meshio.Mesh(xyz, cells, point_data=data))
-        self._entries.append((t, fname))
-        self._write_pvd()
+        self._entries.append((t, names))
+        if self.comm.rank == 0:
+            self._write_pvd()
         return self.folder / fname
 
     def _write_pvd(self) -> None:
@@ -84,8 +104,9 @@ class ParticleWriter:
             "  <Collection>",
         ]
         lines += [
-            f'    <DataSet timestep="{t:.10g}" part="0" file={quoteattr(f)}/>'
-            for t, f in self._entries
+            f'    <DataSet timestep="{t:.10g}" part="{part}" file={quoteattr(f)}/>'
+            for t, names in self._entries
+            for part, f in enumerate(names)
         ]
         lines += ["  </Collection>", "</VTKFile>", ""]
         self.pvd.write_text("\n".join(lines))

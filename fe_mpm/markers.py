@@ -8,20 +8,36 @@ cell, extended linearly to the marker. Demos measure displacements this way
 
 from __future__ import annotations
 
+from mpi4py import MPI
+
 import numpy as np
 
+from fe_mpm import parallel
 from fe_mpm.errors import PointsOutsideError
 
 
 class Markers:
-    """Named markers, each a position (g,) in m and the index of its host point."""
+    """Named markers, each a position (g,) in m and the index of its host point.
 
-    def __init__(self):
+    Under MPI every rank knows every marker's position; the host lives on one rank
+    (the others hold host −1), which moves the marker and shares its new position.
+
+    Args:
+        comm: The communicator of the grid (one rank by default).
+    """
+
+    def __init__(self, comm: MPI.Comm = MPI.COMM_SELF):
+        self.comm = comm
         self._entries: dict[str, tuple[np.ndarray, int]] = {}
 
     def add(self, name: str, x: np.ndarray, points_x: np.ndarray) -> None:
         """Add a marker at ``x`` (g,), hosted by the nearest of the points ``points_x`` (n, g)."""
-        host = int(np.argmin(np.linalg.norm(points_x - x, axis=1)))
+        distance = np.linalg.norm(points_x - x, axis=1)
+        host = int(np.argmin(distance)) if distance.size else -1
+        nearest = float(distance[host]) if distance.size else np.inf
+        if self.comm.size > 1:  # the nearest point of all ranks; ties go to the lowest rank
+            _, rank = self.comm.allreduce((nearest, self.comm.rank), op=MPI.MINLOC)
+            host = host if rank == self.comm.rank else -1
         self._entries[name] = (x.copy(), host)  # a copy: the caller's array must not move
 
     def position(self, name: str) -> np.ndarray:
@@ -42,7 +58,10 @@ class Markers:
         """
         identity = np.eye(points_x.shape[1])
         for xm, host in self._entries.values():
-            xm += du[host] + (dF[host] - identity) @ (xm - points_x[host])
+            move = np.zeros_like(xm)
+            if host >= 0:
+                move = du[host] + (dF[host] - identity) @ (xm - points_x[host])
+            xm += parallel.total(self.comm, move)
 
     def keep_hosts(self, keep: np.ndarray) -> None:
         """Renumber the hosts after the points where ``keep`` (n,) is False are removed.

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from fe_mpm import parallel
 from fe_mpm._dolfinx import dolfinx
 from fe_mpm.boundary import PointDirichlet
 from fe_mpm.checks import check_choice, check_range
@@ -70,22 +71,34 @@ def check_dynamics(dynamic: bool, formulation: str, damping: float, mass: str) -
 
 
 def check_grid_and_points(mesh: dolfinx.mesh.Mesh, points: MaterialPoints) -> None:
-    """One serial rank, a non-empty simplex grid, and points of its dimension."""
-    if mesh.comm.size > 1:
-        # Every rank constructs the simulation, so every rank stops here: no hang.
-        raise NotImplementedError(
-            f"Simulation: fe-mpm runs on one MPI rank for now, and this mesh is "
-            f"distributed over {mesh.comm.size}. Run without mpiexec, or build the "
-            "mesh on MPI.COMM_SELF to run independent serial simulations per rank."
-        )
+    """A non-empty simplex grid, and points of its dimension (on some rank)."""
     if mesh.topology.index_map(mesh.topology.dim).size_global == 0:
         raise ValueError("Simulation: the mesh is empty (it has no cells)")
     simplex_cell_type(mesh)
-    if len(points) == 0:
+    if parallel.total(mesh.comm, len(points)) == 0:
         raise ValueError("Simulation: there are no material points")
     if points.gdim != mesh.geometry.dim:
         raise ValueError(
             f"Simulation: points are {points.gdim}D but the mesh is {mesh.geometry.dim}D"
+        )
+
+
+def check_serial_only(comm, features: dict[str, bool]) -> None:
+    """Refuse, on every rank alike, what does not run on a distributed mesh yet.
+
+    Every rank passes the same arguments, so every rank refuses: none waits for
+    the others in a collective call.
+
+    Args:
+        comm: The mesh's communicator.
+        features: What the simulation asks for, description -> whether it is used.
+    """
+    used = [name for name, on in features.items() if on]
+    if comm.size > 1 and used:
+        raise NotImplementedError(
+            f"Simulation: on a mesh distributed over {comm.size} MPI ranks, fe-mpm runs "
+            "static u and up scenes with grid supports and loads; not yet "
+            f"{', '.join(used)}. Run on one rank (without mpiexec) for these."
         )
 
 

@@ -28,9 +28,9 @@ class SimulationOutput:
     def __init__(self, folder: str | Path, fields: GridFields, every: int = 1):
         self.folder, self.fields, self.every = Path(folder), fields, int(every)
         self._written_step = -1
-        self._points = ParticleWriter(self.folder)
-        self._grid, self._maps = self._grid_functions()
         comm = fields.W.mesh.comm
+        self._points = ParticleWriter(self.folder, comm=comm)
+        self._grid, self._maps = self._grid_functions()
         self._writers = [
             dolfinx.io.VTXWriter(comm, self.folder / "grid.bp", self._grid[:1], engine="BP4")
         ]

@@ -54,7 +54,8 @@ def gather(f: dolfinx.fem.Function, cells: np.ndarray) -> np.ndarray:
     mixed elements of these on simplices), which is all fe-mpm uses.
     """
     dofmap = f.function_space.dofmap
-    return f.x.array.reshape(-1, dofmap.bs)[dofmap.list[cells]].reshape(len(cells), -1)
+    width = dofmap.dof_layout.num_dofs * dofmap.bs  # explicit: a rank may bind no cells
+    return f.x.array.reshape(-1, dofmap.bs)[dofmap.list[cells]].reshape(len(cells), width)
 
 
 def is_slot_field(c) -> bool:

@@ -9,8 +9,11 @@ material points; the grid is reset simply by never moving it).
 
 from __future__ import annotations
 
+from mpi4py import MPI
+
 import numpy as np
 
+from fe_mpm import parallel
 from fe_mpm.dynamics import NewmarkDynamics
 from fe_mpm.errors import ConvergenceError
 from fe_mpm.markers import Markers
@@ -26,6 +29,7 @@ def checked_update(
     max_step_cells: float | None,
     step: int,
     t: float,
+    comm: MPI.Comm = MPI.COMM_SELF,
 ) -> PointUpdate:
     """The points' new state from the evaluated update vector, once it passes the checks.
 
@@ -38,37 +42,56 @@ def checked_update(
             no limit (dynamics).
         step: The step's number, for messages.
         t: Its end time, for messages.
+        comm: The grid's communicator: a check that fails on one rank stops them all.
 
     Raises:
         ConvergenceError: A value is not finite, a point moves farther than
             ``max_step_cells``, or ``det ΔF <= 0``; the message names the first point.
     """
+    error = None
     if not np.all(np.isfinite(values)):
         bad = np.flatnonzero(~np.all(np.isfinite(values), axis=1))
-        raise ConvergenceError(
+        error = ConvergenceError(
             f"non-finite state at {bad.size} material point(s) in step {step} (t = {t:g}); "
             f"first: point {bad[0]} at x = {points.x[bad[0]]}. Nothing was updated."
         )
+    parallel.raise_together(comm, error)
     new = layout.decode(values)
-    if max_step_cells is not None:
-        cells_moved = np.linalg.norm(new.du, axis=1) / cell_sizes
-        far = int(np.argmax(cells_moved))
-        if cells_moved[far] > max_step_cells:
-            raise ConvergenceError(
-                f"point {far} (x = {points.x[far]}) would move "
-                f"{cells_moved[far]:.3g} cell sizes ({np.linalg.norm(new.du[far]):.3g} m) in "
-                f"static step {step} (t = {t:g}), more than max_step_cells = "
-                f"{max_step_cells:g}: a grid value blew up (e.g. at a node with "
-                "almost no material). Nothing was updated."
-            )
+    parallel.raise_together(comm, _moved_too_far(new, points, cell_sizes, max_step_cells, step, t))
     det_dF = np.linalg.det(new.dF)
+    error = None
     if np.any(det_dF <= 0):
         bad = np.flatnonzero(det_dF <= 0)[0]
-        raise ConvergenceError(
+        error = ConvergenceError(
             f"det(ΔF) <= 0 at point {bad} (x = {points.x[bad]}) in step {step} "
             f"(t = {t:g}): the step inverts material; take smaller steps."
         )
+    parallel.raise_together(comm, error)
     return new
+
+
+def _moved_too_far(
+    new: PointUpdate,
+    points: MaterialPoints,
+    cell_sizes: np.ndarray,
+    max_step_cells: float | None,
+    step: int,
+    t: float,
+) -> ConvergenceError | None:
+    """The error for a point that moves more than ``max_step_cells`` of its cell, or None."""
+    if max_step_cells is None or len(points) == 0:
+        return None
+    cells_moved = np.linalg.norm(new.du, axis=1) / cell_sizes
+    far = int(np.argmax(cells_moved))
+    if cells_moved[far] <= max_step_cells:
+        return None
+    return ConvergenceError(
+        f"point {far} (x = {points.x[far]}) would move "
+        f"{cells_moved[far]:.3g} cell sizes ({np.linalg.norm(new.du[far]):.3g} m) in "
+        f"static step {step} (t = {t:g}), more than max_step_cells = "
+        f"{max_step_cells:g}: a grid value blew up (e.g. at a node with "
+        "almost no material). Nothing was updated."
+    )
 
 
 def apply_update(

@@ -27,11 +27,14 @@ from __future__ import annotations
 import weakref
 from dataclasses import dataclass
 
+from mpi4py import MPI
+
 import basix
 import basix.ufl
 import numpy as np
 import ufl
 
+from fe_mpm import parallel
 from fe_mpm._dolfinx import dolfinx
 
 #: Slot counts are rounded up to one of these, so a slowly growing maximum
@@ -62,23 +65,36 @@ def bucket(count: int) -> int:
     )
 
 
-def slot_count(counts: np.ndarray, current: int | None = None) -> int:
+def slot_count(counts: np.ndarray, current: int | None = None, comm: MPI.Comm | None = None) -> int:
     """Slots per entity for cells holding ``counts`` points.
 
     Minimises ``slots + ENTITY_COST · entities`` over :data:`SLOT_BUCKETS` (up to the
     fullest cell's bucket). The ``current`` count is kept unless another saves a
-    fifth of that cost, so a changing layout seldom recompiles.
+    fifth of that cost, so a changing layout seldom recompiles. With ``comm``, the
+    cells of every rank count, so every rank gets the same answer (its forms are
+    compiled collectively).
     """
+    comm = MPI.COMM_SELF if comm is None else comm
     counts = np.asarray(counts)
     counts = counts[counts > 0]
-    if counts.size == 0:
+    error = None
+    if counts.size and counts.max() > SLOT_BUCKETS[-1]:
+        try:
+            bucket(int(counts.max()))
+        except ValueError as err:
+            error = err
+    parallel.raise_together(comm, error)
+    # Cells by number of points: the cost depends on nothing else, and sums over ranks.
+    cells_holding = parallel.total(comm, np.bincount(counts, minlength=SLOT_BUCKETS[-1] + 1))
+    held = np.flatnonzero(cells_holding)
+    if held.size == 0:
         return current or 1
 
     def cost(nslot: int) -> float:
-        entities = np.ceil(counts / nslot).sum()
+        entities = (cells_holding[held] * np.ceil(held / nslot)).sum()
         return entities * (nslot + ENTITY_COST)
 
-    candidates = [b for b in SLOT_BUCKETS if b <= bucket(int(counts.max()))]
+    candidates = [b for b in SLOT_BUCKETS if b <= bucket(int(held.max()))]
     best = min(candidates, key=cost)
     if current is not None and cost(best) > SLOT_CHANGE_SAVING * cost(current):
         return current

@@ -4,8 +4,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from mpi4py import MPI
+
 import numpy as np
 
+from fe_mpm import parallel
 from fe_mpm._dolfinx import dolfinx
 from fe_mpm.errors import ConvergenceError
 from fe_mpm.force_test import NewtonResult
@@ -87,6 +90,7 @@ class StepReport:
             conditions: The :class:`~fe_mpm.grid_conditions.GridConditions`, whose
                 ``lost_load`` is keyed by the tractions' tags, i + 1 for ``Traction i``.
         """
+        comm = markers.comm  # counts are over every rank
         lost = {
             f"Traction {i - 1}": share for i, share in conditions.lost_load.items() if share > 0
         }
@@ -97,10 +101,10 @@ class StepReport:
             residual_norms=result.residual_norms,
             markers=markers.positions(),
             nslot=current.forms.q.nslot,
-            occupied_cells=current.layout.occupied.size,
+            occupied_cells=parallel.total(comm, int(current.layout.occupied.size)),
             dt=current.dt,
             reactions=reactions,
-            held_points=tracking.held_points,
+            held_points=parallel.total(comm, int(tracking.held_points)),
             converged_reason=result.reason,
             force_scale=result.force_scale,
             relative_residual=result.relative_residual,
@@ -134,10 +138,11 @@ def newton_failure(
 
 
 class ProgressBar:
-    """A run's progress in steps (tqdm), or nothing when ``enabled`` is False."""
+    """A run's progress in steps (tqdm), or nothing when ``enabled`` is False or off rank 0."""
 
     def __init__(self, n_steps: int, enabled: bool = True):
         self._bar = None
+        enabled = enabled and MPI.COMM_WORLD.rank == 0
         if enabled:
             from tqdm.auto import tqdm
 

@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from fe_mpm import model_checks
+from fe_mpm import model_checks, parallel
 from fe_mpm._dolfinx import dolfinx
 from fe_mpm.boundary import Dirichlet, PointDirichlet, PointTraction, Traction
 from fe_mpm.boundary_points import BoundaryPointStep
@@ -176,6 +176,18 @@ class Simulation:
         model_checks.check_domains(
             point_domains, ghost_penalty, points, points_leaving, self.spec.u_degree
         )
+        model_checks.check_serial_only(
+            mesh.comm,
+            {
+                "dynamic=True": bool(dynamic),
+                f"formulation {formulation!r}": formulation not in ("u", "up"),
+                "point_domains=True": bool(point_domains),
+                "a ghost penalty": bool(ghost_penalty),
+                "PointDirichlet or PointTraction": bool(point_dirichlet or point_tractions),
+                "linear_solver='iterative'": linear_solver != "direct",
+                "points_leaving='drop'": points_leaving != "raise",
+            },
+        )
         model_checks.check_law(material, self.spec, formulation)
         model_checks.take_density(material, points)
         for name, h in material.history.items():
@@ -194,7 +206,7 @@ class Simulation:
         t0 = time.perf_counter()
         self.tracker = Tracker(mesh)
         self.tracking = PointTracking(self.tracker, points_leaving)
-        self.markers = Markers()
+        self.markers = Markers(mesh.comm)
         self.fields = GridFields(mesh, self.spec)
         self.ladder = RetryLadder(fallback_line_search, bool(fallback_hold_cells))
         self.dynamics = None
@@ -232,7 +244,7 @@ class Simulation:
         Read it from ``history[k].markers[name]`` or :meth:`marker`.
         """
         xm = check_finite("Simulation.add_marker", f"x of marker {name!r}", x).reshape(self.gdim)
-        if self.tracker.locate(xm[None, :])[0] < 0:
+        if not parallel.any_rank(self.mesh.comm, self.tracker.locate(xm[None, :])[0] >= 0):
             raise PointsOutsideError(f"marker {name!r} at {xm} is outside the grid")
         self.markers.add(name, xm, self.points.x)
 
@@ -311,7 +323,8 @@ class Simulation:
             self._consistent_initial_acceleration(forms, layout, R, bcs, dt)
         # Solve for the grid increment: Newton from Δu = 0.
         result = self._solve(forms, R, J, bcs)
-        if not result.converged or not np.all(np.isfinite(self.w.x.array)):
+        finite = not parallel.any_rank(self.mesh.comm, not np.all(np.isfinite(self.w.x.array)))
+        if not result.converged or not finite:
             raise newton_failure(
                 result, k, self.t, t_new, self.mesh, layout, self.tracker.centroids
             )
@@ -418,7 +431,7 @@ class Simulation:
             pattern = forms.jacobian.bind_cells(np.arange(self.tracker.num_cells, dtype=np.int32))
             options = (self.petsc_options, self.timings, self.linear_solver, self.fields.U)
             coupling = None if self.ghost is None else self.ghost.pattern
-            size = self.tracker.sizes.max()
+            size = parallel.largest(self.mesh.comm, float(self.tracker.sizes.max()))
             self._newton = NewtonSolver(self.w, pattern, prefix, *options, size, coupling)
 
         def attempt(search: str | None) -> NewtonResult:
@@ -461,7 +474,9 @@ class Simulation:
         values, pts, rm = forms.update.evaluate(layout), self.points, self._current.return_map
         limit = None if self.dynamic else self.max_step_cells
         sizes = self.tracker.sizes[layout.cell]
-        new = checked_update(values, forms.update_layout, pts, sizes, limit, step, t)
+        new = checked_update(
+            values, forms.update_layout, pts, sizes, limit, step, t, self.mesh.comm
+        )
         apply_update(pts, new, self.markers, self.dynamics, dt, rm and rm.result.history)
 
     def _write_output(self, force: bool = False) -> None:
@@ -480,7 +495,7 @@ class Simulation:
     @property
     def dropped(self) -> int:
         """Points removed so far because they left the grid (``points_leaving="drop"``)."""
-        return self.tracking.dropped
+        return parallel.total(self.mesh.comm, int(self.tracking.dropped))
 
     @property
     def w(self) -> dolfinx.fem.Function:

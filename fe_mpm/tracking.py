@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from fe_mpm import parallel
 from fe_mpm._dolfinx import dolfinx
 from fe_mpm.errors import ConvergenceError, PointsOutsideError, warn
 from fe_mpm.formulations import FormulationSpec
@@ -68,12 +69,23 @@ class PointTracking:
             self.held_points = int(np.count_nonzero(held != cells))
             cells = held
         outside = np.flatnonzero(cells < 0)
-        if outside.size:
-            cells = self._drop(
-                points, markers, cells, outside, f"step {step} (t = {t:g})" if step else "set-up"
-            )
+        where = f"step {step} (t = {t:g})" if step else "set-up"
+        comm = self.tracker.mesh.comm
+        if comm.size > 1:
+            # A point in another rank's cells is not found here either, and points do
+            # not move between ranks yet: every rank stops, with the same message.
+            error = None
+            if outside.size:
+                error = PointsOutsideError(
+                    f"{_outside_message(points, outside, where)}. On {comm.size} MPI ranks this "
+                    "also means a point moved into another rank's cells: moving points "
+                    "between ranks is not implemented yet; run on one rank"
+                )
+            parallel.raise_together(comm, error)
+        elif outside.size:
+            cells = self._drop(points, markers, cells, outside, where)
         points.cell = cells
-        self._nslot = slot_count(np.bincount(cells), self._nslot)
+        self._nslot = slot_count(np.bincount(cells), self._nslot, comm)
         return SlotLayout.from_cells(cells, self._nslot)
 
     def _drop(
@@ -85,11 +97,7 @@ class PointTracking:
         where: str,
     ) -> np.ndarray:
         """Refuse, or remove with a warning, the points outside the grid; the kept cells."""
-        first = outside[0]
-        msg = (
-            f"{outside.size} material point(s) left the grid at {where}; first: "
-            f"point {first} at x = {points.x[first]}"
-        )
+        msg = _outside_message(points, outside, where)
         if self.points_leaving == "raise":
             raise PointsOutsideError(msg + ". Pass points_leaving='drop' to remove them.")
         warn(msg + "; dropped.")
@@ -100,6 +108,14 @@ class PointTracking:
         if len(points) == 0:
             raise PointsOutsideError(f"all material points have left the grid at {where}")
         return cells[keep]
+
+
+def _outside_message(points: MaterialPoints, outside: np.ndarray, where: str) -> str:
+    first = outside[0]
+    return (
+        f"{outside.size} material point(s) left the grid at {where}; first: "
+        f"point {first} at x = {points.x[first]}"
+    )
 
 
 def check_points_per_cell(

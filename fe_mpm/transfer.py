@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from fe_mpm import parallel
 from fe_mpm._dolfinx import dolfinx
 
 
@@ -33,6 +34,27 @@ def nodal_shares(
     return nodes, shares, space.dofmap.index_map.size_local + space.dofmap.index_map.num_ghosts
 
 
+def summed_over_ranks(
+    space: dolfinx.fem.FunctionSpace | dolfinx.common.IndexMap, nodal: np.ndarray
+) -> np.ndarray:
+    """Nodal sums (nodes,) or (nodes, k) of this rank's points, completed with the other ranks'.
+
+    A node on a rank boundary gets points from the cells of both ranks: the owner adds
+    the ghosts' partial sums (a reverse scatter) and sends the total back (a forward
+    one). ``space`` is a scalar space (block size 1) or the nodes' index map (e.g. the
+    geometry's). On one rank the sums are returned unchanged.
+    """
+    index_map = getattr(getattr(space, "dofmap", None), "index_map", space)
+    if index_map.comm.size == 1:
+        return nodal
+    k = 1 if nodal.ndim == 1 else nodal.shape[1]
+    vector = dolfinx.la.vector(index_map, bs=k)
+    vector.array[:] = nodal.ravel()
+    vector.scatter_reverse(dolfinx.la.InsertMode.add)
+    vector.scatter_forward()
+    return vector.array.reshape(nodal.shape).copy()
+
+
 def mass_weighted_projection(
     space: dolfinx.fem.FunctionSpace,
     cells: np.ndarray,
@@ -54,7 +76,7 @@ def mass_weighted_projection(
         masses ``Σ_p N_I m_p`` ``(nodes,)``.
     """
     nodes, weights, n = nodal_shares(space, cells, bary, mass)
-    nodal_mass = np.bincount(nodes, weights=weights, minlength=n)
+    nodal_mass = summed_over_ranks(space, np.bincount(nodes, weights=weights, minlength=n))
     repeated = np.repeat(values, space.dofmap.list.shape[1], axis=0)
     moment = np.stack(
         [
@@ -63,6 +85,7 @@ def mass_weighted_projection(
         ],
         axis=1,
     )
+    moment = summed_over_ranks(space, moment)
     nodal = np.divide(
         moment, nodal_mass[:, None], out=np.zeros_like(moment), where=nodal_mass[:, None] > 0
     )
@@ -78,7 +101,9 @@ def nodal_sum_norm(
     in Newton's test (m³; m² in 2D).
     """
     nodes, shares, n = nodal_shares(space, cells, bary, weights)
-    return float(np.linalg.norm(np.bincount(nodes, weights=shares, minlength=n)))
+    sums = summed_over_ranks(space, np.bincount(nodes, weights=shares, minlength=n))
+    owned = sums[: space.dofmap.index_map.size_local]  # each node once
+    return float(np.sqrt(parallel.total(space.mesh.comm, float(owned @ owned))))
 
 
 def second_moments(vertices: np.ndarray, x: np.ndarray, bary: np.ndarray) -> np.ndarray:

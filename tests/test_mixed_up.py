@@ -131,7 +131,7 @@ def test_splitting_cells_into_entities_changes_nothing(monkeypatch):
 
     tips = {}
     for nslot in (6, 2):
-        monkeypatch.setattr(fe_mpm.tracking, "slot_count", lambda counts, current, n=nslot: n)
+        monkeypatch.setattr(fe_mpm.tracking, "slot_count", lambda counts, current, comm, n=nslot: n)
         sim = scenes.cook_membrane(8, 0.499, "up", per_cell=6)  # not cook(): it is cached
         (report,) = sim.run(progress=False)
         assert report.nslot == nslot

@@ -1,0 +1,62 @@
+"""What the ranks of a distributed run must agree on, in one place.
+
+A simulation on a mesh shared by several MPI ranks runs the same Python on every
+rank, and every collective call (a form's compilation, a PETSc solve, a norm) must
+be reached by all of them. So a decision taken from local data (a point that left
+the grid, a rank with no loaded facets, the slot count) is reduced first, and an
+error found on one rank is raised on every rank, with the message of the lowest
+rank that found one. On one rank every function here is the serial identity.
+"""
+
+from __future__ import annotations
+
+from mpi4py import MPI
+
+import numpy as np
+
+
+def any_rank(comm: MPI.Comm, flag: bool) -> bool:
+    """Whether ``flag`` is true on some rank."""
+    return bool(flag) if comm.size == 1 else bool(comm.allreduce(bool(flag), op=MPI.LOR))
+
+
+def total(comm: MPI.Comm, value):
+    """The sum of ``value`` (a number or an array) over the ranks."""
+    if comm.size == 1:
+        return value
+    if np.ndim(value) == 0:
+        return comm.allreduce(value, op=MPI.SUM)
+    local = np.ascontiguousarray(value)
+    out = np.empty_like(local)
+    comm.Allreduce(local, out, op=MPI.SUM)
+    return out
+
+
+def largest(comm: MPI.Comm, value: float) -> float:
+    """The maximum of a number over the ranks."""
+    return value if comm.size == 1 else comm.allreduce(value, op=MPI.MAX)
+
+
+def raise_together(comm: MPI.Comm, error: Exception | None) -> None:
+    """Raise on every rank if ``error`` is set on some rank; return otherwise.
+
+    The lowest rank with an error gives the type and message; the other ranks raise
+    an exception of that type (its class must take a message) naming that rank.
+    """
+    if comm.size == 1:
+        if error is not None:
+            raise error
+        return
+    found = comm.allgather(None if error is None else (type(error), str(error)))
+    first = next(((rank, e) for rank, e in enumerate(found) if e is not None), None)
+    if first is None:
+        return
+    rank, (kind, message) = first
+    if rank == comm.rank:
+        raise error
+    raise kind(f"(on rank {rank}) {message}")
+
+
+def on_rank_zero(comm: MPI.Comm) -> bool:
+    """Whether this rank prints and writes the run's shared files (rank 0)."""
+    return comm.rank == 0
