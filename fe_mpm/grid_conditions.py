@@ -218,8 +218,9 @@ class GridConditions:
             self.lost_load[i] = share
             if share > self._warned_share.get(i, 0.0) + LOST_LOAD_WARNING_STEP:
                 self._warned_share[i] = share
+                owned = nodes < self.mesh.geometry.index_map().size_local  # each node once
                 n_idle, n_nodes = (
-                    parallel.total(self.mesh.comm, k) for k in (idle.sum(), idle.size)
+                    parallel.total(self.mesh.comm, int(k)) for k in (idle[owned].sum(), owned.sum())
                 )
                 warn(
                     f"Traction {i - 1}: {n_idle} of its {n_nodes} grid nodes carry no "

@@ -63,14 +63,33 @@ class Markers:
                 move = du[host] + (dF[host] - identity) @ (xm - points_x[host])
             xm += parallel.total(self.comm, move)
 
-    def keep_hosts(self, keep: np.ndarray) -> None:
+    def keep_hosts(self, keep: np.ndarray, moved_away: bool = False) -> None:
         """Renumber the hosts after the points where ``keep`` (n,) is False are removed.
 
+        Args:
+            keep: Which of this rank's points stay (n,).
+            moved_away: The removed points went to another rank (migration), which
+                takes over their markers; False: they left the grid.
+
         Raises:
-            PointsOutsideError: A marker's host is among the removed points.
+            PointsOutsideError: A marker's host left the grid.
         """
         new_index = np.cumsum(keep) - 1
         for name, (xm, host) in self._entries.items():
+            if host < 0:
+                continue
             if not keep[host]:
-                raise PointsOutsideError(f"the host point of marker {name!r} left the grid")
-            self._entries[name] = (xm, int(new_index[host]))
+                if not moved_away:
+                    raise PointsOutsideError(f"the host point of marker {name!r} left the grid")
+                self._entries[name] = (xm, -1)
+            else:
+                self._entries[name] = (xm, int(new_index[host]))
+
+    def hosts(self) -> dict[str, int]:
+        """The markers hosted by this rank's points, name -> the host's index."""
+        return {name: host for name, (_, host) in self._entries.items() if host >= 0}
+
+    def set_host(self, name: str, host: int) -> None:
+        """Host the marker ``name`` by this rank's point ``host`` (it arrived here)."""
+        xm, _ = self._entries[name]
+        self._entries[name] = (xm, int(host))

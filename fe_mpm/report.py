@@ -33,6 +33,8 @@ class StepReport:
             (N, per unit thickness in 2D).
         held_points: Points integrated in their last step's cell instead of the
             one they are in (nonzero only in a step retried without re-binning).
+        migrated_points: Points that moved to another MPI rank's cells before the
+            step and were sent there (all ranks together; 0 on one rank).
         converged_reason: Why Newton stopped, e.g. ``"‖R‖ = 2.1e-13 of the force
             scale 1.962e+04"`` (see :class:`fe_mpm.newton.ForceTest`).
         force_scale: The forces in play at the last iterate, S = max(‖f_ext‖,
@@ -59,6 +61,7 @@ class StepReport:
     dt: float = 0.0
     reactions: dict[str, np.ndarray] = field(default_factory=dict)
     held_points: int = 0
+    migrated_points: int = 0
     converged_reason: str = ""
     force_scale: float = 0.0
     relative_residual: float = 0.0
@@ -105,6 +108,7 @@ class StepReport:
             dt=current.dt,
             reactions=reactions,
             held_points=parallel.total(comm, int(tracking.held_points)),
+            migrated_points=tracking.migrated,
             converged_reason=result.reason,
             force_scale=result.force_scale,
             relative_residual=result.relative_residual,

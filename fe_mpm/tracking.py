@@ -16,6 +16,7 @@ from fe_mpm._dolfinx import dolfinx
 from fe_mpm.errors import ConvergenceError, PointsOutsideError, warn
 from fe_mpm.formulations import FormulationSpec
 from fe_mpm.markers import Markers
+from fe_mpm.migration import migrate
 from fe_mpm.particles import MaterialPoints
 from fe_mpm.quadrature import SlotLayout, slot_count
 from fe_mpm.tracker import Tracker
@@ -40,6 +41,7 @@ class PointTracking:
         self.tracker, self.points_leaving = tracker, points_leaving
         self.held_points = 0
         self.dropped = 0
+        self.migrated = 0  # points that moved between ranks at the last tracking
         self._nslot: int | None = None  # slots per entity, kept while they suit
 
     def track(
@@ -62,6 +64,11 @@ class PointTracking:
                 within :data:`HOLD_REACH` of it.
         """
         cells = self.tracker.locate(points.x, points.cell)
+        # Points in another rank's cells go there (before holding: a held point's
+        # old cell is a cell of this rank).
+        cells, self.migrated = migrate(points, markers, self.tracker, cells)
+        if self.migrated:
+            hold = None  # the old cells no longer match the points
         self.held_points = 0
         if hold is not None and hold.size == cells.size and np.all(cells >= 0):
             near = self.tracker.barycentric(points.x, hold).min(axis=1) >= -HOLD_REACH
@@ -72,14 +79,12 @@ class PointTracking:
         where = f"step {step} (t = {t:g})" if step else "set-up"
         comm = self.tracker.mesh.comm
         if comm.size > 1:
-            # A point in another rank's cells is not found here either, and points do
-            # not move between ranks yet: every rank stops, with the same message.
+            # A point left here is in no rank's cells: every rank stops, with one message.
             error = None
             if outside.size:
                 error = PointsOutsideError(
-                    f"{_outside_message(points, outside, where)}. On {comm.size} MPI ranks this "
-                    "also means a point moved into another rank's cells: moving points "
-                    "between ranks is not implemented yet; run on one rank"
+                    f"{_outside_message(points, outside, where)} (on {comm.size} MPI ranks: "
+                    "in no rank's cells). Dropping points is not distributed yet."
                 )
             parallel.raise_together(comm, error)
         elif outside.size:

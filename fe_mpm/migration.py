@@ -1,0 +1,96 @@
+"""Points that move into another rank's cells go to that rank, with everything they carry.
+
+On a distributed grid each rank holds the points of the cells it owns. After a step
+a point may lie in a cell of another rank; the tracker, which searches this rank's
+cells, then does not find it. :func:`migrate` asks DOLFINx which rank owns the cell
+of each such point (``dolfinx.geometry.determine_point_ownership``, collective) and
+sends the point there: position, mass, volume, F, stress, velocity, acceleration,
+its initial position, its history, and the markers it hosts. Received points are
+appended in the order of the sending ranks, so a run is reproducible for a given
+number of ranks. A point that no rank's cell holds stays lost (cell −1), for the
+caller to report.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from fe_mpm import parallel
+from fe_mpm._dolfinx import dolfinx
+from fe_mpm.markers import Markers
+from fe_mpm.particles import PER_POINT_FIELDS, MaterialPoints
+from fe_mpm.tracker import Tracker
+
+#: Padding of the cells' bounding boxes in the ownership search, in cell sizes: a point
+#: on a facet between ranks still finds a candidate.
+PADDING = 1e-6
+
+
+def migrate(
+    points: MaterialPoints, markers: Markers, tracker: Tracker, cells: np.ndarray
+) -> tuple[np.ndarray, int]:
+    """Send the points this rank did not find (``cells < 0``) to the ranks that own them.
+
+    Collective: every rank calls it at every tracking, even with nothing to send.
+
+    Args:
+        points: This rank's points, changed in place (sent ones removed, received
+            ones appended).
+        markers: Their hosts follow the points.
+        tracker: This rank's point locator (it finds the received points' cells).
+        cells: Each point's cell on this rank, or −1 (n,).
+
+    Returns:
+        The cells of this rank's points after the exchange (−1: in no rank's cell),
+        and the number of points that moved between ranks (all ranks together).
+    """
+    comm = tracker.mesh.comm
+    lost = np.flatnonzero(cells < 0)
+    if comm.size == 1 or not parallel.any_rank(comm, lost.size > 0):
+        return cells, 0
+    g = points.gdim
+    x3 = np.zeros((lost.size, 3))
+    x3[:, :g] = points.x[lost]
+    padding = PADDING * parallel.largest(comm, float(tracker.sizes.max()))
+    owner = dolfinx.geometry.determine_point_ownership(tracker.mesh, x3, padding).src_owner
+    # A point owned here after all (on a facet the walk missed) is not sent.
+    sent = lost[(owner >= 0) & (owner != comm.rank)]
+    destination = owner[(owner >= 0) & (owner != comm.rank)]
+    hosted = markers.hosts()
+    outgoing = []
+    for rank in range(comm.size):
+        rows = sent[destination == rank]
+        outgoing.append(None if rows.size == 0 else _pack(points, rows, hosted))
+    incoming = comm.alltoall(outgoing)
+    keep = np.ones(len(points), dtype=bool)
+    keep[sent] = False
+    markers.keep_hosts(keep, moved_away=True)
+    points.keep(keep)
+    cells = cells[keep]
+    for data in incoming:
+        if data is not None:
+            cells = _append(points, markers, tracker, cells, data)
+    return cells, int(parallel.total(comm, int(sent.size)))
+
+
+def _pack(points: MaterialPoints, rows: np.ndarray, hosted: dict[str, int]) -> dict:
+    """The data of the points ``rows``, with the markers they host (by position in ``rows``)."""
+    data = {name: getattr(points, name)[rows] for name in PER_POINT_FIELDS}
+    data["history"] = {name: values[rows] for name, values in points.history.items()}
+    where = {int(row): i for i, row in enumerate(rows)}
+    data["markers"] = {name: where[host] for name, host in hosted.items() if host in where}
+    return data
+
+
+def _append(
+    points: MaterialPoints, markers: Markers, tracker: Tracker, cells: np.ndarray, data: dict
+) -> np.ndarray:
+    """Append received points; their cells are looked up here."""
+    start = len(points)
+    for name in PER_POINT_FIELDS:
+        setattr(points, name, np.concatenate([getattr(points, name), data[name]]))
+    for name in points.history:
+        points.history[name] = np.concatenate([points.history[name], data["history"][name]])
+    for name, i in data["markers"].items():
+        markers.set_host(name, start + i)
+    return np.concatenate([cells, tracker.locate(data["x"])])
