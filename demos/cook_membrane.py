@@ -185,6 +185,8 @@ if reference is not None:
 else:
     print()
 print(f"  Newton iterations per step: {iterations}")
+if scene.mesh.comm.size > 1:  # each rank integrates its own points
+    print(f"  points per rank, most over mean: {max(r.point_imbalance for r in reports):.2f}")
 print(f"  wall time {wall:.2f} s; " + ", ".join(f"{k} {v:.3f} s" for k, v in sim.timings.items()))
 
 if not args.no_output and rank0:
@@ -216,6 +218,8 @@ summary = {
     "newton_iterations": int(sum(iterations)),
     "newton_iterations_per_step": iterations,
     "wall_time_s": wall,
+    "timings": sim.timings,
+    "point_imbalance": max(r.point_imbalance for r in reports),
     "n_particles": n_points,
     "n": args.n,
     "nu": args.nu,

@@ -30,7 +30,10 @@
 # held in their last cells (no re-binning, `Simulation.step(rebin=False)`), and only
 # then cuts it.
 #
-# Usage: `python demos/strip_footing.py --formulation up --steps 100 --json`.
+# Usage: `python demos/strip_footing.py --formulation up --steps 100 --json`. Under
+# `mpiexec -n 2 python -m mpi4py demos/strip_footing.py` the grid, its points and the
+# footing's boundary points are shared among the ranks and the answer is the serial
+# one; rank 0 prints and writes the files.
 
 # +
 import time
@@ -39,13 +42,16 @@ START = time.perf_counter()
 
 import argparse
 import json
+import os
 import sys
 from pathlib import Path
+
+from mpi4py import MPI
 
 import numpy as np
 
 import fe_mpm
-from fe_mpm import scenes
+from fe_mpm import parallel, scenes
 from fe_mpm.diagnostics import stress_oscillation
 from fe_mpm.plotting import pyplot
 
@@ -97,6 +103,9 @@ def parse_args(argv=None):
 
 
 args = parse_args()
+rank0 = MPI.COMM_WORLD.rank == 0
+if not rank0:  # every rank runs this script; one prints
+    sys.stdout = open(os.devnull, "w")  # noqa: SIM115
 # -
 
 # ## Scene
@@ -156,13 +165,16 @@ settlement = np.array([args.settlement * r.t for r in reports])
 q = np.array([scenes.footing_pressure(r, B) for r in reports])
 s_over_B, q_over_cu = settlement / B, q / args.cu
 iterations = [r.newton_iterations for r in reports]
-# Vertical stress in the soil under the footing, within B/2 of its base.
-below = (points.x[:, 0] < B / 2) & (points.x[:, 1] > -args.settlement - B / 2)
-sigma_yy = points.stress[below, 1, 1] / args.cu
-oscillation = stress_oscillation(points.x[below], points.stress[below, 1, 1]) / args.cu
+# Vertical stress in the soil under the footing, within B/2 of its base (each rank
+# holds the points of its cells: gather them).
+x, sigma = (parallel.gathered(sim.mesh.comm, a) for a in (points.x, points.stress[:, 1, 1]))
+below = (x[:, 0] < B / 2) & (x[:, 1] > -args.settlement - B / 2)
+sigma_yy = sigma[below] / args.cu
+oscillation = stress_oscillation(x[below], sigma[below]) / args.cu
+n_points = len(x)
 wall = time.perf_counter() - START
 print(
-    f"Strip footing, {args.formulation}: {len(points)} points, {len(reports)} steps, "
+    f"Strip footing, {args.formulation}: {n_points} points, {len(reports)} steps, "
     f"wall time {wall:.1f} s"
 )
 for target in (0.05, 0.1, 0.25, 0.5, 1.0, 1.5, 2.0):
@@ -180,8 +192,11 @@ print(
 held = [r.step for r in reports if r.held_points]
 if held:
     print(f"  steps retried without re-binning (Simulation.step): {held}")
+if sim.mesh.comm.size > 1:  # each rank integrates its own points
+    imbalance = [r.point_imbalance for r in reports]
+    print(f"  points per rank, most over mean: {imbalance[0]:.2f} first, {max(imbalance):.2f} max")
 
-if not args.no_output:
+if not args.no_output and rank0:
     plt = pyplot()  # None without matplotlib (the plots extra)
     out = Path(args.output)
     np.savetxt(
@@ -257,7 +272,8 @@ if args.json:
                 "settlement_over_B": s_over_B.tolist(),
                 "q_over_cu": q_over_cu.tolist(),
                 "wall_time_s": wall,
-                "n_particles": len(points),
+                "n_particles": n_points,
+                "point_imbalance": max(r.point_imbalance for r in reports),
                 "steps": len(reports),
                 "newton_iterations_max": max(iterations),
                 "newton_iterations": iterations,

@@ -19,6 +19,7 @@ Typical use::
 # `import dolfinx_solver` before dolfinx, petsc4py and mpi4py.
 from fe_mpm import _dolfinx  # noqa: F401, I001
 from fe_mpm.boundary import Dirichlet, PointDirichlet, PointTraction, Traction
+from fe_mpm.checkpoint import CheckpointError
 from fe_mpm.errors import ConvergenceError, PointsOutsideError
 from fe_mpm.materials import J2Plasticity, MohrCoulomb, NeoHookean
 from fe_mpm.particles import MaterialPoints, merge, seed
@@ -28,6 +29,7 @@ from fe_mpm.simulation import Simulation
 __version__ = "0.1.0"
 
 __all__ = [
+    "CheckpointError",
     "ConvergenceError",
     "Dirichlet",
     "J2Plasticity",

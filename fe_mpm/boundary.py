@@ -249,7 +249,8 @@ class PointDirichlet:
     Args:
         name: Name of the condition; its force on the body is reported in
             ``StepReport.reactions[name]`` (N, per unit thickness in 2D).
-        x: Initial positions of the boundary points (n, g), m.
+        x: Initial positions of the boundary points (n, g), m. Under MPI every
+            rank gives all of them; each point then acts on one rank.
         weight: Boundary measure each point represents (n,): length (m) in 2D,
             area (m²) in 3D, > 0. Points may also fill a rigid body to tie the grid
             nodes inside it (see ``meshes.footing_points``); each then carries the
@@ -334,7 +335,9 @@ class PointTraction:
     Args:
         name: Name of the load; the force it applies is reported in
             ``StepReport.reactions[name]`` (N, per unit thickness in 2D).
-        x: Initial positions of the points (n, g), m, on the body's boundary.
+        x: Initial positions of the points (n, g), m, on the body's boundary. Under
+            MPI every rank gives all of them (:func:`~fe_mpm.meshes.facet_points`
+            gathers them); each point then acts on one rank.
         weight: Boundary measure each point represents (n,): length (m) in 2D, area in 3D.
         value: Traction vector (Pa), length g, a dead load (fixed direction).
         scale: Load factor as a function of time, ``t -> float``; constant 1 if None.

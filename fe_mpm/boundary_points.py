@@ -6,6 +6,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from fe_mpm import parallel
 from fe_mpm.boundary import SNAP_REACH, PointDirichlet, PointTraction
 from fe_mpm.checks import check_range
 from fe_mpm.errors import PointsOutsideError, warn
@@ -112,7 +113,8 @@ class BoundaryPointStep:
 
     Only the points in (or within half a cell of) occupied cells take part; the
     others (e.g. a footing point above the soil) follow their target until material
-    reaches them.
+    reaches them. On a distributed grid every rank holds all boundary points (they
+    are few) and each point takes part on the one rank whose cell it reads.
 
     Args:
         points: All boundary points of the simulation.
@@ -134,7 +136,9 @@ class BoundaryPointStep:
         """The boundary points of ``conditions`` on the grid of ``tracker``; None if none."""
         if not conditions:
             return None
-        return cls(BoundaryPoints(conditions, tracker.mesh.geometry.dim), tracker)
+        points = BoundaryPoints(conditions, tracker.mesh.geometry.dim)
+        _check_same_on_every_rank(tracker.mesh.comm, points)
+        return cls(points, tracker)
 
     def locate(self, occupied_cells: np.ndarray, t_new: float) -> SlotLayout:
         """Slot layout of the boundary points that lie in occupied cells.
@@ -146,21 +150,21 @@ class BoundaryPointStep:
             PointsOutsideError: A boundary point lies outside the grid.
         """
         pp, tracker = self.points, self.tracker
-        cells = tracker.locate(pp.x)
-        if np.any(cells < 0):
-            first = np.flatnonzero(cells < 0)[0]
+        occupied = np.zeros(tracker.num_cells, dtype=bool)
+        occupied[occupied_cells] = True
+        # The body's surface lies between its points, often in a cell whose points
+        # have moved on: read the field of an occupied neighbour, up to half a cell out.
+        # Every rank holds every boundary point; each takes part on one rank only.
+        cells, found = tracker.claim(pp.x, occupied, tol=pp.reach)
+        if not np.all(found):
+            first = np.flatnonzero(~found)[0]
             raise PointsOutsideError(
                 f"boundary point {first} of {type(pp.conditions[pp.owner[first]]).__name__} "
                 f"{pp.conditions[pp.owner[first]].name!r} at x = {pp.x[first]} is outside the grid "
                 f"(step to t = {t_new:g})"
             )
-        occupied = np.zeros(tracker.num_cells, dtype=bool)
-        occupied[occupied_cells] = True
-        # The body's surface lies between its points, often in a cell whose points
-        # have moved on: read the field of an occupied neighbour, up to half a cell out.
-        cells = tracker.snap_to(pp.x, cells, occupied, tol=pp.reach)
         self._active = cells >= 0
-        idle = ~self._active & pp.loaded
+        idle = ~self._active_anywhere() & pp.loaded
         if np.any(idle) and not self._warned:
             self._warned = True
             first = np.flatnonzero(idle)[0]
@@ -170,9 +174,13 @@ class BoundaryPointStep:
                 f"to t = {t_new:g} (first at x = {pp.x[first]}); their load is not applied."
             )
         cells = cells[self._active]
-        self._nslot = slot_count(np.bincount(cells), self._nslot)
+        self._nslot = slot_count(np.bincount(cells), self._nslot, tracker.mesh.comm)
         self.layout = SlotLayout.from_cells(cells, self._nslot)
         return self.layout
+
+    def _active_anywhere(self) -> np.ndarray:
+        """Whether each point takes part in the step on some rank (N,)."""
+        return parallel.total(self.tracker.mesh.comm, self._active.astype(np.int64)) > 0
 
     def pack(self, forms, t_new: float) -> None:
         """Their positions, gaps, penalties and tractions into the step's slot fields."""
@@ -187,9 +195,29 @@ class BoundaryPointStep:
 
     def convect(self, forms, t_new: float) -> dict[str, np.ndarray]:
         """Move the points with the grid solution; return each condition's force (g,)."""
-        pp, active = self.points, self._active
+        pp, active, comm = self.points, self._active, self.tracker.mesh.comm
         du = forms.du_at_boundary.evaluate(self.layout)
         forces = pp.forces(self._gap + du, active, t_new)
-        pp.x[active] += du
-        pp.x[~active] = pp.targets(t_new)[~active]  # outside the material: follow the target
-        return forces
+        # Each point moves on the rank where it took part; every rank keeps them all.
+        moved = np.zeros_like(pp.x)
+        moved[active] = du
+        moved = parallel.total(comm, moved)
+        anywhere = self._active_anywhere()
+        pp.x[anywhere] += moved[anywhere]
+        pp.x[~anywhere] = pp.targets(t_new)[~anywhere]  # outside the material: follow the target
+        return {name: parallel.total(comm, force) for name, force in forces.items()}
+
+
+def _check_same_on_every_rank(comm, points: BoundaryPoints) -> None:
+    """Raise on every rank unless every rank was given the same boundary points."""
+    if comm.size == 1:
+        return
+    mine = (len(points), points.x0.tobytes(), points.weight.tobytes())
+    differ = [rank for rank, theirs in enumerate(comm.allgather(mine)) if theirs != mine]
+    if differ:
+        raise ValueError(
+            f"PointDirichlet/PointTraction: rank {comm.rank} holds {len(points)} boundary "
+            f"points and rank {differ[0]} other ones; under MPI every rank must hold every "
+            "boundary point (build them from geometry, or with meshes.facet_points, which "
+            "gathers them from all ranks)"
+        )

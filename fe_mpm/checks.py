@@ -121,7 +121,7 @@ def check_finite(owner: str, field: str, value: object, *, what: str = "entry") 
     if not finite.all():
         if a.ndim == 0:
             raise ValueError(f"{owner}: {field} must be finite, got {a.item():g}")
-        bad = np.flatnonzero(~finite.reshape(a.shape[0], -1).all(axis=1))
+        bad = np.flatnonzero(~finite.reshape(a.shape[0], int(np.prod(a.shape[1:]))).all(axis=1))
         i = int(bad[0])
         raise ValueError(
             f"{owner}: {field} must be finite; {what} {i} is {a[i].tolist()} "

@@ -79,8 +79,8 @@ class ParticleWriter:
             "pressure": -np.trace(points.stress, axis1=1, axis2=2) / 3.0,
             "cell": points.cell.astype(np.float64),
         }
-        data.update({k: v.reshape(n, -1) if v.ndim > 1 else v for k, v in points.history.items()})
-        data.update({k: np.asarray(v).reshape(n, -1) for k, v in fields.items()})
+        data.update({k: _rows(v, n) for k, v in points.history.items()})
+        data.update({k: _rows(np.asarray(v), n) for k, v in fields.items()})
         cells = [("vertex", np.arange(n, dtype=np.int64).reshape(-1, 1))]
         stem = f"{self.name}_{len(self._entries):06d}"
         names = (
@@ -110,3 +110,13 @@ class ParticleWriter:
         ]
         lines += ["  </Collection>", "</VTKFile>", ""]
         self.pvd.write_text("\n".join(lines))
+
+
+def _rows(values: np.ndarray, n: int) -> np.ndarray:
+    """``values`` (n, ...) as one row per point; a scalar field stays 1-D.
+
+    The width is explicit, not ``-1``: a rank may hold no points (n = 0).
+    """
+    if values.ndim == 1:
+        return values
+    return values.reshape(n, int(np.prod(values.shape[1:])))

@@ -89,6 +89,13 @@ class Markers:
         """The markers hosted by this rank's points, name -> the host's index."""
         return {name: host for name, (_, host) in self._entries.items() if host >= 0}
 
+    def place(self, name: str, x: np.ndarray, host: int) -> None:
+        """Put the marker ``name`` at ``x`` (g,), as a checkpoint had it.
+
+        ``host`` is this rank's host point, or −1 where another rank hosts it.
+        """
+        self._entries[name] = (np.array(x, dtype=np.float64), int(host))
+
     def set_host(self, name: str, host: int) -> None:
         """Host the marker ``name`` by this rank's point ``host`` (it arrived here)."""
         xm, _ = self._entries[name]

@@ -97,7 +97,7 @@ def check_serial_only(comm, features: dict[str, bool]) -> None:
     if comm.size > 1 and used:
         raise NotImplementedError(
             f"Simulation: on a mesh distributed over {comm.size} MPI ranks, fe-mpm runs "
-            "static u and up scenes with grid supports and loads; not yet "
+            "static and dynamic u and up scenes with grid and point conditions; not yet "
             f"{', '.join(used)}. Run on one rank (without mpiexec) for these."
         )
 

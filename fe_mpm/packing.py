@@ -181,4 +181,5 @@ class PointExpression:
         kernel = _Kernel(self._columns, self._width, layout.entities, q)
         values = np.zeros((layout.num_entities, q.nslot, *self._shape))
         tabulate_expression(self.expression, kernel.pack(), q.mesh, layout.entities, values)
-        return values.reshape(layout.num_entities, q.nslot, -1)[layout.entity, layout.slot]
+        width = int(np.prod(self._shape))  # explicit: a rank may hold no points
+        return values.reshape(layout.num_entities, q.nslot, width)[layout.entity, layout.slot]

@@ -32,9 +32,26 @@ def total(comm: MPI.Comm, value):
     return out
 
 
-def largest(comm: MPI.Comm, value: float) -> float:
-    """The maximum of a number over the ranks."""
-    return value if comm.size == 1 else comm.allreduce(value, op=MPI.MAX)
+def largest(comm: MPI.Comm, value):
+    """The maximum of ``value`` (a number, or an array elementwise) over the ranks."""
+    if comm.size == 1:
+        return value
+    if np.ndim(value) == 0:
+        return comm.allreduce(value, op=MPI.MAX)
+    local = np.ascontiguousarray(value)
+    out = np.empty_like(local)
+    comm.Allreduce(local, out, op=MPI.MAX)
+    return out
+
+
+def gathered(comm: MPI.Comm, values: np.ndarray) -> np.ndarray:
+    """Every rank's rows of ``values`` (n_rank, ...), in rank order, on every rank.
+
+    For diagnostics over all points (a plot, a stress profile), not for the step.
+    """
+    if comm.size == 1:
+        return values
+    return np.concatenate(comm.allgather(np.asarray(values)))
 
 
 def raise_together(comm: MPI.Comm, error: Exception | None) -> None:

@@ -13,6 +13,7 @@ import basix
 import numpy as np
 import numpy.typing as npt
 
+from fe_mpm import parallel
 from fe_mpm._dolfinx import dolfinx
 from fe_mpm.checks import check_choice, check_finite, check_int, check_range
 
@@ -196,7 +197,9 @@ def seed(
             here to seed zones of different densities (see :func:`merge`).
         cells: Cells to seed: a 1-D array of local indices of owned cells
             (``0 <= c < size_local``; ghost cells cannot be seeded), each once; all
-            cells by default. A boolean mask is refused: pass ``np.flatnonzero(mask)``.
+            cells by default. Under MPI every rank calls ``seed`` with its own
+            selection, which may be empty on some ranks but not on all. A
+            boolean mask is refused: pass ``np.flatnonzero(mask)``.
         volumes: ``"gauss"`` gives each point the Gauss weight times the cell
             volume (exact quadrature of the initial body); ``"equal"`` splits the
             cell volume equally, as in the thesis.
@@ -216,11 +219,15 @@ def seed(
     per_cell = check_int("seed", "per_cell", per_cell, lo=1)
     tdim = mesh.topology.dim
     num_cells = mesh.topology.index_map(tdim).size_local
-    if num_cells == 0:
+    # A rank may own no cells, or none of the selection: it seeds nothing. Only a
+    # selection that is empty on every rank is an error.
+    if parallel.total(mesh.comm, num_cells) == 0:
         raise ValueError("seed: the mesh has no cells")
     cell_type = simplex_cell_type(mesh)
     ref_pts, ref_wts = _rule_with_count(cell_type, per_cell)
     cells = np.arange(num_cells, dtype=np.int32) if cells is None else _cells(cells, num_cells)
+    if parallel.total(mesh.comm, cells.size) == 0:
+        raise ValueError("seed: no cells to seed")
 
     X = mesh.geometry.x[:, : mesh.geometry.dim]
     nodes = X[mesh.geometry.dofmaps[0][cells]]  # (nc, tdim+1, g)
@@ -259,8 +266,6 @@ def _cells(cells: npt.ArrayLike, num_cells: int) -> np.ndarray:
         )
     if a.ndim != 1:
         raise ValueError(f"seed: cells must be a 1-D array of cell indices, got shape {a.shape}")
-    if a.size == 0:
-        raise ValueError("seed: no cells to seed")
     # Whole floats such as 3.0 are indices; a cast would truncate 2.5 to 2 silently.
     if a.dtype.kind == "f" and np.all(np.isfinite(a) & (a == np.trunc(a))):
         a = a.astype(np.int64)

@@ -282,7 +282,7 @@ class MaterialPointQuadrature:
         data = np.empty((layout.num_entities, self.nslot, size))
         data[:] = np.reshape(empty, (-1,))
         data[layout.entity, layout.slot] = values.reshape(values.shape[0], size)
-        self.values[f] = data.reshape(layout.num_entities, -1)
+        self.values[f] = data.reshape(layout.num_entities, self.nslot * size)
 
     def pack_cell_field(
         self, f: dolfinx.fem.Function, layout: SlotLayout, values: np.ndarray

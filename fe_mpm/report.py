@@ -35,6 +35,9 @@ class StepReport:
             one they are in (nonzero only in a step retried without re-binning).
         migrated_points: Points that moved to another MPI rank's cells before the
             step and were sent there (all ranks together; 0 on one rank).
+        point_imbalance: The most points a rank held in the step over the mean per
+            rank (1 on one rank): how far the ranks' work is from even, since
+            each rank packs and integrates its own points.
         converged_reason: Why Newton stopped, e.g. ``"‖R‖ = 2.1e-13 of the force
             scale 1.962e+04"`` (see :class:`fe_mpm.newton.ForceTest`).
         force_scale: The forces in play at the last iterate, S = max(‖f_ext‖,
@@ -62,6 +65,7 @@ class StepReport:
     reactions: dict[str, np.ndarray] = field(default_factory=dict)
     held_points: int = 0
     migrated_points: int = 0
+    point_imbalance: float = 1.0
     converged_reason: str = ""
     force_scale: float = 0.0
     relative_residual: float = 0.0
@@ -109,11 +113,20 @@ class StepReport:
             reactions=reactions,
             held_points=parallel.total(comm, int(tracking.held_points)),
             migrated_points=tracking.migrated,
+            point_imbalance=imbalance(comm, current.layout.cell.size),
             converged_reason=result.reason,
             force_scale=result.force_scale,
             relative_residual=result.relative_residual,
             lost_load=lost,
         )
+
+
+def imbalance(comm, count: int) -> float:
+    """The largest of the ranks' ``count`` over their mean (1 when all are empty)."""
+    if comm.size == 1:
+        return 1.0
+    most, total = parallel.largest(comm, count), parallel.total(comm, count)
+    return float(most * comm.size / total) if total else 1.0
 
 
 def newton_failure(
@@ -155,7 +168,10 @@ class ProgressBar:
     def update(self, report: StepReport, nominal: float) -> None:
         """Count ``report``'s step as its share of the nominal step length ``nominal``."""
         if self._bar is not None:
-            self._bar.set_postfix(t=f"{report.t:.4g}", newton=report.newton_iterations)
+            extra = (
+                {} if MPI.COMM_WORLD.size == 1 else {"imbalance": f"{report.point_imbalance:.2f}"}
+            )
+            self._bar.set_postfix(t=f"{report.t:.4g}", newton=report.newton_iterations, **extra)
             self._bar.update(report.dt / nominal)
 
     def close(self) -> None:

@@ -22,11 +22,11 @@ from pathlib import Path
 
 import numpy as np
 
-from fe_mpm import model_checks, parallel
+from fe_mpm import checkpoint, model_checks, parallel
 from fe_mpm._dolfinx import dolfinx
 from fe_mpm.boundary import Dirichlet, PointDirichlet, PointTraction, Traction
 from fe_mpm.boundary_points import BoundaryPointStep
-from fe_mpm.checks import check_finite, check_range
+from fe_mpm.checks import check_finite, check_int, check_range
 from fe_mpm.domains import PointDomains, step_with_domains
 from fe_mpm.dynamics import NewmarkDynamics
 from fe_mpm.errors import ConvergenceError, PointsOutsideError, warn
@@ -132,6 +132,10 @@ class Simulation:
             cells (:mod:`fe_mpm.ghost`); 0: none. Default:
             :data:`fe_mpm.ghost.WITH_DOMAINS` with point domains (0.1 for P1, 0.01
             for P2), else 0.
+        checkpoint_dir: Folder for a checkpoint every ``checkpoint_every`` steps
+            (:mod:`fe_mpm.checkpoint`; :meth:`restore` continues from one); None
+            (default): none.
+        checkpoint_every: Steps between checkpoints, ≥ 1.
     """
 
     def __init__(
@@ -165,6 +169,8 @@ class Simulation:
         max_step_cells: float = 10.0,
         point_domains: bool = False,
         ghost_penalty: float | None = None,
+        checkpoint_dir: str | Path | None = None,
+        checkpoint_every: int = 10,
     ):
         model_checks.check_grid_and_points(mesh, points)
         model_checks.check_choices(
@@ -179,11 +185,9 @@ class Simulation:
         model_checks.check_serial_only(
             mesh.comm,
             {
-                "dynamic=True": bool(dynamic),
                 f"formulation {formulation!r}": formulation not in ("u", "up"),
                 "point_domains=True": bool(point_domains),
                 "a ghost penalty": bool(ghost_penalty),
-                "PointDirichlet or PointTraction": bool(point_dirichlet or point_tractions),
                 "linear_solver='iterative'": linear_solver != "direct",
                 "points_leaving='drop'": points_leaving != "raise",
             },
@@ -199,6 +203,8 @@ class Simulation:
         self.petsc_options = {"snes_linesearch_type": line_search, **(petsc_options or {})}
         self.linear_solver = linear_solver
         self.max_step_cells, self.min_step = max_step_cells, min_step
+        self.checkpoint_dir = checkpoint_dir
+        self.checkpoint_every = check_int("Simulation", "checkpoint_every", checkpoint_every, lo=1)
         self.timings: dict[str, float] = {}
         self.history: list[StepReport] = []
         self.t, self.step_number = 0.0, 0
@@ -248,6 +254,31 @@ class Simulation:
             raise PointsOutsideError(f"marker {name!r} at {xm} is outside the grid")
         self.markers.add(name, xm, self.points.x)
 
+    def checkpoint(self, directory: str | Path | None = None) -> Path:
+        """Write the run's state after the current step (collective); return its folder.
+
+        Into ``directory`` (default: ``checkpoint_dir``), as :mod:`fe_mpm.checkpoint` says.
+        """
+        directory = self.checkpoint_dir if directory is None else directory
+        if directory is None:
+            raise ValueError("Simulation.checkpoint: give a directory (or checkpoint_dir)")
+        t0 = time.perf_counter()
+        folder = checkpoint.write(self, directory)
+        self._add_time("checkpoint", t0)
+        return folder
+
+    def restore(self, path: str | Path) -> None:
+        """Continue from a checkpoint (a folder, or a directory: its latest); collective.
+
+        Build the simulation with the script that wrote the checkpoint, on any number
+        of ranks, then restore and :meth:`run` on to the end time. Time, step count,
+        points, markers and boundary points become the checkpoint's.
+
+        Raises:
+            CheckpointError: It is of another fe-mpm version or scene, or corrupted.
+        """
+        checkpoint.read(self, path)
+
     def marker(self, name: str) -> np.ndarray:
         """Current position of a marker, shape (g,)."""
         return self.markers.position(name)
@@ -294,6 +325,8 @@ class Simulation:
                 report.failed_iterations = spent - report.newton_iterations
                 before += spent
                 reports.append(report)
+                if self.checkpoint_dir and self.step_number % self.checkpoint_every == 0:
+                    self.checkpoint()
                 if on_step is not None:
                     on_step(report)
                 length.accepted()

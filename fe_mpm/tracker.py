@@ -12,8 +12,11 @@ from __future__ import annotations
 
 import math
 
+from mpi4py import MPI
+
 import numpy as np
 
+from fe_mpm import parallel
 from fe_mpm._dolfinx import dolfinx
 
 #: Barycentric coordinates down to ``-BARY_TOL`` count as inside: points on
@@ -132,6 +135,78 @@ class Tracker:
                 out[i] = candidates[best]
         return out
 
+    def claim(
+        self, x: np.ndarray, allowed: np.ndarray, tol: float | np.ndarray = ON_FACET
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Locate points that every rank holds and give each to one rank's allowed cell.
+
+        :meth:`locate` then :meth:`snap_to` across the ranks of a distributed grid,
+        for points held on every rank (boundary points): a point goes to the rank
+        whose owned, allowed cell holds it (the lowest such rank on a shared
+        facet); failing that, to the allowed cell, on any rank, that shares a
+        vertex with the point's cell and has the largest smallest barycentric
+        coordinate, if that is ≥ −tol. On one rank this is ``snap_to(x, locate(x))``.
+        Collective.
+
+        Args:
+            x: Points (n, g), the same on every rank.
+            allowed: Boolean mask over this rank's cells.
+            tol: As in :meth:`snap_to`.
+
+        Returns:
+            ``cells``: the point's cell on this rank, or −1 where another rank (or
+            none) takes it; ``found``: whether some rank's cell holds the point (n,).
+        """
+        comm = self.mesh.comm
+        cells = self.locate(x)
+        if comm.size == 1:
+            return self.snap_to(x, cells, allowed, tol), cells >= 0
+        n, rank = x.shape[0], comm.rank
+        here = cells >= 0
+        inside = here & allowed[np.maximum(cells, 0)]
+        # The lowest rank whose cell holds the point is its host; one holding it in an
+        # allowed cell takes it outright.
+        host = _lowest_rank(comm, here)
+        taker = _lowest_rank(comm, inside)
+        found, taken = host < comm.size, taker < comm.size
+        out = np.where(taker == rank, cells, -1).astype(np.int32)
+        # The host's cell's nodes, by global index, for every rank to find its cells there.
+        index_map = self.mesh.geometry.index_map()
+        k = self._nodes_of.shape[1]
+        nodes = np.full((n, k), -1, dtype=np.int64)
+        mine = np.flatnonzero(host == rank)
+        local = self._nodes_of[cells[mine]].ravel().astype(np.int32)
+        nodes[mine] = index_map.local_to_global(local).reshape(-1, k)
+        nodes = parallel.largest(comm, nodes)
+        score, choice = np.full(n, -np.inf), np.full(n, -1, dtype=np.int32)
+        on_rank = index_map.local_to_global(
+            np.arange(index_map.size_local + index_map.num_ghosts, dtype=np.int32)
+        )
+        order = np.argsort(on_rank)
+        owner, starts = self._cells_of_nodes()
+        for i in np.flatnonzero(found & ~taken):
+            at = np.searchsorted(on_rank[order], nodes[i])
+            at = np.minimum(at, order.size - 1)
+            local_nodes = order[at][on_rank[order[at]] == nodes[i]]
+            local_nodes = local_nodes[local_nodes < starts.size - 1]
+            if local_nodes.size == 0:
+                continue
+            candidates = np.unique(
+                np.concatenate([owner[starts[v] : starts[v + 1]] for v in local_nodes])
+            )
+            candidates = candidates[allowed[candidates]]
+            if candidates.size == 0:
+                continue
+            lam = self.barycentric(np.repeat(x[i : i + 1], candidates.size, axis=0), candidates)
+            best = np.argmax(lam.min(axis=1))
+            score[i], choice[i] = lam[best].min(), candidates[best]
+        scores = np.array(comm.allgather(score))  # (ranks, n)
+        winner = np.argmax(scores, axis=0)  # the lowest rank among equals
+        close = scores[winner, np.arange(n)] >= -np.maximum(np.broadcast_to(tol, (n,)), ON_FACET)
+        snapped = found & ~taken & close & (winner == rank)
+        out[snapped] = choice[snapped]
+        return out, found
+
     def vertex_neighbours(self) -> np.ndarray:
         """The cells that share a vertex with each cell, itself included (nc, s), padded with -1.
 
@@ -196,6 +271,14 @@ class Tracker:
         cells[found] = colliding.array[offsets[:-1][found]]
         cells[cells >= self.num_cells] = -1  # ghost cells belong to another rank
         return cells
+
+
+def _lowest_rank(comm, flag: np.ndarray) -> np.ndarray:
+    """Per point, the lowest rank where ``flag`` is set; ``comm.size`` where none (n,)."""
+    mine = np.where(flag, comm.rank, comm.size).astype(np.int64)
+    out = np.empty_like(mine)
+    comm.Allreduce(mine, out, op=MPI.MIN)
+    return out
 
 
 def _facet_neighbours(nodes_of: np.ndarray) -> np.ndarray:

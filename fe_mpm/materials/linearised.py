@@ -75,4 +75,4 @@ class Linearisation:
     @staticmethod
     def flat_tangent(tangent: np.ndarray) -> np.ndarray:
         """(n, 3, 3, g, g) → (n, 9·g·g) in the order :meth:`kirchhoff` reads."""
-        return tangent.reshape(tangent.shape[0], -1)
+        return tangent.reshape(tangent.shape[0], int(np.prod(tangent.shape[1:])))

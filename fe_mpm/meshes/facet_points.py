@@ -22,9 +22,14 @@ def facet_points(
     edge (2D) or the three points ``(2/3, 1/6, 1/6)`` of each triangle (3D), each
     with an equal share of the facet's measure.
 
+    Boundary points are held by every rank (see :class:`~fe_mpm.boundary.PointTraction`),
+    so on a distributed mesh this is collective: each rank contributes the facets
+    it owns and every rank gets the points of all of them, in rank order.
+
     Args:
         mesh: Affine simplex mesh.
-        facets: Local facet indices, e.g. ``facet_tags.find(tag)``, shape (m,).
+        facets: Local facet indices, e.g. ``facet_tags.find(tag)``, shape (m,); ghost
+            facets are left to the rank that owns them.
         degree: 1 or 2, the degree of the displacement the points load.
 
     Returns:
@@ -35,7 +40,10 @@ def facet_points(
         raise ValueError(f"facet_points: degree must be 1 or 2, got {degree!r}")
     g = mesh.geometry.dim
     fdim = mesh.topology.dim - 1
-    nodes = dolfinx.mesh.entities_to_geometry(mesh, fdim, np.asarray(facets, dtype=np.int32))
+    facets = np.asarray(facets, dtype=np.int32)
+    if mesh.comm.size > 1:
+        facets = facets[facets < mesh.topology.index_map(fdim).size_local]
+    nodes = dolfinx.mesh.entities_to_geometry(mesh, fdim, facets)
     corners = mesh.geometry.x[nodes][:, :, :g]  # (m, fdim + 1, g)
     edges = corners[:, 1:] - corners[:, :1]
     if fdim == 1:
@@ -43,11 +51,18 @@ def facet_points(
     else:
         weight = 0.5 * np.linalg.norm(np.cross(edges[:, 0], edges[:, 1]), axis=1)
     if degree == 1:
-        return corners.mean(axis=1), weight
+        return _from_every_rank(mesh.comm, corners.mean(axis=1), weight)
     if fdim == 1:
         a = 0.5 / np.sqrt(3.0)
         bary = np.array([[0.5 + a, 0.5 - a], [0.5 - a, 0.5 + a]])
     else:
         bary = np.full((3, 3), 1.0 / 6.0) + 0.5 * np.eye(3)
     x = np.einsum("qv,mvg->mqg", bary, corners).reshape(-1, g)
-    return x, np.repeat(weight / len(bary), len(bary))
+    return _from_every_rank(mesh.comm, x, np.repeat(weight / len(bary), len(bary)))
+
+
+def _from_every_rank(comm, x: np.ndarray, weight: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The points and weights of all ranks, in rank order, on every rank."""
+    if comm.size == 1:
+        return x, weight
+    return np.vstack(comm.allgather(x)), np.concatenate(comm.allgather(weight))

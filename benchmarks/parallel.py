@@ -1,0 +1,100 @@
+"""Strong scaling: the demos on 1 and more MPI ranks, side by side in one run.
+
+Each run is a whole process, ``mpiexec -n N python -m mpi4py demos/<demo>.py ... --json``,
+timed from outside (imports, grid, forms and all steps) with ``OMP_NUM_THREADS=1``;
+the table gives the median over ``--repeat`` runs, the speed-up against one rank, the
+points' imbalance (the most points on a rank over the mean, ``StepReport.point_imbalance``),
+rank 0's split of the run (``Simulation.timings``) and how far the answer moved from
+the one-rank run (it should be round-off).
+
+Scenes (``--scenes``):
+
+- ``footing``: the thesis-grid strip footing (u-p, h = 0.05 B, 107 976 points), 20
+  steps of 10 mm; the answer is q/c_u at the last step.
+- ``cook``: Cook's membrane, u-p, n = 256, one point per triangle, one step; the
+  answer is the tip displacement.
+
+On a machine with 2 cores, 2 ranks is the most that measures speed.
+
+Usage: ``./run python benchmarks/parallel.py [--ranks 1 2] [--repeat 3] [--scenes footing cook]``.
+Not a test: it prints numbers.
+"""
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+SCENES = {
+    "footing": (
+        ["demos/strip_footing.py", "--steps", "20", "--settlement", "0.2", "--no-output"],
+        lambda out: out["q_over_cu"][-1],
+        "q/c_u",
+    ),
+    "cook": (
+        ["demos/cook_membrane.py", "--formulation", "up", "--n", "256", "--nu", "0.499"],
+        lambda out: out["tip_displacement_y"],
+        "u_A,y",
+    ),
+}
+
+
+def run_once(script: list[str], ranks: int) -> tuple[float, dict]:
+    """Wall time (s) of one whole run on ``ranks`` ranks, and its JSON summary."""
+    mpiexec = Path(sys.executable).parent / "mpiexec"
+    command = [str(mpiexec), "-n", str(ranks), sys.executable, "-m", "mpi4py"]
+    command += [*script, "--json", "--quiet"] if "cook" in script[0] else [*script, "--json"]
+    env = {**os.environ, "OMP_NUM_THREADS": "1"}
+    start = time.perf_counter()
+    done = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, env=env)
+    wall = time.perf_counter() - start
+    if done.returncode != 0:
+        sys.exit(f"parallel.py: {' '.join(command)} failed:\n{done.stdout}\n{done.stderr}")
+    return wall, json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def main() -> None:
+    """Run every scene on every rank count, interleaved, and print the table."""
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--ranks", type=int, nargs="+", default=[1, 2])
+    p.add_argument("--repeat", type=int, default=3)
+    p.add_argument("--scenes", nargs="+", choices=sorted(SCENES), default=["footing", "cook"])
+    args = p.parse_args()
+    print(f"{os.cpu_count()} cores; medians of {args.repeat} runs, whole processes")
+    columns = ["scene", "ranks", "run (s)", "speed-up", "imbalance", "answer", "vs 1 rank"]
+    print("| " + " | ".join([*columns, "rank 0's split (s)"]) + " |")
+    print("|---" * (len(columns) + 1) + "|")
+    for name in args.scenes:
+        script, answer, label = SCENES[name]
+        times = {k: [] for k in args.ranks}
+        last = {}
+        for _ in range(args.repeat):  # interleaved, so drifts in machine load hit all alike
+            for k in args.ranks:
+                wall, out = run_once(script, k)
+                times[k].append(wall)
+                last[k] = out
+        base = statistics.median(times[args.ranks[0]])
+        reference = answer(last[args.ranks[0]])
+        for k in args.ranks:
+            median = statistics.median(times[k])
+            value = answer(last[k])
+            split = ", ".join(
+                f"{phase} {seconds:.1f}"
+                for phase, seconds in sorted(
+                    last[k].get("timings", {}).items(), key=lambda item: -item[1]
+                )[:4]
+            )
+            print(
+                f"| {name} | {k} | {median:.1f} | {base / median:.2f} | "
+                f"{last[k].get('point_imbalance', 1.0):.2f} | {label} = {value:.6g} | "
+                f"{abs(value / reference - 1):.1e} | {split} |"
+            )
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,310 @@
+"""Checkpoints: the whole state of a run, to continue it later on any number of ranks.
+
+A checkpoint is a folder ``step_NNNNNN`` holding
+
+- ``points_rNNNN.npz``, one piece per rank that wrote it: every per-point field of
+  :class:`~fe_mpm.particles.MaterialPoints` and the law's history, and the markers
+  these points host;
+- ``shared.npz``: the boundary points' positions and the markers' positions;
+- ``state.json``: what the run is (fe-mpm version, formulation, law and its
+  parameters, the grid's size and extent) and where it stands (time, step, slot
+  counts), with the SHA-256 of every file.
+
+The points and their history are the whole state of a run between steps: the grid
+is reset after every step, and a dynamic run carries its velocities and
+accelerations on the points. A restart rebuilds the simulation with the same script
+and calls :meth:`Simulation.restore <fe_mpm.simulation.Simulation.restore>`: on N
+ranks, rank r reads the pieces r, r + N, ... and every point then moves to the rank
+that owns its cell (:mod:`fe_mpm.migration`), so a checkpoint written on 2 ranks
+continues on 3. The points come back in another order than they had, so sums over
+them round off differently: the answers agree to round-off, not bit for bit.
+
+A checkpoint of another fe-mpm version or format, of another scene, or one whose
+files do not match their checksums is refused with a :class:`CheckpointError` that
+says why, before the simulation is changed.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import io
+import json
+import shutil
+from pathlib import Path
+
+import numpy as np
+
+from fe_mpm import parallel
+from fe_mpm.particles import PER_POINT_FIELDS, MaterialPoints
+
+#: Version of the checkpoint layout; a reader refuses any other.
+FORMAT = 1
+#: The per-point fields a checkpoint keeps (the cell is found again on restart).
+SAVED_FIELDS = tuple(name for name in PER_POINT_FIELDS if name != "cell")
+#: How far the grid's extent may differ (relative to its size) and still be the same grid.
+EXTENT_TOLERANCE = 1e-9
+
+
+class CheckpointError(ValueError):
+    """A checkpoint that cannot be read into this simulation; the message says why."""
+
+
+def folder_for(directory: str | Path, step: int) -> Path:
+    """The checkpoint folder of ``step`` under ``directory``."""
+    return Path(directory) / f"step_{step:06d}"
+
+
+def latest(directory: str | Path) -> Path:
+    """The checkpoint of the latest step under ``directory``.
+
+    Raises:
+        CheckpointError: ``directory`` holds no complete checkpoint.
+    """
+    found = sorted(p for p in Path(directory).glob("step_*") if (p / "state.json").is_file())
+    if not found:
+        raise CheckpointError(f"no checkpoint (step_NNNNNN/state.json) in {directory}")
+    return found[-1]
+
+
+def write(sim, directory: str | Path) -> Path:
+    """Write the state of ``sim`` after its current step; collective.
+
+    The pieces go to a ``.partial`` folder first, which is renamed once complete,
+    so a run stopped mid-write leaves the previous checkpoints intact.
+
+    Returns:
+        The checkpoint folder.
+    """
+    if sim.domains is not None:
+        raise NotImplementedError(
+            "Simulation.checkpoint: point domains are not checkpointed yet "
+            "(point_domains=True); run without them to checkpoint"
+        )
+    comm = sim.mesh.comm
+    final = folder_for(directory, sim.step_number)
+    partial = final.with_name(final.name + ".partial")
+    error = None
+    if comm.rank == 0:
+        try:
+            shutil.rmtree(partial, ignore_errors=True)
+            partial.mkdir(parents=True)
+        except OSError as err:
+            error = CheckpointError(f"cannot write checkpoint {final}: {err}")
+    parallel.raise_together(comm, error)
+    piece = f"points_r{comm.rank:04d}.npz"
+    arrays = {name: getattr(sim.points, name) for name in SAVED_FIELDS}
+    arrays.update({f"history.{k}": v for k, v in sim.points.history.items()})
+    arrays.update({f"marker.{k}": np.array(h) for k, h in sim.markers.hosts().items()})
+    error, digest = None, ""
+    try:
+        digest = _save(partial / piece, arrays)
+    except OSError as err:
+        error = CheckpointError(f"cannot write checkpoint {final}: {err}")
+    parallel.raise_together(comm, error)
+    pieces = comm.gather({"file": piece, "points": len(sim.points), "sha256": digest})
+    fingerprint, dropped = scene(sim), sim.dropped  # collective: before rank 0 goes alone
+    if comm.rank == 0:
+        try:
+            shared = {f"marker.{k}": x for k, x in sim.markers.positions().items()}
+            if sim._boundary is not None:
+                shared["boundary_x"] = sim._boundary.points.x
+            state = {
+                "format": FORMAT,
+                "scene": fingerprint,
+                "t": sim.t,
+                "step": sim.step_number,
+                "dropped": dropped,
+                "slots": sim.tracking._nslot,
+                "boundary_slots": None if sim._boundary is None else sim._boundary._nslot,
+                "ranks": comm.size,
+                "pieces": pieces,
+                "shared_sha256": _save(partial / "shared.npz", shared),
+            }
+            (partial / "state.json").write_text(json.dumps(state, indent=1))
+            if final.exists():  # the same step of an earlier run: replaced whole
+                shutil.rmtree(final)
+            partial.rename(final)
+        except OSError as err:
+            error = CheckpointError(f"cannot write checkpoint {final}: {err}")
+    parallel.raise_together(comm, error)
+    return final
+
+
+def read(sim, path: str | Path) -> None:
+    """Put the state of the checkpoint at ``path`` into ``sim``; collective.
+
+    Args:
+        sim: A simulation built by the script that wrote the checkpoint (same
+            grid, law, formulation and conditions), on any number of ranks.
+        path: A checkpoint folder, or a directory of them (the latest is read).
+
+    Raises:
+        CheckpointError: The checkpoint is of another format, fe-mpm version or
+            scene, or a file is missing or does not match its checksum; ``sim``
+            is left as it was.
+    """
+    if sim.domains is not None:
+        raise NotImplementedError("Simulation.restore: point domains are not checkpointed yet")
+    comm = sim.mesh.comm
+    path = Path(path)
+    if not (path / "state.json").is_file() and path.is_dir():
+        path = latest(path)
+    state, error = None, None
+    if comm.rank == 0:
+        try:
+            state = json.loads((path / "state.json").read_text())
+        except (OSError, ValueError) as err:
+            error = CheckpointError(f"checkpoint {path}: cannot read state.json ({err})")
+    parallel.raise_together(comm, error)
+    state = comm.bcast(state)
+    _check_state(sim, path, state)
+    mine = state["pieces"][comm.rank :: comm.size]
+    error, loaded = None, []
+    try:
+        loaded = [_load(path / p["file"], p["sha256"], p["points"], sim) for p in mine]
+        shared = _load(path / "shared.npz", state["shared_sha256"], None, sim)
+        points = _joined(loaded, sim)
+    except CheckpointError as err:
+        error = err
+    parallel.raise_together(comm, error)
+
+    # Checked: now change the simulation.
+    pts = sim.points
+    for name in (*SAVED_FIELDS, "cell"):
+        setattr(pts, name, getattr(points, name))
+    pts.history = points.history
+    markers = sim.markers
+    markers._entries.clear()
+    offsets = np.cumsum([0] + [len(a["x"]) for a in loaded])
+    hosts = {
+        key.removeprefix("marker."): int(offsets[i] + arrays[key])
+        for i, arrays in enumerate(loaded)
+        for key in arrays
+        if key.startswith("marker.")
+    }
+    for key, x in shared.items():
+        if key.startswith("marker."):
+            name = key.removeprefix("marker.")
+            markers.place(name, x, hosts.get(name, -1))
+    if sim._boundary is not None:
+        sim._boundary.points.x[:] = shared["boundary_x"]
+        sim._boundary._nslot = state["boundary_slots"]
+    sim.t, sim.step_number = float(state["t"]), int(state["step"])
+    sim.tracking._nslot = state["slots"]
+    sim.tracking.dropped = int(state["dropped"]) if comm.rank == 0 else 0
+    sim._cells_of_last_step, sim._current = None, None
+    sim._track(sim.step_number, sim.t)  # each point to the rank that owns its cell
+
+
+def scene(sim) -> dict:
+    """What a checkpoint must match to be read into ``sim``: a JSON-able fingerprint."""
+    mesh, comm = sim.mesh, sim.mesh.comm
+    tdim, g = mesh.topology.dim, sim.gdim
+    x = mesh.geometry.x[:, :g]
+    low = -parallel.largest(comm, -x.min(axis=0)) if x.size else np.full(g, np.inf)
+    high = parallel.largest(comm, x.max(axis=0)) if x.size else np.full(g, -np.inf)
+    from fe_mpm import __version__
+
+    return {
+        "fe_mpm": __version__,
+        "formulation": sim.formulation,
+        "dynamic": sim.dynamic,
+        "law": type(sim.material).__name__,
+        "law_parameters": _parameters(sim.material),
+        "history": sorted(sim.material.history),
+        "cells": int(mesh.topology.index_map(tdim).size_global),
+        "extent": [np.asarray(low).tolist(), np.asarray(high).tolist()],
+        "boundary_points": 0 if sim._boundary is None else len(sim._boundary.points),
+    }
+
+
+def _parameters(material) -> dict:
+    """The law's parameters by name (numbers and names), for the fingerprint."""
+    if not dataclasses.is_dataclass(material):
+        return {"repr": repr(material)}
+    out = {}
+    for f in dataclasses.fields(material):
+        value = getattr(material, f.name)
+        out[f.name] = value if isinstance(value, int | float | str | bool | None) else repr(value)
+    return out
+
+
+def _check_state(sim, path: Path, state: dict) -> None:
+    """Refuse a checkpoint of another format, version or scene (same on every rank)."""
+    if not isinstance(state, dict) or state.get("format") != FORMAT:
+        found = state.get("format") if isinstance(state, dict) else None
+        raise CheckpointError(
+            f"checkpoint {path}: format {found!r}, this fe-mpm reads format {FORMAT}"
+        )
+    theirs, ours = state["scene"], scene(sim)
+    if theirs["fe_mpm"] != ours["fe_mpm"]:
+        raise CheckpointError(
+            f"checkpoint {path} was written by fe-mpm {theirs['fe_mpm']}, this is "
+            f"{ours['fe_mpm']}; restart with the version that wrote it"
+        )
+    span = max(float(np.max(np.subtract(ours["extent"][1], ours["extent"][0]))), 1e-300)
+    for key, value in ours.items():
+        if key == "extent":
+            same = np.allclose(theirs[key], value, rtol=0, atol=EXTENT_TOLERANCE * span)
+        else:
+            same = theirs.get(key) == value
+        if not same:
+            raise CheckpointError(
+                f"checkpoint {path} is of another scene: its {key} is {theirs.get(key)!r}, "
+                f"this simulation's is {value!r}"
+            )
+
+
+def _save(file: Path, arrays: dict) -> str:
+    """Write ``arrays`` as an .npz file; return its SHA-256."""
+    buffer = io.BytesIO()
+    np.savez(buffer, **arrays)
+    data = buffer.getvalue()
+    file.write_bytes(data)
+    return hashlib.sha256(data).hexdigest()
+
+
+def _load(file: Path, sha256: str, count: int | None, sim) -> dict:
+    """The arrays of one checkpoint file, checked against its checksum and point count."""
+    try:
+        data = file.read_bytes()
+    except OSError as err:
+        raise CheckpointError(f"checkpoint file {file} cannot be read: {err}") from err
+    if hashlib.sha256(data).hexdigest() != sha256:
+        raise CheckpointError(f"checkpoint file {file} does not match its checksum: corrupted")
+    with np.load(io.BytesIO(data)) as npz:
+        arrays = {name: npz[name] for name in npz.files}
+    if count is not None:
+        missing = [n for n in SAVED_FIELDS if n not in arrays]
+        if missing or len(arrays["x"]) != count:
+            raise CheckpointError(f"checkpoint file {file} lacks {missing or 'points'}")
+    return arrays
+
+
+def _joined(pieces: list[dict], sim) -> MaterialPoints:
+    """One point set from this rank's pieces, checked as any new points are."""
+    g = sim.gdim
+
+    def stacked(name: str, shape: tuple) -> np.ndarray:
+        parts = [p[name] for p in pieces]
+        return np.concatenate(parts) if parts else np.zeros((0, *shape))
+
+    shapes = {
+        "x": (g,),
+        "volume": (),
+        "mass": (),
+        "F": (g, g),
+        "stress": (3, 3),
+        "x0": (g,),
+        "velocity": (g,),
+        "acceleration": (g,),
+    }
+    try:
+        points = MaterialPoints(**{name: stacked(name, shapes[name]) for name in SAVED_FIELDS})
+    except (TypeError, ValueError) as err:
+        raise CheckpointError(f"checkpoint points are not valid: {err}") from err
+    for name, law_history in sim.material.history.items():
+        parts = [p[f"history.{name}"] for p in pieces]
+        points.history[name] = np.concatenate(parts) if parts else law_history.initial_values(0)
+    return points

@@ -1,0 +1,132 @@
+"""Checkpoints: a run stopped and restored continues to the answer it would have given.
+
+The restarted points come back in their pieces' order, which is the order they had
+on one rank, so on one rank the restored run repeats the uninterrupted one exactly;
+across rank counts (``tests/test_mpi.py``) it agrees to round-off.
+"""
+
+import json
+
+import numpy as np
+import pytest
+
+import fe_mpm
+from fe_mpm import checkpoint, meshes, scenes
+
+
+def falling_block(**options):
+    """A Mohr-Coulomb block dropped onto the clamped base: dynamics, plasticity, a marker."""
+    mesh = meshes.rectangle_mesh((0, 0), (2, 2), (8, 8))
+    centre = mesh.geometry.x[mesh.geometry.dofmaps[0]][:, :, :2].mean(axis=1)
+    block = (abs(centre[:, 0] - 1) < 0.5) & (centre[:, 1] > 0.25) & (centre[:, 1] < 1.0)
+    points = fe_mpm.seed(mesh, per_cell=3, cells=np.flatnonzero(block))
+    law = fe_mpm.MohrCoulomb(E=options.pop("E", 1e6), nu=0.3, cohesion=2e3, friction_angle=30.0)
+    sim = fe_mpm.Simulation(
+        mesh,
+        points,
+        law,
+        dynamic=True,
+        mass="lumped",
+        body_force=(0, -9.81),
+        dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))],
+        **options,
+    )
+    sim.add_marker("corner", (0.501, 0.999))
+    return sim
+
+
+def state(sim):
+    pts = sim.points
+    return {
+        "x": pts.x.copy(),
+        "velocity": pts.velocity.copy(),
+        "F": pts.F.copy(),
+        "plastic_strain": pts.history["plastic_strain"].copy(),
+        "corner": sim.marker("corner"),
+    }
+
+
+def test_a_restored_dynamic_plastic_run_continues_exactly(tmp_path):
+    """Ten steps, a checkpoint, ten more: the restored run repeats the second ten."""
+    straight = falling_block()
+    straight.run(0.25, 10, progress=False)
+    expected = straight.run(0.5, 10, progress=False)
+    assert max(r.newton_iterations for r in expected) > 4  # landed and yielding
+
+    first = falling_block(checkpoint_dir=tmp_path, checkpoint_every=5)
+    first.run(0.25, 10, progress=False)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["step_000005", "step_000010"]
+
+    again = falling_block()
+    again.restore(tmp_path)  # the latest: step 10
+    assert (again.t, again.step_number) == (0.25, 10)
+    reports = again.run(0.5, 10, progress=False)
+    assert [r.newton_iterations for r in reports] == [r.newton_iterations for r in expected]
+    for key, value in state(straight).items():
+        np.testing.assert_array_equal(state(again)[key], value, err_msg=key)
+
+
+def test_a_restored_footing_keeps_its_boundary_points(tmp_path):
+    """The footing's PointDirichlet points are convected state: restored with the rest."""
+    options = {"h": 0.2, "h_far": 0.2, "E": 1e4, "points_near": 3, "settlement": 0.08}
+    straight = scenes.strip_footing(**options)
+    straight.run(0.5, 4, progress=False)
+    expected = straight.run(1.0, 4, progress=False)
+    first = scenes.strip_footing(**options)
+    first.run(0.5, 4, progress=False)
+    folder = first.checkpoint(tmp_path)
+    again = scenes.strip_footing(**options)
+    again.restore(folder)
+    reports = again.run(1.0, 4, progress=False)
+    q = [scenes.footing_pressure(r) for r in reports]
+    assert q == [scenes.footing_pressure(r) for r in expected]
+    np.testing.assert_array_equal(again._boundary.points.x, straight._boundary.points.x)
+
+
+@pytest.fixture
+def written(tmp_path):
+    sim = falling_block()
+    sim.run(0.05, 2, progress=False)
+    return sim.checkpoint(tmp_path)
+
+
+def _refused(folder, match, **options):
+    sim = falling_block(**options)
+    before = sim.points.x.copy()
+    with pytest.raises(fe_mpm.CheckpointError, match=match):
+        sim.restore(folder)
+    # Refused before anything changed.
+    assert (sim.t, sim.step_number) == (0.0, 0)
+    np.testing.assert_array_equal(sim.points.x, before)
+
+
+def test_a_checkpoint_of_another_scene_is_refused(written):
+    _refused(written, r"another scene: its law_parameters", E=2e6)
+
+
+def test_a_corrupted_checkpoint_is_refused(written):
+    piece = written / "points_r0000.npz"
+    data = bytearray(piece.read_bytes())
+    data[len(data) // 2] ^= 0xFF
+    piece.write_bytes(bytes(data))
+    _refused(written, "does not match its checksum: corrupted")
+
+
+def test_a_checkpoint_of_another_version_or_format_is_refused(written):
+    state_file = written / "state.json"
+    state = json.loads(state_file.read_text())
+    state["scene"]["fe_mpm"] = "0.0.1"
+    state_file.write_text(json.dumps(state))
+    _refused(written, "written by fe-mpm 0.0.1")
+    state["format"] = checkpoint.FORMAT + 1
+    state_file.write_text(json.dumps(state))
+    _refused(written, f"this fe-mpm reads format {checkpoint.FORMAT}")
+
+
+def test_a_folder_without_checkpoints_is_refused(tmp_path):
+    _refused(tmp_path, "no checkpoint")
+
+
+def test_checkpoint_every_must_be_a_positive_count():
+    with pytest.raises(ValueError, match="checkpoint_every"):
+        falling_block(checkpoint_every=0)
