@@ -193,7 +193,8 @@ def read(sim, path: str | Path) -> None:
     sim.t, sim.step_number = float(state["t"]), int(state["step"])
     sim.tracking._nslot = state["slots"]
     sim.tracking.dropped = int(state["dropped"]) if comm.rank == 0 else 0
-    sim._cells_of_last_step, sim._current = None, None
+    sim.tracking.forget()
+    sim._current = None
     sim._track(sim.step_number, sim.t)  # each point to the rank that owns its cell
 
 

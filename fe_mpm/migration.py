@@ -27,8 +27,12 @@ PADDING = 1e-6
 
 
 def migrate(
-    points: MaterialPoints, markers: Markers, tracker: Tracker, cells: np.ndarray
-) -> tuple[np.ndarray, int]:
+    points: MaterialPoints,
+    markers: Markers,
+    tracker: Tracker,
+    cells: np.ndarray,
+    carried: np.ndarray | None = None,
+) -> tuple[np.ndarray, int, np.ndarray | None]:
     """Send the points this rank did not find (``cells < 0``) to the ranks that own them.
 
     Collective: every rank calls it at every tracking, even with nothing to send.
@@ -39,38 +43,63 @@ def migrate(
         markers: Their hosts follow the points.
         tracker: This rank's point locator (it finds the received points' cells).
         cells: Each point's cell on this rank, or −1 (n,).
+        carried: Rows of more per-point data that travel with the points (n, k).
 
     Returns:
         The cells of this rank's points after the exchange (−1: in no rank's cell),
-        and the number of points that moved between ranks (all ranks together).
+        the number of points that moved between ranks (all ranks together), and
+        ``carried`` for the points now here.
     """
     comm = tracker.mesh.comm
     lost = np.flatnonzero(cells < 0)
     if comm.size == 1 or not parallel.any_rank(comm, lost.size > 0):
-        return cells, 0
+        return cells, 0, carried
     g = points.gdim
     x3 = np.zeros((lost.size, 3))
     x3[:, :g] = points.x[lost]
     padding = PADDING * parallel.largest(comm, float(tracker.sizes.max()))
     owner = dolfinx.geometry.determine_point_ownership(tracker.mesh, x3, padding).src_owner
     # A point owned here after all (on a facet the walk missed) is not sent.
-    sent = lost[(owner >= 0) & (owner != comm.rank)]
-    destination = owner[(owner >= 0) & (owner != comm.rank)]
+    leaving = (owner >= 0) & (owner != comm.rank)
+    return send(points, markers, tracker, cells, lost[leaving], owner[leaving], carried)
+
+
+def send(
+    points: MaterialPoints,
+    markers: Markers,
+    tracker: Tracker,
+    cells: np.ndarray,
+    rows: np.ndarray,
+    destination: np.ndarray,
+    carried: np.ndarray | None = None,
+) -> tuple[np.ndarray, int, np.ndarray | None]:
+    """Send this rank's points ``rows`` to the ranks ``destination``; collective.
+
+    Returns what :func:`migrate` returns; received points' cells are looked up here.
+    """
+    comm = tracker.mesh.comm
     hosted = markers.hosts()
     outgoing = []
     for rank in range(comm.size):
-        rows = sent[destination == rank]
-        outgoing.append(None if rows.size == 0 else _pack(points, rows, hosted))
+        to_rank = rows[destination == rank]
+        data = None
+        if to_rank.size:
+            data = _pack(points, to_rank, hosted)
+            data["carried"] = None if carried is None else carried[to_rank]
+        outgoing.append(data)
     incoming = comm.alltoall(outgoing)
     keep = np.ones(len(points), dtype=bool)
-    keep[sent] = False
+    keep[rows] = False
     markers.keep_hosts(keep, moved_away=True)
     points.keep(keep)
     cells = cells[keep]
+    carried = None if carried is None else carried[keep]
     for data in incoming:
         if data is not None:
             cells = _append(points, markers, tracker, cells, data)
-    return cells, int(parallel.total(comm, int(sent.size)))
+            if carried is not None:
+                carried = np.concatenate([carried, data["carried"]])
+    return cells, int(parallel.total(comm, int(rows.size))), carried
 
 
 def _pack(points: MaterialPoints, rows: np.ndarray, hosted: dict[str, int]) -> dict:

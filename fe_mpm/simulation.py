@@ -189,7 +189,6 @@ class Simulation:
                 "point_domains=True": bool(point_domains),
                 "a ghost penalty": bool(ghost_penalty),
                 "linear_solver='iterative'": linear_solver != "direct",
-                "points_leaving='drop'": points_leaving != "raise",
             },
         )
         model_checks.check_law(material, self.spec, formulation)
@@ -227,7 +226,6 @@ class Simulation:
             self.fields, self.spec, material, self.conditions, ppp, self.dynamics, mass
         )
         self._current: StepInProgress | None = None
-        self._cells_of_last_step: np.ndarray | None = None
         self._newton: NewtonSolver | None = None
         self._add_time("setup", t0)
         self.output = (
@@ -316,7 +314,7 @@ class Simulation:
                 try:
                     report = self.ladder.take_step(
                         lambda rebin: self.step(t_new, rebin),
-                        can_hold and self._cells_of_last_step is not None,
+                        can_hold and self.tracking.can_hold,
                     )
                 except ConvergenceError as failure:
                     length.cut_after(failure)
@@ -369,7 +367,7 @@ class Simulation:
         if self._boundary is not None:
             reactions.update(self._boundary.convect(forms, t_new))
         self._add_time("update", t0)
-        self._cells_of_last_step = layout.cell.copy()
+        self.tracking.remember(layout.cell)
         self.t, self.step_number = t_new, k
         report = StepReport.of_step(
             k, t_new, result, self._current, reactions, self.markers, self.tracking, self.conditions
@@ -390,9 +388,7 @@ class Simulation:
             Taylor tests use this to check every residual/Jacobian pair (with
             :meth:`refresh_material` before each assembly for a pointwise law).
         """
-        layout = self._track(
-            self.step_number + 1, t_new, hold=None if rebin else self._cells_of_last_step
-        )
+        layout = self._track(self.step_number + 1, t_new, hold=not rebin)
         if self.step_number == 0 and not self.dynamic:
             model_checks.check_supports(self.conditions, self._boundary, layout.occupied)
         self.conditions.check_loaded_facets(layout.occupied, t_new)
@@ -443,7 +439,7 @@ class Simulation:
 
     # -- the phases of a step --------------------------------------------------
 
-    def _track(self, step: int = 0, t: float = 0.0, hold: np.ndarray | None = None) -> SlotLayout:
+    def _track(self, step: int = 0, t: float = 0.0, hold: bool = False) -> SlotLayout:
         t0 = time.perf_counter()
         layout = self.tracking.track(self.points, self.markers, step, t, hold)
         self._add_time("tracking", t0)

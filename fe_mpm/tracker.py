@@ -27,7 +27,7 @@ ON_FACET = 1e-6
 
 
 class Tracker:
-    """Finds the cell of each point of a fixed affine simplex mesh (serial).
+    """Finds the cell of each point among this rank's cells of a fixed affine simplex mesh.
 
     Args:
         mesh: Triangle or tetrahedron mesh with affine geometry.
@@ -183,11 +183,11 @@ class Tracker:
             np.arange(index_map.size_local + index_map.num_ghosts, dtype=np.int32)
         )
         order = np.argsort(on_rank)
+        sorted_globals = on_rank[order]
         owner, starts = self._cells_of_nodes()
         for i in np.flatnonzero(found & ~taken):
-            at = np.searchsorted(on_rank[order], nodes[i])
-            at = np.minimum(at, order.size - 1)
-            local_nodes = order[at][on_rank[order[at]] == nodes[i]]
+            at = np.minimum(np.searchsorted(sorted_globals, nodes[i]), order.size - 1)
+            local_nodes = order[at][sorted_globals[at] == nodes[i]]
             local_nodes = local_nodes[local_nodes < starts.size - 1]
             if local_nodes.size == 0:
                 continue

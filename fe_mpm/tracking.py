@@ -16,7 +16,7 @@ from fe_mpm._dolfinx import dolfinx
 from fe_mpm.errors import ConvergenceError, PointsOutsideError, warn
 from fe_mpm.formulations import FormulationSpec
 from fe_mpm.markers import Markers
-from fe_mpm.migration import migrate
+from fe_mpm.migration import migrate, send
 from fe_mpm.particles import MaterialPoints
 from fe_mpm.quadrature import SlotLayout, slot_count
 from fe_mpm.tracker import Tracker
@@ -43,6 +43,23 @@ class PointTracking:
         self.dropped = 0
         self.migrated = 0  # points that moved between ranks at the last tracking
         self._nslot: int | None = None  # slots per entity, kept while they suit
+        # (rank, cell) of each point in the last accepted step, kept in step with the
+        # points as they migrate: a held point goes back to that rank and cell.
+        self._home: np.ndarray | None = None
+
+    def remember(self, cells: np.ndarray) -> None:
+        """Keep the cells of an accepted step (n,), where a retry may hold the points."""
+        rank = self.tracker.mesh.comm.rank
+        self._home = np.column_stack([np.full(cells.size, rank), cells]).astype(np.int64)
+
+    def forget(self) -> None:
+        """No accepted step to hold the points in (set-up, restart)."""
+        self._home = None
+
+    @property
+    def can_hold(self) -> bool:
+        """Whether a retry can hold the points in the cells of the last accepted step."""
+        return self._home is not None
 
     def track(
         self,
@@ -50,7 +67,7 @@ class PointTracking:
         markers: Markers,
         step: int = 0,
         t: float = 0.0,
-        hold: np.ndarray | None = None,
+        hold: bool = False,
     ) -> SlotLayout:
         """Find each point's cell (``points.cell``) and return their slot layout.
 
@@ -60,38 +77,44 @@ class PointTracking:
             markers: The markers; their hosts are renumbered after a drop.
             step: The step about to be taken (0: set-up), for messages.
             t: Its end time, for messages.
-            hold: Last step's cells: each point stays in its old cell if it lies
-                within :data:`HOLD_REACH` of it.
+            hold: Hold each point in its cell of the last accepted step
+                (:meth:`remember`) if it lies within :data:`HOLD_REACH` of it.
         """
+        comm = self.tracker.mesh.comm
         cells = self.tracker.locate(points.x, points.cell)
-        # Points in another rank's cells go there (before holding: a held point's
-        # old cell is a cell of this rank).
-        cells, self.migrated = migrate(points, markers, self.tracker, cells)
-        if self.migrated:
-            hold = None  # the old cells no longer match the points
-        self.held_points = 0
-        if hold is not None and hold.size == cells.size and np.all(cells >= 0):
-            near = self.tracker.barycentric(points.x, hold).min(axis=1) >= -HOLD_REACH
-            held = np.where(near, hold, cells).astype(np.int32)
-            self.held_points = int(np.count_nonzero(held != cells))
-            cells = held
+        self.held_points, self.migrated = 0, 0
+        # On one rank a retry holds the points only if every point is in the grid.
+        if hold and self._home is not None and (comm.size > 1 or np.all(cells >= 0)):
+            cells = self._hold(points, markers, cells)
+        # The others in another rank's cells go there.
+        cells, migrated, self._home = migrate(points, markers, self.tracker, cells, self._home)
+        self.migrated += migrated
         outside = np.flatnonzero(cells < 0)
         where = f"step {step} (t = {t:g})" if step else "set-up"
-        comm = self.tracker.mesh.comm
-        if comm.size > 1:
-            # A point left here is in no rank's cells: every rank stops, with one message.
-            error = None
-            if outside.size:
-                error = PointsOutsideError(
-                    f"{_outside_message(points, outside, where)} (on {comm.size} MPI ranks: "
-                    "in no rank's cells). Dropping points is not distributed yet."
-                )
-            parallel.raise_together(comm, error)
-        elif outside.size:
+        if parallel.any_rank(comm, outside.size > 0):
             cells = self._drop(points, markers, cells, outside, where)
         points.cell = cells
         self._nslot = slot_count(np.bincount(cells), self._nslot, comm)
         return SlotLayout.from_cells(cells, self._nslot)
+
+    def _hold(self, points: MaterialPoints, markers: Markers, cells: np.ndarray) -> np.ndarray:
+        """Hold the points near their last accepted cells there; return the cells.
+
+        A point that has since migrated goes back to the rank of that cell first.
+        """
+        comm = self.tracker.mesh.comm
+        if comm.size > 1:
+            away = np.flatnonzero(self._home[:, 0] != comm.rank)
+            destination = self._home[away, 0]
+            cells, migrated, self._home = send(
+                points, markers, self.tracker, cells, away, destination, self._home
+            )
+            self.migrated += migrated
+        home = self._home[:, 1].astype(np.int32)
+        near = self.tracker.barycentric(points.x, home).min(axis=1) >= -HOLD_REACH
+        held = np.where(near, home, cells).astype(np.int32)
+        self.held_points = int(np.count_nonzero(held != cells))
+        return held
 
     def _drop(
         self,
@@ -101,24 +124,41 @@ class PointTracking:
         outside: np.ndarray,
         where: str,
     ) -> np.ndarray:
-        """Refuse, or remove with a warning, the points outside the grid; the kept cells."""
-        msg = _outside_message(points, outside, where)
+        """Refuse, or remove with a warning, the points outside the grid; the kept cells.
+
+        Collective: a point left outside here after migration is in no rank's cells.
+        Every rank refuses alike, or drops its own such points.
+        """
+        comm = self.tracker.mesh.comm
+        count = int(parallel.total(comm, int(outside.size)))
+        first = _outside_message(points, outside, where, count) if outside.size else None
+        if comm.size > 1:  # the lowest rank that has one gives the example
+            first = next(m for m in comm.allgather(first) if m is not None)
+            first += f" (in none of the {comm.size} MPI ranks' cells)"
         if self.points_leaving == "raise":
-            raise PointsOutsideError(msg + ". Pass points_leaving='drop' to remove them.")
-        warn(msg + "; dropped.")
+            parallel.raise_together(
+                comm, PointsOutsideError(first + ". Pass points_leaving='drop' to remove them.")
+            )
+        warn(first + "; dropped.")
         keep = cells >= 0
-        markers.keep_hosts(keep)
+        error = None
+        try:
+            markers.keep_hosts(keep)
+        except PointsOutsideError as err:
+            error = err
+        parallel.raise_together(comm, error)
         points.keep(keep)
+        self._home = None if self._home is None else self._home[keep]
         self.dropped += outside.size
-        if len(points) == 0:
+        if parallel.total(comm, len(points)) == 0:
             raise PointsOutsideError(f"all material points have left the grid at {where}")
         return cells[keep]
 
 
-def _outside_message(points: MaterialPoints, outside: np.ndarray, where: str) -> str:
+def _outside_message(points: MaterialPoints, outside: np.ndarray, where: str, count: int) -> str:
     first = outside[0]
     return (
-        f"{outside.size} material point(s) left the grid at {where}; first: "
+        f"{count} material point(s) left the grid at {where}; first: "
         f"point {first} at x = {points.x[first]}"
     )
 

@@ -54,7 +54,7 @@ def test_held_points_read_their_old_cells_field_not_their_new_cells():
     The expected values come from that cell's three nodes alone."""
     sim = _block_sim()
     sim.step(0.5)
-    old = sim._cells_of_last_step.copy()
+    old = sim.tracking._home[:, 1].copy()  # the cells of the accepted step
     sim.points.x += np.array([0.037, 0.021])
     forms, layout, *_ = sim.prepare_step(1.0, rebin=False)
     held = layout.cell != sim.tracker.locate(sim.points.x)

@@ -38,7 +38,7 @@ case, folder = sys.argv[1], Path(sys.argv[2])
 rank = MPI.COMM_WORLD.rank
 out = folder / f"rank{rank}_{MPI.COMM_WORLD.size}.json"
 
-def cook(formulation, n, steps, load=1 / 16, margin=None, **options):
+def cook(formulation, n, steps, load=1 / 16, margin=None, fail_at=(), **options):
     if margin is None:
         margin = 0 if steps == 1 else max(1, -(-n // 16))
     scene = meshes.cook_membrane(n=n, margin=margin)
@@ -50,6 +50,16 @@ def cook(formulation, n, steps, load=1 / 16, margin=None, **options):
         tractions=[fe_mpm.Traction(meshes.COOK_LOADED, (0.0, load), scale=lambda t: t)],
         reactions={"clamp": meshes.COOK_CLAMPED}, **options)
     sim.add_marker("A", meshes.COOK_POINT_A)
+    step, failed = sim.step, []
+
+    def failing_once(t_new, rebin=True):  # as Newton may, once the points are re-binned
+        if sim.step_number + 1 in fail_at and rebin and sim.step_number + 1 not in failed:
+            failed.append(sim.step_number + 1)
+            sim.prepare_step(t_new)  # tracked (and migrated) before it fails
+            raise fe_mpm.ConvergenceError("made to fail")
+        return step(t_new, rebin)
+
+    sim.step = failing_once
     reports = sim.run(t_end=1.0, n_steps=steps, progress=False)
     sim.close()
     return {
@@ -60,9 +70,10 @@ def cook(formulation, n, steps, load=1 / 16, margin=None, **options):
         "points": len(points),
         "migrated": sum(r.migrated_points for r in reports),
         "imbalance": reports[-1].point_imbalance,
+        "held": [r.held_points for r in reports],
     }
 
-def falling_block(mass, steps, restore=None, **options):
+def falling_block(mass, steps, restore=None, supported=True, **options):
     # A Mohr-Coulomb block dropped onto the grid's clamped base (dynamic, gravity).
     mesh = meshes.rectangle_mesh((0, 0), (2, 2), (8, 8))
     owned = mesh.topology.index_map(2).size_local
@@ -72,8 +83,8 @@ def falling_block(mass, steps, restore=None, **options):
     seeded = len(points)
     law = fe_mpm.MohrCoulomb(E=1e6, nu=0.3, cohesion=2e3, friction_angle=30.0, density=2000.0)
     sim = fe_mpm.Simulation(mesh, points, law, dynamic=True, mass=mass, body_force=(0, -9.81),
-                            dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))],
-                            **options)
+                            dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))]
+                            if supported else [], **options)
     sim.add_marker("corner", (0.501, 0.999))
     if restore is not None:
         sim.restore(restore)
@@ -86,6 +97,8 @@ def falling_block(mass, steps, restore=None, **options):
         "stress": total(points.stress[:, 1, 1] * points.volume),
         "seeded": seeded,
         "migrated": sum(r.migrated_points for r in reports),
+        "dropped": sim.dropped,
+        "remaining": int(parallel.total(MPI.COMM_WORLD, len(points))),
     }
 
 try:
@@ -94,9 +107,12 @@ try:
                   (("u", 16, 1), ("up", 16, 1), ("up", 8, 4), ("u", 8, 4))}
         result["output"] = cook("up", 8, 2, output_dir=folder / f"out{MPI.COMM_WORLD.size}")
     elif case == "crossing":
-        result = {"up 32 4": cook("up", 32, 4), "x5": cook("up", 32, 10, load=5 / 16, margin=10)}
+        result = {"up 32 4": cook("up", 32, 4), "x5": cook("up", 32, 10, load=5 / 16, margin=10),
+                  "held": cook("up", 32, 10, load=5 / 16, margin=10, fail_at=(4, 7, 9))}
     elif case == "falling":
         result = {m: falling_block(m, k) for m, k in (("consistent", 10), ("lumped", 20))}
+    elif case == "dropping":
+        result = falling_block("lumped", 16, supported=False, points_leaving="drop")
     elif case == "write checkpoint":
         result = falling_block("lumped", 10, checkpoint_dir=folder / "ck", checkpoint_every=10)
     elif case == "restore checkpoint":
@@ -209,16 +225,21 @@ def test_points_that_cross_to_another_rank_move_there_and_the_answer_stays_seria
     """Cook u-p at n = 32: at 1 N its fourth step moves two points across the partition;
     at 5 N (ten steps, ten rows of margin) the body sweeps through the grid and tens of
     points change rank. Iterations, tip and reaction stay the serial ones (the points are
-    summed in another order: measured 6e-15)."""
+    summed in another order: measured 6e-15). "held": the same run with steps 4, 7 and
+    9 failing once after re-binning: the retry holds each point in its last step's cell,
+    on that cell's rank, so points that had migrated go back; the same points are held
+    and the answer stays the serial one."""
     (serial,) = _run(tmp_path, "crossing", 1)
     for result in _run(tmp_path, "crossing", ranks):
-        for case in ("up 32 4", "x5"):
+        for case in ("up 32 4", "x5", "held"):
             want, got = serial[case], result[case]
+            assert got["held"] == want["held"], case
             assert got["iterations"] == want["iterations"], case
             for a, b in zip(got["tip"], want["tip"], strict=True):
                 assert a == pytest.approx(b, rel=1e-10, abs=1e-12), case
             assert got["migrated"] > 0, case  # the test would test nothing otherwise
         assert want["migrated"] == 0
+    assert sum(serial["held"]["held"]) > 0
 
 
 def test_a_block_falling_onto_the_base_in_dynamics_gives_the_serial_answer(tmp_path, ranks=3):
@@ -258,10 +279,24 @@ def test_a_checkpoint_written_on_two_ranks_continues_on_three_and_on_one(tmp_pat
                 assert np.allclose(got[key], want[key], rtol=1e-10, atol=0), (ranks, key)
 
 
+def test_points_that_fall_out_of_the_grid_are_dropped_on_every_rank_as_in_serial(tmp_path):
+    """The block without its base falls out of the grid's bottom (16 steps of Newmark,
+    points_leaving="drop"): the same points are dropped, and the rest fall on, as in
+    serial (iterations, count, marker and height; measured equal to 1e-15)."""
+    (serial,) = _run(tmp_path, "dropping", 1)
+    assert 0 < serial["dropped"] < serial["seeded"] == serial["dropped"] + serial["remaining"]
+    for got in _run(tmp_path, "dropping", 3):
+        assert got["iterations"] == serial["iterations"]
+        assert (got["dropped"], got["remaining"]) == (serial["dropped"], serial["remaining"])
+        for key in ("corner", "height"):
+            assert np.allclose(got[key], serial[key], rtol=1e-10, atol=0), key
+
+
 def test_a_point_that_leaves_the_grid_stops_every_rank_with_one_message(tmp_path):
     lines = _run(tmp_path, "leaving", 2)
     assert all(line["error"] == "PointsOutsideError" for line in lines), lines
-    assert all("in no rank's cells" in x["message"] for x in lines)
+    assert all("in none of the 2 MPI ranks' cells" in x["message"] for x in lines)
+    assert all("Pass points_leaving='drop'" in x["message"] for x in lines)
 
 
 def test_a_feature_not_yet_distributed_is_refused_on_every_rank(tmp_path):
