@@ -41,16 +41,13 @@ START = time.perf_counter()  # the wall time reported includes the imports
 
 import argparse
 import json
-import os
 import sys
 from pathlib import Path
-
-from mpi4py import MPI
 
 import numpy as np
 
 import fe_mpm
-from fe_mpm import meshes
+from fe_mpm import meshes, parallel
 from fe_mpm.plotting import pyplot
 from fe_mpm.references import cook_reference
 
@@ -95,9 +92,7 @@ def parse_args(argv=None):
 
 
 args = parse_args()
-rank0 = MPI.COMM_WORLD.rank == 0
-if not rank0:  # every rank runs this script; one prints
-    sys.stdout = open(os.devnull, "w")  # noqa: SIM115
+rank0 = parallel.print_on_rank_zero()  # every rank runs this script; one prints
 if args.mp_per_cell is None:
     args.mp_per_cell = 3 if args.formulation == "up-p2p1" else 1
 # -

@@ -44,7 +44,7 @@ import sys
 import numpy as np
 
 import fe_mpm
-from fe_mpm import meshes
+from fe_mpm import meshes, parallel
 
 
 def parse_args(argv=None):
@@ -84,6 +84,7 @@ def parse_args(argv=None):
 
 
 args = parse_args()
+parallel.print_on_rank_zero()  # every rank runs this script; one prints
 defaults = (25.0, 5e4, 1.0, 9.81) if args.dynamic else (50.0, 4e5, 80.0, 10.0)
 L, E, ρ, g = (
     d if v is None else v
@@ -136,14 +137,13 @@ if args.dynamic:
     error = float(np.abs(u_top - exact).max() / (ρ * g * L**2 / (2 * E)))
 else:
     σ_exact = -ρ * g * (L - Y)
-    error = float(
-        np.sum(np.abs(points.stress[:, 1, 1] - σ_exact) * points.volume)
-        / (ρ * g * L * points.volume.sum())
-    )
+    comm = scene.mesh.comm  # each rank holds its cells' points: sum over the ranks
+    misfit = parallel.total(comm, np.sum(np.abs(points.stress[:, 1, 1] - σ_exact) * points.volume))
+    error = float(misfit / (ρ * g * L * parallel.total(comm, points.volume.sum())))
 wall = time.perf_counter() - START
 print(
     f"Elastic column ({'dynamic' if args.dynamic else 'quasi-static'}): ny = {args.ny}, "
-    f"{len(reports)} steps, {len(points)} points"
+    f"{len(reports)} steps, {parallel.total(scene.mesh.comm, len(points))} points"
 )
 print(
     f"  error = {error:.3e}; base reaction {reports[-1].reactions['base'][1]:.6g} N "
@@ -207,7 +207,7 @@ if args.json:
                 "error": error,
                 "wall_time_s": wall,
                 "steps": len(reports),
-                "n_particles": len(points),
+                "n_particles": parallel.total(scene.mesh.comm, len(points)),
                 "dynamic": args.dynamic,
                 "ny": args.ny,
                 "newton_iterations": [r.newton_iterations for r in reports],

@@ -37,6 +37,7 @@ import sys
 import numpy as np
 
 import fe_mpm
+from fe_mpm import parallel
 from fe_mpm.meshes import rectangle_mesh
 
 
@@ -52,6 +53,7 @@ def parse_args(argv=None):
 
 
 args = parse_args()
+parallel.print_on_rank_zero()  # every rank runs this script; one prints
 g, θ = 9.81, np.radians(args.theta)
 length = 1.0 + 0.5 * g * np.sin(θ) * args.t_end**2 + 1.0  # room for the slide
 # -
@@ -61,7 +63,8 @@ length = 1.0 + 0.5 * g * np.sin(θ) * args.t_end**2 + 1.0  # room for the slide
 # +
 n = (int(np.ceil(length / args.h)), int(np.ceil(1.0 / args.h)))
 grid = rectangle_mesh((0.0, 0.0), (n[0] * args.h, n[1] * args.h), n)
-centroids = grid.geometry.x[grid.geometry.dofmaps[0]][:, :, :2].mean(axis=1)
+owned = grid.topology.index_map(2).size_local  # each rank seeds the cells it owns
+centroids = grid.geometry.x[grid.geometry.dofmaps[0][:owned]][:, :, :2].mean(axis=1)
 block = np.flatnonzero((centroids[:, 0] < 1.0) & (centroids[:, 1] < 0.5))
 points = fe_mpm.seed(grid, per_cell=3, density=7800.0, cells=block)
 on_plane = lambda x: np.isclose(x[1], 0.0)  # noqa: E731
@@ -75,13 +78,19 @@ try:
         body_force=(g * np.sin(θ), -g * np.cos(θ)),
         reactions={"plane": on_plane},
     )
-    # Step by hand to record the centre of mass after every step.
-    m = points.mass
+
+    # Step by hand to record the centre of mass after every step (a sum over the
+    # ranks: each holds the points of its cells).
+    def slide() -> float:
+        """Horizontal motion of the centre of mass (m)."""
+        moment = points.mass @ (points.x - points.x0)[:, 0]
+        return parallel.total(grid.comm, moment) / parallel.total(grid.comm, points.mass.sum())
+
     com = [(0.0, 0.0)]
     reports = []
     for k in range(1, round(args.t_end / args.dt) + 1):
         reports.append(sim.step(k * args.dt))
-        com.append((reports[-1].t, m @ (points.x - points.x0)[:, 0] / m.sum()))
+        com.append((reports[-1].t, slide()))
 except (ValueError, fe_mpm.ConvergenceError, fe_mpm.PointsOutsideError) as err:
     sys.exit(f"sliding_block.py: {err}")
 # -
@@ -96,7 +105,8 @@ s_exact = 0.5 * g * np.sin(θ) * t**2
 error = float(np.sqrt(np.sum((s_h - s_exact) ** 2)))  # Eq. 4.44
 wall = time.perf_counter() - START
 print(
-    f"Sliding block: θ = {args.theta}°, Δt = {args.dt}, {len(reports)} steps, {len(points)} points"
+    f"Sliding block: θ = {args.theta}°, Δt = {args.dt}, {len(reports)} steps, "
+    f"{parallel.total(grid.comm, len(points))} points"
 )
 print(
     f"  slide s = {s_h[-1]:.6f} m, exact {s_exact[-1]:.6f} m; "
@@ -132,7 +142,7 @@ if args.json:
                 "error": error,
                 "wall_time_s": wall,
                 "steps": len(reports),
-                "n_particles": len(points),
+                "n_particles": parallel.total(grid.comm, len(points)),
                 "dt": args.dt,
                 "slide_m": float(s_h[-1]),
                 "exact_m": float(s_exact[-1]),

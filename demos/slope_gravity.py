@@ -20,7 +20,9 @@
 # - ramp gravity with `body_force_scale`, and read the reaction on the base,
 # - follow a point with a marker and read Newton's verdict in each `StepReport`.
 #
-# Usage: `python demos/slope_gravity.py [--h 0.5] [--steps 12] [--g-max 1.2] [--json]`.
+# Usage: `python demos/slope_gravity.py [--h 0.5] [--steps 12] [--g-max 1.2] [--json]`;
+# `mpiexec -n 2 python -m mpi4py demos/slope_gravity.py` shares the grid and its points
+# among the ranks (rank 0 builds the gmsh model and prints).
 #
 # Past the knee the slope keeps finding equilibrium on its new shape; on h = 0.5
 # the ramp to 2 g in 20 steps reached 1.4 g, where a step stops: the imbalance
@@ -37,6 +39,7 @@ import sys
 
 # ruff: noqa: I001 - fe_mpm first: the PyPI wheel needs its bootstrap before dolfinx and mpi4py.
 import fe_mpm
+from fe_mpm import parallel
 import dolfinx
 import gmsh
 import numpy as np
@@ -64,6 +67,8 @@ def parse_args(argv=None):
 
 
 args = parse_args()
+comm = MPI.COMM_WORLD
+parallel.print_on_rank_zero(comm)  # every rank runs this script; one prints
 # -
 
 # ## The grid
@@ -75,9 +80,21 @@ args = parse_args()
 
 # +
 def slope_grid(h: float):
-    """The grid of the scene: (mesh, cell_tags), built on rank 0 and kept serial."""
+    """The grid of the scene: (mesh, cell_tags), built by gmsh on rank 0.
+
+    DOLFINx shares its cells among the ranks.
+    """
     gmsh.initialize(interruptible=False)
     gmsh.option.setNumber("General.Terminal", 0)
+    if comm.rank == 0:
+        build_model(h)
+    data = dolfinx.io.gmsh.model_to_mesh(gmsh.model, comm, 0, gdim=2)
+    gmsh.finalize()
+    return data.mesh, data.cell_tags
+
+
+def build_model(h: float) -> None:
+    """The gmsh model: the soil polygon fragmenting the rectangle, meshed with size h."""
     occ = gmsh.model.occ
     outline = [
         (0, 0),
@@ -103,9 +120,6 @@ def slope_grid(h: float):
     gmsh.option.setNumber("Mesh.MeshSizeMin", h)
     gmsh.option.setNumber("Mesh.MeshSizeMax", h)
     gmsh.model.mesh.generate(2)
-    data = dolfinx.io.gmsh.model_to_mesh(gmsh.model, MPI.COMM_SELF, 0, gdim=2)
-    gmsh.finalize()
-    return data.mesh, data.cell_tags
 
 
 mesh, cell_tags = slope_grid(args.h)
@@ -157,7 +171,8 @@ sim.add_marker("crest", crest)
 # reaction over the weight at that load.
 
 # +
-weight = points.mass.sum() * G
+weight = comm.allreduce(points.mass.sum()) * G  # each rank holds its cells' points
+n_points = comm.allreduce(len(points))
 
 
 def report_step(r: fe_mpm.StepReport) -> None:
@@ -175,7 +190,7 @@ def report_step(r: fe_mpm.StepReport) -> None:
 
 
 print(
-    f"Slope: {len(points)} points on {mesh.topology.index_map(2).size_local} cells (h = "
+    f"Slope: {n_points} points on {mesh.topology.index_map(2).size_global} cells (h = "
     f"{args.h} m), gravity to {args.g_max} g in {args.steps} steps"
 )
 try:
@@ -250,7 +265,7 @@ if args.json:
                 "steps": len(reports),
                 "worst_relative_residual": worst,
                 "reaction_balance": balance,
-                "n_particles": len(points),
+                "n_particles": n_points,
                 "newton_iterations": [r.newton_iterations for r in reports],
                 "crest_moved": moved.tolist(),
                 "load_factor": factor.tolist(),

@@ -42,11 +42,8 @@ START = time.perf_counter()
 
 import argparse
 import json
-import os
 import sys
 from pathlib import Path
-
-from mpi4py import MPI
 
 import numpy as np
 
@@ -103,9 +100,7 @@ def parse_args(argv=None):
 
 
 args = parse_args()
-rank0 = MPI.COMM_WORLD.rank == 0
-if not rank0:  # every rank runs this script; one prints
-    sys.stdout = open(os.devnull, "w")  # noqa: SIM115
+rank0 = parallel.print_on_rank_zero()  # every rank runs this script; one prints
 # -
 
 # ## Scene

@@ -46,7 +46,7 @@ from pathlib import Path
 import numpy as np
 
 import fe_mpm
-from fe_mpm import meshes
+from fe_mpm import meshes, parallel
 from fe_mpm.plotting import pyplot
 
 
@@ -70,6 +70,7 @@ def parse_args(argv=None):
 
 
 args = parse_args()
+rank0 = parallel.print_on_rank_zero()  # every rank runs this script; one prints
 # -
 
 # ## Scene and simulation
@@ -113,19 +114,21 @@ analytical = 2.0 / np.sqrt(3.0) * args.yield_stress * args.width
 iterations = [r.newton_iterations for r in reports]
 wall = time.perf_counter() - START
 print(
-    f"Tension test, {args.formulation}, ν = {args.nu}: {len(points)} points, {len(reports)} steps"
+    f"Tension test, {args.formulation}, ν = {args.nu}: "
+    f"{parallel.total(scene.mesh.comm, len(points))} points, {len(reports)} steps"
 )
 print(
     f"  limit load {limit_load:.6g} N/m; (2/√3) σ_Y W = {analytical:.6g} N/m "
     f"({limit_load / analytical - 1:+.2%})"
 )
-print(f"  max equivalent plastic strain {points.history['plastic_strain'].max():.4f}")
+strain = parallel.largest(scene.mesh.comm, float(points.history["plastic_strain"].max(initial=0)))
+print(f"  max equivalent plastic strain {strain:.4f}")
 print(
     f"  Newton iterations per step: max {max(iterations)}, mean {np.mean(iterations):.2f}; "
     f"wall time {wall:.2f} s"
 )
 
-if not args.no_output:
+if not args.no_output and rank0:
     plt = pyplot()  # None without matplotlib (the plots extra)
     out = Path(args.output)
     np.savetxt(
@@ -197,7 +200,7 @@ if args.json:
                 "newton_iterations": iterations,
                 "wall_time_s": wall,
                 "steps": len(reports),
-                "n_particles": len(points),
+                "n_particles": parallel.total(scene.mesh.comm, len(points)),
                 "formulation": args.formulation,
                 "nu": args.nu,
                 "check_passed": passed,

@@ -10,6 +10,9 @@ rank that found one. On one rank every function here is the serial identity.
 
 from __future__ import annotations
 
+import os
+import sys
+
 from mpi4py import MPI
 
 import numpy as np
@@ -22,25 +25,23 @@ def any_rank(comm: MPI.Comm, flag: bool) -> bool:
 
 def total(comm: MPI.Comm, value):
     """The sum of ``value`` (a number or an array) over the ranks."""
-    if comm.size == 1:
-        return value
-    if np.ndim(value) == 0:
-        return comm.allreduce(value, op=MPI.SUM)
-    local = np.ascontiguousarray(value)
-    out = np.empty_like(local)
-    comm.Allreduce(local, out, op=MPI.SUM)
-    return out
+    return _reduced(comm, value, MPI.SUM)
 
 
 def largest(comm: MPI.Comm, value):
     """The maximum of ``value`` (a number, or an array elementwise) over the ranks."""
+    return _reduced(comm, value, MPI.MAX)
+
+
+def _reduced(comm: MPI.Comm, value, op: MPI.Op):
+    """``value`` (a number, or an array elementwise) reduced with ``op`` over the ranks."""
     if comm.size == 1:
         return value
     if np.ndim(value) == 0:
-        return comm.allreduce(value, op=MPI.MAX)
+        return comm.allreduce(value, op=op)
     local = np.ascontiguousarray(value)
     out = np.empty_like(local)
-    comm.Allreduce(local, out, op=MPI.MAX)
+    comm.Allreduce(local, out, op=op)
     return out
 
 
@@ -72,6 +73,17 @@ def raise_together(comm: MPI.Comm, error: Exception | None) -> None:
     if rank == comm.rank:
         raise error
     raise kind(f"(on rank {rank}) {message}")
+
+
+def print_on_rank_zero(comm: MPI.Comm = MPI.COMM_WORLD) -> bool:
+    """Send the standard output of every rank but 0 to ``os.devnull``.
+
+    Every rank runs a script under ``mpiexec``; its prints then appear once. Returns
+    whether this is rank 0 (which also writes the script's own files).
+    """
+    if comm.rank != 0:
+        sys.stdout = open(os.devnull, "w")  # noqa: SIM115 - open for the process's life
+    return comm.rank == 0
 
 
 def on_rank_zero(comm: MPI.Comm) -> bool:

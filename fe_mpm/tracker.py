@@ -120,20 +120,29 @@ class Tracker:
         """
         out = np.where(allowed[np.maximum(cells, 0)] & (cells >= 0), cells, -1).astype(np.int32)
         tol = np.maximum(np.broadcast_to(tol, cells.shape), ON_FACET)
-        owner, starts = self._cells_of_nodes()
         for i in np.flatnonzero((out < 0) & (cells >= 0)):
-            nodes = self._nodes_of[cells[i]]
-            candidates = np.unique(
-                np.concatenate([owner[starts[v] : starts[v + 1]] for v in nodes])
-            )
-            candidates = candidates[allowed[candidates]]
-            if candidates.size == 0:
-                continue
-            lam = self.barycentric(np.repeat(x[i : i + 1], candidates.size, axis=0), candidates)
-            best = np.argmax(lam.min(axis=1))
-            if lam[best].min() >= -tol[i]:
-                out[i] = candidates[best]
+            score, cell = self._best_allowed(x[i], self._nodes_of[cells[i]], allowed)
+            if score >= -tol[i]:
+                out[i] = cell
         return out
+
+    def _best_allowed(
+        self, x: np.ndarray, nodes: np.ndarray, allowed: np.ndarray
+    ) -> tuple[float, int]:
+        """The allowed cell at ``nodes`` that holds the point ``x`` (g,) best.
+
+        Among the allowed cells at any of the (local) ``nodes``, the one whose
+        smallest barycentric coordinate at ``x`` is largest: (that coordinate, the
+        cell); (−inf, −1) if none.
+        """
+        owner, starts = self._cells_of_nodes()
+        candidates = np.unique(np.concatenate([owner[starts[v] : starts[v + 1]] for v in nodes]))
+        candidates = candidates[allowed[candidates]]
+        if candidates.size == 0:
+            return -np.inf, -1
+        lam = self.barycentric(np.repeat(x[None, :], candidates.size, axis=0), candidates)
+        best = np.argmax(lam.min(axis=1))
+        return float(lam[best].min()), int(candidates[best])
 
     def claim(
         self, x: np.ndarray, allowed: np.ndarray, tol: float | np.ndarray = ON_FACET
@@ -184,22 +193,13 @@ class Tracker:
         )
         order = np.argsort(on_rank)
         sorted_globals = on_rank[order]
-        owner, starts = self._cells_of_nodes()
+        starts = self._cells_of_nodes()[1]
         for i in np.flatnonzero(found & ~taken):
             at = np.minimum(np.searchsorted(sorted_globals, nodes[i]), order.size - 1)
             local_nodes = order[at][sorted_globals[at] == nodes[i]]
             local_nodes = local_nodes[local_nodes < starts.size - 1]
-            if local_nodes.size == 0:
-                continue
-            candidates = np.unique(
-                np.concatenate([owner[starts[v] : starts[v + 1]] for v in local_nodes])
-            )
-            candidates = candidates[allowed[candidates]]
-            if candidates.size == 0:
-                continue
-            lam = self.barycentric(np.repeat(x[i : i + 1], candidates.size, axis=0), candidates)
-            best = np.argmax(lam.min(axis=1))
-            score[i], choice[i] = lam[best].min(), candidates[best]
+            if local_nodes.size:
+                score[i], choice[i] = self._best_allowed(x[i], local_nodes, allowed)
         scores = np.array(comm.allgather(score))  # (ranks, n)
         winner = np.argmax(scores, axis=0)  # the lowest rank among equals
         close = scores[winner, np.arange(n)] >= -np.maximum(np.broadcast_to(tol, (n,)), ON_FACET)

@@ -327,3 +327,33 @@ def test_boundary_points_act_on_one_rank_each_and_give_the_serial_answer(tmp_pat
 def test_serial_meshes_run_independently_on_each_rank(tmp_path):
     lines = _run(tmp_path, "self", 2)
     assert isinstance(lines[0], float) and lines[0] == lines[1]  # the same serial answer
+
+
+def _demo_json(name: str, ranks: int, *args: str) -> dict:
+    """The JSON summary a demo prints as its last line, run on ``ranks`` ranks."""
+    demo = Path(__file__).resolve().parent.parent / "demos" / name
+    done = subprocess.run(
+        [_mpiexec(), "-n", str(ranks), sys.executable, "-m", "mpi4py", str(demo), *args, "--json"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env=dict(os.environ),
+    )
+    assert done.returncode == 0, done.stdout + done.stderr
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+@pytest.mark.parametrize(
+    ("demo", "args", "key"),
+    [
+        ("elastic_column.py", ("--ny", "8", "--steps", "2"), "error"),
+        ("sliding_block.py", ("--t-end", "0.5"), "slide_m"),
+    ],
+)
+def test_demos_run_unchanged_on_two_ranks_and_print_the_serial_summary(demo, args, key):
+    """Their measures sum or gather the points of every rank; rank 0 prints once."""
+    serial, shared = _demo_json(demo, 1, *args), _demo_json(demo, 2, *args)
+    assert shared["n_particles"] == serial["n_particles"]
+    assert shared["check_passed"] and serial["check_passed"]
+    # The column's stress error and the block's slide (a sum over every point).
+    assert shared[key] == pytest.approx(serial[key], rel=1e-10, abs=0)
