@@ -61,10 +61,14 @@ def latest(directory: str | Path) -> Path:
     Raises:
         CheckpointError: ``directory`` holds no complete checkpoint.
     """
-    found = sorted(p for p in Path(directory).glob("step_*") if (p / "state.json").is_file())
+    found = [
+        p
+        for p in Path(directory).glob("step_*")
+        if p.name[5:].isdigit() and (p / "state.json").is_file()
+    ]
     if not found:
         raise CheckpointError(f"no checkpoint (step_NNNNNN/state.json) in {directory}")
-    return found[-1]
+    return max(found, key=lambda p: int(p.name[5:]))
 
 
 def write(sim, directory: str | Path) -> Path:
@@ -96,6 +100,10 @@ def write(sim, directory: str | Path) -> Path:
     arrays = {name: getattr(sim.points, name) for name in SAVED_FIELDS}
     arrays.update({f"history.{k}": v for k, v in sim.points.history.items()})
     arrays.update({f"marker.{k}": np.array(h) for k, h in sim.markers.hosts().items()})
+    home = sim.tracking._home  # the accepted step's cells, where a retry may hold the points
+    if home is not None:
+        cells = sim.mesh.topology.index_map(sim.mesh.topology.dim)
+        arrays["home_cell"] = cells.local_to_global(home[:, 1].astype(np.int32))
     error, digest = None, ""
     try:
         digest = _save(partial / piece, arrays)
@@ -122,9 +130,12 @@ def write(sim, directory: str | Path) -> Path:
                 "shared_sha256": _save(partial / "shared.npz", shared),
             }
             (partial / "state.json").write_text(json.dumps(state, indent=1))
+            old = final.with_name(final.name + ".old")
             if final.exists():  # the same step of an earlier run: replaced whole
-                shutil.rmtree(final)
+                shutil.rmtree(old, ignore_errors=True)
+                final.rename(old)
             partial.rename(final)
+            shutil.rmtree(old, ignore_errors=True)
         except OSError as err:
             error = CheckpointError(f"cannot write checkpoint {final}: {err}")
     parallel.raise_together(comm, error)
@@ -158,8 +169,17 @@ def read(sim, path: str | Path) -> None:
             error = CheckpointError(f"checkpoint {path}: cannot read state.json ({err})")
     parallel.raise_together(comm, error)
     state = comm.bcast(state)
-    _check_state(sim, path, state)
-    mine = state["pieces"][comm.rank :: comm.size]
+    try:
+        _check_state(sim, path, state)
+    except (KeyError, TypeError, ValueError, IndexError) as err:
+        if isinstance(err, CheckpointError):
+            raise
+        raise CheckpointError(f"checkpoint {path}: state.json is malformed ({err!r})") from err
+    try:
+        mine = state["pieces"][comm.rank :: comm.size]
+        state["shared_sha256"], state["t"], state["step"], state["slots"]  # noqa: B018
+    except (KeyError, TypeError) as err:
+        raise CheckpointError(f"checkpoint {path}: state.json is malformed ({err!r})") from err
     error, loaded = None, []
     try:
         loaded = [_load(path / p["file"], p["sha256"], p["points"], sim) for p in mine]
@@ -193,7 +213,14 @@ def read(sim, path: str | Path) -> None:
     sim.t, sim.step_number = float(state["t"]), int(state["step"])
     sim.tracking._nslot = state["slots"]
     sim.tracking.dropped = int(state["dropped"]) if comm.rank == 0 else 0
+    # Where a retry of the next step may hold the points: the cells of the last step.
+    starts = _cell_starts(sim)
+    home = np.zeros((0, 2), dtype=np.int64) if not loaded else None
+    if loaded and all("home_cell" in arrays for arrays in loaded):
+        home = _home_on_ranks(starts, np.concatenate([a["home_cell"] for a in loaded]))
     sim.tracking.forget()
+    if parallel.all_ranks(comm, home is not None):  # not so before the first step
+        sim.tracking._home = home
     sim._current = None
     sim._track(sim.step_number, sim.t)  # each point to the rank that owns its cell
 
@@ -203,8 +230,8 @@ def scene(sim) -> dict:
     mesh, comm = sim.mesh, sim.mesh.comm
     tdim, g = mesh.topology.dim, sim.gdim
     x = mesh.geometry.x[:, :g]
-    low = -parallel.largest(comm, -x.min(axis=0)) if x.size else np.full(g, np.inf)
-    high = parallel.largest(comm, x.max(axis=0)) if x.size else np.full(g, -np.inf)
+    low = -parallel.largest(comm, -x.min(axis=0, initial=np.inf))
+    high = parallel.largest(comm, x.max(axis=0, initial=-np.inf))
     from fe_mpm import __version__
 
     return {
@@ -222,12 +249,14 @@ def scene(sim) -> dict:
 
 def _parameters(material) -> dict:
     """The law's parameters by name (numbers and names), for the fingerprint."""
+    kind = f"{type(material).__module__}.{type(material).__qualname__}"
     if not dataclasses.is_dataclass(material):
-        return {"repr": repr(material)}
+        return {"type": kind}  # a repr may hold a memory address, which never matches
     out = {}
     for f in dataclasses.fields(material):
         value = getattr(material, f.name)
-        out[f.name] = value if isinstance(value, int | float | str | bool | None) else repr(value)
+        scalar = isinstance(value, int | float | str | bool | None)
+        out[f.name] = value if scalar else type(value).__name__
     return out
 
 
@@ -255,6 +284,18 @@ def _check_state(sim, path: Path, state: dict) -> None:
                 f"checkpoint {path} is of another scene: its {key} is {theirs.get(key)!r}, "
                 f"this simulation's is {value!r}"
             )
+
+
+def _cell_starts(sim) -> np.ndarray:
+    """The first global cell index of every rank (ranks,); collective."""
+    index_map = sim.mesh.topology.index_map(sim.mesh.topology.dim)
+    return np.array([start for start, _ in sim.mesh.comm.allgather(index_map.local_range)])
+
+
+def _home_on_ranks(starts: np.ndarray, global_cells: np.ndarray) -> np.ndarray:
+    """(rank, local cell) of each point's held cell, from global cell indices (n, 2)."""
+    owner = np.searchsorted(starts, global_cells, side="right") - 1
+    return np.column_stack([owner, global_cells - starts[owner]]).astype(np.int64)
 
 
 def _save(file: Path, arrays: dict) -> str:

@@ -23,6 +23,11 @@ def any_rank(comm: MPI.Comm, flag: bool) -> bool:
     return bool(flag) if comm.size == 1 else bool(comm.allreduce(bool(flag), op=MPI.LOR))
 
 
+def all_ranks(comm: MPI.Comm, flag: bool) -> bool:
+    """Whether ``flag`` is true on every rank."""
+    return bool(flag) if comm.size == 1 else bool(comm.allreduce(bool(flag), op=MPI.LAND))
+
+
 def total(comm: MPI.Comm, value):
     """The sum of ``value`` (a number or an array) over the ranks."""
     return _reduced(comm, value, MPI.SUM)

@@ -83,6 +83,47 @@ def test_a_restored_footing_keeps_its_boundary_points(tmp_path):
     np.testing.assert_array_equal(again._boundary.points.x, straight._boundary.points.x)
 
 
+def _failing_once_after_rebinning(sim, at_step):
+    """Make ``sim.step`` fail once in step ``at_step`` after re-binning, as Newton may."""
+    step, failed = sim.step, []
+
+    def failing_once(t_new, rebin=True):
+        if sim.step_number + 1 == at_step and rebin and not failed:
+            failed.append(at_step)
+            sim.prepare_step(t_new)  # tracked before it fails
+            raise fe_mpm.ConvergenceError("made to fail")
+        return step(t_new, rebin)
+
+    sim.step = failing_once
+
+
+def test_a_restored_static_run_retries_a_failed_step_with_its_points_held_as_before(tmp_path):
+    """The cells of the step before the checkpoint are kept: the first step after a
+    restart that fails after re-binning is retried with the points held in them, as
+    the uninterrupted run does (not cut)."""
+    options = {"h": 0.2, "h_far": 0.2, "E": 1e4, "points_near": 3, "settlement": 0.08}
+    straight = scenes.strip_footing(**options)
+    straight.run(0.5, 4, progress=False)
+    _failing_once_after_rebinning(straight, at_step=5)
+    expected = straight.run(1.0, 4, progress=False)
+    first = scenes.strip_footing(**options)
+    first.run(0.5, 4, progress=False)
+    folder = first.checkpoint(tmp_path)
+    again = scenes.strip_footing(**options)
+    again.restore(folder)
+    _failing_once_after_rebinning(again, at_step=5)
+    reports = again.run(1.0, 4, progress=False)
+    assert expected[0].held_points > 0 and len(expected) == 4  # held, not cut
+    assert [r.held_points for r in reports] == [r.held_points for r in expected]
+    q = [scenes.footing_pressure(r) for r in reports]
+    assert q == [scenes.footing_pressure(r) for r in expected]
+
+
+def test_checkpoints_with_point_domains_are_refused_up_front():
+    with pytest.raises(NotImplementedError, match="point domains are not checkpointed"):
+        falling_block(point_domains=True, checkpoint_dir="unused")
+
+
 @pytest.fixture
 def written(tmp_path):
     sim = falling_block()
@@ -125,6 +166,14 @@ def test_a_checkpoint_of_another_version_or_format_is_refused(written):
 
 def test_a_folder_without_checkpoints_is_refused(tmp_path):
     _refused(tmp_path, "no checkpoint")
+
+
+def test_a_malformed_state_is_refused(written):
+    state_file = written / "state.json"
+    state = json.loads(state_file.read_text())
+    del state["pieces"]
+    state_file.write_text(json.dumps(state))
+    _refused(written, "state.json is malformed")
 
 
 def test_checkpoint_every_must_be_a_positive_count():
