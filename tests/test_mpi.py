@@ -242,13 +242,22 @@ def test_points_that_cross_to_another_rank_move_there_and_the_answer_stays_seria
     assert sum(serial["held"]["held"]) > 0
 
 
-def test_a_block_falling_onto_the_base_in_dynamics_gives_the_serial_answer(tmp_path, ranks=3):
+@pytest.fixture(scope="module")
+def falling_serial(tmp_path_factory):
+    """The falling block's serial answers (consistent mass, 10 steps; lumped, 20)."""
+    (serial,) = _run(tmp_path_factory.mktemp("falling"), "falling", 1)
+    return serial
+
+
+def test_a_block_falling_onto_the_base_in_dynamics_gives_the_serial_answer(
+    tmp_path, falling_serial, ranks=3
+):
     """Newmark with consistent and lumped mass, Mohr-Coulomb, gravity: a block seeded on
     part of the grid (some ranks start with no points) falls onto the clamped base and
     yields. Measured against serial: iterations equal, marker, mass-weighted height and
     integrated stress to 1e-14 relative, also on 2 ranks; on 3 ranks points cross to
     other ranks (on 2 they do not: 3 tests more, in less time)."""
-    (serial,) = _run(tmp_path, "falling", 1)
+    serial = falling_serial
     runs = _run(tmp_path, "falling", ranks)
     for mass in ("consistent", "lumped"):
         want = serial[mass]
@@ -263,12 +272,12 @@ def test_a_block_falling_onto_the_base_in_dynamics_gives_the_serial_answer(tmp_p
     assert all(r[m]["migrated"] > 0 for r in runs for m in ("consistent", "lumped"))
 
 
-def test_a_checkpoint_written_on_two_ranks_continues_on_three_and_on_one(tmp_path):
+def test_a_checkpoint_written_on_two_ranks_continues_on_three_and_on_one(tmp_path, falling_serial):
     """The falling block (Newmark, lumped mass, Mohr-Coulomb history, a marker): ten
     steps on 2 ranks with a checkpoint at the tenth, restored on 3 ranks and on 1 for
     ten more. Each matches the uninterrupted serial run's last ten steps: the same
     iterations, marker, height and stress to 1e-10 (measured 1e-15)."""
-    (serial,) = _run(tmp_path, "falling", 1)
+    serial = falling_serial
     want = serial["lumped"]
     _run(tmp_path, "write checkpoint", 2)
     assert (tmp_path / "ck" / "step_000010" / "points_r0001.npz").is_file()
