@@ -66,21 +66,7 @@ def test_a_restored_dynamic_plastic_run_continues_exactly(tmp_path):
         np.testing.assert_array_equal(state(again)[key], value, err_msg=key)
 
 
-def test_a_restored_footing_keeps_its_boundary_points(tmp_path):
-    """The footing's PointDirichlet points are convected state: restored with the rest."""
-    options = {"h": 0.2, "h_far": 0.2, "E": 1e4, "points_near": 3, "settlement": 0.08}
-    straight = scenes.strip_footing(**options)
-    straight.run(0.5, 4, progress=False)
-    expected = straight.run(1.0, 4, progress=False)
-    first = scenes.strip_footing(**options)
-    first.run(0.5, 4, progress=False)
-    folder = first.checkpoint(tmp_path)
-    again = scenes.strip_footing(**options)
-    again.restore(folder)
-    reports = again.run(1.0, 4, progress=False)
-    q = [scenes.footing_pressure(r) for r in reports]
-    assert q == [scenes.footing_pressure(r) for r in expected]
-    np.testing.assert_array_equal(again._boundary.points.x, straight._boundary.points.x)
+FOOTING = {"h": 0.2, "h_far": 0.2, "E": 1e4, "points_near": 3, "settlement": 0.08}
 
 
 def _failing_once_after_rebinning(sim, at_step):
@@ -97,22 +83,36 @@ def _failing_once_after_rebinning(sim, at_step):
     sim.step = failing_once
 
 
+def _footing_with_and_without_restart(folder, fail_at=None):
+    """The strip footing over 4 + 4 steps, straight and restored after the fourth:
+    ``(straight, its last 4 reports, restored, its 4 reports)``."""
+    straight = scenes.strip_footing(**FOOTING)
+    straight.run(0.5, 4, progress=False)
+    if fail_at is not None:
+        _failing_once_after_rebinning(straight, fail_at)
+    expected = straight.run(1.0, 4, progress=False)
+    first = scenes.strip_footing(**FOOTING)
+    first.run(0.5, 4, progress=False)
+    again = scenes.strip_footing(**FOOTING)
+    again.restore(first.checkpoint(folder))
+    if fail_at is not None:
+        _failing_once_after_rebinning(again, fail_at)
+    return straight, expected, again, again.run(1.0, 4, progress=False)
+
+
+def test_a_restored_footing_keeps_its_boundary_points(tmp_path):
+    """The footing's PointDirichlet points are convected state: restored with the rest."""
+    straight, expected, again, reports = _footing_with_and_without_restart(tmp_path)
+    q = [scenes.footing_pressure(r) for r in reports]
+    assert q == [scenes.footing_pressure(r) for r in expected]
+    np.testing.assert_array_equal(again._boundary.points.x, straight._boundary.points.x)
+
+
 def test_a_restored_static_run_retries_a_failed_step_with_its_points_held_as_before(tmp_path):
     """The cells of the step before the checkpoint are kept: the first step after a
     restart that fails after re-binning is retried with the points held in them, as
     the uninterrupted run does (not cut)."""
-    options = {"h": 0.2, "h_far": 0.2, "E": 1e4, "points_near": 3, "settlement": 0.08}
-    straight = scenes.strip_footing(**options)
-    straight.run(0.5, 4, progress=False)
-    _failing_once_after_rebinning(straight, at_step=5)
-    expected = straight.run(1.0, 4, progress=False)
-    first = scenes.strip_footing(**options)
-    first.run(0.5, 4, progress=False)
-    folder = first.checkpoint(tmp_path)
-    again = scenes.strip_footing(**options)
-    again.restore(folder)
-    _failing_once_after_rebinning(again, at_step=5)
-    reports = again.run(1.0, 4, progress=False)
+    _, expected, _, reports = _footing_with_and_without_restart(tmp_path, fail_at=5)
     assert expected[0].held_points > 0 and len(expected) == 4  # held, not cut
     assert [r.held_points for r in reports] == [r.held_points for r in expected]
     q = [scenes.footing_pressure(r) for r in reports]

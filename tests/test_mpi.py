@@ -318,9 +318,9 @@ def test_boundary_points_act_on_one_rank_each_and_give_the_serial_answer(tmp_pat
     """Every rank holds every boundary point; each acts on the rank whose cell it reads.
     Cook u-p at 5 N as a PointTraction that follows the body (10 steps, points
     migrating), and the smooth strip footing, a PointDirichlet pushed 0.16 B down over
-    16 steps (h = 0.2 B; q rises 4.5-fold as the soil yields). Measured against serial: the same iterations, tip and q to
-    5e-14 relative, also on 2 ranks; the traction's reported force is the whole load on
-    every rank."""
+    16 steps (h = 0.2 B; q rises 4.5-fold as the soil yields). Measured against
+    serial: the same iterations, tip and q to 5e-14 relative, also on 2 ranks; the
+    traction's reported force is the whole load on every rank."""
     (serial,) = _run(tmp_path, "boundary points", 1)
     runs = _run(tmp_path, "boundary points", ranks)
     for result in runs:
