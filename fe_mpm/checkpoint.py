@@ -42,6 +42,11 @@ from fe_mpm.particles import PER_POINT_FIELDS, MaterialPoints
 FORMAT = 1
 #: The per-point fields a checkpoint keeps (the cell is found again on restart).
 SAVED_FIELDS = tuple(name for name in PER_POINT_FIELDS if name != "cell")
+#: What ``state.json`` must hold, and each entry of its ``pieces``.
+STATE_KEYS = frozenset(
+    {"scene", "t", "step", "dropped", "slots", "boundary_slots", "pieces", "shared_sha256"}
+)
+PIECE_KEYS = frozenset({"file", "points", "sha256"})
 #: How far the grid's extent may differ (relative to its size) and still be the same grid.
 EXTENT_TOLERANCE = 1e-9
 
@@ -169,21 +174,12 @@ def read(sim, path: str | Path) -> None:
             error = CheckpointError(f"checkpoint {path}: cannot read state.json ({err})")
     parallel.raise_together(comm, error)
     state = comm.bcast(state)
-    try:
-        _check_state(sim, path, state)
-    except (KeyError, TypeError, ValueError, IndexError) as err:
-        if isinstance(err, CheckpointError):
-            raise
-        raise CheckpointError(f"checkpoint {path}: state.json is malformed ({err!r})") from err
-    try:
-        mine = state["pieces"][comm.rank :: comm.size]
-        state["shared_sha256"], state["t"], state["step"], state["slots"]  # noqa: B018
-    except (KeyError, TypeError) as err:
-        raise CheckpointError(f"checkpoint {path}: state.json is malformed ({err!r})") from err
+    _check_state(sim, path, state)
+    mine = state["pieces"][comm.rank :: comm.size]
     error, loaded = None, []
     try:
-        loaded = [_load(path / p["file"], p["sha256"], p["points"], sim) for p in mine]
-        shared = _load(path / "shared.npz", state["shared_sha256"], None, sim)
+        loaded = [_load(path / p["file"], p["sha256"], p["points"]) for p in mine]
+        shared = _load(path / "shared.npz", state["shared_sha256"], None)
         points = _joined(loaded, sim)
     except CheckpointError as err:
         error = err
@@ -261,22 +257,42 @@ def _parameters(material) -> dict:
 
 
 def _check_state(sim, path: Path, state: dict) -> None:
-    """Refuse a checkpoint of another format, version or scene (same on every rank)."""
+    """Refuse a checkpoint of another format, version or scene, or a malformed one.
+
+    Every rank checks the same ``state``, so every rank refuses alike; all of it is
+    checked before :func:`read` changes anything.
+    """
     if not isinstance(state, dict) or state.get("format") != FORMAT:
         found = state.get("format") if isinstance(state, dict) else None
         raise CheckpointError(
             f"checkpoint {path}: format {found!r}, this fe-mpm reads format {FORMAT}"
         )
-    theirs, ours = state["scene"], scene(sim)
-    if theirs["fe_mpm"] != ours["fe_mpm"]:
+    missing = sorted(STATE_KEYS - state.keys())
+    pieces = state.get("pieces")
+    if missing or not isinstance(pieces, list) or not isinstance(state["scene"], dict):
         raise CheckpointError(
-            f"checkpoint {path} was written by fe-mpm {theirs['fe_mpm']}, this is "
+            f"checkpoint {path}: state.json is malformed (missing {missing or 'nothing'}; "
+            "pieces must be a list and scene a mapping)"
+        )
+    if any(not isinstance(p, dict) or PIECE_KEYS - p.keys() for p in pieces):
+        raise CheckpointError(f"checkpoint {path}: state.json is malformed (a piece lacks keys)")
+    theirs, ours = state["scene"], scene(sim)
+    if theirs.get("fe_mpm") != ours["fe_mpm"]:
+        raise CheckpointError(
+            f"checkpoint {path} was written by fe-mpm {theirs.get('fe_mpm')}, this is "
             f"{ours['fe_mpm']}; restart with the version that wrote it"
+        )
+    if sorted(theirs) != sorted(ours):
+        raise CheckpointError(
+            f"checkpoint {path} is of another scene: it records {sorted(theirs)}, "
+            f"this simulation {sorted(ours)}"
         )
     span = max(float(np.max(np.subtract(ours["extent"][1], ours["extent"][0]))), 1e-300)
     for key, value in ours.items():
         if key == "extent":
-            same = np.allclose(theirs[key], value, rtol=0, atol=EXTENT_TOLERANCE * span)
+            same = np.shape(theirs[key]) == np.shape(value) and np.allclose(
+                theirs[key], value, rtol=0, atol=EXTENT_TOLERANCE * span
+            )
         else:
             same = theirs.get(key) == value
         if not same:
@@ -307,7 +323,7 @@ def _save(file: Path, arrays: dict) -> str:
     return hashlib.sha256(data).hexdigest()
 
 
-def _load(file: Path, sha256: str, count: int | None, sim) -> dict:
+def _load(file: Path, sha256: str, count: int | None) -> dict:
     """The arrays of one checkpoint file, checked against its checksum and point count."""
     try:
         data = file.read_bytes()
@@ -326,24 +342,14 @@ def _load(file: Path, sha256: str, count: int | None, sim) -> dict:
 
 def _joined(pieces: list[dict], sim) -> MaterialPoints:
     """One point set from this rank's pieces, checked as any new points are."""
-    g = sim.gdim
 
-    def stacked(name: str, shape: tuple) -> np.ndarray:
+    def stacked(name: str) -> np.ndarray:
         parts = [p[name] for p in pieces]
-        return np.concatenate(parts) if parts else np.zeros((0, *shape))
+        # No pieces on this rank: no points, in the shape the simulation's have.
+        return np.concatenate(parts) if parts else getattr(sim.points, name)[:0]
 
-    shapes = {
-        "x": (g,),
-        "volume": (),
-        "mass": (),
-        "F": (g, g),
-        "stress": (3, 3),
-        "x0": (g,),
-        "velocity": (g,),
-        "acceleration": (g,),
-    }
     try:
-        points = MaterialPoints(**{name: stacked(name, shapes[name]) for name in SAVED_FIELDS})
+        points = MaterialPoints(**{name: stacked(name) for name in SAVED_FIELDS})
     except (TypeError, ValueError) as err:
         raise CheckpointError(f"checkpoint points are not valid: {err}") from err
     for name, law_history in sim.material.history.items():

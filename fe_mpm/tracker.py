@@ -58,6 +58,7 @@ class Tracker:
         self._nodes_of = nodes_of
         self._tree = None  # built on first need
         self._node_cells = None  # node -> cells (CSR), built on first need
+        self._global_nodes = None  # nodes sorted by global index, built on first need
         self._vertex_neighbours = None  # built on first need
         #: Vertices of every cell, shape (nc, t+1, g) in m.
         self.cell_vertices = nodes
@@ -188,11 +189,7 @@ class Tracker:
         nodes[mine] = index_map.local_to_global(local).reshape(-1, k)
         nodes = parallel.largest(comm, nodes)
         score, choice = np.full(n, -np.inf), np.full(n, -1, dtype=np.int32)
-        on_rank = index_map.local_to_global(
-            np.arange(index_map.size_local + index_map.num_ghosts, dtype=np.int32)
-        )
-        order = np.argsort(on_rank)
-        sorted_globals = on_rank[order]
+        order, sorted_globals = self._nodes_by_global_index()
         starts = self._cells_of_nodes()[1]
         for i in np.flatnonzero(found & ~taken):
             at = np.minimum(np.searchsorted(sorted_globals, nodes[i]), order.size - 1)
@@ -206,6 +203,20 @@ class Tracker:
         snapped = found & ~taken & close & (winner == rank)
         out[snapped] = choice[snapped]
         return out, found
+
+    def _nodes_by_global_index(self) -> tuple[np.ndarray, np.ndarray]:
+        """This rank's geometry nodes sorted by global index: (local order, global indices).
+
+        The grid never moves, so this is computed once.
+        """
+        if self._global_nodes is None:
+            index_map = self.mesh.geometry.index_map()
+            on_rank = index_map.local_to_global(
+                np.arange(index_map.size_local + index_map.num_ghosts, dtype=np.int32)
+            )
+            order = np.argsort(on_rank)
+            self._global_nodes = (order, on_rank[order])
+        return self._global_nodes
 
     def vertex_neighbours(self) -> np.ndarray:
         """The cells that share a vertex with each cell, itself included (nc, s), padded with -1.

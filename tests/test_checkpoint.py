@@ -168,10 +168,12 @@ def test_a_folder_without_checkpoints_is_refused(tmp_path):
     _refused(tmp_path, "no checkpoint")
 
 
-def test_a_malformed_state_is_refused(written):
+@pytest.mark.parametrize("key", ["pieces", "dropped"])
+def test_a_malformed_state_is_refused(written, key):
+    """Checked whole before anything changes: "dropped" is read last."""
     state_file = written / "state.json"
     state = json.loads(state_file.read_text())
-    del state["pieces"]
+    del state[key]
     state_file.write_text(json.dumps(state))
     _refused(written, "state.json is malformed")
 
