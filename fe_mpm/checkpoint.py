@@ -35,11 +35,11 @@ from pathlib import Path
 
 import numpy as np
 
-from fe_mpm import parallel
+from fe_mpm import balance, parallel
 from fe_mpm.particles import PER_POINT_FIELDS, MaterialPoints
 
 #: Version of the checkpoint layout; a reader refuses any other.
-FORMAT = 1
+FORMAT = 2
 #: The per-point fields a checkpoint keeps (the cell is found again on restart).
 SAVED_FIELDS = tuple(name for name in PER_POINT_FIELDS if name != "cell")
 #: What ``state.json`` must hold, and each entry of its ``pieces``.
@@ -106,9 +106,8 @@ def write(sim, directory: str | Path) -> Path:
     arrays.update({f"history.{k}": v for k, v in sim.points.history.items()})
     arrays.update({f"marker.{k}": np.array(h) for k, h in sim.markers.hosts().items()})
     home = sim.tracking._home  # the accepted step's cells, where a retry may hold the points
-    if home is not None:
-        cells = sim.mesh.topology.index_map(sim.mesh.topology.dim)
-        arrays["home_cell"] = cells.local_to_global(home[:, 1].astype(np.int32))
+    if parallel.all_ranks(comm, home is not None):  # by original index: any partition reads it
+        arrays["home_cell"] = balance.original_indices(sim.mesh, home)
     error, digest = None, ""
     try:
         digest = _save(partial / piece, arrays)
@@ -210,13 +209,12 @@ def read(sim, path: str | Path) -> None:
     sim.tracking._nslot = state["slots"]
     sim.tracking.dropped = int(state["dropped"]) if comm.rank == 0 else 0
     # Where a retry of the next step may hold the points: the cells of the last step.
-    starts = _cell_starts(sim)
-    home = np.zeros((0, 2), dtype=np.int64) if not loaded else None
-    if loaded and all("home_cell" in arrays for arrays in loaded):
-        home = _home_on_ranks(starts, np.concatenate([a["home_cell"] for a in loaded]))
     sim.tracking.forget()
-    if parallel.all_ranks(comm, home is not None):  # not so before the first step
-        sim.tracking._home = home
+    # Not kept before the first step; a rank that read no piece has no points to hold.
+    if parallel.all_ranks(comm, all("home_cell" in arrays for arrays in loaded)):
+        original = [a["home_cell"] for a in loaded]
+        original = np.concatenate(original) if original else np.zeros(0, dtype=np.int64)
+        sim.tracking._home = balance.owners_of_original_cells(sim.mesh, original)
     sim._current = None
     sim._track(sim.step_number, sim.t)  # each point to the rank that owns its cell
 
@@ -300,18 +298,6 @@ def _check_state(sim, path: Path, state: dict) -> None:
                 f"checkpoint {path} is of another scene: its {key} is {theirs.get(key)!r}, "
                 f"this simulation's is {value!r}"
             )
-
-
-def _cell_starts(sim) -> np.ndarray:
-    """The first global cell index of every rank (ranks,); collective."""
-    index_map = sim.mesh.topology.index_map(sim.mesh.topology.dim)
-    return np.array([start for start, _ in sim.mesh.comm.allgather(index_map.local_range)])
-
-
-def _home_on_ranks(starts: np.ndarray, global_cells: np.ndarray) -> np.ndarray:
-    """(rank, local cell) of each point's held cell, from global cell indices (n, 2)."""
-    owner = np.searchsorted(starts, global_cells, side="right") - 1
-    return np.column_stack([owner, global_cells - starts[owner]]).astype(np.int64)
 
 
 def _save(file: Path, arrays: dict) -> str:

@@ -56,6 +56,15 @@ def check_ranges(
     check_range("Simulation", "output_every", output_every, lo=1)
 
 
+def check_rebalance(rebalance_above: float | None) -> float | None:
+    """None, or the imbalance (> 1) past which the grid is repartitioned."""
+    if rebalance_above is None:
+        return None
+    return float(
+        check_range("Simulation", "rebalance_above", rebalance_above, lo=1.0, lo_open=True)
+    )
+
+
 def check_dynamics(dynamic: bool, formulation: str, damping: float, mass: str) -> None:
     """Dynamics needs a P1 displacement; damping and a lumped mass need dynamics."""
     spec = FORMULATIONS[formulation]

@@ -3,7 +3,9 @@
 ``particles.pvd`` holds the material points (positions, stress, pressure, F,
 volume, history; :class:`~fe_mpm.io.ParticleWriter`), ``grid.bp`` the grid
 displacement increment of the step and, for the mixed forms, ``grid_pressure.bp``
-the grid pressure (ADIOS2 files that ParaView opens with its VTX reader).
+the grid pressure (ADIOS2 files that ParaView opens with its VTX reader). After
+the N-th repartition of the grid under MPI the grid's files are ``grid_N.bp`` and
+``grid_pressure_N.bp``.
 """
 
 from __future__ import annotations
@@ -28,18 +30,33 @@ class SimulationOutput:
     def __init__(self, folder: str | Path, fields: GridFields, every: int = 1):
         self.folder, self.fields, self.every = Path(folder), fields, int(every)
         self._written_step = -1
-        comm = fields.W.mesh.comm
-        self._points = ParticleWriter(self.folder, comm=comm)
+        self._points = ParticleWriter(self.folder, comm=fields.W.mesh.comm)
+        self._grids = 0  # grids written so far: a repartition starts another
+        self._open_grid()
+
+    def _open_grid(self) -> None:
+        """The grid files of the current grid: grid.bp, or grid_N.bp for the N-th repartition."""
+        comm, tail = self.fields.W.mesh.comm, f"_{self._grids}" if self._grids else ""
         self._grid, self._maps = self._grid_functions()
         self._writers = [
-            dolfinx.io.VTXWriter(comm, self.folder / "grid.bp", self._grid[:1], engine="BP4")
+            dolfinx.io.VTXWriter(comm, self.folder / f"grid{tail}.bp", self._grid[:1], engine="BP4")
         ]
         if len(self._grid) > 1:
             self._writers.append(
                 dolfinx.io.VTXWriter(
-                    comm, self.folder / "grid_pressure.bp", self._grid[1:], engine="BP4"
+                    comm, self.folder / f"grid_pressure{tail}.bp", self._grid[1:], engine="BP4"
                 )
             )
+
+    def regrid(self, fields: GridFields) -> None:
+        """Write the grid's fields on ``fields``'s grid from now on (after a repartition).
+
+        A VTX file holds one grid, so the next goes to ``grid_1.bp`` (then
+        ``grid_2.bp``, ...); the points' series continues.
+        """
+        self.close()
+        self.fields, self._grids = fields, self._grids + 1
+        self._open_grid()
 
     def _grid_functions(self) -> tuple[list[dolfinx.fem.Function], list]:
         """Collapsed copies of Δu (and p) for VTX output, with their dofs in ``w``."""

@@ -38,6 +38,9 @@ class StepReport:
         point_imbalance: The most points a rank held in the step over the mean per
             rank (1 on one rank): how far the ranks' work is from even, since
             each rank packs and integrates its own points.
+        repartitioned: Whether the grid was repartitioned by its points after this
+            step (``Simulation(rebalance_above=)``), so that the next step starts
+            balanced.
         converged_reason: Why Newton stopped, e.g. ``"‖R‖ = 2.1e-13 of the force
             scale 1.962e+04"`` (see :class:`fe_mpm.newton.ForceTest`).
         force_scale: The forces in play at the last iterate, S = max(‖f_ext‖,
@@ -66,6 +69,7 @@ class StepReport:
     held_points: int = 0
     migrated_points: int = 0
     point_imbalance: float = 1.0
+    repartitioned: bool = False
     converged_reason: str = ""
     force_scale: float = 0.0
     relative_residual: float = 0.0

@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from fe_mpm import checkpoint, model_checks, parallel
+from fe_mpm import balance, checkpoint, model_checks, parallel
 from fe_mpm._dolfinx import dolfinx
 from fe_mpm.boundary import Dirichlet, PointDirichlet, PointTraction, Traction
 from fe_mpm.boundary_points import BoundaryPointStep
@@ -41,7 +41,7 @@ from fe_mpm.output import SimulationOutput
 from fe_mpm.particles import MaterialPoints
 from fe_mpm.point_update import apply_update, checked_update
 from fe_mpm.quadrature import SlotLayout
-from fe_mpm.report import ProgressBar, StepReport, newton_failure
+from fe_mpm.report import ProgressBar, StepReport, imbalance, newton_failure
 from fe_mpm.retry import RetryLadder, StepLength
 from fe_mpm.step_forms import (
     FormsBySlotCount,
@@ -136,6 +136,10 @@ class Simulation:
             (:mod:`fe_mpm.checkpoint`; :meth:`restore` continues from one); None
             (default): none.
         checkpoint_every: Steps between checkpoints, ≥ 1.
+        rebalance_above: Under MPI, repartition the grid by its points
+            (:meth:`rebalance`) at set-up and after any step in which the most points
+            on a rank exceed this multiple (> 1) of the mean; None: never. Default
+            1.25. Serial runs never repartition.
     """
 
     def __init__(
@@ -171,6 +175,7 @@ class Simulation:
         ghost_penalty: float | None = None,
         checkpoint_dir: str | Path | None = None,
         checkpoint_every: int = 10,
+        rebalance_above: float | None = 1.25,
     ):
         model_checks.check_grid_and_points(mesh, points)
         model_checks.check_choices(
@@ -214,24 +219,20 @@ class Simulation:
         self.t, self.step_number = 0.0, 0
 
         t0 = time.perf_counter()
-        self.tracker = Tracker(mesh)
-        self.tracking = PointTracking(self.tracker, points_leaving)
+        self.points_leaving = points_leaving
         self.markers = Markers(mesh.comm)
-        self.fields = GridFields(mesh, self.spec)
         self.ladder = RetryLadder(fallback_line_search, bool(fallback_hold_cells))
-        self.dynamics = None
-        if self.dynamic:
-            self.dynamics = NewmarkDynamics(self.fields, damping, linear_solver, petsc_options)
-        self.conditions = GridConditions(
-            self.fields, dirichlet, tractions, body_force, body_force_scale, reactions, facet_tags
-        )
-        self._boundary = BoundaryPointStep.of([*point_dirichlet, *point_tractions], self.tracker)
-        ppp = PPPData.on_grid(mesh, self.tracker.centroids, ppp_alpha) if self.spec.ppp else None
-        self._forms = FormsBySlotCount(
-            self.fields, self.spec, material, self.conditions, ppp, self.dynamics, mass
-        )
-        self._current: StepInProgress | None = None
-        self._newton: NewtonSolver | None = None
+        # What the grid's objects are built from, again after a repartition.
+        self._given = {
+            "conditions": (dirichlet, tractions, body_force, body_force_scale, reactions),
+            "boundary": [*point_dirichlet, *point_tractions],
+            "dynamics": (damping, petsc_options),
+            "ppp_alpha": ppp_alpha,
+            "mass": mass,
+        }
+        self.tracking: PointTracking | None = None
+        self._boundary: BoundaryPointStep | None = None
+        self._set_grid(mesh, facet_tags)
         self._add_time("setup", t0)
         self.output = (
             None if output_dir is None else SimulationOutput(output_dir, self.fields, output_every)
@@ -242,6 +243,51 @@ class Simulation:
             self.domains = PointDomains(points, self.tracker, self.spec.u_degree)
         gamma = model_checks.ghost_factor(ghost_penalty, point_domains, self.spec.u_degree)
         self.ghost = GhostStabilisation(self.fields, gamma, material.mu) if gamma else None
+        #: Grid repartitions so far (:meth:`rebalance`).
+        self.repartitions = 0
+        self.rebalance_above = model_checks.check_rebalance(rebalance_above)
+        if self._rebalance_if_due(imbalance(mesh.comm, len(points))):
+            self._track()
+
+    def _set_grid(self, mesh: dolfinx.mesh.Mesh, facet_tags) -> None:
+        """Build everything that lives on the grid: at set-up and after a repartition.
+
+        The point tracking and the boundary points keep their state; the rest is new.
+        """
+        self.mesh, self.facet_tags = mesh, facet_tags
+        self.tracker = Tracker(mesh)
+        tracking = PointTracking(self.tracker, self.points_leaving)
+        if self.tracking is not None:
+            tracking._nslot, tracking.dropped = self.tracking._nslot, self.tracking.dropped
+        self.tracking = tracking
+        self.fields = GridFields(mesh, self.spec)
+        self.dynamics = None
+        if self.dynamic:
+            damping, petsc_options = self._given["dynamics"]
+            self.dynamics = NewmarkDynamics(self.fields, damping, self.linear_solver, petsc_options)
+        self.conditions = GridConditions(self.fields, *self._given["conditions"], facet_tags)
+        if self._boundary is None:
+            self._boundary = BoundaryPointStep.of(self._given["boundary"], self.tracker)
+        else:  # the same points, now on this grid
+            old, self._boundary = (
+                self._boundary,
+                BoundaryPointStep(self._boundary.points, self.tracker),
+            )
+            self._boundary._nslot, self._boundary._warned = old._nslot, old._warned
+        ppp = None
+        if self.spec.ppp:
+            ppp = PPPData.on_grid(mesh, self.tracker.centroids, self._given["ppp_alpha"])
+        self._forms = FormsBySlotCount(
+            self.fields,
+            self.spec,
+            self.material,
+            self.conditions,
+            ppp,
+            self.dynamics,
+            self._given["mass"],
+        )
+        self._current: StepInProgress | None = None
+        self._newton: NewtonSolver | None = None
 
     # -- public API ------------------------------------------------------------
 
@@ -281,6 +327,48 @@ class Simulation:
             CheckpointError: It is of another fe-mpm version or scene, or corrupted.
         """
         checkpoint.read(self, path)
+
+    def rebalance(self) -> None:
+        """Repartition the grid so that the ranks hold about equal numbers of points.
+
+        Collective; between steps. The grid is built again from the same cells and
+        nodes with a partition weighted by the points in each cell
+        (:mod:`fe_mpm.balance`); at the next step's tracking every point moves to the
+        rank that now owns its cell, with all it carries. :attr:`mesh` (and
+        :attr:`facet_tags`) are then the new grid's; the answers change by round-off
+        only. :meth:`run` calls this after a step whose ``point_imbalance`` exceeds
+        ``rebalance_above`` when another step follows. On one rank nothing changes.
+        """
+        comm = self.mesh.comm
+        if comm.size == 1:
+            return
+        t0 = time.perf_counter()
+        old, home = self.mesh, self.tracking._home
+        weights = balance.cell_weights(self.tracker.num_cells, self.points.cell)
+        mesh = balance.repartitioned(old, weights)
+        tags = self.facet_tags
+        if tags is not None:
+            tags = balance.carried_facet_tags(tags, old, mesh)
+        keep_home = parallel.all_ranks(comm, home is not None)
+        if keep_home:  # a retry of the next step may still hold the points there
+            home = balance.original_indices(old, home)
+        if self._newton is not None:
+            self._newton.destroy()
+        self._set_grid(mesh, tags)
+        if keep_home:
+            self.tracking._home = balance.owners_of_original_cells(mesh, home)
+        self.points.cell[:] = -1  # cells of the old grid: the next tracking looks again
+        if self.output is not None:
+            self.output.regrid(self.fields)
+        self.repartitions += 1
+        self._add_time("rebalance", t0)
+
+    def _rebalance_if_due(self, point_imbalance: float) -> bool:
+        """:meth:`rebalance` if the imbalance exceeds ``rebalance_above``; whether it did."""
+        if self.rebalance_above is None or point_imbalance <= self.rebalance_above:
+            return False
+        self.rebalance()
+        return True
 
     def marker(self, name: str) -> np.ndarray:
         """Current position of a marker, shape (g,)."""
@@ -330,6 +418,8 @@ class Simulation:
                 reports.append(report)
                 if self.checkpoint_dir and self.step_number % self.checkpoint_every == 0:
                     self.checkpoint()
+                if t_end - self.t > END_OF_RUN * nominal:  # another step follows
+                    report.repartitioned = self._rebalance_if_due(report.point_imbalance)
                 if on_step is not None:
                     on_step(report)
                 length.accepted()

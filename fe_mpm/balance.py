@@ -1,0 +1,270 @@
+"""Load balance: the grid partitioned by the points its cells hold, not by its cells.
+
+DOLFINx gives each rank about as many cells as the others, but MPM points fill part
+of the grid only (a column collapse starts in a corner of it), and the work of a
+step — tracking, packing, the return map, the assembly — goes with the points. A
+rank owns the points in its cells, so :func:`repartitioned` builds the same grid
+again with a partition from METIS (through ``pymetis``) of the cells' dual graph,
+each cell weighted by the points it holds (:func:`cell_weights`).
+
+The new grid keeps every cell's original index (``mesh.topology.original_cell_index``)
+and every node's input index, so a cell is the same cell on any partition:
+:func:`owners_of_original_cells` finds where it went. Facet tags are carried over
+by their nodes (:func:`carried_facet_tags`). The grid is rebuilt from the whole
+topology gathered on rank 0, as a mesh is when it is read from gmsh; the partition
+is computed there too, so it is the same in every run on the same number of ranks.
+The new grid has no ghost cells: fe-mpm tracks and assembles on owned cells only.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+
+import numpy as np
+
+from fe_mpm._dolfinx import dolfinx
+
+#: A cell's weight per point it holds; an empty cell weighs 1, so a rank's share of
+#: the grid counts a little too (its nodes are in the vectors and the tracking).
+POINT_WEIGHT = 10
+
+
+def cell_weights(num_cells: int, cells: np.ndarray) -> np.ndarray:
+    """The METIS weight of each owned cell: 1 + :data:`POINT_WEIGHT` × its points.
+
+    Args:
+        num_cells: This rank's owned cells.
+        cells: The cell of each of this rank's points (n,).
+
+    Returns:
+        Integer weights, shape (num_cells,).
+    """
+    return 1 + POINT_WEIGHT * np.bincount(cells, minlength=num_cells).astype(np.int64)
+
+
+def repartitioned(mesh: dolfinx.mesh.Mesh, weights: np.ndarray) -> dolfinx.mesh.Mesh:
+    """The grid of ``mesh`` partitioned so that the ranks' weights are about equal.
+
+    Collective. On one rank ``mesh`` itself is returned.
+
+    Args:
+        mesh: An affine simplex grid, distributed over its communicator's ranks.
+        weights: The weight of each owned cell, shape (owned cells,), integers ≥ 1.
+
+    Returns:
+        A new mesh of the same cells and nodes, each cell owned by the rank METIS
+        gave it, with the same original cell and input node indices.
+
+    Raises:
+        ImportError: ``pymetis`` (a dependency of fe-mpm) is not installed.
+    """
+    comm = mesh.comm
+    if comm.size == 1:
+        return mesh
+    _pymetis()  # on every rank: a missing pymetis stops them all, not rank 0 alone
+    tdim, gdim = mesh.topology.dim, mesh.geometry.dim
+    owned = mesh.topology.index_map(tdim).size_local
+    node_input = np.asarray(mesh.geometry.input_global_indices, dtype=np.int64)
+    cells = node_input[mesh.geometry.dofmaps[0][:owned]]
+    original = np.asarray(mesh.topology.original_cell_index[:owned], dtype=np.int64)
+    n_nodes = mesh.geometry.index_map().size_local
+    gathered = comm.gather(
+        (
+            original,
+            cells,
+            np.asarray(weights, dtype=np.int64)[:owned],
+            node_input[:n_nodes],
+            mesh.geometry.x[:n_nodes, :gdim],
+        )
+    )
+    parts = np.zeros(0, dtype=np.int32)
+    all_cells = np.zeros((0, tdim + 1), dtype=np.int64)
+    x = np.zeros((0, gdim))
+    if comm.rank == 0:
+        order = np.argsort(np.concatenate([g[0] for g in gathered]), kind="stable")
+        all_cells = np.concatenate([g[1] for g in gathered])[order]
+        cell_weight = np.concatenate([g[2] for g in gathered])[order]
+        inputs = np.concatenate([g[3] for g in gathered])
+        x = np.zeros((int(inputs.max()) + 1, gdim))  # rows no cell uses are never read
+        x[inputs] = np.concatenate([g[4] for g in gathered])
+        parts = partition(all_cells, cell_weight, comm.size)
+
+    # Held here while create_mesh runs: the C++ list may view this array's memory.
+    destinations = dolfinx.graph.adjacencylist(parts)
+
+    def partitioner(comm, nparts, cell_types, topology):
+        # Called by create_mesh with the cells as given: all on rank 0, in original order.
+        return destinations._cpp_object
+
+    element = mesh.ufl_domain().ufl_coordinate_element()
+    return dolfinx.mesh.create_mesh(comm, all_cells, element, x, partitioner=partitioner)
+
+
+def partition(cells: np.ndarray, weights: np.ndarray, parts: int) -> np.ndarray:
+    """The part (0 to ``parts`` − 1) of each cell: METIS on the cells' dual graph.
+
+    Args:
+        cells: The nodes of each simplex, shape (n, t + 1).
+        weights: Integer weight of each cell (n,), ≥ 1.
+        parts: How many parts.
+
+    Returns:
+        Shape (n,), int32: parts of about equal total weight, with few facets cut.
+    """
+    xadj, adjncy = dual_graph(cells)
+    metis = _pymetis()
+    graph = metis.CSRAdjacency(xadj, adjncy)
+    _, membership = metis.part_graph(parts, adjacency=graph, vweights=weights)
+    return np.asarray(membership, dtype=np.int32)
+
+
+def _pymetis():
+    """The ``pymetis`` module, loaded so that it calls its own METIS.
+
+    PETSc, loaded with DOLFINx, brings a METIS of its own into the process's global
+    symbols; pymetis's extension would bind to it and crash (its index width and
+    options differ). ``RTLD_DEEPBIND`` makes the extension prefer its own copy. A
+    pymetis imported before PETSc needs nothing; one imported after it without this
+    (by the user) cannot be fixed here.
+    """
+    if "pymetis" in sys.modules:
+        return sys.modules["pymetis"]
+    flags = sys.getdlopenflags()
+    sys.setdlopenflags(flags | getattr(os, "RTLD_DEEPBIND", 0))
+    try:
+        import pymetis
+    except ImportError as err:
+        raise ImportError(
+            "fe-mpm balances the points over MPI ranks with pymetis: pip install pymetis "
+            "(or pass rebalance_above=None to Simulation)"
+        ) from err
+    finally:
+        sys.setdlopenflags(flags)
+    return pymetis
+
+
+def dual_graph(cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The cells' facet adjacency in CSR form (xadj, adjncy), for METIS.
+
+    Args:
+        cells: The nodes of each simplex, shape (n, t + 1).
+    """
+    n, k = cells.shape
+    # Each facet leaves out one node; sorted, equal rows are one facet of two cells.
+    facets = np.sort(np.concatenate([np.delete(cells, j, axis=1) for j in range(k)]), axis=1)
+    owner = np.tile(np.arange(n), k)
+    order = np.lexsort(facets.T[::-1])
+    facets, owner = facets[order], owner[order]
+    shared = np.flatnonzero(np.all(facets[1:] == facets[:-1], axis=1))
+    a, b = owner[shared], owner[shared + 1]
+    source, target = np.concatenate([a, b]), np.concatenate([b, a])
+    order = np.argsort(source, kind="stable")
+    xadj = np.zeros(n + 1, dtype=np.int64)
+    np.cumsum(np.bincount(source, minlength=n), out=xadj[1:])
+    return xadj, target[order].astype(np.int64)
+
+
+def owners_of_original_cells(mesh: dolfinx.mesh.Mesh, original: np.ndarray) -> np.ndarray:
+    """Where each cell of the given original indices is owned now: (rank, local cell).
+
+    Collective; every rank asks for its own cells. The ranks answer through a
+    directory: the cell of original index i is registered on rank i mod size.
+
+    Args:
+        mesh: The grid.
+        original: Original cell indices (n,).
+
+    Returns:
+        Shape (n, 2): the owning rank and the cell's local index there.
+    """
+    comm, tdim = mesh.comm, mesh.topology.dim
+    owned = mesh.topology.index_map(tdim).size_local
+    mine = np.asarray(mesh.topology.original_cell_index[:owned], dtype=np.int64)
+    original = np.asarray(original, dtype=np.int64)
+    if comm.size == 1:
+        where = np.full(int(mine.max(initial=-1)) + 1, -1, dtype=np.int64)
+        where[mine] = np.arange(owned)
+        return np.column_stack([np.zeros_like(original), where[original]])
+    size = comm.size
+    entries = np.column_stack([mine, np.full(owned, comm.rank), np.arange(owned)])
+    registered = np.concatenate(comm.alltoall([entries[mine % size == r] for r in range(size)]))
+    asked = comm.alltoall([original[original % size == r] for r in range(size)])
+    order = np.argsort(registered[:, 0])
+    keys = registered[order, 0]
+    answers = [registered[order[np.searchsorted(keys, q)], 1:] for q in asked]
+    replies = comm.alltoall(answers)
+    out = np.empty((original.size, 2), dtype=np.int64)
+    for r in range(size):
+        out[original % size == r] = replies[r]
+    return out
+
+
+def original_indices(mesh: dolfinx.mesh.Mesh, where: np.ndarray) -> np.ndarray:
+    """The original index of each cell given as (rank, local cell); collective.
+
+    Args:
+        mesh: The grid.
+        where: Shape (n, 2): the rank that owns each cell and its local index there.
+
+    Returns:
+        Original cell indices (n,).
+    """
+    comm, tdim = mesh.comm, mesh.topology.dim
+    owned = mesh.topology.index_map(tdim).size_local
+    mine = np.asarray(mesh.topology.original_cell_index[:owned], dtype=np.int64)
+    where = np.asarray(where, dtype=np.int64).reshape(-1, 2)
+    if comm.size == 1:
+        return mine[where[:, 1]]
+    asked = comm.alltoall([where[where[:, 0] == r, 1] for r in range(comm.size)])
+    replies = comm.alltoall([mine[q] for q in asked])
+    out = np.empty(where.shape[0], dtype=np.int64)
+    for r in range(comm.size):
+        out[where[:, 0] == r] = replies[r]
+    return out
+
+
+def carried_facet_tags(
+    tags: dolfinx.mesh.MeshTags, old: dolfinx.mesh.Mesh, new: dolfinx.mesh.Mesh
+) -> dolfinx.mesh.MeshTags:
+    """The facet tags of ``old`` on ``new``, a repartition of the same grid; collective.
+
+    A facet is known by its nodes' input indices, the same on both grids.
+    """
+    fdim = old.topology.dim - 1
+    keys, values = _facet_keys(old, tags.indices), np.asarray(tags.values)
+    keys = np.concatenate(old.comm.allgather(keys))
+    values = np.concatenate(old.comm.allgather(values))
+    keys, first = np.unique(keys, axis=0, return_index=True)
+    values = values[first]
+    new.topology.create_entities(fdim)
+    facet_map = new.topology.index_map(fdim)
+    candidates = np.arange(facet_map.size_local + facet_map.num_ghosts, dtype=np.int32)
+    theirs = _facet_keys(new, candidates)
+    at = _rows_in(theirs, keys)
+    found = at >= 0
+    return dolfinx.mesh.meshtags(
+        new, fdim, candidates[found], values[at[found]].astype(np.asarray(tags.values).dtype)
+    )
+
+
+def _facet_keys(mesh: dolfinx.mesh.Mesh, facets: np.ndarray) -> np.ndarray:
+    """The sorted input node indices of each facet (n, t)."""
+    fdim = mesh.topology.dim - 1
+    mesh.topology.create_connectivity(fdim, mesh.topology.dim)
+    nodes = dolfinx.mesh.entities_to_geometry(mesh, fdim, np.asarray(facets, dtype=np.int32))
+    inputs = np.asarray(mesh.geometry.input_global_indices, dtype=np.int64)
+    return np.sort(inputs[nodes], axis=1).reshape(-1, fdim + 1)
+
+
+def _rows_in(rows: np.ndarray, table: np.ndarray) -> np.ndarray:
+    """Each row's index in ``table`` (unique rows, as ``np.unique`` gives); −1 if absent."""
+    if table.shape[0] == 0:
+        return np.full(rows.shape[0], -1)
+    both = np.concatenate([table, rows])
+    _, inverse = np.unique(both, axis=0, return_inverse=True)
+    inverse = inverse.reshape(-1)
+    # table is unique, so its rows are the first len(table) labels; map label -> table row.
+    label_to_row = np.full(inverse.max() + 1, -1)
+    label_to_row[inverse[: table.shape[0]]] = np.arange(table.shape[0])
+    return label_to_row[inverse[table.shape[0] :]]
