@@ -13,11 +13,11 @@ Scenes (``--scenes``):
   steps of 10 mm; the answer is q/c_u at the last step.
 - ``cook``: Cook's membrane, u-p, n = 256, one point per triangle, one step; the
   answer is the tip displacement.
-- ``collapse``: the granular column, a = 3, h = 0.01 m, 3 points per cell, the first
-  0.15 s (60 steps): the column starts in a corner of the grid, so the grid is
-  partitioned by its points (``rebalance_above`` = 1.25, the default);
-  ``collapse-cells`` is the same with the grid partitioned by cells only
-  (``--rebalance-above none``). The answer is the run-out so far; the collapse is
+- ``collapse``: the granular column, a = 3, h = 5 mm, 3 points per cell (7140), the
+  first 0.1 s (40 steps; its own check of the deposit then fails). The column starts
+  in a corner of the grid, so on 2 ranks one holds every point;
+  ``collapse-balanced`` is the same with the grid partitioned by its points
+  (``--rebalance-above 1.25``). The answer is the run-out so far; the collapse is
   chaotic at round-off (docs/limitations.md), so it moves with the partition.
 
 On a machine with 2 cores, 2 ranks is the most that measures speed.
@@ -37,8 +37,8 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 COLLAPSE = [
-    "demos/column_collapse.py", "--aspect", "3", "--h", "0.01", "--points-per-cell", "3",
-    "--t-end", "0.15", "--no-output",
+    "demos/column_collapse.py", "--aspect", "3", "--h", "0.005", "--points-per-cell", "3",
+    "--t-end", "0.1", "--no-output",
 ]  # fmt: skip
 SCENES = {
     "footing": (
@@ -52,8 +52,8 @@ SCENES = {
         "u_A,y",
     ),
     "collapse": (COLLAPSE, lambda out: out["runout"], "d_inf"),
-    "collapse-cells": (
-        [*COLLAPSE, "--rebalance-above", "none"],
+    "collapse-balanced": (
+        [*COLLAPSE, "--rebalance-above", "1.25"],
         lambda out: out["runout"],
         "d_inf",
     ),
@@ -69,9 +69,11 @@ def run_once(script: list[str], ranks: int) -> tuple[float, dict]:
     start = time.perf_counter()
     done = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, env=env)
     wall = time.perf_counter() - start
-    if done.returncode != 0:
+    summary = [line for line in done.stdout.splitlines() if line.startswith("{")]
+    # A demo whose own check fails (a collapse cut short of its deposit) still ran.
+    if not summary:
         sys.exit(f"parallel.py: {' '.join(command)} failed:\n{done.stdout}\n{done.stderr}")
-    return wall, json.loads(done.stdout.strip().splitlines()[-1])
+    return wall, json.loads(summary[-1])
 
 
 def main() -> None:

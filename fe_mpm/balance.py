@@ -89,6 +89,8 @@ def repartitioned(mesh: dolfinx.mesh.Mesh, weights: np.ndarray) -> dolfinx.mesh.
         x = np.zeros((int(inputs.max()) + 1, gdim))  # rows no cell uses are never read
         x[inputs] = np.concatenate([g[4] for g in gathered])
         parts = partition(all_cells, cell_weight, comm.size)
+        now = np.repeat(np.arange(comm.size), [len(g[0]) for g in gathered])[order]
+        parts = _kept_in_place(parts, now, cell_weight, comm.size)
 
     # Held here while create_mesh runs: the C++ list may view this array's memory.
     destinations = dolfinx.graph.adjacencylist(parts)
@@ -117,6 +119,29 @@ def partition(cells: np.ndarray, weights: np.ndarray, parts: int) -> np.ndarray:
     graph = metis.CSRAdjacency(xadj, adjncy)
     _, membership = metis.part_graph(parts, adjacency=graph, vweights=weights)
     return np.asarray(membership, dtype=np.int32)
+
+
+def _kept_in_place(parts: np.ndarray, now: np.ndarray, weights: np.ndarray, size: int):
+    """``parts`` renumbered so that each goes to the rank that holds most of it now.
+
+    METIS numbers its parts arbitrarily; given to the ranks as numbered, most points
+    would change rank. Greedily, the heaviest overlap of a part and a rank first.
+
+    Args:
+        parts: The part of each cell (n,).
+        now: The rank that owns each cell now (n,).
+        weights: Each cell's weight (n,).
+        size: The number of parts and ranks.
+    """
+    overlap = np.zeros((size, size))
+    np.add.at(overlap, (parts, now), weights)
+    rank_of = np.full(size, -1)
+    taken = np.zeros(size, dtype=bool)
+    for flat in np.argsort(-overlap, axis=None, kind="stable"):
+        part, rank = divmod(int(flat), size)
+        if rank_of[part] < 0 and not taken[rank]:
+            rank_of[part], taken[rank] = rank, True
+    return rank_of[parts].astype(np.int32)
 
 
 def _pymetis():

@@ -175,14 +175,18 @@ class NewtonSolver:
         """
         pc = self.snes.getKSP().getPC()
         if split is None:
-            self.A.setNearNullSpace(rigid_body_modes(V, np.arange(self.A.getSize()[0])))
+            self.A.setNearNullSpace(rigid_body_modes(V, np.arange(self._u_rows.size)))
             return
         collapsed, u_dofs = split
-        if u_dofs.size != collapsed.dofmap.index_map.size_local * collapsed.dofmap.index_map_bs:
+        owned = collapsed.dofmap.index_map.size_local * collapsed.dofmap.index_map_bs
+        u_dofs = u_dofs[:owned]  # the owned rows of the collapsed space are the first
+        if not np.array_equal(np.sort(u_dofs), self._u_rows):
             raise RuntimeError("iterative solver: unexpected layout of the displacement dofs")
         order = np.argsort(u_dofs)
-        is_u = PETSc.IS().createGeneral(self._u_rows, comm=self.A.comm)  # = u_dofs[order]
-        is_p = PETSc.IS().createGeneral(self._p_rows, comm=self.A.comm)
+        # PETSc's index sets take global rows.
+        start = self.A.getOwnershipRange()[0]
+        is_u = PETSc.IS().createGeneral(start + self._u_rows, comm=self.A.comm)
+        is_p = PETSc.IS().createGeneral(start + self._p_rows, comm=self.A.comm)
         # PCFIELDSPLIT hands a near null space composed with a split's IS to its block.
         modes = rigid_body_modes(collapsed, order)
         is_u.compose("nearnullspace", modes)

@@ -137,9 +137,12 @@ class Simulation:
             (default): none.
         checkpoint_every: Steps between checkpoints, ≥ 1.
         rebalance_above: Under MPI, repartition the grid by its points
-            (:meth:`rebalance`) at set-up and after any step in which the most points
-            on a rank exceed this multiple (> 1) of the mean; None: never. Default
-            1.25. Serial runs never repartition.
+            (:meth:`rebalance`) at set-up and after a step in which the most points
+            on a rank exceed this multiple (> 1) of the mean, once the time lost to
+            the imbalance has paid for the last repartition (e.g. 1.25); None
+            (default): never. It pays where the points' own work (return map,
+            packing, assembly over occupied cells) dominates a step; see
+            docs/limitations.md. Serial runs never repartition.
     """
 
     def __init__(
@@ -175,9 +178,10 @@ class Simulation:
         ghost_penalty: float | None = None,
         checkpoint_dir: str | Path | None = None,
         checkpoint_every: int = 10,
-        rebalance_above: float | None = 1.25,
+        rebalance_above: float | None = None,
     ):
         model_checks.check_grid_and_points(mesh, points)
+        parallel.one_thread_per_rank(mesh.comm)
         model_checks.check_choices(
             formulation, mass, points_leaving, linear_solver, line_search, fallback_line_search
         )
@@ -193,7 +197,6 @@ class Simulation:
                 f"formulation {formulation!r}": formulation not in ("u", "up"),
                 "point_domains=True": bool(point_domains),
                 "a ghost penalty": bool(ghost_penalty),
-                "linear_solver='iterative'": linear_solver != "direct",
             },
         )
         model_checks.check_law(material, self.spec, formulation)
@@ -246,6 +249,7 @@ class Simulation:
         #: Grid repartitions so far (:meth:`rebalance`).
         self.repartitions = 0
         self.rebalance_above = model_checks.check_rebalance(rebalance_above)
+        self._lost_to_imbalance = self._rebalance_cost = 0.0  # s, see _rebalance_if_due
         if self._rebalance_if_due(imbalance(mesh.comm, len(points))):
             self._track()
 
@@ -352,22 +356,47 @@ class Simulation:
         keep_home = parallel.all_ranks(comm, home is not None)
         if keep_home:  # a retry of the next step may still hold the points there
             home = balance.original_indices(old, home)
+        # Each point's cell by its original index, to start the next search from.
+        found = np.flatnonzero(self.points.cell >= 0)  # all but after a rebalance untracked
+        here = np.column_stack([np.full(found.size, comm.rank), self.points.cell[found]])
+        cells = balance.original_indices(old, here)
         if self._newton is not None:
             self._newton.destroy()
         self._set_grid(mesh, tags)
         if keep_home:
             self.tracking._home = balance.owners_of_original_cells(mesh, home)
-        self.points.cell[:] = -1  # cells of the old grid: the next tracking looks again
+        # The next tracking starts from the cell each point was in, where this rank
+        # owns it now; the others are searched for and sent to their new ranks.
+        where = balance.owners_of_original_cells(mesh, cells)
+        self.points.cell[:] = -1
+        self.points.cell[found] = np.where(where[:, 0] == comm.rank, where[:, 1], -1)
         if self.output is not None:
             self.output.regrid(self.fields)
         self.repartitions += 1
         self._add_time("rebalance", t0)
 
-    def _rebalance_if_due(self, point_imbalance: float) -> bool:
-        """:meth:`rebalance` if the imbalance exceeds ``rebalance_above``; whether it did."""
-        if self.rebalance_above is None or point_imbalance <= self.rebalance_above:
+    def _rebalance_if_due(self, point_imbalance: float, step_time: float = 0.0) -> bool:
+        """:meth:`rebalance` if it is due, as ``rebalance_above`` says; whether it did.
+
+        Due when the imbalance exceeds ``rebalance_above`` and the time the imbalance
+        has cost since the last repartition exceeds what that repartition cost: a
+        step of ``step_time`` seconds on the busiest rank would take about
+        1/imbalance of it balanced. A repartition's cost is taken as twice its own
+        time, as the next step builds the forms and the solver again (measured about
+        as long). So a flow that keeps unbalancing the ranks is not repartitioned at
+        every step. Collective: the inputs are the same on every rank.
+        """
+        if self.rebalance_above is None:
             return False
+        self._lost_to_imbalance += step_time * (1.0 - 1.0 / point_imbalance)
+        if point_imbalance <= self.rebalance_above:
+            return False
+        if self._lost_to_imbalance < self._rebalance_cost:
+            return False
+        t0 = time.perf_counter()
         self.rebalance()
+        self._rebalance_cost = 2.0 * parallel.largest(self.mesh.comm, time.perf_counter() - t0)
+        self._lost_to_imbalance = 0.0
         return True
 
     def marker(self, name: str) -> np.ndarray:
@@ -404,6 +433,7 @@ class Simulation:
                 t_new = min(self.t + length.dt, t_end)
                 if t_end - t_new < MERGE_LAST_STEP * nominal:
                     t_new = t_end
+                started = time.perf_counter()
                 try:
                     report = self.ladder.take_step(
                         lambda rebin: self.step(t_new, rebin),
@@ -412,6 +442,7 @@ class Simulation:
                 except ConvergenceError as failure:
                     length.cut_after(failure)
                     continue
+                took = time.perf_counter() - started
                 spent = self.newton_iterations_total - before
                 report.failed_iterations = spent - report.newton_iterations
                 before += spent
@@ -419,7 +450,8 @@ class Simulation:
                 if self.checkpoint_dir and self.step_number % self.checkpoint_every == 0:
                     self.checkpoint()
                 if t_end - self.t > END_OF_RUN * nominal:  # another step follows
-                    report.repartitioned = self._rebalance_if_due(report.point_imbalance)
+                    took = parallel.largest(self.mesh.comm, took)  # the same on every rank
+                    report.repartitioned = self._rebalance_if_due(report.point_imbalance, took)
                 if on_step is not None:
                     on_step(report)
                 length.accepted()

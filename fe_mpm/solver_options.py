@@ -95,15 +95,17 @@ def with_petsc_options(prefix: str, options: dict, configure) -> None:
 def rigid_body_modes(V: dolfinx.fem.FunctionSpace, order: np.ndarray) -> PETSc.NullSpace:
     """Translations and rotations of a blocked displacement space, as a PETSc null space.
 
+    Distributed like the matrix: each rank gives the entries of its owned rows.
+
     Args:
         V: A vector P1/P2 space (block size = geometric dimension 2 or 3).
-        order: Which of V's dofs each entry of the vectors holds (e.g. their
-            order inside a mixed unknown).
+        order: Which of V's owned dofs each of this rank's entries holds (e.g.
+            their order among the owned rows of a mixed unknown).
     """
     g = V.dofmap.index_map_bs
-    x = V.tabulate_dof_coordinates()[:, :g]  # one row per node
-    n_nodes = x.shape[0]
-    modes = [np.zeros((n_nodes, g)) for _ in range(3 if g == 2 else 6)]
+    owned = V.dofmap.index_map.size_local
+    x = V.tabulate_dof_coordinates()[:owned, :g]  # one row per owned node
+    modes = [np.zeros((owned, g)) for _ in range(3 if g == 2 else 6)]
     for c in range(g):
         modes[c][:, c] = 1.0
     if g == 2:
@@ -111,7 +113,15 @@ def rigid_body_modes(V: dolfinx.fem.FunctionSpace, order: np.ndarray) -> PETSc.N
     else:
         for k, (i, j) in enumerate(((0, 1), (1, 2), (2, 0)), start=3):
             modes[k][:, i], modes[k][:, j] = -x[:, j], x[:, i]
-    # GAMG wants them orthonormal.
-    basis = np.linalg.qr(np.column_stack([m.reshape(-1)[order] for m in modes]))[0]
-    vectors = [PETSc.Vec().createWithArray(column.copy()) for column in basis.T]
-    return PETSc.NullSpace().create(vectors=vectors)
+    comm = V.mesh.comm
+    vectors = []
+    for m in modes:
+        column = m.reshape(-1)[order]
+        v = PETSc.Vec().createWithArray(column.copy(), size=(column.size, PETSc.DECIDE), comm=comm)
+        vectors.append(v)
+    # GAMG wants them orthonormal over all ranks: Gram-Schmidt with global dot products.
+    for i, v in enumerate(vectors):
+        for w in vectors[:i]:
+            v.axpy(-v.dot(w), w)
+        v.scale(1.0 / v.norm())
+    return PETSc.NullSpace().create(vectors=vectors, comm=comm)
