@@ -23,6 +23,7 @@ import sys
 
 import numpy as np
 
+from fe_mpm import parallel
 from fe_mpm._dolfinx import dolfinx
 
 #: A cell's weight per point it holds; an empty cell weighs 1, so a rank's share of
@@ -40,6 +41,7 @@ def cell_weights(num_cells: int, cells: np.ndarray) -> np.ndarray:
     Returns:
         Integer weights, shape (num_cells,).
     """
+    cells = cells[cells >= 0]  # a point not looked for since a repartition counts nowhere
     return 1 + POINT_WEIGHT * np.bincount(cells, minlength=num_cells).astype(np.int64)
 
 
@@ -81,18 +83,13 @@ def repartitioned(mesh: dolfinx.mesh.Mesh, weights: np.ndarray) -> dolfinx.mesh.
     parts = np.zeros(0, dtype=np.int32)
     all_cells = np.zeros((0, tdim + 1), dtype=np.int64)
     x = np.zeros((0, gdim))
+    error = None
     if comm.rank == 0:
-        order = np.argsort(np.concatenate([g[0] for g in gathered]), kind="stable")
-        all_cells = np.concatenate([g[1] for g in gathered])[order]
-        cell_weight = np.concatenate([g[2] for g in gathered])[order]
-        inputs = np.concatenate([g[3] for g in gathered])
-        x = np.zeros((int(inputs.max()) + 1, gdim))  # rows no cell uses are never read
-        x[inputs] = np.concatenate([g[4] for g in gathered])
-        parts = partition(all_cells, cell_weight, comm.size)
-        now = np.repeat(np.arange(comm.size), [len(g[0]) for g in gathered])[order]
-        parts = _kept_in_place(parts, now, cell_weight, comm.size)
-
-    # Held here while create_mesh runs: the C++ list may view this array's memory.
+        try:
+            all_cells, x, parts = _partitioned(gathered, comm.size, tdim, gdim)
+        except (ValueError, MemoryError) as err:
+            error = err
+    parallel.raise_together(comm, error)  # rank 0 alone may fail; the others would wait
     destinations = dolfinx.graph.adjacencylist(parts)
 
     def partitioner(comm, nparts, cell_types, topology):
@@ -101,6 +98,38 @@ def repartitioned(mesh: dolfinx.mesh.Mesh, weights: np.ndarray) -> dolfinx.mesh.
 
     element = mesh.ufl_domain().ufl_coordinate_element()
     return dolfinx.mesh.create_mesh(comm, all_cells, element, x, partitioner=partitioner)
+
+
+def _partitioned(gathered: list, size: int, tdim: int, gdim: int):
+    """On rank 0: every cell's nodes and every node's position in input order, and parts.
+
+    Args:
+        gathered: Each rank's (original cell indices, cell nodes, weights, node input
+            indices, node positions).
+        size: The number of ranks.
+        tdim: The cells' dimension.
+        gdim: The nodes' dimension.
+
+    Raises:
+        ValueError: The original cell indices are not 0, ..., N − 1 (the new grid
+            numbers its cells by their place in the list it is given).
+    """
+    original = np.concatenate([g[0] for g in gathered])
+    order = np.argsort(original, kind="stable")
+    if not np.array_equal(original[order], np.arange(original.size)):
+        raise ValueError(
+            "repartition: the grid's original cell indices are not 0, ..., N - 1 "
+            "(mesh.topology.original_cell_index); build the grid with create_mesh, "
+            "create_rectangle/box or from gmsh"
+        )
+    all_cells = np.concatenate([g[1] for g in gathered])[order]
+    cell_weight = np.concatenate([g[2] for g in gathered])[order]
+    inputs = np.concatenate([g[3] for g in gathered])
+    x = np.zeros((int(inputs.max()) + 1, gdim))  # rows no cell uses are never read
+    x[inputs] = np.concatenate([g[4] for g in gathered])
+    parts = partition(all_cells, cell_weight, size)
+    now = np.repeat(np.arange(size), [len(g[0]) for g in gathered])[order]
+    return all_cells, x, _kept_in_place(parts, now, cell_weight, size)
 
 
 def partition(cells: np.ndarray, weights: np.ndarray, parts: int) -> np.ndarray:
@@ -217,8 +246,12 @@ def owners_of_original_cells(mesh: dolfinx.mesh.Mesh, original: np.ndarray) -> n
     asked = comm.alltoall([original[original % size == r] for r in range(size)])
     order = np.argsort(registered[:, 0])
     keys = registered[order, 0]
-    answers = [registered[order[np.searchsorted(keys, q)], 1:] for q in asked]
-    replies = comm.alltoall(answers)
+    at = [np.searchsorted(keys, q) for q in asked]
+    known = all(np.all(i < keys.size) and np.array_equal(keys[i], q) for i, q in zip(at, asked))
+    parallel.raise_together(
+        comm, None if known else ValueError("owners_of_original_cells: no such original cell")
+    )
+    replies = comm.alltoall([registered[order[i], 1:] for i in at])
     out = np.empty((original.size, 2), dtype=np.int64)
     for r in range(size):
         out[original % size == r] = replies[r]

@@ -15,6 +15,9 @@ import numpy as np
 from fe_mpm import parallel
 from fe_mpm.errors import PointsOutsideError
 
+#: Distances within this relative margin of the nearest count as equally near.
+TIE = 1e-12
+
 
 class Markers:
     """Named markers, each a position (g,) in m and the index of its host point.
@@ -33,10 +36,18 @@ class Markers:
     def add(self, name: str, x: np.ndarray, points_x: np.ndarray) -> None:
         """Add a marker at ``x`` (g,), hosted by the nearest of the points ``points_x`` (n, g)."""
         distance = np.linalg.norm(points_x - x, axis=1)
-        host = int(np.argmin(distance)) if distance.size else -1
-        nearest = float(distance[host]) if distance.size else np.inf
-        if self.comm.size > 1:  # the nearest point of all ranks; ties go to the lowest rank
-            _, rank = self.comm.allreduce((nearest, self.comm.rank), op=MPI.MINLOC)
+        nearest = float(distance.min(initial=np.inf))
+        if self.comm.size > 1:
+            nearest = self.comm.allreduce(nearest, op=MPI.MIN)
+        # Points as near as the nearest to round-off (a symmetric seeding has many): the
+        # one at the lowest position, lexicographically, so that the host is the same
+        # whatever the points' order and their ranks.
+        tied = np.flatnonzero(distance <= nearest * (1 + TIE))
+        host = int(tied[np.lexsort(points_x[tied].T[::-1])[0]]) if tied.size else -1
+        if self.comm.size > 1:
+            mine = None if host < 0 else tuple(points_x[host].tolist())
+            offers = self.comm.allgather(mine)
+            rank = min((p, r) for r, p in enumerate(offers) if p is not None)[1]
             host = host if rank == self.comm.rank else -1
         self._entries[name] = (x.copy(), host)  # a copy: the caller's array must not move
 

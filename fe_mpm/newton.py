@@ -18,6 +18,7 @@ from petsc4py import PETSc
 import dolfinx.fem.petsc as fem_petsc
 import numpy as np
 
+from fe_mpm import parallel
 from fe_mpm._dolfinx import dolfinx, matrix_with_pattern_of
 from fe_mpm.force_test import EPS, ROUND_OFF_FACTOR, ForceTest, NewtonResult
 from fe_mpm.formulations import collapse
@@ -180,8 +181,13 @@ class NewtonSolver:
         collapsed, u_dofs = split
         owned = collapsed.dofmap.index_map.size_local * collapsed.dofmap.index_map_bs
         u_dofs = u_dofs[:owned]  # the owned rows of the collapsed space are the first
-        if not np.array_equal(np.sort(u_dofs), self._u_rows):
-            raise RuntimeError("iterative solver: unexpected layout of the displacement dofs")
+        unexpected = not np.array_equal(np.sort(u_dofs), self._u_rows)
+        parallel.raise_together(  # every rank stops, or none: collective calls follow
+            self.A.comm.tompi4py(),
+            RuntimeError("iterative solver: unexpected layout of the displacement dofs")
+            if unexpected
+            else None,
+        )
         order = np.argsort(u_dofs)
         # PETSc's index sets take global rows.
         start = self.A.getOwnershipRange()[0]

@@ -88,14 +88,27 @@ def one_thread_per_rank(comm: MPI.Comm) -> None:
     ranks and 2 cores took 8 times as long as with one thread per rank (DOLFINx's
     advice is ``OMP_NUM_THREADS=1`` under MPI). Done with ``threadpoolctl`` at run
     time, as numpy is loaded before fe-mpm can set the environment. A thread count
-    the user chose (``OMP_NUM_THREADS``, ``OPENBLAS_NUM_THREADS``) is kept, and one
-    rank keeps its threads.
+    the user chose (``OMP_NUM_THREADS``, ``OPENBLAS_NUM_THREADS``,
+    ``MKL_NUM_THREADS``) is kept, and a rank alone on its machine keeps its threads.
     """
-    if comm.size == 1 or any(v in os.environ for v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS")):
+    chosen = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+    if not _ranks_share_this_machine(comm) or any(v in os.environ for v in chosen):
         return
     from threadpoolctl import threadpool_limits
 
     threadpool_limits(limits=1)
+
+
+def _ranks_share_this_machine(comm: MPI.Comm) -> bool:
+    """Whether other ranks of this run are on this machine, from the launcher's word.
+
+    MPICH's and Open MPI's launchers say how many ranks run here; without it, any
+    run of more than one rank counts. Not collective (a simulation may be on one rank).
+    """
+    for name in ("MPI_LOCALNRANKS", "OMPI_COMM_WORLD_LOCAL_SIZE"):
+        if os.environ.get(name, "").isdigit():
+            return int(os.environ[name]) > 1
+    return comm.size > 1 or MPI.COMM_WORLD.size > 1
 
 
 def print_on_rank_zero(comm: MPI.Comm = MPI.COMM_WORLD) -> bool:

@@ -235,11 +235,11 @@ class Simulation:
         }
         self.tracking: PointTracking | None = None
         self._boundary: BoundaryPointStep | None = None
+        self._conditions_warned: dict[int, float] = {}
+        self._iterations_of_old_grids = 0  # Newton iterations on grids since repartitioned
+        self.output = None
         self._set_grid(mesh, facet_tags)
         self._add_time("setup", t0)
-        self.output = (
-            None if output_dir is None else SimulationOutput(output_dir, self.fields, output_every)
-        )
         self._track()  # once now, so a bad initial layout fails at set-up
         self.domains = None
         if point_domains:
@@ -252,6 +252,8 @@ class Simulation:
         self._lost_to_imbalance = self._rebalance_cost = 0.0  # s, see _rebalance_if_due
         if self._rebalance_if_due(imbalance(mesh.comm, len(points))):
             self._track()
+        if output_dir is not None:  # on the grid the run starts on
+            self.output = SimulationOutput(output_dir, self.fields, output_every)
 
     def _set_grid(self, mesh: dolfinx.mesh.Mesh, facet_tags) -> None:
         """Build everything that lives on the grid: at set-up and after a repartition.
@@ -270,6 +272,7 @@ class Simulation:
             damping, petsc_options = self._given["dynamics"]
             self.dynamics = NewmarkDynamics(self.fields, damping, self.linear_solver, petsc_options)
         self.conditions = GridConditions(self.fields, *self._given["conditions"], facet_tags)
+        self.conditions._warned_share = self._conditions_warned  # warned once per run
         if self._boundary is None:
             self._boundary = BoundaryPointStep.of(self._given["boundary"], self.tracker)
         else:  # the same points, now on this grid
@@ -331,6 +334,9 @@ class Simulation:
             CheckpointError: It is of another fe-mpm version or scene, or corrupted.
         """
         checkpoint.read(self, path)
+        self._lost_to_imbalance = self._rebalance_cost = 0.0  # a partition for these points
+        if self._rebalance_if_due(imbalance(self.mesh.comm, len(self.points))):
+            self._track(self.step_number, self.t)
 
     def rebalance(self) -> None:
         """Repartition the grid so that the ranks hold about equal numbers of points.
@@ -361,6 +367,7 @@ class Simulation:
         here = np.column_stack([np.full(found.size, comm.rank), self.points.cell[found]])
         cells = balance.original_indices(old, here)
         if self._newton is not None:
+            self._iterations_of_old_grids += self._newton.iterations_total
             self._newton.destroy()
         self._set_grid(mesh, tags)
         if keep_home:
@@ -449,11 +456,11 @@ class Simulation:
                 reports.append(report)
                 if self.checkpoint_dir and self.step_number % self.checkpoint_every == 0:
                     self.checkpoint()
+                if on_step is not None:  # on the grid of the step
+                    on_step(report)
                 if t_end - self.t > END_OF_RUN * nominal:  # another step follows
                     took = parallel.largest(self.mesh.comm, took)  # the same on every rank
                     report.repartitioned = self._rebalance_if_due(report.point_imbalance, took)
-                if on_step is not None:
-                    on_step(report)
                 length.accepted()
                 bar.update(report, nominal)
         finally:
@@ -646,7 +653,8 @@ class Simulation:
     @property
     def newton_iterations_total(self) -> int:
         """Newton iterations of every solve so far, failed attempts included."""
-        return 0 if self._newton is None else self._newton.iterations_total
+        now = 0 if self._newton is None else self._newton.iterations_total
+        return self._iterations_of_old_grids + now
 
     @property
     def dropped(self) -> int:
