@@ -140,6 +140,19 @@ def test_markers_follow_their_hosts_renumbered_after_a_drop():
         lost.keep_hosts(keep)
 
 
+def test_a_marker_between_equally_near_points_takes_the_same_host_in_any_order():
+    """A marker midway between two points (a symmetric seeding has many such ties) is
+    hosted by the one at the lowest position, whatever the points' order, so it is the
+    same host on any partition of the points over MPI ranks."""
+    x = np.array([[1.0, 0.0], [0.0, 1.0], [1.0, 1.0], [2.0, 2.0]])
+    for order in ([0, 1, 2, 3], [2, 1, 0, 3], [3, 2, 1, 0]):
+        markers = Markers()
+        markers.add("m", np.array([0.5, 0.5]), x[order])  # 0.707 from points 0, 1 and 2
+        du = np.eye(4)[:, :2][order]  # each point moves by its own unit offset
+        markers.move(x[order], du, np.repeat(np.eye(2)[None], 4, axis=0))
+        np.testing.assert_allclose(markers.position("m"), [0.5, 1.5], rtol=0, atol=1e-15)
+
+
 def test_snap_to_moves_points_into_the_nearest_allowed_cell_within_the_tolerance():
     """Cells left of x = 0.5 are allowed. A point on that line, or just right of it, read
     from a cell on the right, moves to the allowed cell that holds it best (largest
