@@ -31,6 +31,46 @@ from fe_mpm._dolfinx import dolfinx
 POINT_WEIGHT = 10
 
 
+class RebalanceRule:
+    """When a run repartitions its grid: past an imbalance, once the imbalance has paid.
+
+    Due when the imbalance (the most points on a rank over the mean) exceeds
+    ``above`` and the time the imbalance has cost since the last repartition exceeds
+    what that repartition cost: a step of ``step_time`` seconds on the busiest rank
+    would take about 1/imbalance of it balanced. A repartition's cost is taken as
+    twice its own time, as the next step builds the forms and the solver again
+    (measured about as long). So a flow that keeps unbalancing the ranks is not
+    repartitioned at every step. Its inputs must be the same on every rank.
+
+    Args:
+        above: The imbalance (> 1) past which a repartition may be due; None: never.
+    """
+
+    def __init__(self, above: float | None):
+        self.above = above
+        self.restart()
+
+    @property
+    def on(self) -> bool:
+        """Whether the run ever repartitions."""
+        return self.above is not None
+
+    def restart(self) -> None:
+        """Nothing lost, nothing paid (at set-up and after a restore): due at once."""
+        self._lost, self._cost = 0.0, 0.0
+
+    def due(self, imbalance: float, step_time: float = 0.0) -> bool:
+        """Whether to repartition after a step of ``step_time`` s at ``imbalance``."""
+        if self.above is None:
+            return False
+        self._lost += step_time * (1.0 - 1.0 / imbalance)
+        return imbalance > self.above and self._lost >= self._cost
+
+    def paid(self, seconds: float) -> None:
+        """A repartition took ``seconds`` (the slowest rank's)."""
+        self._lost, self._cost = 0.0, 2.0 * seconds
+
+
 def cell_weights(num_cells: int, cells: np.ndarray) -> np.ndarray:
     """The METIS weight of each owned cell: 1 + :data:`POINT_WEIGHT` × its points.
 

@@ -248,8 +248,7 @@ class Simulation:
         self.ghost = GhostStabilisation(self.fields, gamma, material.mu) if gamma else None
         #: Grid repartitions so far (:meth:`rebalance`).
         self.repartitions = 0
-        self.rebalance_above = model_checks.check_rebalance(rebalance_above)
-        self._lost_to_imbalance = self._rebalance_cost = 0.0  # s, see _rebalance_if_due
+        self.rebalancing = balance.RebalanceRule(model_checks.check_rebalance(rebalance_above))
         if self._rebalance_if_due(imbalance(mesh.comm, len(points))):
             self._track()
         if output_dir is not None:  # on the grid the run starts on
@@ -334,7 +333,7 @@ class Simulation:
             CheckpointError: It is of another fe-mpm version or scene, or corrupted.
         """
         checkpoint.read(self, path)
-        self._lost_to_imbalance = self._rebalance_cost = 0.0  # a partition for these points
+        self.rebalancing.restart()  # a partition for these points
         if self._rebalance_if_due(imbalance(self.mesh.comm, len(self.points))):
             self._track(self.step_number, self.t)
 
@@ -383,27 +382,12 @@ class Simulation:
         self._add_time("rebalance", t0)
 
     def _rebalance_if_due(self, point_imbalance: float, step_time: float = 0.0) -> bool:
-        """:meth:`rebalance` if it is due, as ``rebalance_above`` says; whether it did.
-
-        Due when the imbalance exceeds ``rebalance_above`` and the time the imbalance
-        has cost since the last repartition exceeds what that repartition cost: a
-        step of ``step_time`` seconds on the busiest rank would take about
-        1/imbalance of it balanced. A repartition's cost is taken as twice its own
-        time, as the next step builds the forms and the solver again (measured about
-        as long). So a flow that keeps unbalancing the ranks is not repartitioned at
-        every step. Collective: the inputs are the same on every rank.
-        """
-        if self.rebalance_above is None:
-            return False
-        self._lost_to_imbalance += step_time * (1.0 - 1.0 / point_imbalance)
-        if point_imbalance <= self.rebalance_above:
-            return False
-        if self._lost_to_imbalance < self._rebalance_cost:
+        """:meth:`rebalance` if :class:`~fe_mpm.balance.RebalanceRule` says so; whether it did."""
+        if not self.rebalancing.due(point_imbalance, step_time):
             return False
         t0 = time.perf_counter()
         self.rebalance()
-        self._rebalance_cost = 2.0 * parallel.largest(self.mesh.comm, time.perf_counter() - t0)
-        self._lost_to_imbalance = 0.0
+        self.rebalancing.paid(parallel.largest(self.mesh.comm, time.perf_counter() - t0))
         return True
 
     def marker(self, name: str) -> np.ndarray:
@@ -458,7 +442,7 @@ class Simulation:
                     self.checkpoint()
                 if on_step is not None:  # on the grid of the step
                     on_step(report)
-                if t_end - self.t > END_OF_RUN * nominal:  # another step follows
+                if self.rebalancing.on and t_end - self.t > END_OF_RUN * nominal:
                     took = parallel.largest(self.mesh.comm, took)  # the same on every rank
                     report.repartitioned = self._rebalance_if_due(report.point_imbalance, took)
                 length.accepted()

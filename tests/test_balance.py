@@ -89,4 +89,16 @@ def test_one_rank_never_repartitions():
     mesh = sim.mesh
     sim.rebalance()
     assert sim.mesh is mesh and sim.repartitions == 0
-    assert _block(rebalance_above=None).rebalance_above is None
+    assert not _block().rebalancing.on
+
+
+def test_a_repartition_is_due_past_the_imbalance_once_the_imbalance_has_paid_for_the_last():
+    rule = balance.RebalanceRule(1.25)
+    assert not rule.due(1.2, 10.0)  # balanced enough
+    assert rule.due(2.0, 1.0)  # nothing paid yet: at once
+    rule.paid(0.5)  # it took 0.5 s: costs 1 s with the next step's rebuilding
+    assert not rule.due(2.0, 1.0)  # 0.5 s lost so far
+    assert rule.due(2.0, 1.0)  # 1 s lost
+    rule.restart()
+    assert rule.due(1.5, 0.0)
+    assert not balance.RebalanceRule(None).due(10.0, 100.0)
