@@ -1,11 +1,14 @@
 """Load balance: the grid partitioned by the points its cells hold, not by its cells.
 
 DOLFINx gives each rank about as many cells as the others, but MPM points fill part
-of the grid only (a column collapse starts in a corner of it), and the work of a
-step — tracking, packing, the return map, the assembly — goes with the points. A
-rank owns the points in its cells, so :func:`repartitioned` builds the same grid
-again with a partition from METIS (through ``pymetis``) of the cells' dual graph,
-each cell weighted by the points it holds (:func:`cell_weights`).
+of the grid only (a column collapse starts in a corner of it), and part of the work
+of a step goes with the points: tracking, packing, the return map, the assembly
+over occupied cells. The rest goes with the grid (the matrix keeps the pattern of
+every cell, empty nodes are pinned), which is why it does not always pay
+(docs/limitations.md). A rank owns the points in its cells, so
+:func:`repartitioned` builds the same grid again with a partition from METIS
+(through ``pymetis``) of the cells' dual graph, each cell weighted by the points it
+holds (:func:`cell_weights`).
 
 The new grid keeps every cell's original index (``mesh.topology.original_cell_index``)
 and every node's input index, so a cell is the same cell on any partition:
@@ -127,7 +130,7 @@ def repartitioned(mesh: dolfinx.mesh.Mesh, weights: np.ndarray) -> dolfinx.mesh.
     if comm.rank == 0:
         try:
             all_cells, x, parts = _partitioned(gathered, comm.size, tdim, gdim)
-        except (ValueError, MemoryError) as err:
+        except (ValueError, RuntimeError, MemoryError) as err:  # METIS's own included
             error = err
     parallel.raise_together(comm, error)  # rank 0 alone may fail; the others would wait
     destinations = dolfinx.graph.adjacencylist(parts)
