@@ -194,7 +194,6 @@ class Simulation:
         model_checks.check_serial_only(
             mesh.comm,
             {
-                f"formulation {formulation!r}": formulation not in ("u", "up"),
                 "point_domains=True": bool(point_domains),
                 "a ghost penalty": bool(ghost_penalty),
             },
@@ -516,7 +515,9 @@ class Simulation:
             need, volume = self.spec.min_points_per_cell, self.points.volume
             self.ghost.update(layout.cell, volume, self.tracker.volumes, bcs, need)
             tied = self.ghost.tied_cells()
-        check_points_per_cell(layout, self.spec, self.step_number, self.tracker.centroids, tied)
+        check_points_per_cell(
+            layout, self.spec, self.step_number, self.tracker.centroids, tied, self.mesh.comm
+        )
 
         t0 = time.perf_counter()
         boundary = None if self._boundary is None else self._boundary.locate(layout.occupied, t_new)

@@ -169,13 +169,14 @@ def check_points_per_cell(
     step_number: int,
     centroids: np.ndarray,
     tied: np.ndarray | None = None,
+    comm=None,
 ) -> None:
     """Refuse a layout with fewer points in an occupied cell than the formulation needs.
 
     ``spec.min_points_per_cell`` is 3 for P2/P1 (the rank of the P2 strain) and 1
     otherwise; ``centroids`` (cells, g) locate the cell named in the message. Cells
     in ``tied`` (those the ghost penalty ties to a neighbour, :mod:`fe_mpm.ghost`)
-    may hold fewer.
+    may hold fewer. Under MPI (``comm``) every rank raises when one finds such a cell.
 
     Raises:
         ValueError: At set-up (``step_number`` 0): seed more points.
@@ -183,14 +184,27 @@ def check_points_per_cell(
             the singular tangent, to a wrong answer (Cook's membrane over 20 steps: 0.17
             for 1.30), so the run stops.
     """
-    need, formulation = spec.min_points_per_cell, spec.name
+    need = spec.min_points_per_cell
     if need <= 1:
         return
     counts = np.bincount(layout.cell)[layout.occupied]
     if tied is not None:
         counts[np.isin(layout.occupied, tied)] = need
-    if counts.min() >= need:
+    error = (
+        None
+        if counts.min(initial=need) >= need
+        else _too_few(counts, need, layout, spec, step_number, centroids)
+    )
+    if comm is None:
+        if error is not None:
+            raise error
         return
+    parallel.raise_together(comm, error)
+
+
+def _too_few(counts, need, layout, spec, step_number, centroids) -> Exception:
+    """The error of a layout with cells of fewer than ``need`` points (counts per occupied cell)."""
+    formulation = spec.name
     few = int(np.sum(counts < need))
     worst = layout.occupied[np.argmin(counts)]
     message = (
@@ -200,8 +214,8 @@ def check_points_per_cell(
         "neighbour: the quadratic displacement then has strain modes no point sees."
     )
     if step_number == 0:
-        raise ValueError(f"Simulation: {message} Seed more points per cell.")
-    raise ConvergenceError(
+        return ValueError(f"Simulation: {message} Seed more points per cell.")
+    return ConvergenceError(
         f"step {step_number + 1}: {message} The points no longer support the "
         "unknowns; use point_domains=True, a ghost_penalty > 0 (it holds a cell tied "
         "by facets to cells with enough points), more points per cell, or the 'up' "

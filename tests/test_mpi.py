@@ -40,11 +40,12 @@ rank = MPI.COMM_WORLD.rank
 out = folder / f"rank{rank}_{MPI.COMM_WORLD.size}.json"
 
 def cook(formulation, n, steps, load=1 / 16, margin=None, fail_at=(), restore=None,
-         repartition=False, **options):
+         repartition=False, per_cell=1, **options):
     if margin is None:
         margin = 0 if steps == 1 else max(1, -(-n // 16))
     scene = meshes.cook_membrane(n=n, margin=margin)
-    points = fe_mpm.seed(scene.mesh, per_cell=1, density=1000.0, cells=meshes.body_cells(scene))
+    points = fe_mpm.seed(scene.mesh, per_cell=per_cell, density=1000.0,
+                         cells=meshes.body_cells(scene))
     sim = fe_mpm.Simulation(
         scene.mesh, points, fe_mpm.NeoHookean(E=70.0, nu=0.499, density=1000.0),
         formulation=formulation, facet_tags=scene.facet_tags,
@@ -139,6 +140,7 @@ try:
         result = {f"{f} {n} {k}": cook(f, n, k) for f, n, k in
                   (("u", 16, 1), ("up", 16, 1), ("up", 8, 4), ("u", 8, 4))}
         result["output"] = cook("up", 8, 2, output_dir=folder / f"out{MPI.COMM_WORLD.size}")
+        result["up-p2p1 8 2"] = cook("up-p2p1", 8, 2, per_cell=3)  # Taylor-Hood
         for f in ("u", "up") if MPI.COMM_WORLD.size < 3 else ():  # GAMG; Schur field split
             result[f"{f} 16 1 iterative"] = cook(f, 16, 1, linear_solver="iterative")
     elif case == "crossing":
@@ -162,6 +164,9 @@ try:
         result = falling_block("lumped", 5, restore=folder / "ck")
     elif case == "leaving":
         cook("up", 8, 4, load=5 / 16, margin=0)
+        result = "finished"
+    elif case == "too few":
+        cook("up-p2p1", 8, 10, load=5 / 16, margin=4, per_cell=3, min_step=0.05)
         result = "finished"
     elif case == "refused":
         scene = meshes.cook_membrane(n=4)
@@ -220,7 +225,8 @@ def _run(tmp_path: Path, case: str, ranks: int) -> list:
 
 
 def test_cook_on_two_and_three_ranks_gives_the_serial_answer(tmp_path):
-    """Cook u and u-p (one step at n = 16, four at n = 8) on 1, 2 and 3 ranks; its
+    """Cook u and u-p (one step at n = 16, four at n = 8) and P2/P1 (two steps at n =
+    8, three points per cell) on 1, 2 and 3 ranks; its
     point output on 2 ranks: a piece per rank, every point once; and one step with the
     iterative solvers on 1 and 2 ranks."""
     runs = {ranks: _run(tmp_path, "cook", ranks) for ranks in (1, 2, 3)}
@@ -241,7 +247,7 @@ def test_cook_on_two_and_three_ranks_gives_the_serial_answer(tmp_path):
 
 def _check_cook(serial: dict, runs: list, ranks: int) -> None:
     for rank, result in enumerate(runs):
-        for case in ("u 16 1", "up 16 1", "up 8 4", "u 8 4"):
+        for case in ("u 16 1", "up 16 1", "up 8 4", "u 8 4", "up-p2p1 8 2"):
             want, got = serial[case], result[case]
             assert got["iterations"] == want["iterations"], (case, rank)
             # The same on every rank. The clamp's horizontal force is zero to Newton's
@@ -385,6 +391,16 @@ def test_a_point_that_leaves_the_grid_stops_every_rank_with_one_message(tmp_path
     assert all(line["error"] == "PointsOutsideError" for line in lines), lines
     assert all("in none of the 2 MPI ranks' cells" in x["message"] for x in lines)
     assert all("Pass points_leaving='drop'" in x["message"] for x in lines)
+
+
+def test_a_p2_cell_left_with_too_few_points_stops_every_rank_with_one_message(tmp_path):
+    """P2/P1 needs three points in every occupied cell; at 5 N Cook's points leave
+    some cells with fewer, on one rank: every rank stops, the serial way."""
+    (serial,) = _run(tmp_path, "too few", 1)
+    lines = _run(tmp_path, "too few", 2)
+    assert serial["error"] == "ConvergenceError" and "needs at least 3" in serial["message"]
+    assert all(line["error"] == "ConvergenceError" for line in lines), lines
+    assert all("needs at least 3 material points" in x["message"] for x in lines)
 
 
 def test_a_feature_not_yet_distributed_is_refused_on_every_rank(tmp_path):
