@@ -221,7 +221,6 @@ class Simulation:
         self.t, self.step_number = 0.0, 0
 
         t0 = time.perf_counter()
-        self.points_leaving = points_leaving
         self.markers = Markers(mesh.comm)
         self.ladder = RetryLadder(fallback_line_search, bool(fallback_hold_cells))
         # What the grid's objects are built from, again after a repartition.
@@ -231,6 +230,7 @@ class Simulation:
             "dynamics": (damping, petsc_options),
             "ppp_alpha": ppp_alpha,
             "mass": mass,
+            "points_leaving": points_leaving,
         }
         self.tracking: PointTracking | None = None
         self._boundary: BoundaryPointStep | None = None
@@ -256,14 +256,15 @@ class Simulation:
     def _set_grid(self, mesh: dolfinx.mesh.Mesh, facet_tags) -> None:
         """Build everything that lives on the grid: at set-up and after a repartition.
 
-        The point tracking and the boundary points keep their state; the rest is new.
+        The point tracking and the boundary points keep their state and take the new
+        grid's tracker; the rest is new.
         """
         self.mesh, self.facet_tags = mesh, facet_tags
         self.tracker = Tracker(mesh)
-        tracking = PointTracking(self.tracker, self.points_leaving)
-        if self.tracking is not None:
-            tracking._nslot, tracking.dropped = self.tracking._nslot, self.tracking.dropped
-        self.tracking = tracking
+        if self.tracking is None:
+            self.tracking = PointTracking(self.tracker, self._given["points_leaving"])
+        else:
+            self.tracking.tracker = self.tracker
         self.fields = GridFields(mesh, self.spec)
         self.dynamics = None
         if self.dynamic:
@@ -273,12 +274,8 @@ class Simulation:
         self.conditions._warned_share = self._conditions_warned  # warned once per run
         if self._boundary is None:
             self._boundary = BoundaryPointStep.of(self._given["boundary"], self.tracker)
-        else:  # the same points, now on this grid
-            old, self._boundary = (
-                self._boundary,
-                BoundaryPointStep(self._boundary.points, self.tracker),
-            )
-            self._boundary._nslot, self._boundary._warned = old._nslot, old._warned
+        else:
+            self._boundary.tracker = self.tracker
         ppp = None
         if self.spec.ppp:
             ppp = PPPData.on_grid(mesh, self.tracker.centroids, self._given["ppp_alpha"])
