@@ -168,15 +168,16 @@ def check_points_per_cell(
     spec: FormulationSpec,
     step_number: int,
     centroids: np.ndarray,
-    tied: np.ndarray | None = None,
-    comm=None,
+    tied: np.ndarray | None,
+    comm,
 ) -> None:
     """Refuse a layout with fewer points in an occupied cell than the formulation needs.
 
     ``spec.min_points_per_cell`` is 3 for P2/P1 (the rank of the P2 strain) and 1
     otherwise; ``centroids`` (cells, g) locate the cell named in the message. Cells
     in ``tied`` (those the ghost penalty ties to a neighbour, :mod:`fe_mpm.ghost`)
-    may hold fewer. Under MPI (``comm``) every rank raises when one finds such a cell.
+    may hold fewer. Collective over ``comm``: every rank raises when one finds such a
+    cell.
 
     Raises:
         ValueError: At set-up (``step_number`` 0): seed more points.
@@ -195,10 +196,6 @@ def check_points_per_cell(
         if counts.min(initial=need) >= need
         else _too_few(counts, need, layout, spec, step_number, centroids)
     )
-    if comm is None:
-        if error is not None:
-            raise error
-        return
     parallel.raise_together(comm, error)
 
 
