@@ -158,7 +158,7 @@ finally:
 u_A = sim.marker("A") - np.array(meshes.COOK_POINT_A)
 iterations = [r.newton_iterations for r in reports]
 wall = time.perf_counter() - START
-n_points = scene.mesh.comm.allreduce(len(points))  # each rank holds those of its cells
+n_points = parallel.total(scene.mesh.comm, len(points))  # each rank holds those of its cells
 # The published numbers are for structured meshes with one point per triangle, E = 70
 # and (UP+PPP) the PPP factor 1.
 kratos_setup = (

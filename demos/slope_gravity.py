@@ -171,8 +171,8 @@ sim.add_marker("crest", crest)
 # reaction over the weight at that load.
 
 # +
-weight = comm.allreduce(points.mass.sum()) * G  # each rank holds its cells' points
-n_points = comm.allreduce(len(points))
+weight = parallel.total(comm, points.mass.sum()) * G  # each rank holds its cells' points
+n_points = parallel.total(comm, len(points))
 
 
 def report_step(r: fe_mpm.StepReport) -> None:

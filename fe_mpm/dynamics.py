@@ -157,11 +157,11 @@ class NewmarkDynamics:
         mass_matrix.bind(layout).assemble_matrix(M)
         rows = np.flatnonzero(constrained[self.u_dofs]).astype(np.int32)
         rhs.x.array[rows] = 0.0
-        # PETSc numbers rows globally; each rank zeroes the rows it owns.
+        # PETSc numbers rows globally; each rank zeroes the rows it owns, which are
+        # its local rows shifted by the start of its range.
         index_map, bs = self.space.dofmap.index_map, self.space.dofmap.index_map_bs
         owned = rows[rows < index_map.size_local * bs]
-        global_rows = index_map.local_to_global(owned // bs) * bs + owned % bs
-        M.zeroRowsColumns(global_rows.astype(PETSc.IntType), 1.0)
+        M.zeroRowsColumns((M.getOwnershipRange()[0] + owned).astype(PETSc.IntType), 1.0)
         a0 = dolfinx.fem.Function(self.space)
         ksp = PETSc.KSP().create(M.comm)
         try:

@@ -36,9 +36,7 @@ class Markers:
     def add(self, name: str, x: np.ndarray, points_x: np.ndarray) -> None:
         """Add a marker at ``x`` (g,), hosted by the nearest of the points ``points_x`` (n, g)."""
         distance = np.linalg.norm(points_x - x, axis=1)
-        nearest = float(distance.min(initial=np.inf))
-        if self.comm.size > 1:
-            nearest = self.comm.allreduce(nearest, op=MPI.MIN)
+        nearest = parallel.smallest(self.comm, float(distance.min(initial=np.inf)))
         # Points as near as the nearest to round-off (a symmetric seeding has many): the
         # one at the lowest position, lexicographically, so that the host is the same
         # whatever the points' order and their ranks.

@@ -33,6 +33,11 @@ def total(comm: MPI.Comm, value):
     return _reduced(comm, value, MPI.SUM)
 
 
+def smallest(comm: MPI.Comm, value):
+    """The minimum of ``value`` (a number, or an array elementwise) over the ranks."""
+    return _reduced(comm, value, MPI.MIN)
+
+
 def largest(comm: MPI.Comm, value):
     """The maximum of ``value`` (a number, or an array elementwise) over the ranks."""
     return _reduced(comm, value, MPI.MAX)
@@ -53,7 +58,8 @@ def _reduced(comm: MPI.Comm, value, op: MPI.Op):
 def gathered(comm: MPI.Comm, values: np.ndarray) -> np.ndarray:
     """Every rank's rows of ``values`` (n_rank, ...), in rank order, on every rank.
 
-    For diagnostics over all points (a plot, a stress profile), not for the step.
+    For what every rank needs whole: diagnostics over all points (a plot, a stress
+    profile) and the boundary points, which every rank holds; not for the step's points.
     """
     if comm.size == 1:
         return values

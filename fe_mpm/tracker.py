@@ -12,8 +12,6 @@ from __future__ import annotations
 
 import math
 
-from mpi4py import MPI
-
 import numpy as np
 
 from fe_mpm import parallel
@@ -286,10 +284,7 @@ class Tracker:
 
 def _lowest_rank(comm, flag: np.ndarray) -> np.ndarray:
     """Per point, the lowest rank where ``flag`` is set; ``comm.size`` where none (n,)."""
-    mine = np.where(flag, comm.rank, comm.size).astype(np.int64)
-    out = np.empty_like(mine)
-    comm.Allreduce(mine, out, op=MPI.MIN)
-    return out
+    return parallel.smallest(comm, np.where(flag, comm.rank, comm.size).astype(np.int64))
 
 
 def _facet_neighbours(nodes_of: np.ndarray) -> np.ndarray:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from fe_mpm import parallel
 from fe_mpm._dolfinx import dolfinx
 
 
@@ -63,6 +64,4 @@ def facet_points(
 
 def _from_every_rank(comm, x: np.ndarray, weight: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The points and weights of all ranks, in rank order, on every rank."""
-    if comm.size == 1:
-        return x, weight
-    return np.vstack(comm.allgather(x)), np.concatenate(comm.allgather(weight))
+    return parallel.gathered(comm, x), parallel.gathered(comm, weight)
