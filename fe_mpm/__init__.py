@@ -21,7 +21,13 @@ from fe_mpm import _dolfinx  # noqa: F401, I001
 from fe_mpm.boundary import Dirichlet, PointDirichlet, PointTraction, Traction
 from fe_mpm.checkpoint import CheckpointError
 from fe_mpm.errors import ConvergenceError, PointsOutsideError
-from fe_mpm.materials import J2Plasticity, MohrCoulomb, NeoHookean
+from fe_mpm.materials import (
+    DruckerPrager,
+    J2Plasticity,
+    ModifiedDruckerPrager,
+    MohrCoulomb,
+    NeoHookean,
+)
 from fe_mpm.particles import MaterialPoints, merge, seed
 from fe_mpm.report import StepReport
 from fe_mpm.simulation import Simulation
@@ -32,8 +38,10 @@ __all__ = [
     "CheckpointError",
     "ConvergenceError",
     "Dirichlet",
+    "DruckerPrager",
     "J2Plasticity",
     "MaterialPoints",
+    "ModifiedDruckerPrager",
     "MohrCoulomb",
     "NeoHookean",
     "PointDirichlet",

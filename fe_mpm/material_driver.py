@@ -129,3 +129,79 @@ class MaterialDriver:
         for name in self.history:
             self.history[name] = result[name]
         return result["tau"]
+
+
+def cauchy_stress(tau: np.ndarray, F: np.ndarray) -> np.ndarray:
+    """σ = τ/J (n, 3, 3), Pa, of Kirchhoff stresses (n, 3, 3) and F (n, g, g)."""
+    J = np.linalg.det(F)
+    return tau / J[:, None, None]
+
+
+def mixed_control(
+    driver: MaterialDriver,
+    F: np.ndarray,
+    free: list[tuple[int, int]],
+    held: dict[tuple[int, int], float],
+    tolerance: float = 1e-10,
+    max_iterations: int = 50,
+) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """Solve for the ``free`` entries of F so that the ``held`` Cauchy stresses are met.
+
+    A mixed-control material driver (Mast 2013, §3.8): some entries of the
+    deformation gradient are prescribed (those of ``F`` not listed in ``free``),
+    and as many Cauchy stress components as there are free entries are held.
+    Newton's Jacobian is the law's own tangent, ∂σ_ab/∂F_ij = (∂τ_ab/∂ΔF_im
+    (F_n⁻¹)_jm)/J − σ_ab (F⁻ᵀ)_ij, solved in the least-squares sense (on a
+    singular return two free entries may move together).
+
+    Args:
+        driver: A one-point driver (``n=1``) at its committed state F_n.
+        F: The deformation gradient to go to (g, g): the prescribed entries, and a
+            start for the free ones.
+        free: The entries (i, j) to solve for.
+        held: Stress component (a, b) -> its Cauchy stress (Pa); as many as ``free``.
+        tolerance: Stop when every held component is met to this fraction of the
+            largest held stress (or of 1 Pa if they are all zero).
+        max_iterations: Newton iterations before giving up.
+
+    Returns:
+        The deformation gradient (g, g) and the law's result there
+        (:meth:`MaterialDriver.evaluate`, for one point), with ``sigma`` (3, 3) added.
+
+    Raises:
+        RuntimeError: Newton did not meet the held stresses.
+    """
+    if driver.n != 1:
+        raise ValueError(f"mixed_control: the driver must have n = 1 point, got n = {driver.n}")
+    if len(free) != len(held):
+        raise ValueError(
+            f"mixed_control: as many held stresses as free entries are needed, got "
+            f"{len(held)} held and {len(free)} free"
+        )
+    F = np.array(F, dtype=np.float64)
+    Fn_inv = np.linalg.inv(driver.F[0])
+    targets = np.array(list(held.values()), dtype=np.float64)
+    scale = max(np.abs(targets).max(initial=0.0), 1.0)
+    residual = np.full(len(held), np.inf)
+    for _ in range(max_iterations):
+        result = driver.evaluate(F[None])
+        sigma = cauchy_stress(result["tau"], F[None])[0]
+        residual = np.array([sigma[a, b] for a, b in held]) - targets
+        if np.abs(residual).max() <= tolerance * scale:
+            return F, {**{k: v[0] for k, v in result.items()}, "sigma": sigma}
+        D = result["tangent"][0]  # ∂τ_ab/∂ΔF_im, in-plane block
+        J = np.linalg.det(F)
+        F_inv_T = np.linalg.inv(F).T
+        jacobian = np.array(
+            [
+                [D[a, b, i] @ Fn_inv[j] / J - sigma[a, b] * F_inv_T[i, j] for i, j in free]
+                for a, b in held
+            ]
+        )
+        step = np.linalg.lstsq(jacobian, -residual, rcond=1e-12)[0]
+        for (i, j), s in zip(free, step, strict=True):
+            F[i, j] += s
+    raise RuntimeError(
+        f"mixed_control: the held stresses were not met in {max_iterations} iterations "
+        f"(residual {np.abs(residual).max():.3g} Pa against {tolerance * scale:.3g} Pa)"
+    )

@@ -291,6 +291,58 @@ def test_slope_under_rising_gravity_fails_near_the_slip_circle(tmp_path):
     assert out["check_passed"]
 
 
+@pytest.mark.parametrize(
+    "law, path", [("dp-modified", "shear"), ("dp-modified", "biaxial"), ("dp", "biaxial")]
+)
+def test_material_paths_json_contract_and_masts_critical_state(tmp_path, law, path):
+    """Mast §3.8: the dense sand peaks, softens and reaches a critical state; the
+    JSON carries the curves as equal-length lists; the plot is written."""
+    out = tmp_path / "out"
+    stdout = run_demo(
+        "material_paths.py",
+        "--law",
+        law,
+        "--path",
+        path,
+        "--steps",
+        "200",
+        "--output",
+        str(out),
+        "--json",
+        cwd=tmp_path,
+    )
+    summary = _last_json(stdout)
+    stress = "sigma_12" if path == "shear" else "sigma_22"
+    lengths = {len(summary[k]) for k in ("lambda", "p", "q", "eps_v", stress, "strain")}
+    assert lengths == {200}
+    assert summary["check_passed"] and summary["lambda"][-1] > 0.5
+    assert np.all(np.diff(summary["lambda"]) >= 0.0)
+    assert (out / f"{law}_{path}.png").stat().st_size > 1000
+    if law == "dp-modified":
+        # σ₁₁ = σ₂₂ (shear) or σ₁₁ = σ₃₃ (biaxial) are held at p₀ = −150 kPa
+        assert summary["checks"]["peak / end of the driven stress"] > 1.2
+
+
+def test_material_paths_loose_sand_does_not_soften(tmp_path):
+    """Negative control: Mast's loose sand (Table 3.5, iii) has no peak, so the
+    dense sand's check fails and the demo exits 1."""
+    stdout = run_demo(
+        "material_paths.py",
+        "--sand",
+        "loose",
+        "--steps",
+        "100",
+        "--output",
+        str(tmp_path),
+        "--json",
+        cwd=tmp_path,
+        fails=True,
+    )
+    summary = _last_json(stdout)
+    assert not summary["check_passed"]
+    assert summary["checks"]["peak / end of the driven stress"] < 1.01
+
+
 def test_a_demo_whose_result_is_off_its_reference_exits_non_zero(tmp_path):
     """Every demo ends by checking its headline result against its reference. The
     tension test in the irreducible form at ν = 0.4999 locks: its limit load

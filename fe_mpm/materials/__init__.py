@@ -10,10 +10,12 @@ through ``updated_history``. :mod:`.protocol` states the contract:
 ``history``, ``updated_history``), :class:`~.protocol.MixedLaw` for the u-p
 formulations (``kirchhoff_deviatoric``: the pressure is a field), and
 :class:`~.protocol.PointwiseLaw` for laws integrated in principal space
-(:class:`MohrCoulomb`), whose ``return_map(dF, history)`` runs in numpy and whose UFL
-stress is the linearisation at the current Newton iterate (:mod:`.linearised`).
+(:class:`MohrCoulomb`, :class:`DruckerPrager`, :class:`ModifiedDruckerPrager`), whose
+``return_map(dF, history)`` runs at the points (compiled) and whose UFL stress is the
+linearisation at the current Newton iterate (:mod:`.linearised`).
 """
 
+from fe_mpm.materials.drucker_prager import DruckerPrager, ModifiedDruckerPrager
 from fe_mpm.materials.elastic import NeoHookean, embed_3d, in_plane
 from fe_mpm.materials.j2 import J2Plasticity
 from fe_mpm.materials.linearised import Linearisation, ReturnMapResult
@@ -22,11 +24,13 @@ from fe_mpm.materials.protocol import Law, MixedLaw, PointwiseLaw
 from fe_mpm.materials.state import HistoryField, PointState
 
 __all__ = [
+    "DruckerPrager",
     "HistoryField",
     "J2Plasticity",
     "Law",
     "Linearisation",
     "MixedLaw",
+    "ModifiedDruckerPrager",
     "MohrCoulomb",
     "NeoHookean",
     "PointState",

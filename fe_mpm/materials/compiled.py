@@ -167,11 +167,74 @@ def _return(eps, a, C, k, m, two_c_sqrt_k, p1, p2, apex, has_apex, tolerance, y,
     return region
 
 
+def trial_decomposition(dF: np.ndarray, b_n: np.ndarray) -> tuple[bool, np.ndarray, np.ndarray]:
+    """Whether the loops decompose b^tr in closed form (plane strain), else its eigen-pairs.
+
+    Args:
+        dF: Deformation gradient increments (n, g, g).
+        b_n: b^e at t_n (n, 3, 3).
+
+    Returns:
+        ``plane``, and the eigenvalues (n, 3) and eigenvectors (n, 3, 3) of
+        b^tr = ΔF b_n ΔFᵀ from the numpy route (LAPACK: numba's own needs SciPy),
+        empty when ``plane``.
+    """
+    n, g = dF.shape[0], dF.shape[1]
+    plane = g == 2 and not (b_n[:, 2, :2].any() or b_n[:, :2, 2].any())
+    if plane:
+        return True, np.zeros((0, 3)), np.zeros((0, 3, 3))
+    F3 = np.tile(np.eye(3), (n, 1, 1))
+    F3[:, :g, :g] = dF
+    b = F3 @ b_n @ np.swapaxes(F3, 1, 2)
+    # A non-finite trial (an inverted iterate) gives NaN, as in plane strain, for
+    # Newton to report; LAPACK would raise instead.
+    finite = np.isfinite(b).all(axis=(1, 2))
+    x_given, Q_given = np.full((n, 3), np.nan), np.full((n, 3, 3), np.nan)
+    x_given[finite], Q_given[finite] = spectral_decomposition(b[finite])
+    return False, x_given, Q_given
+
+
+@jit
+def trial_point(p, dF, b_n, x_given, Q_given, plane, F3, x, Q, b, work):
+    """b^tr of point ``p`` into ``b``, ΔF embedded in 3D into ``F3[p]``, its eigen-pairs.
+
+    ``x[p]`` (descending) and ``Q[p]`` (columns) are written; ``work`` is a (3, 3)
+    scratch array.
+    """
+    g = dF.shape[1]
+    for i in range(3):
+        F3[p, i, i] = 1.0
+    for i in range(g):
+        for j in range(g):
+            F3[p, i, j] = dF[p, i, j]
+    _product(F3[p], b_n[p], work, False)
+    _product(work, F3[p], b, True)
+    if plane:
+        _plane_eigen(b, x[p], Q[p])
+    else:
+        for A in range(3):
+            x[p, A] = x_given[p, A]
+            for i in range(3):
+                Q[p, i, A] = Q_given[p, i, A]
+
+
+@jit
+def from_principal_point(Q, values, out):
+    """Σ_A v_A n_A⊗n_A of one point into ``out`` (3, 3); ``values`` a 3-tuple or (3,)."""
+    for i in range(3):
+        for j in range(3):
+            out[i, j] = (
+                Q[i, 0] * values[0] * Q[j, 0]
+                + Q[i, 1] * values[1] * Q[j, 1]
+                + Q[i, 2] * values[2] * Q[j, 2]
+            )
+
+
 @jit
 def _mohr_coulomb_loop(
     dF, b_n, x_given, Q_given, plane, a, C, k, m, two_c_sqrt_k, p1, p2, apex, has_apex, tolerance
 ):
-    n, g = dF.shape[0], dF.shape[1]
+    n = dF.shape[0]
     tau = np.zeros((n, 3, 3))
     be = np.zeros((n, 3, 3))
     increment = np.zeros(n)
@@ -183,31 +246,12 @@ def _mohr_coulomb_loop(
     D = np.zeros((n, 3, 3))
     work, b = np.zeros((3, 3)), np.zeros((3, 3))
     for p in range(n):
-        for i in range(3):
-            F3[p, i, i] = 1.0
-        for i in range(g):
-            for j in range(g):
-                F3[p, i, j] = dF[p, i, j]
-        _product(F3[p], b_n[p], work, False)
-        _product(work, F3[p], b, True)
-        if plane:
-            _plane_eigen(b, x[p], Q[p])
-        else:
-            for A in range(3):
-                x[p, A] = x_given[p, A]
-                for i in range(3):
-                    Q[p, i, A] = Q_given[p, i, A]
+        trial_point(p, dF, b_n, x_given, Q_given, plane, F3, x, Q, b, work)
         eps = (0.5 * math.log(x[p, 0]), 0.5 * math.log(x[p, 1]), 0.5 * math.log(x[p, 2]))
         region[p] = _return(
             eps, a, C, k, m, two_c_sqrt_k, p1, p2, apex, has_apex, tolerance, y[p], D[p]
         )
-        for i in range(3):
-            for j in range(3):
-                tau[p, i, j] = (
-                    Q[p, i, 0] * y[p, 0] * Q[p, j, 0]
-                    + Q[p, i, 1] * y[p, 1] * Q[p, j, 1]
-                    + Q[p, i, 2] * y[p, 2] * Q[p, j, 2]
-                )
+        from_principal_point(Q[p], y[p], tau[p])
         if region[p] == ELASTIC:  # b^e_{n+1} = b^tr, no plastic strain
             for i in range(3):
                 for j in range(3):
@@ -219,13 +263,7 @@ def _mohr_coulomb_loop(
                 math.exp(2.0 * strain_e[1]),
                 math.exp(2.0 * strain_e[2]),
             )
-            for i in range(3):
-                for j in range(3):
-                    be[p, i, j] = (
-                        Q[p, i, 0] * stretch[0] * Q[p, j, 0]
-                        + Q[p, i, 1] * stretch[1] * Q[p, j, 1]
-                        + Q[p, i, 2] * stretch[2] * Q[p, j, 2]
-                    )
+            from_principal_point(Q[p], stretch, be[p])
             s = 0.0
             for A in range(3):
                 s += (eps[A] - strain_e[A]) ** 2
@@ -249,21 +287,9 @@ def mohr_coulomb_points(
         the eigenvalues ``x`` (n, 3), eigenvectors ``Q`` (n, 3, 3), ``F3`` (n, 3, 3),
         principal stresses ``y`` (n, 3) and ``dy_deps`` = ∂y/∂ε^tr (n, 3, 3).
     """
-    n, g = dF.shape[0], dF.shape[1]
     dF = np.ascontiguousarray(dF, dtype=float)
     b_n = np.ascontiguousarray(b_n, dtype=float)
-    plane = g == 2 and not (b_n[:, 2, :2].any() or b_n[:, :2, 2].any())
-    if plane:
-        x_given, Q_given = np.zeros((0, 3)), np.zeros((0, 3, 3))
-    else:  # the numpy route's decomposition (LAPACK: numba's own needs SciPy)
-        F3 = np.tile(np.eye(3), (n, 1, 1))
-        F3[:, :g, :g] = dF
-        b = F3 @ b_n @ np.swapaxes(F3, 1, 2)
-        # A non-finite trial (an inverted iterate) gives NaN, as in plane strain, for
-        # Newton to report; LAPACK would raise instead.
-        finite = np.isfinite(b).all(axis=(1, 2))
-        x_given, Q_given = np.full((n, 3), np.nan), np.full((n, 3, 3), np.nan)
-        x_given[finite], Q_given[finite] = spectral_decomposition(b[finite])
+    plane, x_given, Q_given = trial_decomposition(dF, b_n)
     k, m = surface.k, surface.m
     p1, p2 = surface.line_points()
     apex = surface.apex()

@@ -1,0 +1,324 @@
+r"""Finite-strain Drucker–Prager plasticity on Hencky strains: Mast (2013) §3.6.
+
+Two laws share the cone-and-cutoff return of :mod:`~fe_mpm.materials.cone_return`
+(the step and its algorithm in that module's docstring), integrated like
+:class:`~fe_mpm.materials.MohrCoulomb`: :math:`b^{tr} = \Delta F\, b^e_n\, \Delta F^T`,
+principal Hencky strains, the return, :math:`b^e_{n+1} = \exp(2\varepsilon^e)`, and the
+exact tangent :math:`\partial\tau/\partial\Delta F` for Newton.
+
+- :class:`DruckerPrager`, the traditional two-surface model (§3.6.1): the cone
+  matched to Mohr-Coulomb's compression meridian (Eq. 3.107),
+  :math:`\varrho_F = \sqrt{2/3}\,2\sin\varphi/(3-\sin\varphi)` and
+  :math:`\kappa = \sqrt{2/3}\,6c\cos\varphi/(3-\sin\varphi)`, the tension cutoff at its
+  apex :math:`I_1 = 3c\cot\varphi`, and linear isotropic hardening of the cone.
+- :class:`ModifiedDruckerPrager`, the cone with evolving friction and dilatancy
+  angles (§3.6.3–3.6.4, Eqs. 3.112–3.116), semi-implicit (§3.3.3): the angles are
+  taken at the state of t_n and frozen over the step, so the step is the
+  traditional return with those angles, and its tangent is exact for it.
+
+Kirchhoff stresses, tension positive (compression negative, as in Mast);
+:math:`I_1 = \operatorname{tr}\tau`, :math:`s = \operatorname{dev}\tau`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import ufl
+
+from fe_mpm.materials.elastic import IsotropicModuli, in_plane
+from fe_mpm.materials.linearised import ReturnMapResult
+from fe_mpm.materials.principal_return import YIELD_TOLERANCE
+from fe_mpm.materials.state import HistoryField, PointState
+
+_SQRT_2_3 = math.sqrt(2.0 / 3.0)
+
+
+def cone_slope(angle: np.ndarray | float) -> np.ndarray | float:
+    """ϱ = √(2/3) 2 sin θ/(3 − sin θ) of an angle θ in degrees (Eqs. 3.107, 3.109)."""
+    s = np.sin(np.radians(angle))
+    return _SQRT_2_3 * 2.0 * s / (3.0 - s)
+
+
+class _ConeLaw(IsotropicModuli):
+    """What both cone laws share: the compiled return, the linearised UFL stress."""
+
+    def _cone_parameters(self, history: dict[str, np.ndarray]):
+        """(ϱ_F, ϱ_G, κ, T) per point at t_n, κ with the hardening of α_n; k."""
+        raise NotImplementedError
+
+    def _updated(self, history: dict[str, np.ndarray], dgamma: np.ndarray) -> dict:
+        """The scalar internal variables at t_{n+1} from Δγ₁ (n,)."""
+        raise NotImplementedError
+
+    def return_map(self, dF: np.ndarray, history: dict[str, np.ndarray]) -> ReturnMapResult:
+        """Stress, tangent and history at t_{n+1} for step increments ΔF.
+
+        Args:
+            dF: Deformation gradient increments (n, g, g).
+            history: The law's internal variables at t_n (``be`` (n, 3, 3) and its scalars).
+        """
+        # Imported here: numba only when a law first runs (as for Mohr-Coulomb).
+        from fe_mpm.materials import compiled
+        from fe_mpm.materials.cone_return import cone_points
+
+        b_n = history["be"]
+        rho_F, rho_G, kappa, T, k = self._cone_parameters(history)
+        out = cone_points(
+            dF, b_n, self.bulk_modulus, self.mu, rho_F, rho_G, kappa, T, k, YIELD_TOLERANCE
+        )
+
+        def tangent() -> np.ndarray:
+            with np.errstate(invalid="ignore", divide="ignore"):
+                dy_dx = out["dy_deps"] / (2.0 * out["x"][:, None, :])
+            return compiled.spectral_derivative(
+                out["x"], out["Q"], out["y"], dy_dx, out["F3"], b_n, dF.shape[1]
+            )
+
+        return ReturnMapResult(
+            tau=out["tau"],
+            derivative=tangent,
+            region=out["region"],
+            history={"be": out["be"], **self._updated(history, out["dgamma"])},
+        )
+
+    def kirchhoff(self, F: ufl.core.expr.Expr, state: PointState) -> ufl.core.expr.Expr:
+        """The linearised return-map stress τ (Pa), shape of ``F``."""
+        return in_plane(self._linearised(state), ufl.shape(F)[0])
+
+    def kirchhoff_deviatoric(self, F: ufl.core.expr.Expr, state: PointState) -> ufl.core.expr.Expr:
+        """Dev τ (Pa), shape of ``F`` (pressure-independent cones only: ``check_formulation``)."""
+        return in_plane(ufl.dev(self._linearised(state)), ufl.shape(F)[0])
+
+    def _linearised(self, state: PointState) -> ufl.core.expr.Expr:
+        if state is None or state.linearisation is None:
+            raise ValueError(
+                f"{type(self).__name__}: the state has no linearisation slot fields; the "
+                "law is evaluated at the points (return_map) by the simulation"
+            )
+        return state.linearisation.kirchhoff(state.dF)
+
+    def updated_history(self, F: ufl.core.expr.Expr, state: PointState) -> dict:
+        """Nothing in UFL: :meth:`return_map` gives the history."""
+        return {}
+
+    def yield_functions(
+        self, tau: np.ndarray, history: dict[str, np.ndarray]
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """F₁ (cone) and F₂ (cutoff), Pa, of stresses (n, 3, 3) with the parameters of ``history``.
+
+        ``history`` is the state the parameters are taken from: t_n's for the
+        returned stress of a step (the angles are frozen over it), with the
+        plastic strain of t_{n+1} for the hardening.
+        """
+        I1 = np.trace(tau, axis1=1, axis2=2)
+        s = tau - I1[:, None, None] / 3.0 * np.eye(3)
+        norm = np.sqrt(np.einsum("nij,nij->n", s, s))
+        rho_F, _, kappa, T, _ = self._cone_parameters(history)
+        return norm + rho_F * I1 - kappa, I1 - T
+
+
+@dataclass(frozen=True)
+class DruckerPrager(_ConeLaw):
+    """Hencky-elastic Drucker–Prager solid with a tension cutoff (Mast 2013, §3.6.1).
+
+    The cone passes through Mohr-Coulomb's compression corners (Eq. 3.107); ``φ = 0``
+    gives von Mises with ‖s‖ ≤ 2√(2/3) c. The cone hardens linearly with the
+    equivalent plastic strain α (``hardening`` k: ‖s‖ at I₁ = 0 grows by √(2/3) k α);
+    the cutoff stays at the initial apex I₁ = 3c cot φ.
+
+    Args:
+        E: Young's modulus (Pa), > 0.
+        nu: Poisson's ratio, in (-1, 0.5).
+        cohesion: c (Pa), ≥ 0; > 0 when the friction angle is 0.
+        friction_angle: φ in degrees, in [0, 90).
+        dilatancy_angle: ψ in degrees, in [0, φ]; ψ = φ is associative.
+        hardening: k (Pa), ≥ 0.
+        density: Reference mass density ρ₀ (kg/m³), > 0, or None to take it from the
+            points.
+    """
+
+    E: float
+    nu: float
+    cohesion: float
+    friction_angle: float = 0.0
+    dilatancy_angle: float = 0.0
+    hardening: float = 0.0
+    density: float | None = None
+
+    def __post_init__(self) -> None:
+        self._check_moduli()
+        self._check("cohesion", lo=0.0)
+        self._check("friction_angle", lo=0.0, hi=90.0, hi_open=True)
+        self._check("dilatancy_angle", lo=0.0, hi=self.friction_angle)
+        self._check("hardening", lo=0.0)
+        if self.density is not None:
+            self._check("density", lo=0.0, lo_open=True)
+        if self.friction_angle == 0.0 and self.cohesion == 0.0:
+            raise ValueError(
+                "DruckerPrager: cohesion must be > 0 when friction_angle = 0 "
+                "(the material would have no strength), got 0"
+            )
+
+    @property
+    def history(self) -> dict[str, HistoryField]:
+        """Elastic left Cauchy–Green tensor and equivalent plastic strain."""
+        return {
+            "be": HistoryField((3, 3), np.eye(3), "elastic left Cauchy-Green bᵉ"),
+            "plastic_strain": HistoryField(
+                (), 0.0, "equivalent plastic strain α = Σ √(2/3)‖dev Δεᵖ‖ (Hencky)"
+            ),
+        }
+
+    @property
+    def apex(self) -> float:
+        """I₁ at the cone's initial apex and the cutoff, 3c cot φ (Pa); inf for φ = 0."""
+        if self.friction_angle == 0.0:
+            return math.inf
+        return 3.0 * self.cohesion / math.tan(math.radians(self.friction_angle))
+
+    def check_formulation(self, pressure: bool) -> None:
+        """The mixed forms take the pressure from a field: only φ = 0 (von Mises) fits them."""
+        if pressure and self.friction_angle > 0.0:
+            raise ValueError(
+                "DruckerPrager: the u-p formulations need a pressure-independent, isochoric "
+                f"law, i.e. friction_angle = 0 (von Mises); got φ = {self.friction_angle:g}°. "
+                "Use formulation='u'."
+            )
+
+    def _cone_parameters(self, history):
+        phi = self.friction_angle
+        sin_phi = math.sin(math.radians(phi))
+        kappa0 = _SQRT_2_3 * 6.0 * self.cohesion * math.cos(math.radians(phi)) / (3.0 - sin_phi)
+        kappa = kappa0 + _SQRT_2_3 * self.hardening * history["plastic_strain"]
+        rho_F, rho_G = cone_slope(phi), cone_slope(self.dilatancy_angle)
+        return rho_F, rho_G, kappa, self.apex, self.hardening
+
+    def _updated(self, history, dgamma):
+        return {"plastic_strain": history["plastic_strain"] + _SQRT_2_3 * dgamma}
+
+
+#: Mast (2013) Table 3.5, the constants of the evolving angles (degrees), with a₂
+#: converted from 1/kPa to 1/Pa: dense, moderately dense and loose sand.
+MAST_TABLE_3_5 = {
+    "dense": dict(a0=20.0, a1=7750.0, a2=3.33e-7, a3=150.0, a4=20.0, a5=300.0),
+    "moderately dense": dict(a0=20.0, a1=2000.0, a2=1.67e-8, a3=100.0, a4=20.0, a5=100.0),
+    "loose": dict(a0=20.0, a1=0.0, a2=0.0, a3=70.0, a4=20.0, a5=50.0),
+}
+
+
+@dataclass(frozen=True)
+class ModifiedDruckerPrager(_ConeLaw):
+    r"""Drucker–Prager with evolving friction and dilatancy angles (Mast 2013, §3.6.3–3.6.4).
+
+    The mobilised friction angle and the critical-state angle (degrees, Eqs. 3.113–3.114)
+
+    .. math::
+
+        \varphi_F = a_0 + (a_1\lambda - a_4)\, e^{a_2 I_1 - a_3\lambda}, \qquad
+        \varphi_{cs} = a_0 - a_4 e^{-a_5\lambda}, \qquad
+        \tan\psi_G = \tan\varphi_F - \tan\varphi_{cs}
+
+    set the cone's slopes ϱ_F and ϱ_G (Eqs. 3.107, 3.109, 3.112; ψ_G < 0 contracts).
+    The cone's apex stays at τ = c_F 1 (I₁ = 3c_F), where the tension cutoff is. The
+    plastic measure λ grows by Δλ = ‖Δγ dev g‖ (the third option of Eq. 3.116): the
+    plastic shear strain, which is what softens and hardens a sand; it does not feed
+    the volume change (which ψ_G sets) back into the angles that set it, and at the
+    critical state (ψ_G = 0) it equals the first option. The angles are taken at
+    t_n (I₁ of τ_n, λ_n) and frozen over a step: the semi-implicit return of §3.3.3.
+
+    Args:
+        E: Young's modulus (Pa), > 0.
+        nu: Poisson's ratio, in (-1, 0.5).
+        a0: The final value of both φ_F and φ_cs (degrees), in [a4, 90).
+        a1: Peak height and rate, ≥ 0.
+        a2: Pressure sensitivity of φ_F (1/Pa), ≥ 0 (Mast's Table 3.5 gives 1/kPa).
+        a3: Width of φ_F's curve, ≥ 0; > 0 when a1 > 0.
+        a4: a0 − a4 is the initial friction angle (degrees), in [0, a0].
+        a5: Rate of φ_cs, ≥ 0.
+        apex_stress: c_F (Pa), ≥ 0: the apex of the cone, τ = c_F 1.
+        density: Reference mass density ρ₀ (kg/m³), > 0, or None to take it from the
+            points.
+    """
+
+    E: float
+    nu: float
+    a0: float
+    a1: float
+    a2: float
+    a3: float
+    a4: float
+    a5: float
+    apex_stress: float = 0.0
+    density: float | None = None
+
+    def __post_init__(self) -> None:
+        self._check_moduli()
+        self._check("a4", lo=0.0, hi=90.0, hi_open=True)
+        self._check("a0", lo=self.a4, hi=90.0, hi_open=True)
+        for name in ("a1", "a2", "a3", "a5", "apex_stress"):
+            self._check(name, lo=0.0)
+        if self.a1 > 0.0 and self.a3 == 0.0:
+            raise ValueError(
+                "ModifiedDruckerPrager: a3 must be > 0 when a1 > 0 (φ_F would grow "
+                "without bound), got 0"
+            )
+        peak = self.a0 + self._largest_rise() * math.exp(self.a2 * 3.0 * self.apex_stress)
+        if peak >= 90.0:
+            raise ValueError(
+                "ModifiedDruckerPrager: a0 + max over λ of (a1 λ − a4) exp(a2 I1 − a3 λ) must "
+                f"stay below 90°; the constants give φ_F up to {peak:.4g}°"
+            )
+        if self.density is not None:
+            self._check("density", lo=0.0, lo_open=True)
+
+    def _largest_rise(self) -> float:
+        """The largest (a1 λ − a4) e^{−a3 λ} over λ ≥ 0 (degrees)."""
+        if self.a1 == 0.0:
+            return 0.0
+        top = 1.0 / self.a3 + self.a4 / self.a1
+        return max(self.a1 / self.a3 * math.exp(-self.a3 * top), 0.0)
+
+    @property
+    def history(self) -> dict[str, HistoryField]:
+        """Elastic left Cauchy–Green tensor and Mast's plastic measure λ."""
+        return {
+            "be": HistoryField((3, 3), np.eye(3), "elastic left Cauchy-Green bᵉ"),
+            "plastic_shear": HistoryField(
+                (), 0.0, "plastic measure λ = Σ ‖dev Δεᵖ‖ (Hencky; Mast Eq. 3.116)"
+            ),
+        }
+
+    def check_formulation(self, pressure: bool) -> None:
+        """The mixed forms take the pressure from a field; this law depends on it."""
+        if pressure:
+            raise ValueError(
+                "ModifiedDruckerPrager: the u-p formulations need a pressure-independent, "
+                "isochoric law; this one depends on the pressure. Use formulation='u'."
+            )
+
+    def angles(
+        self, I1: np.ndarray, plastic_shear: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """φ_F, φ_cs and ψ_G (degrees) at I₁ (Pa) and λ, each (n,)."""
+        lam = plastic_shear
+        phi_F = self.a0 + (self.a1 * lam - self.a4) * np.exp(self.a2 * I1 - self.a3 * lam)
+        phi_cs = self.a0 - self.a4 * np.exp(-self.a5 * lam)
+        psi = np.degrees(np.arctan(np.tan(np.radians(phi_F)) - np.tan(np.radians(phi_cs))))
+        return phi_F, phi_cs, psi
+
+    def _cone_parameters(self, history):
+        # I₁ of τ_n = 3K ε_v of bᵉ_n (Hencky): ε_v = ½ ln det bᵉ_n.
+        I1 = 1.5 * self.bulk_modulus * np.log(np.linalg.det(history["be"]))
+        # The state is admissible (I₁ ≤ 3c_F) except by round-off; clip so that the
+        # angles stay within the bounds checked at construction.
+        I1 = np.minimum(I1, 3.0 * self.apex_stress)
+        phi_F, _, psi = self.angles(I1, history["plastic_shear"])
+        rho_F, rho_G = cone_slope(phi_F), cone_slope(psi)
+        T = 3.0 * self.apex_stress
+        return rho_F, rho_G, rho_F * T, np.full_like(rho_F, T), 0.0
+
+    def _updated(self, history, dgamma):
+        return {"plastic_shear": history["plastic_shear"] + dgamma}
