@@ -18,9 +18,12 @@
 # - build the grid with gmsh and convert it with `dolfinx.io.gmsh.model_to_mesh`,
 # - seed only the cells of one physical group (`seed(cells=cell_tags.find(...))`),
 # - ramp gravity with `body_force_scale`, and read the reaction on the base,
-# - follow a point with a marker and read Newton's verdict in each `StepReport`.
+# - follow a point with a marker and read Newton's verdict in each `StepReport`,
+# - swap the law: `--law drucker-prager` takes the Drucker–Prager cone that gives
+#   Mohr-Coulomb's plane-strain collapse stress (`match="plane strain"`).
 #
-# Usage: `python demos/slope_gravity.py [--h 0.5] [--steps 12] [--g-max 1.2] [--json]`;
+# Usage: `python demos/slope_gravity.py [--h 0.5] [--steps 12] [--g-max 1.2]
+# [--law mohr-coulomb|drucker-prager] [--json]`;
 # `mpiexec -n 2 python -m mpi4py demos/slope_gravity.py` shares the grid and its points
 # among the ranks (rank 0 builds the gmsh model and prints).
 #
@@ -62,6 +65,12 @@ def parse_args(argv=None):
     p.add_argument("--g-max", type=float, default=1.2, help="final gravity, in units of g")
     p.add_argument("--steps", type=int, default=12, help="load steps from 0 to g-max")
     p.add_argument("--per-cell", type=int, default=3, help="points per triangle")
+    p.add_argument(
+        "--law",
+        choices=("mohr-coulomb", "drucker-prager"),
+        default="mohr-coulomb",
+        help="the soil's law (the same c, φ, ψ)",
+    )
     p.add_argument("--json", action="store_true", help="print a JSON summary as the last line")
     return p.parse_args(argv)
 
@@ -131,9 +140,11 @@ mesh, cell_tags = slope_grid(args.h)
 # base is the whole weight, since the rollers carry no vertical force.
 
 # +
-soil = fe_mpm.MohrCoulomb(
-    E=10e6, nu=0.3, cohesion=10e3, friction_angle=20.0, dilatancy_angle=0.0, density=2000.0
-)
+strength = dict(cohesion=10e3, friction_angle=20.0, dilatancy_angle=0.0)
+if args.law == "mohr-coulomb":
+    soil = fe_mpm.MohrCoulomb(E=10e6, nu=0.3, **strength, density=2000.0)
+else:  # the cone through Mohr-Coulomb's plane-strain limit (the default cone is stronger)
+    soil = fe_mpm.DruckerPrager(E=10e6, nu=0.3, **strength, density=2000.0, match="plane strain")
 points = fe_mpm.seed(mesh, per_cell=args.per_cell, cells=cell_tags.find(SOIL))
 
 

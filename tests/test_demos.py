@@ -291,6 +291,20 @@ def test_slope_under_rising_gravity_fails_near_the_slip_circle(tmp_path):
     assert out["check_passed"]
 
 
+def test_slope_with_the_plane_strain_drucker_prager_cone_fails_near_the_slip_circle(tmp_path):
+    """The same slope with `--law drucker-prager` (the cone through Mohr-Coulomb's
+    plane-strain limit): measured, the knee at 0.90 g on h = 1 m and on h = 0.5 m
+    (Mohr-Coulomb: 1.00 g and 0.90 g); the default outer cone does not fail by 1.2 g."""
+    out = _last_json(
+        run_demo(
+            "slope_gravity.py", "--h", "1.0", "--law", "drucker-prager", "--json", cwd=tmp_path
+        )
+    )
+    assert out["steps"] == 12 and out["worst_relative_residual"] <= 1e-10
+    assert abs(out["knee"] / out["bishop"] - 1.0) < 0.25
+    assert out["check_passed"]
+
+
 @pytest.mark.parametrize(
     "law, path", [("dp-modified", "shear"), ("dp-modified", "biaxial"), ("dp", "biaxial")]
 )

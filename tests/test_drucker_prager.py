@@ -347,3 +347,26 @@ def test_a_cone_of_no_width_keeps_a_compressed_point_on_its_axis():
     deviator = result.tau - mean[:, None, None] * np.eye(3)
     assert np.abs(deviator).max() < 1e-9 * abs(expected)
     assert np.all(result.region[2:] == CONE)  # 1e-19 is lost in b = F Fᵀ: elastic
+
+
+@pytest.mark.parametrize("phi", [30.0, 0.0])
+def test_plane_strain_match_reaches_mohr_coulombs_plane_strain_limit(phi):
+    """Associated flow in plane strain: once flowing at a steady stress, ε_zz = 0 holds
+    the stress on the cone where it touches Mohr-Coulomb's plane-strain limit, so
+    σ_yy = −(k p₀ + 2c√k) with σ_xx = −p₀ held (Tresca's −(p₀ + 2c) at φ = 0)."""
+    law = fe_mpm.DruckerPrager(
+        **SOIL, friction_angle=phi, dilatancy_angle=phi, match="plane strain"
+    )
+    regions, taus, _ = confined_compression(law, 2, held=[0], compressed=[1], strain=0.1)
+    limit = -(k_of(phi) * P0 + 2 * SOIL["cohesion"] * np.sqrt(k_of(phi)))
+    assert regions[-1] == CONE
+    assert abs(taus[-1][1, 1] - limit) < 1e-10 * abs(limit)
+    # the outer cone (the default) is stronger in plane strain
+    outer = fe_mpm.DruckerPrager(**SOIL, friction_angle=phi, dilatancy_angle=phi)
+    _, outer_taus, _ = confined_compression(outer, 2, held=[0], compressed=[1], strain=0.1)
+    assert outer_taus[-1][1, 1] < 1.05 * limit
+
+
+def test_an_unknown_match_is_named():
+    with pytest.raises(ValueError, match="DruckerPrager: match must be one of 'compression'"):
+        fe_mpm.DruckerPrager(**SOIL, friction_angle=30.0, match="plane-strain")

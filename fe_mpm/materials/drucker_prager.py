@@ -36,10 +36,43 @@ from fe_mpm.materials.state import HistoryField, PointState
 _SQRT_2_3 = math.sqrt(2.0 / 3.0)
 
 
-def cone_slope(angle: np.ndarray | float) -> np.ndarray | float:
-    """ϱ = √(2/3) 2 sin θ/(3 − sin θ) of an angle θ in degrees (Eqs. 3.107, 3.109)."""
+#: Where the cone meets Mohr-Coulomb: its compression corners (outer cone, Mast
+#: Eq. 3.107), its extension corners (inner cone, 3 + sin φ), or the plane-strain
+#: limit of associated flow (√J₂ + α I₁ = k, α = tan φ/√(9 + 12 tan²φ), k = 3c/√(…)).
+MATCHES = ("compression", "extension", "plane strain")
+
+
+def cone_slope(angle: np.ndarray | float, match: str = "compression") -> np.ndarray | float:
+    """ϱ of F = ‖s‖ + ϱ I₁ − κ for an angle θ in degrees (Eqs. 3.107, 3.109).
+
+    ``compression``: ϱ = √(2/3) 2 sin θ/(3 − sin θ); ``extension``: 3 + sin θ;
+    ``plane strain``: ϱ = √2 tan θ/√(9 + 12 tan²θ).
+    """
+    if match == "plane strain":
+        t = np.tan(np.radians(angle))
+        return math.sqrt(2.0) * t / np.sqrt(9.0 + 12.0 * t**2)
     s = np.sin(np.radians(angle))
-    return _SQRT_2_3 * 2.0 * s / (3.0 - s)
+    return _SQRT_2_3 * 2.0 * s / (3.0 - s if match == "compression" else 3.0 + s)
+
+
+def cone_radius(cohesion: float, friction_angle: float, match: str = "compression") -> float:
+    """κ (Pa), the cone's ‖s‖ at I₁ = 0 for a cohesion c (Pa) and φ (degrees).
+
+    ``compression``: κ = √(2/3) 6c cos φ/(3 − sin φ); ``extension``: 3 + sin φ;
+    ``plane strain``: κ = √2 · 3c/√(9 + 12 tan²φ). In each the apex is at
+    I₁ = κ/ϱ = 3c cot φ.
+    """
+    phi = math.radians(friction_angle)
+    if match == "plane strain":
+        return math.sqrt(2.0) * 3.0 * cohesion / math.sqrt(9.0 + 12.0 * math.tan(phi) ** 2)
+    s = math.sin(phi)
+    return (
+        _SQRT_2_3
+        * 6.0
+        * cohesion
+        * math.cos(phi)
+        / (3.0 - s if match == "compression" else 3.0 + s)
+    )
 
 
 class _ConeLaw(IsotropicModuli):
@@ -124,10 +157,17 @@ class _ConeLaw(IsotropicModuli):
 class DruckerPrager(_ConeLaw):
     """Hencky-elastic Drucker–Prager solid with a tension cutoff (Mast 2013, §3.6.1).
 
-    The cone passes through Mohr-Coulomb's compression corners (Eq. 3.107); ``φ = 0``
-    gives von Mises with ‖s‖ ≤ 2√(2/3) c. The cone hardens linearly with the
-    equivalent plastic strain α (``hardening`` k: ‖s‖ at I₁ = 0 grows by √(2/3) k α);
-    the cutoff stays at the initial apex I₁ = 3c cot φ.
+    The cone passes through Mohr-Coulomb's compression corners (Eq. 3.107; the
+    default), its extension corners, or gives its plane-strain collapse stress for
+    associated flow (``match``, :data:`MATCHES`); ``φ = 0`` gives von Mises, with
+    ‖s‖ ≤ 2√(2/3) c (compression, extension) or √2 c (plane strain: Tresca's c_u).
+    Plane-strain scenes that should fail where Mohr-Coulomb does take
+    ``match="plane strain"``: the outer cone is stronger there (plane-strain
+    compression at φ = ψ = 30° ends at 2.65 times Mohr-Coulomb's stress, at φ = 0 at
+    1.08 times). The
+    cone hardens linearly with the equivalent plastic strain α (``hardening`` k: ‖s‖
+    at I₁ = 0 grows by √(2/3) k α); the cutoff stays at the initial apex
+    I₁ = 3c cot φ.
 
     Args:
         E: Young's modulus (Pa), > 0.
@@ -138,6 +178,8 @@ class DruckerPrager(_ConeLaw):
         hardening: k (Pa), ≥ 0.
         density: Reference mass density ρ₀ (kg/m³), > 0, or None to take it from the
             points.
+        match: Where the cone meets Mohr-Coulomb, one of :data:`MATCHES`; the
+            dilatancy cone follows the same rule with ψ.
     """
 
     E: float
@@ -147,6 +189,7 @@ class DruckerPrager(_ConeLaw):
     dilatancy_angle: float = 0.0
     hardening: float = 0.0
     density: float | None = None
+    match: str = "compression"
 
     def __post_init__(self) -> None:
         self._check_moduli()
@@ -156,6 +199,11 @@ class DruckerPrager(_ConeLaw):
         self._check("hardening", lo=0.0)
         if self.density is not None:
             self._check("density", lo=0.0, lo_open=True)
+        if self.match not in MATCHES:
+            raise ValueError(
+                f"DruckerPrager: match must be one of {', '.join(map(repr, MATCHES))}, "
+                f"got {self.match!r}"
+            )
         if self.friction_angle == 0.0 and self.cohesion == 0.0:
             raise ValueError(
                 "DruckerPrager: cohesion must be > 0 when friction_angle = 0 "
@@ -189,11 +237,10 @@ class DruckerPrager(_ConeLaw):
             )
 
     def _cone_parameters(self, history):
-        phi = self.friction_angle
-        sin_phi = math.sin(math.radians(phi))
-        kappa0 = _SQRT_2_3 * 6.0 * self.cohesion * math.cos(math.radians(phi)) / (3.0 - sin_phi)
+        kappa0 = cone_radius(self.cohesion, self.friction_angle, self.match)
         kappa = kappa0 + _SQRT_2_3 * self.hardening * history["plastic_strain"]
-        rho_F, rho_G = cone_slope(phi), cone_slope(self.dilatancy_angle)
+        rho_F = cone_slope(self.friction_angle, self.match)
+        rho_G = cone_slope(self.dilatancy_angle, self.match)
         return rho_F, rho_G, kappa, self.apex, self.hardening
 
     def _updated(self, history, dgamma):
