@@ -26,9 +26,12 @@
 #   (Figs. 3.8–3.11), and
 # - check each law against what must hold on its path (below).
 #
-# Laws: `dp-modified` (Mast §3.6.3–3.6.4), `dp` (the traditional cone, §3.6.1,
+# Laws: `dp-modified` (Mast §3.6.3–3.6.4), `mn-dp` (Matsuoka–Nakai yield with the
+# Drucker–Prager potential, §3.7, Mast's recommendation), `mn` (Matsuoka–Nakai's own
+# potential, attached at the stress), `dp` (the traditional cone, §3.6.1,
 # cohesionless, φ = 30°, ψ = 5°), `j2` (`J2Plasticity`, σ_Y = 100 kPa, H = 10 MPa).
-# Mast's Matsuoka–Nakai laws and the smooth-cap cone are not in fe-mpm yet.
+# The first three share Table 3.5's evolving angles. Mast's smooth-cap cone is not in
+# fe-mpm yet.
 #
 # Usage: `python demos/material_paths.py --law dp-modified --path shear --json`.
 
@@ -51,7 +54,8 @@ from fe_mpm import plotting
 from fe_mpm.material_driver import MaterialDriver, mixed_control
 from fe_mpm.materials.drucker_prager import MAST_TABLE_3_5, cone_slope
 
-LAWS = ("dp-modified", "dp", "j2")
+LAWS = ("dp-modified", "mn-dp", "mn", "dp", "j2")
+SANDS = ("dp-modified", "mn-dp", "mn")  # the laws with Mast's evolving angles
 E, NU, P0 = 75e6, 0.33, -150e3  # Pa, Mast §3.8
 YIELD_STRESS, HARDENING = 100e3, 10e6  # the J2 law's (Pa)
 PHI, PSI = 30.0, 5.0  # the traditional cone's angles (degrees)
@@ -66,7 +70,7 @@ def parse_args(argv=None):
         "--sand",
         choices=tuple(MAST_TABLE_3_5),
         default="dense",
-        help="Mast's Table 3.5 column (dp-modified)",
+        help="Mast's Table 3.5 column (dp-modified, mn-dp, mn)",
     )
     p.add_argument(
         "--strain",
@@ -95,6 +99,9 @@ args = parse_args()
 final_strain = args.strain or (0.8 if args.path == "shear" else 0.5)
 if args.law == "dp-modified":
     law = fe_mpm.ModifiedDruckerPrager(E, NU, **MAST_TABLE_3_5[args.sand])
+elif args.law in ("mn-dp", "mn"):
+    potential = "drucker-prager" if args.law == "mn-dp" else "matsuoka-nakai"
+    law = fe_mpm.MatsuokaNakai(E, NU, **MAST_TABLE_3_5[args.sand], potential=potential)
 elif args.law == "dp":
     law = fe_mpm.DruckerPrager(E, NU, cohesion=0.0, friction_angle=PHI, dilatancy_angle=PSI)
 else:
@@ -216,7 +223,7 @@ if plt is not None:
 
 # ## Check against what must hold
 #
-# - `dp-modified` (Mast §3.8): the driven stress peaks and softens (peak ≥ 1.2 × the
+# - `dp-modified`, `mn-dp`, `mn` (Mast §3.8): the driven stress peaks and softens (peak ≥ 1.2 × the
 #   end value), and the critical state is reached: by λ = 0.5 the volumetric strain
 #   rate dε_v/dλ is below 1e-3 of its peak, and the stress has stopped changing
 #   (the last 10 % of the path moves it by less than 1e-3). On the biaxial path the
@@ -239,7 +246,7 @@ rate = np.diff(eps_v)[flowing] / d_lambda[flowing]
 lam_mid = 0.5 * (lam[1:] + lam[:-1])[flowing]
 last = slice(int(0.9 * len(rows)), None)
 checks: dict[str, tuple[float, float, str]] = {}  # name -> (value, bound, relation)
-if args.law == "dp-modified":
+if args.law in SANDS:
     driven_stress = np.abs(curves[stress_key] - (P0 if args.path == "biaxial" else 0.0))
     at_half = np.abs(rate[lam_mid >= 0.5])
     tail = curves[stress_key][last]

@@ -24,6 +24,7 @@ from fe_mpm.errors import ConvergenceError, PointsOutsideError
 from fe_mpm.materials import (
     DruckerPrager,
     J2Plasticity,
+    MatsuokaNakai,
     ModifiedDruckerPrager,
     MohrCoulomb,
     NeoHookean,
@@ -41,6 +42,7 @@ __all__ = [
     "DruckerPrager",
     "J2Plasticity",
     "MaterialPoints",
+    "MatsuokaNakai",
     "ModifiedDruckerPrager",
     "MohrCoulomb",
     "NeoHookean",

@@ -10,7 +10,8 @@ through ``updated_history``. :mod:`.protocol` states the contract:
 ``history``, ``updated_history``), :class:`~.protocol.MixedLaw` for the u-p
 formulations (``kirchhoff_deviatoric``: the pressure is a field), and
 :class:`~.protocol.PointwiseLaw` for laws integrated in principal space
-(:class:`MohrCoulomb`, :class:`DruckerPrager`, :class:`ModifiedDruckerPrager`), whose
+(:class:`MohrCoulomb`, :class:`DruckerPrager`, :class:`ModifiedDruckerPrager`,
+:class:`MatsuokaNakai`), whose
 ``return_map(dF, history)`` runs at the points (compiled) and whose UFL stress is the
 linearisation at the current Newton iterate (:mod:`.linearised`).
 """
@@ -19,6 +20,7 @@ from fe_mpm.materials.drucker_prager import DruckerPrager, ModifiedDruckerPrager
 from fe_mpm.materials.elastic import NeoHookean, embed_3d, in_plane
 from fe_mpm.materials.j2 import J2Plasticity
 from fe_mpm.materials.linearised import Linearisation, ReturnMapResult
+from fe_mpm.materials.matsuoka_nakai import MatsuokaNakai
 from fe_mpm.materials.mohr_coulomb import MohrCoulomb
 from fe_mpm.materials.protocol import Law, MixedLaw, PointwiseLaw
 from fe_mpm.materials.state import HistoryField, PointState
@@ -29,6 +31,7 @@ __all__ = [
     "J2Plasticity",
     "Law",
     "Linearisation",
+    "MatsuokaNakai",
     "MixedLaw",
     "ModifiedDruckerPrager",
     "MohrCoulomb",

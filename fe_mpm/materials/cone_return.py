@@ -51,6 +51,9 @@ import math
 import numpy as np
 
 from fe_mpm.materials.compiled import (
+    _dot,
+    _matvec,
+    _vecmat,
     from_principal_point,
     jit,
     trial_decomposition,
@@ -172,7 +175,348 @@ def _cone_return(eps, K, G, rho_F, rho_G, kappa, T, k, tolerance, y, D):
 
 
 @jit
-def _cone_loop(dF, b_n, x_given, Q_given, plane, K, G, rho_F, rho_G, kappa, T, k, tolerance):
+def _mn_value(s0, s1, s2, kappa):
+    """Matsuoka–Nakai's F = 6κ Ī₃ + 3Ī₁‖s‖² − 2Ī₁³ = 6κ Π σ̄ + 3Ī₁ Σσ̄² − 3Ī₁³ (Eq. 3.120)."""
+    I1 = s0 + s1 + s2
+    return 6.0 * kappa * s0 * s1 * s2 + 3.0 * I1 * (s0 * s0 + s1 * s1 + s2 * s2) - 3.0 * I1**3
+
+
+@jit
+def _mn_gradient(s0, s1, s2, kappa):
+    """∂F/∂σ̄ of :func:`_mn_value`, principal (3-tuple)."""
+    I1 = s0 + s1 + s2
+    S2 = s0 * s0 + s1 * s1 + s2 * s2
+    common = 3.0 * S2 - 9.0 * I1 * I1
+    return (
+        6.0 * kappa * s1 * s2 + common + 6.0 * I1 * s0,
+        6.0 * kappa * s0 * s2 + common + 6.0 * I1 * s1,
+        6.0 * kappa * s0 * s1 + common + 6.0 * I1 * s2,
+    )
+
+
+@jit
+def _mn_hessian(s0, s1, s2, kappa, out):
+    """∂²F/∂σ̄² of :func:`_mn_value` (Mast Eq. 3.127 with the shift), into ``out`` (3, 3)."""
+    I1 = s0 + s1 + s2
+    s = (s0, s1, s2)
+    for i in range(3):
+        for j in range(3):
+            other = 0.0
+            if i != j:
+                other = 6.0 * kappa * s[3 - i - j]
+            out[i, j] = other + 6.0 * (s[i] + s[j]) - 18.0 * I1 + (6.0 * I1 if i == j else 0.0)
+
+
+@jit
+def _mn_outside(gamma, base, n, radius_tr, G, drop, kappa, scale3, tolerance):
+    """Whether the stress σ̄(Δγ) of the radial path lies outside the Matsuoka–Nakai cone.
+
+    σ̄(Δγ) = (base − drop Δγ) 1 + (‖s^tr‖ − 2GΔγ) n: the cone is the part of F ≤ 0
+    in the closed negative octant of σ̄.
+    """
+    r = radius_tr - 2.0 * G * gamma
+    m = base - drop * gamma
+    s0, s1, s2 = m + r * n[0], m + r * n[1], m + r * n[2]
+    if max(s0, s1, s2) > tolerance * scale3 ** (1.0 / 3.0):
+        return True
+    return _mn_value(s0, s1, s2, kappa) > tolerance * scale3
+
+
+@jit
+def _inverse3(A, out):
+    """The inverse of a (3, 3) array into ``out``."""
+    c00 = A[1, 1] * A[2, 2] - A[1, 2] * A[2, 1]
+    c01 = A[1, 2] * A[2, 0] - A[1, 0] * A[2, 2]
+    c02 = A[1, 0] * A[2, 1] - A[1, 1] * A[2, 0]
+    det = A[0, 0] * c00 + A[0, 1] * c01 + A[0, 2] * c02
+    out[0, 0] = c00 / det
+    out[1, 0] = c01 / det
+    out[2, 0] = c02 / det
+    out[0, 1] = (A[0, 2] * A[2, 1] - A[0, 1] * A[2, 2]) / det
+    out[1, 1] = (A[0, 0] * A[2, 2] - A[0, 2] * A[2, 0]) / det
+    out[2, 1] = (A[0, 1] * A[2, 0] - A[0, 0] * A[2, 1]) / det
+    out[0, 2] = (A[0, 1] * A[1, 2] - A[0, 2] * A[1, 1]) / det
+    out[1, 2] = (A[0, 2] * A[1, 0] - A[0, 0] * A[1, 2]) / det
+    out[2, 2] = (A[0, 0] * A[1, 1] - A[0, 1] * A[1, 0]) / det
+
+
+@jit
+def _mn_generator(theta, kappa, m):
+    """The Matsuoka–Nakai cone's generator at Lode angle θ through mean stress −1: ``m``.
+
+    m = −1 + r d(θ), d(θ) = cos θ (1, −1, 0)/√2 + sin θ (1, 1, −2)/√6 (a unit
+    deviator), and r the smallest positive root of F(m) = 0, a cubic in r:
+    −(6κ − 54) + (3κ − 9) r² + 6κ det(d) r³ (bisection, then Newton).
+    """
+    c, s = math.cos(theta), math.sin(theta)
+    d = (
+        c / math.sqrt(2.0) + s / math.sqrt(6.0),
+        -c / math.sqrt(2.0) + s / math.sqrt(6.0),
+        -2.0 * s / math.sqrt(6.0),
+    )
+    a0, a2, a3 = -(6.0 * kappa - 54.0), 3.0 * kappa - 9.0, 6.0 * kappa * d[0] * d[1] * d[2]
+    hi = math.sqrt(-a0 / a2)
+    while a0 + a2 * hi * hi + a3 * hi**3 <= 0.0:
+        hi *= 2.0
+    lo = 0.0
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        if a0 + a2 * mid * mid + a3 * mid**3 > 0.0:
+            hi = mid
+        else:
+            lo = mid
+    r = 0.5 * (lo + hi)
+    for A in range(3):
+        m[A] = -1.0 + r * d[A]
+
+
+@jit
+def _lode_directions(theta):
+    """The unit deviator d(θ) = cos θ (1, −1, 0)/√2 + sin θ (1, 1, −2)/√6 and dd/dθ."""
+    c, s = math.cos(theta), math.sin(theta)
+    a, b = 1.0 / math.sqrt(2.0), 1.0 / math.sqrt(6.0)
+    d = (c * a + s * b, -c * a + s * b, -2.0 * s * b)
+    dd = (-s * a + c * b, s * a + c * b, -2.0 * c * b)
+    return d, dd
+
+
+@jit
+def _mn_flow(theta, kappa_G, sign, g, dg):
+    """The flow of the Matsuoka–Nakai potential attached at a stress of Lode angle θ.
+
+    The potential is the κ_G cone through the stress (its apex where that puts it,
+    Mast §3.7), so its normal there is ∂G/∂σ at the cone's generator m_G(θ) =
+    −1 + r_G d(θ), the same at any distance from the apex. Scaled to a unit
+    deviatoric part (so Δγ is Δλ), with the volumetric part's sign that of ψ_G
+    (``sign``: κ_G holds only sin²ψ_G). At ψ_G = 0 (κ_G = 9) the cone is the axis and
+    the normal's limit is d(θ): no volume change. Writes ĝ into ``g`` and dĝ/dθ into
+    ``dg``.
+    """
+    d, dd = _lode_directions(theta)
+    if kappa_G - 9.0 <= 1e-12 * kappa_G:
+        for i in range(3):
+            g[i] = d[i]
+            dg[i] = dd[i]
+        return
+    m = np.empty(3)
+    _mn_generator(theta, kappa_G, m)
+    r = math.sqrt((m[0] + 1.0) ** 2 + (m[1] + 1.0) ** 2 + (m[2] + 1.0) ** 2)
+    a2 = 3.0 * kappa_G - 9.0
+    a3 = 6.0 * kappa_G * d[0] * d[1] * d[2]
+    da3 = 6.0 * kappa_G * (dd[0] * d[1] * d[2] + d[0] * dd[1] * d[2] + d[0] * d[1] * dd[2])
+    dr = -da3 * r**3 / (2.0 * a2 * r + 3.0 * a3 * r * r)
+    dm = (dr * d[0] + r * dd[0], dr * d[1] + r * dd[1], dr * d[2] + r * dd[2])
+    grad = _mn_gradient(m[0], m[1], m[2], kappa_G)
+    H = np.empty((3, 3))
+    _mn_hessian(m[0], m[1], m[2], kappa_G, H)
+    dgrad = _matvec(H, dm)
+    mean = (grad[0] + grad[1] + grad[2]) / 3.0
+    dmean = (dgrad[0] + dgrad[1] + dgrad[2]) / 3.0
+    dev = (grad[0] - mean, grad[1] - mean, grad[2] - mean)
+    ddev = (dgrad[0] - dmean, dgrad[1] - dmean, dgrad[2] - dmean)
+    N = math.sqrt(_dot(dev, dev))
+    dN = _dot(dev, ddev) / N
+    for i in range(3):
+        g[i] = dev[i] / N + sign * mean / N
+        dg[i] = ddev[i] / N - dev[i] * dN / N**2 + sign * (dmean / N - mean * dN / N**2)
+
+
+@jit
+def _mn_plane_gap(theta, kappa, kappa_G, sign, K, G, v, m, g, dg):
+    """det[m(θ), w(θ), v] with w = a ĝ(θ).
+
+    Zero where v lies in the plane of the yield cone's generator m(θ) and the flow
+    there. ``m``, ``g`` and ``dg`` are written.
+    """
+    _mn_generator(theta, kappa, m)
+    _mn_flow(theta, kappa_G, sign, g, dg)
+    mean = (K - 2.0 * G / 3.0) * (g[0] + g[1] + g[2])
+    w = (mean + 2.0 * G * g[0], mean + 2.0 * G * g[1], mean + 2.0 * G * g[2])
+    return (
+        m[0] * (w[1] * v[2] - w[2] * v[1])
+        - m[1] * (w[0] * v[2] - w[2] * v[0])
+        + m[2] * (w[0] * v[1] - w[1] * v[0])
+    )
+
+
+@jit
+def _matsuoka_nakai_return(eps, K, G, kappa, rho_G, kappa_G, T, tolerance, y, D):
+    """Matsuoka–Nakai yield with Drucker–Prager's flow or with its own potential's.
+
+    Drucker–Prager's (Mast's "MN with DP G") for ``kappa_G`` < 0, else the
+    Matsuoka–Nakai potential with κ_G ≥ 9.
+
+    The apex and the cutoff are at τ = (T/3) 1. With Drucker–Prager's flow
+    n + ϱ_G 1 the deviator keeps its direction (and the Lode angle), so the return
+    follows the line σ̄(Δγ) of :func:`_mn_outside` to where it enters the cone:
+    bisection on that line (the cone is convex and the line ends inside it, on the
+    axis), then Newton on F. Past the apex the point returns to it.
+
+    With the Matsuoka–Nakai potential attached at the stress (:func:`_mn_flow`) the
+    flow ĝ(θ) turns the deviator but depends on the Lode angle θ alone, so the
+    trials that return to the yield cone's generator m(θ) fill the wedge
+    {t m + Δγ a ĝ(θ): t, Δγ ≥ 0}: the return finds the θ whose wedge's plane holds
+    the trial (a root of :func:`_mn_plane_gap` near the trial's θ), then t and Δγ;
+    a trial in no wedge returns to the apex.
+
+    The tangent is D = A⁻¹ − (A⁻¹g)(∂Fᵀ A⁻¹)/(∂Fᵀ A⁻¹ g), A = a⁻¹ + Δγ ∂g/∂τ
+    (Drucker–Prager: ∂g/∂τ = (P − n nᵀ)/‖s‖; Matsuoka–Nakai: dĝ/dθ ⊗ d'(θ)/‖s‖), the
+    derivative of the return's equations at the solution. Both flows have a unit
+    deviatoric part: returns the region and Δλ = Δγ.
+    """
+    if kappa - 9.0 <= 1e-12 * kappa:
+        # φ_F = 0: the cone has no width, the hydrostatic axis (as Drucker–Prager's).
+        return _cone_return(eps, K, G, 0.0, rho_G, 0.0, T, 0.0, tolerance, y, D)
+    ev = eps[0] + eps[1] + eps[2]
+    e = (eps[0] - ev / 3.0, eps[1] - ev / 3.0, eps[2] - ev / 3.0)
+    norm_e = math.sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2])
+    I1 = 3.0 * K * ev
+    shift = T / 3.0
+    n = (0.0, 0.0, 0.0)
+    if norm_e > 0.0:
+        n = (e[0] / norm_e, e[1] / norm_e, e[2] / norm_e)
+    radius_tr = 2.0 * G * norm_e
+    base = I1 / 3.0 - shift  # the shifted mean stress of the trial
+    drop = 3.0 * K * rho_G  # how fast the mean stress falls with Δγ (Drucker–Prager flow)
+    scale = abs(base) + radius_tr
+    scale3 = scale * scale * scale
+    if not _mn_outside(0.0, base, n, radius_tr, G, drop, kappa, scale3, tolerance):
+        for A in range(3):
+            y[A] = K * ev + 2.0 * G * e[A]
+            for B in range(3):
+                D[A, B] = K + 2.0 * G * ((1.0 if A == B else 0.0) - 1.0 / 3.0)
+        return ELASTIC, 0.0
+    compliance_mean = 1.0 / (9.0 * K) - 1.0 / (6.0 * G)
+    A = np.empty((3, 3))
+    Ainv = np.empty((3, 3))
+    apex = False
+    if kappa_G < 0.0:
+        # At Δγ = ‖e‖ the line meets the axis: inside the cone if the shifted mean
+        # stress is compressive there, else the point returns to the apex.
+        if base - drop * norm_e >= -tolerance * scale:
+            apex = True
+        else:
+            lo, hi = 0.0, norm_e
+            for _ in range(40):
+                mid = 0.5 * (lo + hi)
+                if _mn_outside(mid, base, n, radius_tr, G, drop, kappa, scale3, tolerance):
+                    lo = mid
+                else:
+                    hi = mid
+            gamma = hi
+            direction = (drop + 2.0 * G * n[0], drop + 2.0 * G * n[1], drop + 2.0 * G * n[2])
+            for _ in range(20):
+                r = radius_tr - 2.0 * G * gamma
+                m = base - drop * gamma
+                s = (m + r * n[0], m + r * n[1], m + r * n[2])
+                value = _mn_value(s[0], s[1], s[2], kappa)
+                grad = _mn_gradient(s[0], s[1], s[2], kappa)
+                slope = -(grad[0] * direction[0] + grad[1] * direction[1] + grad[2] * direction[2])
+                # Converged to the returned stress's own size, which near the apex is
+                # far below the trial's.
+                size = abs(m) + r
+                if slope == 0.0 or abs(value) <= 1e-15 * size * size * size:
+                    break
+                step = gamma - value / slope
+                if step < lo or step > norm_e:  # stay on the part of the line inside
+                    break
+                gamma = step
+            radius = radius_tr - 2.0 * G * gamma
+            m = base - drop * gamma
+            for i in range(3):
+                y[i] = m + shift + radius * n[i]
+            s = (m + radius * n[0], m + radius * n[1], m + radius * n[2])
+            f_grad = _mn_gradient(s[0], s[1], s[2], kappa)
+            for i in range(3):
+                for j in range(3):
+                    P = (1.0 if i == j else 0.0) - 1.0 / 3.0
+                    A[i, j] = compliance_mean + (1.0 / (2.0 * G) if i == j else 0.0)
+                    A[i, j] += gamma * (P - n[i] * n[j]) / radius
+            g = (n[0] + rho_G, n[1] + rho_G, n[2] + rho_G)
+            dlambda = gamma
+    else:
+        v = (base + radius_tr * n[0], base + radius_tr * n[1], base + radius_tr * n[2])
+        theta_tr = math.atan2(
+            (n[0] + n[1] - 2.0 * n[2]) / math.sqrt(6.0), (n[0] - n[1]) / math.sqrt(2.0)
+        )
+        sign = 1.0 if rho_G >= 0.0 else -1.0
+        m_work, g_work, dg_work = np.empty(3), np.empty(3), np.empty(3)
+        # The nearest sign change of the gap on either side of the trial's θ.
+        samples = 24
+        width = math.pi / 3.0
+        found = False
+        lo = hi = theta_tr
+        if _mn_plane_gap(theta_tr, kappa, kappa_G, sign, K, G, v, m_work, g_work, dg_work) == 0.0:
+            found = True
+        for k in range(1, samples + 1):
+            if found:
+                break
+            for direction in (1.0, -1.0):
+                a = theta_tr + direction * width * (k - 1) / samples
+                b = theta_tr + direction * width * k / samples
+                gap_a = _mn_plane_gap(a, kappa, kappa_G, sign, K, G, v, m_work, g_work, dg_work)
+                gap_b = _mn_plane_gap(b, kappa, kappa_G, sign, K, G, v, m_work, g_work, dg_work)
+                if gap_a * gap_b <= 0.0:
+                    lo, hi, found = a, b, True
+                    break
+        if not found:
+            apex = True
+        else:
+            gap_lo = _mn_plane_gap(lo, kappa, kappa_G, sign, K, G, v, m_work, g_work, dg_work)
+            for _ in range(60):
+                mid = 0.5 * (lo + hi)
+                gap_mid = _mn_plane_gap(mid, kappa, kappa_G, sign, K, G, v, m_work, g_work, dg_work)
+                if gap_mid * gap_lo <= 0.0:
+                    hi = mid
+                else:
+                    lo, gap_lo = mid, gap_mid
+            theta = 0.5 * (lo + hi)
+            _mn_plane_gap(theta, kappa, kappa_G, sign, K, G, v, m_work, g_work, dg_work)
+            m = (m_work[0], m_work[1], m_work[2])
+            g = (g_work[0], g_work[1], g_work[2])
+            mean = (K - 2.0 * G / 3.0) * (g[0] + g[1] + g[2])
+            w = (mean + 2.0 * G * g[0], mean + 2.0 * G * g[1], mean + 2.0 * G * g[2])
+            # v = t m + Δγ w, in the least-squares sense (v lies in their plane).
+            mm, mw, ww = _dot(m, m), _dot(m, w), _dot(w, w)
+            mv, wv = _dot(m, v), _dot(w, v)
+            det = mm * ww - mw * mw
+            t = (ww * mv - mw * wv) / det
+            gamma = (mm * wv - mw * mv) / det
+            if t <= 0.0 or gamma < 0.0:
+                apex = True
+            else:
+                s = (t * m[0], t * m[1], t * m[2])
+                for i in range(3):
+                    y[i] = shift + s[i]
+                f_grad = _mn_gradient(s[0], s[1], s[2], kappa)
+                # ĝ depends on σ through θ only: ∂θ/∂σ = d'(θ)/‖s‖.
+                _, dd = _lode_directions(theta)
+                radius = t * math.sqrt((m[0] + 1.0) ** 2 + (m[1] + 1.0) ** 2 + (m[2] + 1.0) ** 2)
+                for i in range(3):
+                    for j in range(3):
+                        A[i, j] = compliance_mean + (1.0 / (2.0 * G) if i == j else 0.0)
+                        A[i, j] += gamma * dg_work[i] * dd[j] / radius
+                dlambda = gamma
+    if apex:
+        for i in range(3):
+            y[i] = shift
+            for j in range(3):
+                D[i, j] = 0.0
+        return CORNER, norm_e
+    _inverse3(A, Ainv)
+    Ag = _matvec(Ainv, g)
+    fA = _vecmat(f_grad, Ainv)
+    denominator = _dot(f_grad, Ag)
+    for i in range(3):
+        for j in range(3):
+            D[i, j] = Ainv[i, j] - Ag[i] * fA[j] / denominator
+    return CONE, dlambda
+
+
+@jit
+def _cone_loop(
+    dF, b_n, x_given, Q_given, plane, K, G, rho_F, rho_G, kappa, T, k, kappa_MN, kappa_G, tolerance
+):
     n = dF.shape[0]
     tau = np.zeros((n, 3, 3))
     be = np.zeros((n, 3, 3))
@@ -187,9 +531,15 @@ def _cone_loop(dF, b_n, x_given, Q_given, plane, K, G, rho_F, rho_G, kappa, T, k
     for p in range(n):
         trial_point(p, dF, b_n, x_given, Q_given, plane, F3, x, Q, b, work)
         eps = (0.5 * math.log(x[p, 0]), 0.5 * math.log(x[p, 1]), 0.5 * math.log(x[p, 2]))
-        region[p], dgamma[p] = _cone_return(
-            eps, K, G, rho_F[p], rho_G[p], kappa[p], T[p], k, tolerance, y[p], D[p]
-        )
+        if kappa_MN.shape[0] == 0:
+            region[p], dgamma[p] = _cone_return(
+                eps, K, G, rho_F[p], rho_G[p], kappa[p], T[p], k, tolerance, y[p], D[p]
+            )
+        else:
+            potential = -1.0 if kappa_G.shape[0] == 0 else kappa_G[p]
+            region[p], dgamma[p] = _matsuoka_nakai_return(
+                eps, K, G, kappa_MN[p], rho_G[p], potential, T[p], tolerance, y[p], D[p]
+            )
         from_principal_point(Q[p], y[p], tau[p])
         if region[p] == ELASTIC:
             for i in range(3):
@@ -218,6 +568,8 @@ def cone_points(
     T: np.ndarray,
     k: float,
     tolerance: float,
+    kappa_MN: np.ndarray | None = None,
+    kappa_G: np.ndarray | None = None,
 ) -> dict[str, np.ndarray]:
     """The cone-and-cutoff step of every point, compiled.
 
@@ -232,6 +584,11 @@ def cone_points(
         T: The cutoff's I₁ per point (n,), Pa; ``inf`` for none.
         k: Linear isotropic hardening modulus (Pa), ≥ 0.
         tolerance: Relative yield tolerance.
+        kappa_MN: Matsuoka–Nakai's κ_F per point (n,): the yield surface is then
+            :func:`_matsuoka_nakai_return`'s, with its apex at I₁ = T (``rho_F``,
+            ``kappa`` and ``k`` unused); None for the cone.
+        kappa_G: The Matsuoka–Nakai potential's κ_G per point (n,), or None for
+            Drucker–Prager's flow (``rho_G``).
 
     Returns:
         ``tau`` (n, 3, 3) Pa, ``be`` (n, 3, 3), ``dgamma`` = Δγ₁ (n,), ``region``
@@ -247,6 +604,10 @@ def cone_points(
         np.ascontiguousarray(np.broadcast_to(v, (n,)), dtype=float)
         for v in (rho_F, rho_G, kappa, T)
     ]
+    kappa_MN, kappa_G = (
+        np.zeros(0) if v is None else np.ascontiguousarray(np.broadcast_to(v, (n,)), dtype=float)
+        for v in (kappa_MN, kappa_G)
+    )
     out = _cone_loop(
         dF,
         b_n,
@@ -257,6 +618,8 @@ def cone_points(
         float(G),
         *per_point,
         float(k),
+        kappa_MN,
+        kappa_G,
         float(tolerance),
     )
     names = ("tau", "be", "dgamma", "region", "x", "Q", "F3", "y", "dy_deps")

@@ -86,6 +86,14 @@ class _ConeLaw(IsotropicModuli):
         """The scalar internal variables at t_{n+1} from Δγ₁ (n,)."""
         raise NotImplementedError
 
+    def _matsuoka_nakai_kappa(self, history: dict[str, np.ndarray]) -> np.ndarray | None:
+        """Matsuoka–Nakai's κ_F per point, or None for the Drucker–Prager cone."""
+        return None
+
+    def _potential_kappa(self, history: dict[str, np.ndarray]) -> np.ndarray | None:
+        """The Matsuoka–Nakai potential's κ_G per point, or None for Drucker–Prager's flow."""
+        return None
+
     def return_map(self, dF: np.ndarray, history: dict[str, np.ndarray]) -> ReturnMapResult:
         """Stress, tangent and history at t_{n+1} for step increments ΔF.
 
@@ -100,7 +108,18 @@ class _ConeLaw(IsotropicModuli):
         b_n = history["be"]
         rho_F, rho_G, kappa, T, k = self._cone_parameters(history)
         out = cone_points(
-            dF, b_n, self.bulk_modulus, self.mu, rho_F, rho_G, kappa, T, k, YIELD_TOLERANCE
+            dF,
+            b_n,
+            self.bulk_modulus,
+            self.mu,
+            rho_F,
+            rho_G,
+            kappa,
+            T,
+            k,
+            YIELD_TOLERANCE,
+            self._matsuoka_nakai_kappa(history),
+            self._potential_kappa(history),
         )
 
         def tangent() -> np.ndarray:
@@ -356,13 +375,18 @@ class ModifiedDruckerPrager(_ConeLaw):
         psi = np.degrees(np.arctan(np.tan(np.radians(phi_F)) - np.tan(np.radians(phi_cs))))
         return phi_F, phi_cs, psi
 
-    def _cone_parameters(self, history):
+    def state_angles(self, history: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+        """φ_F and ψ_G (degrees) of the state ``history`` (frozen over the next step)."""
         # I₁ of τ_n = 3K ε_v of bᵉ_n (Hencky): ε_v = ½ ln det bᵉ_n.
         I1 = 1.5 * self.bulk_modulus * np.log(np.linalg.det(history["be"]))
         # The state is admissible (I₁ ≤ 3c_F) except by round-off; clip so that the
         # angles stay within the bounds checked at construction.
         I1 = np.minimum(I1, 3.0 * self.apex_stress)
         phi_F, _, psi = self.angles(I1, history["plastic_shear"])
+        return phi_F, psi
+
+    def _cone_parameters(self, history):
+        phi_F, psi = self.state_angles(history)
         rho_F, rho_G = cone_slope(phi_F), cone_slope(psi)
         T = 3.0 * self.apex_stress
         return rho_F, rho_G, rho_F * T, np.full_like(rho_F, T), 0.0
