@@ -102,8 +102,14 @@ class _ConeLaw(IsotropicModuli):
             history: The law's internal variables at t_n (``be`` (n, 3, 3) and its scalars).
         """
         # Imported here: numba only when a law first runs (as for Mohr-Coulomb).
-        from fe_mpm.materials import compiled
-        from fe_mpm.materials.cone_return import cone_points
+        try:
+            from fe_mpm.materials import compiled
+            from fe_mpm.materials.cone_return import cone_points
+        except ImportError as error:
+            raise ImportError(
+                f"{type(self).__name__}: the return map is compiled by numba, which "
+                f"could not be imported ({error}); pip install numba"
+            ) from error
 
         b_n = history["be"]
         rho_F, rho_G, kappa, T, k = self._cone_parameters(history)
