@@ -23,6 +23,7 @@ from fe_mpm.checkpoint import CheckpointError
 from fe_mpm.errors import ConvergenceError, PointsOutsideError
 from fe_mpm.materials import (
     DruckerPrager,
+    HenckyJ2,
     J2Plasticity,
     MatsuokaNakai,
     ModifiedDruckerPrager,
@@ -40,6 +41,7 @@ __all__ = [
     "ConvergenceError",
     "Dirichlet",
     "DruckerPrager",
+    "HenckyJ2",
     "J2Plasticity",
     "MaterialPoints",
     "MatsuokaNakai",
