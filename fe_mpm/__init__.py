@@ -29,6 +29,7 @@ from fe_mpm.materials import (
     ModifiedDruckerPrager,
     MohrCoulomb,
     NeoHookean,
+    SmoothCapDruckerPrager,
 )
 from fe_mpm.particles import MaterialPoints, merge, seed
 from fe_mpm.report import StepReport
@@ -52,6 +53,7 @@ __all__ = [
     "PointTraction",
     "PointsOutsideError",
     "Simulation",
+    "SmoothCapDruckerPrager",
     "StepReport",
     "Traction",
     "merge",

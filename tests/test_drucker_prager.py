@@ -25,7 +25,7 @@ from test_taylor import _simulation
 
 import fe_mpm
 from fe_mpm.material_driver import MaterialDriver
-from fe_mpm.materials.cone_return import CONE, CORNER, CUTOFF, ELASTIC
+from fe_mpm.materials.cone_return import CAP, CONE, CORNER, CUTOFF, ELASTIC
 from fe_mpm.materials.drucker_prager import MAST_TABLE_3_5, cone_slope
 from fe_mpm.verification import rates, taylor_remainders
 
@@ -285,8 +285,10 @@ def test_step_residual_and_jacobian_are_consistent(dim, formulation, law, region
     [
         fe_mpm.DruckerPrager(1e4, 0.3, 10.0, 30.0),
         fe_mpm.ModifiedDruckerPrager(1e4, 0.3, **MAST_TABLE_3_5["loose"]),
+        fe_mpm.SmoothCapDruckerPrager(1e4, 0.3, 30.0, 1.0),
+        fe_mpm.MatsuokaNakai(1e4, 0.3, **MAST_TABLE_3_5["loose"]),
     ],
-    ids=["dp", "modified"],
+    ids=["dp", "modified", "smooth-cap", "matsuoka-nakai"],
 )
 def test_mixed_formulation_refuses_a_pressure_dependent_law(law):
     with pytest.raises(ValueError, match="u-p formulations need a pressure-independent"):
@@ -370,3 +372,96 @@ def test_plane_strain_match_reaches_mohr_coulombs_plane_strain_limit(phi):
 def test_an_unknown_match_is_named():
     with pytest.raises(ValueError, match="DruckerPrager: match must be one of 'compression'"):
         fe_mpm.DruckerPrager(**SOIL, friction_angle=30.0, match="plane-strain")
+
+
+def cap_law(associativity=1.0):
+    return fe_mpm.SmoothCapDruckerPrager(
+        1.0e4, 0.3, 30.0, deviatoric_strength=10.0, associativity=associativity
+    )
+
+
+def cap_states(g, n=1500, seed=0):
+    """From elastic to far beyond the cone, a third stretched toward the cap."""
+    rng = np.random.default_rng(seed)
+    dF = np.eye(g) + rng.uniform(0.0002, 0.004, (n, 1, 1)) * rng.normal(size=(n, g, g))
+    dF[: n // 3] += rng.uniform(0.0, 0.004, (n // 3, 1, 1)) * np.eye(g)
+    A = np.eye(3) + 0.0005 * rng.normal(size=(n, 3, 3))
+    if g == 2:
+        A[:, 2, :2] = A[:, :2, 2] = 0.0
+    return dF, {"be": A @ np.swapaxes(A, 1, 2), "plastic_strain": np.zeros(n)}
+
+
+@pytest.mark.parametrize("gdim", [2, 3])
+@pytest.mark.parametrize("associativity", [1.0, 0.3])
+def test_smooth_cap_tangent_and_surfaces_in_every_region(gdim, associativity):
+    """Cone, cap and (non-associated flow only) the rim where they meet: the tangent
+    against finite differences, the stress on its surface, inside where elastic."""
+    law = cap_law(associativity)
+    dF, history = cap_states(gdim)
+    result = law.return_map(dF, history)
+    expected = {ELASTIC, CONE, CAP} | ({CORNER} if associativity < 1.0 else set())
+    assert set(np.unique(result.region)) == expected
+    error, same = finite_difference_error(law, dF, history, result.tangent)
+    assert same.mean() > 0.95 and set(np.unique(result.region[same])) == expected
+    assert error[same].max() < 1e-7 * law.E
+    F, I1 = law.yield_functions(result.tau, history)
+    scale = np.abs(result.tau).max()
+    assert np.abs(F[result.region != ELASTIC]).max() < 1e-12 * scale
+    assert F.max() < 1e-12 * scale
+    R, I_t, _ = law.cap
+    assert np.all(I1[result.region == CAP] >= I_t * (1 - 1e-12))
+    assert np.all(I1[result.region == CONE] <= I_t * (1 + 1e-12))
+    assert np.allclose(I1[result.region == CORNER], I_t, rtol=1e-12)
+
+
+def test_smooth_cap_closed_forms():
+    """Isotropic tension ends on the cap's axis point I₁ = R_t = μ/√(1 + ϱ_F²); triaxial
+    compression on the cone, Mohr-Coulomb's limit for the c with κ = μ (Eq. 3.107)."""
+    law = cap_law()
+    rho = cone_slope(30.0)
+    R, I_t, s_t = law.cap
+    assert R == pytest.approx(10.0 / math.sqrt(1 + rho**2), rel=1e-15)
+    assert I_t**2 + s_t**2 == pytest.approx(R**2, rel=1e-14)
+    dF = (1.0 + np.array([1e-4, 1e-3, 1e-2]))[:, None, None] * np.eye(3)
+    history = {"be": np.tile(np.eye(3), (3, 1, 1)), "plastic_strain": np.zeros(3)}
+    result = law.return_map(dF, history)
+    assert result.region[1:].tolist() == [CAP, CAP]
+    assert np.allclose(result.tau[1:], R / 3 * np.eye(3), rtol=1e-13, atol=0)
+    s = math.sin(math.radians(30.0))
+    cohesion = 10.0 * (3 - s) / (SQRT_2_3 * 6 * math.cos(math.radians(30.0)))
+    regions, taus, _ = confined_compression(law, 3, held=[0, 1], compressed=[2])
+    limit = -(k_of(30.0) * P0 + 2 * cohesion * np.sqrt(k_of(30.0)))
+    assert regions[-1] == CONE and abs(taus[-1][2, 2] - limit) < 1e-10 * abs(limit)
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_smooth_cap_step_residual_and_jacobian_are_consistent(dim):
+    law = fe_mpm.SmoothCapDruckerPrager(10.0, 0.3, 30.0, 0.05, associativity=0.5)
+    rng, sim = _simulation(dim, "u", material=law)
+    _, _, R, J, _ = sim.prepare_step(1.0)
+    sim.w.x.array[:] = rng.uniform(-0.02, 0.02, sim.w.x.array.size)
+    regions = []
+
+    def refresh():
+        regions.append(sim.refresh_material().region.copy())
+
+    d = rng.uniform(-1.0, 1.0, sim.w.x.array.size)
+    r0, r1 = taylor_remainders(R, J, sim.w, d, TAYLOR_EPS, before_assembly=refresh)
+    assert all(np.array_equal(regions[0], r) for r in regions)
+    assert len(np.unique(regions[0])) >= 2
+    assert np.all(rates(TAYLOR_EPS, r0) > 0.9)
+    assert np.all(rates(TAYLOR_EPS, r1) > 1.9), f"remainders {r1}"
+
+
+@pytest.mark.parametrize(
+    "bad, match",
+    [
+        (dict(friction_angle=0.0), r"friction_angle must lie in \(0, 90\)"),
+        (dict(deviatoric_strength=0.0), r"deviatoric_strength must lie in \(0, inf\]"),
+        (dict(associativity=1.5), r"associativity must lie in \[0, 1\]"),
+    ],
+)
+def test_bad_smooth_cap_parameters_are_named(bad, match):
+    base = dict(E=1e4, nu=0.3, friction_angle=30.0, deviatoric_strength=10.0)
+    with pytest.raises(ValueError, match="SmoothCapDruckerPrager: " + match):
+        fe_mpm.SmoothCapDruckerPrager(**{**base, **bad})

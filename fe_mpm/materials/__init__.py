@@ -11,12 +11,16 @@ through ``updated_history``. :mod:`.protocol` states the contract:
 formulations (``kirchhoff_deviatoric``: the pressure is a field), and
 :class:`~.protocol.PointwiseLaw` for laws integrated in principal space
 (:class:`MohrCoulomb`, :class:`DruckerPrager`, :class:`ModifiedDruckerPrager`,
-:class:`MatsuokaNakai`, :class:`HenckyJ2`), whose
+:class:`MatsuokaNakai`, :class:`SmoothCapDruckerPrager`, :class:`HenckyJ2`), whose
 ``return_map(dF, history)`` runs at the points (compiled) and whose UFL stress is the
 linearisation at the current Newton iterate (:mod:`.linearised`).
 """
 
-from fe_mpm.materials.drucker_prager import DruckerPrager, ModifiedDruckerPrager
+from fe_mpm.materials.drucker_prager import (
+    DruckerPrager,
+    ModifiedDruckerPrager,
+    SmoothCapDruckerPrager,
+)
 from fe_mpm.materials.elastic import NeoHookean, embed_3d, in_plane
 from fe_mpm.materials.hencky_j2 import HenckyJ2
 from fe_mpm.materials.j2 import J2Plasticity
@@ -41,6 +45,7 @@ __all__ = [
     "PointState",
     "PointwiseLaw",
     "ReturnMapResult",
+    "SmoothCapDruckerPrager",
     "embed_3d",
     "in_plane",
 ]

@@ -60,8 +60,11 @@ from fe_mpm.materials.compiled import (
     trial_point,
 )
 
-#: Region codes of the cone return.
-ELASTIC, CONE, CUTOFF, CORNER = 0, 1, 2, 3
+#: Region codes of the returns: the cone, the cutoff, both (the corner: the apex, or
+#: the smooth cap's rim), the smooth cap.
+ELASTIC, CONE, CUTOFF, CORNER, CAP = 0, 1, 2, 3, 4
+#: Which surface a loop returns to.
+DRUCKER_PRAGER, MATSUOKA_NAKAI, SMOOTH_CAP = 0, 1, 2
 
 _SQRT_2_3 = math.sqrt(2.0 / 3.0)
 
@@ -514,8 +517,112 @@ def _matsuoka_nakai_return(eps, K, G, kappa, rho_G, kappa_G, T, tolerance, y, D)
 
 
 @jit
+def _cap_return(eps, K, G, rho_F, rho_G, mu, tolerance, y, D):
+    """The cone with Mast's smooth cap (§3.6.2): one point; τ into ``y``, ∂τ/∂ε into ``D``.
+
+    In the (I₁, ‖s‖) plane the cone ‖s‖ = μ − ϱ_F I₁ holds for I₁ ≤ I_t and the
+    circle √(I₁² + ‖s‖²) = R_t, R_t = μ/√(1 + ϱ_F²), beyond it, tangent to the cone at
+    I_t = μϱ_F/(1 + ϱ_F²), ‖s‖_t = μ/(1 + ϱ_F²). The cone's return (flow n + ϱ_G 1)
+    is kept if it lands on the cone; else the cap's (associated, toward the origin
+    of the plane: I₁ and ‖s‖ shrink by 1 + 9KΔγ/R_t and 1 + 2GΔγ/R_t, Newton on
+    Δγ); a trial between the two (non-associated flow leaves a gap) goes to the rim
+    I_t, ‖s‖_t with its deviator's direction. Returns the region and ‖dev Δεᵖ‖.
+    """
+    ev = eps[0] + eps[1] + eps[2]
+    e = (eps[0] - ev / 3.0, eps[1] - ev / 3.0, eps[2] - ev / 3.0)
+    norm_e = math.sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2])
+    I1 = 3.0 * K * ev
+    s_norm = 2.0 * G * norm_e
+    R = mu / math.sqrt(1.0 + rho_F * rho_F)
+    I_t = mu * rho_F / (1.0 + rho_F * rho_F)
+    s_t = mu / (1.0 + rho_F * rho_F)
+    scale = abs(I1) + s_norm + mu
+    if I1 <= I_t:
+        inside = s_norm + rho_F * I1 - mu <= tolerance * scale
+    else:
+        inside = math.sqrt(I1 * I1 + s_norm * s_norm) - R <= tolerance * scale
+    if inside:
+        for A in range(3):
+            y[A] = K * ev + 2.0 * G * e[A]
+            for B in range(3):
+                D[A, B] = K + 2.0 * G * ((1.0 if A == B else 0.0) - 1.0 / 3.0)
+        return ELASTIC, 0.0
+    n = (0.0, 0.0, 0.0)
+    if norm_e > 0.0:
+        n = (e[0] / norm_e, e[1] / norm_e, e[2] / norm_e)
+    # The cone: a valid return leaves the deviator (the apex is beyond the cap).
+    F1 = s_norm + rho_F * I1 - mu
+    if F1 > 0.0:
+        gamma = F1 / (2.0 * G + 9.0 * K * rho_F * rho_G)
+        if gamma <= norm_e and I1 - 9.0 * K * rho_G * gamma <= I_t * (1.0 + tolerance):
+            return _cone_return(eps, K, G, rho_F, rho_G, mu, math.inf, 0.0, tolerance, y, D)
+    # The cap: φ(Δγ) = I₁(Δγ)² + ‖s‖(Δγ)² − R² is convex and falls, so Newton from 0
+    # climbs to its root from below.
+    a, b = 9.0 * K / R, 2.0 * G / R
+    gamma = 0.0
+    for _ in range(100):
+        i1 = I1 / (1.0 + a * gamma)
+        sn = s_norm / (1.0 + b * gamma)
+        phi = i1 * i1 + sn * sn - R * R
+        if phi <= 1e-15 * R * R:
+            break
+        slope = -2.0 * (i1 * i1 * a / (1.0 + a * gamma) + sn * sn * b / (1.0 + b * gamma))
+        gamma -= phi / slope
+    i1 = I1 / (1.0 + a * gamma)
+    sn = s_norm / (1.0 + b * gamma)
+    if i1 >= I_t * (1.0 - tolerance):
+        for A in range(3):
+            y[A] = i1 / 3.0 + sn * n[A]
+        compliance_mean = 1.0 / (9.0 * K) - 1.0 / (6.0 * G)
+        rho = math.sqrt(i1 * i1 + sn * sn)
+        grad = (
+            (y[0] + 2.0 / 3.0 * i1) / rho,
+            (y[1] + 2.0 / 3.0 * i1) / rho,
+            (y[2] + 2.0 / 3.0 * i1) / rho,
+        )
+        A_ = np.empty((3, 3))
+        Ainv = np.empty((3, 3))
+        for i in range(3):
+            for j in range(3):
+                hessian = ((1.0 if i == j else 0.0) + 2.0 / 3.0 - grad[i] * grad[j]) / rho
+                A_[i, j] = compliance_mean + (1.0 / (2.0 * G) if i == j else 0.0)
+                A_[i, j] += gamma * hessian
+        _inverse3(A_, Ainv)
+        Ag = _matvec(Ainv, grad)
+        gA = _vecmat(grad, Ainv)
+        denominator = _dot(grad, Ag)
+        for i in range(3):
+            for j in range(3):
+                D[i, j] = Ainv[i, j] - Ag[i] * gA[j] / denominator
+        return CAP, norm_e - sn / (2.0 * G)
+    # The rim: the stress is fixed but for its deviator's direction.
+    coefficient = s_t / norm_e if norm_e > 0.0 else 0.0
+    for A in range(3):
+        y[A] = I_t / 3.0 + s_t * n[A]
+        for B in range(3):
+            P = (1.0 if A == B else 0.0) - 1.0 / 3.0
+            D[A, B] = coefficient * (P - n[A] * n[B])
+    return CORNER, norm_e - s_t / (2.0 * G)
+
+
+@jit
 def _cone_loop(
-    dF, b_n, x_given, Q_given, plane, K, G, rho_F, rho_G, kappa, T, k, kappa_MN, kappa_G, tolerance
+    dF,
+    b_n,
+    x_given,
+    Q_given,
+    plane,
+    K,
+    G,
+    rho_F,
+    rho_G,
+    kappa,
+    T,
+    k,
+    kappa_MN,
+    kappa_G,
+    tolerance,
+    surface,
 ):
     n = dF.shape[0]
     tau = np.zeros((n, 3, 3))
@@ -531,9 +638,13 @@ def _cone_loop(
     for p in range(n):
         trial_point(p, dF, b_n, x_given, Q_given, plane, F3, x, Q, b, work)
         eps = (0.5 * math.log(x[p, 0]), 0.5 * math.log(x[p, 1]), 0.5 * math.log(x[p, 2]))
-        if kappa_MN.shape[0] == 0:
+        if surface == DRUCKER_PRAGER:
             region[p], dgamma[p] = _cone_return(
                 eps, K, G, rho_F[p], rho_G[p], kappa[p], T[p], k, tolerance, y[p], D[p]
+            )
+        elif surface == SMOOTH_CAP:
+            region[p], dgamma[p] = _cap_return(
+                eps, K, G, rho_F[p], rho_G[p], kappa[p], tolerance, y[p], D[p]
             )
         else:
             potential = -1.0 if kappa_G.shape[0] == 0 else kappa_G[p]
@@ -570,6 +681,7 @@ def cone_points(
     tolerance: float,
     kappa_MN: np.ndarray | None = None,
     kappa_G: np.ndarray | None = None,
+    cap: bool = False,
 ) -> dict[str, np.ndarray]:
     """The cone-and-cutoff step of every point, compiled.
 
@@ -589,6 +701,8 @@ def cone_points(
             ``kappa`` and ``k`` unused); None for the cone.
         kappa_G: The Matsuoka–Nakai potential's κ_G per point (n,), or None for
             Drucker–Prager's flow (``rho_G``).
+        cap: Mast's smooth cap in place of the cutoff (:func:`_cap_return`;
+            ``kappa`` is its μ; ``T`` and ``k`` unused).
 
     Returns:
         ``tau`` (n, 3, 3) Pa, ``be`` (n, 3, 3), ``dgamma`` = Δγ₁ (n,), ``region``
@@ -621,6 +735,7 @@ def cone_points(
         kappa_MN,
         kappa_G,
         float(tolerance),
+        SMOOTH_CAP if cap else (DRUCKER_PRAGER if kappa_MN.shape[0] == 0 else MATSUOKA_NAKAI),
     )
     names = ("tau", "be", "dgamma", "region", "x", "Q", "F3", "y", "dy_deps")
     return dict(zip(names, out, strict=True))

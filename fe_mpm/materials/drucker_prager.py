@@ -126,6 +126,7 @@ class _ConeLaw(IsotropicModuli):
             YIELD_TOLERANCE,
             self._matsuoka_nakai_kappa(history),
             self._potential_kappa(history),
+            cap=isinstance(self, SmoothCapDruckerPrager),
         )
 
         def tangent() -> np.ndarray:
@@ -270,6 +271,91 @@ class DruckerPrager(_ConeLaw):
 
     def _updated(self, history, dgamma):
         return {"plastic_strain": history["plastic_strain"] + _SQRT_2_3 * dgamma}
+
+
+@dataclass(frozen=True)
+class SmoothCapDruckerPrager(_ConeLaw):
+    r"""Drucker–Prager cone with Mast's smooth tension cap (Mast 2013, §3.6.2).
+
+    The cone F = ‖s‖ + ϱ_F I₁ − μ (ϱ_F by Eq. 3.107 from φ, μ the
+    ``deviatoric_strength``) ends on the tension side
+    in the largest circle about the origin of the (I₁, ‖s‖) plane that fits in it,
+    radius R_t = μ/√(1 + ϱ_F²), tangent to the cone at I_t = μϱ_F/(1 + ϱ_F²): no apex,
+    no corner. One surface is active at a time. The cone's flow is n + ϱ_G 1 with
+    ϱ_G = ``associativity`` ϱ_F; the cap's is associated. No hardening. Mast used it
+    with a very small μ for sand, for the cap's smoothness near zero stress
+    (after Swan & Seo; their compression cap is left out, as in Mast).
+
+    Args:
+        E: Young's modulus (Pa), > 0.
+        nu: Poisson's ratio, in (-1, 0.5).
+        friction_angle: φ in degrees, in (0, 90).
+        deviatoric_strength: Mast's μ (Pa), > 0: the cone's ‖s‖ at I₁ = 0.
+        associativity: ϱ_G/ϱ_F, in [0, 1]; 1 is associated flow.
+        density: Reference mass density ρ₀ (kg/m³), > 0, or None to take it from the
+            points.
+    """
+
+    E: float
+    nu: float
+    friction_angle: float
+    deviatoric_strength: float
+    associativity: float = 1.0
+    density: float | None = None
+
+    def __post_init__(self) -> None:
+        self._check_moduli()
+        self._check("friction_angle", lo=0.0, hi=90.0, lo_open=True, hi_open=True)
+        self._check("deviatoric_strength", lo=0.0, lo_open=True)
+        self._check("associativity", lo=0.0, hi=1.0)
+        if self.density is not None:
+            self._check("density", lo=0.0, lo_open=True)
+
+    @property
+    def history(self) -> dict[str, HistoryField]:
+        """Elastic left Cauchy–Green tensor and equivalent plastic strain."""
+        return {
+            "be": HistoryField((3, 3), np.eye(3), "elastic left Cauchy-Green bᵉ"),
+            "plastic_strain": HistoryField(
+                (), 0.0, "equivalent plastic strain α = Σ √(2/3)‖dev Δεᵖ‖ (Hencky)"
+            ),
+        }
+
+    @property
+    def cap(self) -> tuple[float, float, float]:
+        """R_t, I_t and ‖s‖_t (Pa): the cap's radius and where it meets the cone."""
+        rho = cone_slope(self.friction_angle)
+        return (
+            self.deviatoric_strength / math.sqrt(1.0 + rho * rho),
+            self.deviatoric_strength * rho / (1.0 + rho * rho),
+            self.deviatoric_strength / (1.0 + rho * rho),
+        )
+
+    def check_formulation(self, pressure: bool) -> None:
+        """The mixed forms take the pressure from a field; this law depends on it."""
+        if pressure:
+            raise ValueError(
+                "SmoothCapDruckerPrager: the u-p formulations need a pressure-independent, "
+                "isochoric law; this one depends on the pressure. Use formulation='u'."
+            )
+
+    def _cone_parameters(self, history):
+        rho_F = cone_slope(self.friction_angle)
+        return rho_F, self.associativity * rho_F, self.deviatoric_strength, math.inf, 0.0
+
+    def _updated(self, history, dgamma):
+        return {"plastic_strain": history["plastic_strain"] + _SQRT_2_3 * dgamma}
+
+    def yield_functions(
+        self, tau: np.ndarray, history: dict[str, np.ndarray]
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """The cone's F (Pa) where I₁ ≤ I_t, the cap's √(I₁² + ‖s‖²) − R_t beyond; and I₁."""
+        I1 = np.trace(tau, axis1=1, axis2=2)
+        s = tau - I1[:, None, None] / 3.0 * np.eye(3)
+        norm = np.sqrt(np.einsum("nij,nij->n", s, s))
+        R, I_t, _ = self.cap
+        cone = norm + cone_slope(self.friction_angle) * I1 - self.deviatoric_strength
+        return np.where(I1 <= I_t, cone, np.sqrt(I1**2 + norm**2) - R), I1
 
 
 #: Mast (2013) Table 3.5, the constants of the evolving angles (degrees), with a₂
