@@ -89,6 +89,13 @@ def parse_args(argv=None):
         default=None,
         help="under MPI, repartition the grid by its points past this imbalance (e.g. 1.25)",
     )
+    p.add_argument(
+        "--law",
+        choices=("mohr-coulomb", "drucker-prager", "matsuoka-nakai"),
+        default="mohr-coulomb",
+        help="the sand's law: Mohr-Coulomb (the thesis's), the Drucker-Prager cone through "
+        "its plane-strain limit, or Matsuoka-Nakai with constant angles (Mast §3.7)",
+    )
     p.add_argument("--output", default="column_collapse_output", help="output folder")
     p.add_argument("--no-output", action="store_true", help="write no files")
     p.add_argument("--json", action="store_true", help="print a JSON summary as the last line")
@@ -126,14 +133,25 @@ try:
         density=args.density,
         cells=scene.cell_tags.find(meshes.COLLAPSE_COLUMN),
     )
-    sand = fe_mpm.MohrCoulomb(
-        args.E,
-        args.nu,
-        cohesion=0.0,
-        friction_angle=args.friction,
-        dilatancy_angle=args.dilatancy,
-        density=args.density,
-    )
+    strength = dict(cohesion=0.0, friction_angle=args.friction, dilatancy_angle=args.dilatancy)
+    if args.law == "mohr-coulomb":
+        sand = fe_mpm.MohrCoulomb(args.E, args.nu, **strength, density=args.density)
+    elif args.law == "drucker-prager":  # the cone through Mohr-Coulomb's plane-strain limit
+        sand = fe_mpm.DruckerPrager(
+            args.E, args.nu, **strength, density=args.density, match="plane strain"
+        )
+    else:  # Mast's law with its angles held (a₄ = 0): φ_F = φ_cs = φ, so ψ_G = 0
+        sand = fe_mpm.MatsuokaNakai(
+            args.E,
+            args.nu,
+            a0=args.friction,
+            a1=0.0,
+            a2=0.0,
+            a3=0.0,
+            a4=0.0,
+            a5=0.0,
+            density=args.density,
+        )
     sim = fe_mpm.Simulation(
         scene.mesh,
         points,

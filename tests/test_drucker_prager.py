@@ -20,6 +20,7 @@ import math
 
 import numpy as np
 import pytest
+from law_checks import assert_step_is_consistent, finite_difference_error
 from test_mohr_coulomb import P0, confined_compression, k_of
 from test_taylor import _simulation
 
@@ -27,7 +28,6 @@ import fe_mpm
 from fe_mpm.material_driver import MaterialDriver
 from fe_mpm.materials.cone_return import CAP, CONE, CORNER, CUTOFF, ELASTIC
 from fe_mpm.materials.drucker_prager import MAST_TABLE_3_5, cone_slope
-from fe_mpm.verification import rates, taylor_remainders
 
 SOIL = dict(E=1.0e4, nu=0.3, cohesion=10.0)
 SQRT_2_3 = math.sqrt(2.0 / 3.0)
@@ -61,23 +61,6 @@ def region_states(law, g: int, n: int = 400, seed: int = 3):
     dF[:q] = (1.0 + rng.uniform(0.002, 0.004, (q, 1, 1))) * np.eye(g)
     dF[:q] += 1e-5 * rng.normal(0, 1, (q, g, g))
     return dF, history
-
-
-def finite_difference_error(law, dF, history, tangent, h=1e-7):
-    """max |central difference − tangent| per point (n,), and where neither difference
-    left the point's region (the return is only piecewise smooth)."""
-    g = dF.shape[1]
-    error = np.zeros(len(dF))
-    region = law.return_map(dF, history).region
-    same = np.ones(len(dF), dtype=bool)
-    for k, m in np.ndindex(g, g):
-        E = np.zeros((g, g))
-        E[k, m] = h
-        up, down = law.return_map(dF + E, history), law.return_map(dF - E, history)
-        same &= (up.region == region) & (down.region == region)
-        fd = (up.tau - down.tau) / (2 * h)
-        error = np.maximum(error, np.abs(fd - tangent[..., k, m]).max(axis=(1, 2)))
-    return error, same
 
 
 @pytest.mark.parametrize("gdim", [2, 3])
@@ -237,9 +220,6 @@ def test_modified_angles_follow_masts_equations():
     assert np.abs(F1_moved[on_cone]).min() > 1e-6 * np.abs(result.tau).max()
 
 
-TAYLOR_EPS = (2e-5, 1e-5, 5e-6, 2.5e-6)
-
-
 @pytest.mark.parametrize(
     "formulation, law, regions_seen",
     [
@@ -265,19 +245,7 @@ def test_step_residual_and_jacobian_are_consistent(dim, formulation, law, region
     rng, sim = _simulation(dim, formulation, material=law)
     if "plastic_shear" in sim.points.history:
         sim.points.history["plastic_shear"][:] = 0.01
-    _, _, R, J, _ = sim.prepare_step(1.0)
-    sim.w.x.array[:] = rng.uniform(-0.02, 0.02, sim.w.x.array.size)
-    regions = []
-
-    def refresh():
-        regions.append(sim.refresh_material().region.copy())
-
-    d = rng.uniform(-1.0, 1.0, sim.w.x.array.size)
-    r0, r1 = taylor_remainders(R, J, sim.w, d, TAYLOR_EPS, before_assembly=refresh)
-    assert all(np.array_equal(regions[0], r) for r in regions)
-    assert len(np.unique(regions[0])) >= regions_seen
-    assert np.all(rates(TAYLOR_EPS, r0) > 0.9)
-    assert np.all(rates(TAYLOR_EPS, r1) > 1.9), f"remainders {r1}"
+    assert_step_is_consistent(sim, rng, regions_seen)
 
 
 @pytest.mark.parametrize(
@@ -438,19 +406,7 @@ def test_smooth_cap_closed_forms():
 def test_smooth_cap_step_residual_and_jacobian_are_consistent(dim):
     law = fe_mpm.SmoothCapDruckerPrager(10.0, 0.3, 30.0, 0.05, associativity=0.5)
     rng, sim = _simulation(dim, "u", material=law)
-    _, _, R, J, _ = sim.prepare_step(1.0)
-    sim.w.x.array[:] = rng.uniform(-0.02, 0.02, sim.w.x.array.size)
-    regions = []
-
-    def refresh():
-        regions.append(sim.refresh_material().region.copy())
-
-    d = rng.uniform(-1.0, 1.0, sim.w.x.array.size)
-    r0, r1 = taylor_remainders(R, J, sim.w, d, TAYLOR_EPS, before_assembly=refresh)
-    assert all(np.array_equal(regions[0], r) for r in regions)
-    assert len(np.unique(regions[0])) >= 2
-    assert np.all(rates(TAYLOR_EPS, r0) > 0.9)
-    assert np.all(rates(TAYLOR_EPS, r1) > 1.9), f"remainders {r1}"
+    assert_step_is_consistent(sim, rng, 2)
 
 
 @pytest.mark.parametrize(

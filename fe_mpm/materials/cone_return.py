@@ -1,4 +1,13 @@
-r"""The Drucker–Prager cone with a tension cutoff, returned in principal space, compiled.
+r"""Mast's cone-shaped yield surfaces, returned in principal space, compiled.
+
+Three returns share one loop over the points (:func:`_cone_loop`): the
+Drucker–Prager cone with a tension cutoff (:func:`_cone_return`, below), the cone
+with Mast's smooth cap (:func:`_cap_return`, §3.6.2) and Matsuoka–Nakai's cone
+(:func:`_matsuoka_nakai_return`, §3.7). Each writes the principal stresses and
+∂τ_A/∂ε^tr_B of one point; the loop turns them into τ, bᵉ and, for the spectral
+formula, the eigen-pairs.
+
+**The cone and its cutoff.**
 
 Mast (2013) §3.6.1, Eqs. 3.84–3.100, on principal Hencky strains (Kirchhoff
 stresses, tension positive; compression is negative, as in Mast). With the
@@ -70,6 +79,15 @@ _SQRT_2_3 = math.sqrt(2.0 / 3.0)
 
 
 @jit
+def _elastic(K, G, ev, e, y, D):
+    """The elastic stress K ε_v + 2G e into ``y`` and its stiffness into ``D``."""
+    for A in range(3):
+        y[A] = K * ev + 2.0 * G * e[A]
+        for B in range(3):
+            D[A, B] = K + 2.0 * G * ((1.0 if A == B else 0.0) - 1.0 / 3.0)
+
+
+@jit
 def _cone_return(eps, K, G, rho_F, rho_G, kappa, T, k, tolerance, y, D):
     """Return one point's trial strains ``eps`` (3-tuple); write τ into ``y``, ∂τ/∂ε into ``D``.
 
@@ -88,10 +106,7 @@ def _cone_return(eps, K, G, rho_F, rho_G, kappa, T, k, tolerance, y, D):
     plastic_1 = F1 > tolerance * scale_1
     plastic_2 = F2 > tolerance * scale_2
     if not (plastic_1 or plastic_2):
-        for A in range(3):
-            y[A] = K * ev + 2.0 * G * e[A]
-            for B in range(3):
-                D[A, B] = K + 2.0 * G * ((1.0 if A == B else 0.0) - 1.0 / 3.0)
+        _elastic(K, G, ev, e, y, D)
         return ELASTIC, 0.0
     n = (0.0, 0.0, 0.0)
     if norm_e > 0.0:
@@ -384,10 +399,7 @@ def _matsuoka_nakai_return(eps, K, G, kappa, rho_G, kappa_G, T, tolerance, y, D)
     scale = abs(base) + radius_tr
     scale3 = scale * scale * scale
     if not _mn_outside(0.0, base, n, radius_tr, G, drop, kappa, scale3, tolerance):
-        for A in range(3):
-            y[A] = K * ev + 2.0 * G * e[A]
-            for B in range(3):
-                D[A, B] = K + 2.0 * G * ((1.0 if A == B else 0.0) - 1.0 / 3.0)
+        _elastic(K, G, ev, e, y, D)
         return ELASTIC, 0.0
     compliance_mean = 1.0 / (9.0 * K) - 1.0 / (6.0 * G)
     A = np.empty((3, 3))
@@ -542,10 +554,7 @@ def _cap_return(eps, K, G, rho_F, rho_G, mu, tolerance, y, D):
     else:
         inside = math.sqrt(I1 * I1 + s_norm * s_norm) - R <= tolerance * scale
     if inside:
-        for A in range(3):
-            y[A] = K * ev + 2.0 * G * e[A]
-            for B in range(3):
-                D[A, B] = K + 2.0 * G * ((1.0 if A == B else 0.0) - 1.0 / 3.0)
+        _elastic(K, G, ev, e, y, D)
         return ELASTIC, 0.0
     n = (0.0, 0.0, 0.0)
     if norm_e > 0.0:

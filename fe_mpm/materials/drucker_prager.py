@@ -26,12 +26,11 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import ufl
 
-from fe_mpm.materials.elastic import IsotropicModuli, in_plane
-from fe_mpm.materials.linearised import ReturnMapResult
+from fe_mpm.materials.elastic import IsotropicModuli
+from fe_mpm.materials.linearised import LinearisedStress, ReturnMapResult
 from fe_mpm.materials.principal_return import YIELD_TOLERANCE
-from fe_mpm.materials.state import HistoryField, PointState
+from fe_mpm.materials.state import HistoryField
 
 _SQRT_2_3 = math.sqrt(2.0 / 3.0)
 
@@ -75,16 +74,26 @@ def cone_radius(cohesion: float, friction_angle: float, match: str = "compressio
     )
 
 
-class _ConeLaw(IsotropicModuli):
+class _ConeLaw(LinearisedStress, IsotropicModuli):
     """What both cone laws share: the compiled return, the linearised UFL stress."""
 
     def _cone_parameters(self, history: dict[str, np.ndarray]):
         """(ϱ_F, ϱ_G, κ, T) per point at t_n, κ with the hardening of α_n; k."""
         raise NotImplementedError
 
+    @property
+    def history(self) -> dict[str, HistoryField]:
+        """Elastic left Cauchy–Green tensor and equivalent plastic strain."""
+        return {
+            "be": HistoryField((3, 3), np.eye(3), "elastic left Cauchy-Green bᵉ"),
+            "plastic_strain": HistoryField(
+                (), 0.0, "equivalent plastic strain α = Σ √(2/3)‖dev Δεᵖ‖ (Hencky)"
+            ),
+        }
+
     def _updated(self, history: dict[str, np.ndarray], dgamma: np.ndarray) -> dict:
-        """The scalar internal variables at t_{n+1} from Δγ₁ (n,)."""
-        raise NotImplementedError
+        """The scalar internal variables at t_{n+1} from ‖dev Δεᵖ‖ (n,)."""
+        return {"plastic_strain": history["plastic_strain"] + _SQRT_2_3 * dgamma}
 
     def _matsuoka_nakai_kappa(self, history: dict[str, np.ndarray]) -> np.ndarray | None:
         """Matsuoka–Nakai's κ_F per point, or None for the Drucker–Prager cone."""
@@ -142,26 +151,6 @@ class _ConeLaw(IsotropicModuli):
             region=out["region"],
             history={"be": out["be"], **self._updated(history, out["dgamma"])},
         )
-
-    def kirchhoff(self, F: ufl.core.expr.Expr, state: PointState) -> ufl.core.expr.Expr:
-        """The linearised return-map stress τ (Pa), shape of ``F``."""
-        return in_plane(self._linearised(state), ufl.shape(F)[0])
-
-    def kirchhoff_deviatoric(self, F: ufl.core.expr.Expr, state: PointState) -> ufl.core.expr.Expr:
-        """Dev τ (Pa), shape of ``F`` (pressure-independent cones only: ``check_formulation``)."""
-        return in_plane(ufl.dev(self._linearised(state)), ufl.shape(F)[0])
-
-    def _linearised(self, state: PointState) -> ufl.core.expr.Expr:
-        if state is None or state.linearisation is None:
-            raise ValueError(
-                f"{type(self).__name__}: the state has no linearisation slot fields; the "
-                "law is evaluated at the points (return_map) by the simulation"
-            )
-        return state.linearisation.kirchhoff(state.dF)
-
-    def updated_history(self, F: ufl.core.expr.Expr, state: PointState) -> dict:
-        """Nothing in UFL: :meth:`return_map` gives the history."""
-        return {}
 
     def yield_functions(
         self, tau: np.ndarray, history: dict[str, np.ndarray]
@@ -237,16 +226,6 @@ class DruckerPrager(_ConeLaw):
             )
 
     @property
-    def history(self) -> dict[str, HistoryField]:
-        """Elastic left Cauchy–Green tensor and equivalent plastic strain."""
-        return {
-            "be": HistoryField((3, 3), np.eye(3), "elastic left Cauchy-Green bᵉ"),
-            "plastic_strain": HistoryField(
-                (), 0.0, "equivalent plastic strain α = Σ √(2/3)‖dev Δεᵖ‖ (Hencky)"
-            ),
-        }
-
-    @property
     def apex(self) -> float:
         """I₁ at the cone's initial apex and the cutoff, 3c cot φ (Pa); inf for φ = 0."""
         if self.friction_angle == 0.0:
@@ -268,9 +247,6 @@ class DruckerPrager(_ConeLaw):
         rho_F = cone_slope(self.friction_angle, self.match)
         rho_G = cone_slope(self.dilatancy_angle, self.match)
         return rho_F, rho_G, kappa, self.apex, self.hardening
-
-    def _updated(self, history, dgamma):
-        return {"plastic_strain": history["plastic_strain"] + _SQRT_2_3 * dgamma}
 
 
 @dataclass(frozen=True)
@@ -312,16 +288,6 @@ class SmoothCapDruckerPrager(_ConeLaw):
             self._check("density", lo=0.0, lo_open=True)
 
     @property
-    def history(self) -> dict[str, HistoryField]:
-        """Elastic left Cauchy–Green tensor and equivalent plastic strain."""
-        return {
-            "be": HistoryField((3, 3), np.eye(3), "elastic left Cauchy-Green bᵉ"),
-            "plastic_strain": HistoryField(
-                (), 0.0, "equivalent plastic strain α = Σ √(2/3)‖dev Δεᵖ‖ (Hencky)"
-            ),
-        }
-
-    @property
     def cap(self) -> tuple[float, float, float]:
         """R_t, I_t and ‖s‖_t (Pa): the cap's radius and where it meets the cone."""
         rho = cone_slope(self.friction_angle)
@@ -342,9 +308,6 @@ class SmoothCapDruckerPrager(_ConeLaw):
     def _cone_parameters(self, history):
         rho_F = cone_slope(self.friction_angle)
         return rho_F, self.associativity * rho_F, self.deviatoric_strength, math.inf, 0.0
-
-    def _updated(self, history, dgamma):
-        return {"plastic_strain": history["plastic_strain"] + _SQRT_2_3 * dgamma}
 
     def yield_functions(
         self, tau: np.ndarray, history: dict[str, np.ndarray]

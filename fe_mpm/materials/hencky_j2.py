@@ -38,14 +38,13 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import ufl
 
 from fe_mpm.materials import route
-from fe_mpm.materials.elastic import IsotropicModuli, in_plane
-from fe_mpm.materials.linearised import ReturnMapResult
+from fe_mpm.materials.elastic import IsotropicModuli
+from fe_mpm.materials.linearised import LinearisedStress, ReturnMapResult
 from fe_mpm.materials.principal_return import YIELD_TOLERANCE
 from fe_mpm.materials.spectral import derivative_wrt_dF, from_principal, spectral_decomposition
-from fe_mpm.materials.state import HistoryField, PointState
+from fe_mpm.materials.state import HistoryField
 
 _SQRT_2_3 = math.sqrt(2.0 / 3.0)
 
@@ -56,7 +55,7 @@ def _deviator(A: np.ndarray) -> np.ndarray:
 
 
 @dataclass(frozen=True)
-class HenckyJ2(IsotropicModuli):
+class HenckyJ2(LinearisedStress, IsotropicModuli):
     """Hencky-elastic von Mises solid with linear isotropic and kinematic hardening.
 
     Mast (2013) §3.5, the model of his Taylor bar. Compared with
@@ -172,26 +171,6 @@ class HenckyJ2(IsotropicModuli):
                 "plastic_strain": history["plastic_strain"] + _SQRT_2_3 * dgamma,
             },
         )
-
-    def kirchhoff(self, F: ufl.core.expr.Expr, state: PointState) -> ufl.core.expr.Expr:
-        """The linearised return-map stress τ (Pa), shape of ``F``."""
-        return in_plane(self._linearised(state), ufl.shape(F)[0])
-
-    def kirchhoff_deviatoric(self, F: ufl.core.expr.Expr, state: PointState) -> ufl.core.expr.Expr:
-        """Dev τ (Pa), shape of ``F``: the u-p part (the law is isochoric)."""
-        return in_plane(ufl.dev(self._linearised(state)), ufl.shape(F)[0])
-
-    def _linearised(self, state: PointState) -> ufl.core.expr.Expr:
-        if state is None or state.linearisation is None:
-            raise ValueError(
-                "HenckyJ2: the state has no linearisation slot fields; the law is "
-                "evaluated at the points (return_map) by the simulation"
-            )
-        return state.linearisation.kirchhoff(state.dF)
-
-    def updated_history(self, F: ufl.core.expr.Expr, state: PointState) -> dict:
-        """Nothing in UFL: :meth:`return_map` gives the history."""
-        return {}
 
     def yield_function(self, tau: np.ndarray, history: dict[str, np.ndarray]) -> np.ndarray:
         """The yield function ‖dev τ − β‖ − √(2/3)(σ_Y + k α) (Pa) of stresses (n, 3, 3)."""

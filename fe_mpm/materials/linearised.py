@@ -25,6 +25,8 @@ from functools import cached_property
 import numpy as np
 import ufl
 
+from fe_mpm.materials.elastic import in_plane
+
 
 @dataclass(frozen=True)
 class ReturnMapResult:
@@ -76,3 +78,33 @@ class Linearisation:
     def flat_tangent(tangent: np.ndarray) -> np.ndarray:
         """(n, 3, 3, g, g) → (n, 9·g·g) in the order :meth:`kirchhoff` reads."""
         return tangent.reshape(tangent.shape[0], int(np.prod(tangent.shape[1:])))
+
+
+class LinearisedStress:
+    """The UFL side of a law whose return map runs at the points (a mixin).
+
+    The forms see the linearisation τ_k + D_k : (ΔF − ΔF_k) of the state's slot
+    fields; the history comes from ``return_map``, not from UFL. The mixed forms
+    take its deviator, so a law that uses this must refuse them where it depends on
+    the pressure (``check_formulation``).
+    """
+
+    def kirchhoff(self, F: ufl.core.expr.Expr, state) -> ufl.core.expr.Expr:
+        """The linearised return-map stress τ (Pa), shape of ``F``."""
+        return in_plane(self._linearised(state), ufl.shape(F)[0])
+
+    def kirchhoff_deviatoric(self, F: ufl.core.expr.Expr, state) -> ufl.core.expr.Expr:
+        """Dev τ (Pa), shape of ``F``: the u-p part."""
+        return in_plane(ufl.dev(self._linearised(state)), ufl.shape(F)[0])
+
+    def _linearised(self, state) -> ufl.core.expr.Expr:
+        if state is None or state.linearisation is None:
+            raise ValueError(
+                f"{type(self).__name__}: the state has no linearisation slot fields; the "
+                "law is evaluated at the points (return_map) by the simulation"
+            )
+        return state.linearisation.kirchhoff(state.dF)
+
+    def updated_history(self, F: ufl.core.expr.Expr, state) -> dict:
+        """Nothing in UFL: ``return_map`` gives the history."""
+        return {}

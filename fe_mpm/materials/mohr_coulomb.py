@@ -26,20 +26,19 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import ufl
 
 from fe_mpm.materials import route
-from fe_mpm.materials.elastic import IsotropicModuli, in_plane
-from fe_mpm.materials.linearised import ReturnMapResult
+from fe_mpm.materials.elastic import IsotropicModuli
+from fe_mpm.materials.linearised import LinearisedStress, ReturnMapResult
 from fe_mpm.materials.principal_return import ELASTIC, MohrCoulombSurface, mohr_coulomb_return
 from fe_mpm.materials.spectral import derivative_wrt_dF, from_principal, spectral_decomposition
-from fe_mpm.materials.state import HistoryField, PointState
+from fe_mpm.materials.state import HistoryField
 
 _SQRT_2_3 = math.sqrt(2.0 / 3.0)
 
 
 @dataclass(frozen=True)
-class MohrCoulomb(IsotropicModuli):
+class MohrCoulomb(LinearisedStress, IsotropicModuli):
     """Hencky-elastic, perfectly plastic Mohr-Coulomb solid.
 
     Args:
@@ -174,26 +173,6 @@ class MohrCoulomb(IsotropicModuli):
                 "plastic_strain": history["plastic_strain"] + out["increment"],
             },
         )
-
-    def kirchhoff(self, F: ufl.core.expr.Expr, state: PointState) -> ufl.core.expr.Expr:
-        """The linearised return-map stress τ (Pa), shape of ``F``."""
-        return in_plane(self._linearised(state), ufl.shape(F)[0])
-
-    def kirchhoff_deviatoric(self, F: ufl.core.expr.Expr, state: PointState) -> ufl.core.expr.Expr:
-        """Dev τ (Pa), shape of ``F``: the u-p part (Tresca only, see :meth:`check_formulation`)."""
-        return in_plane(ufl.dev(self._linearised(state)), ufl.shape(F)[0])
-
-    def _linearised(self, state: PointState) -> ufl.core.expr.Expr:
-        if state is None or state.linearisation is None:
-            raise ValueError(
-                "MohrCoulomb: the state has no linearisation slot fields; the "
-                "law is evaluated in numpy (return_map) by the simulation"
-            )
-        return state.linearisation.kirchhoff(state.dF)
-
-    def updated_history(self, F: ufl.core.expr.Expr, state: PointState) -> dict:
-        """Nothing in UFL: :meth:`return_map` gives the history."""
-        return {}
 
     def yield_function(self, tau: np.ndarray) -> np.ndarray:
         """F = (τ₁ − τ₃) + (τ₁ + τ₃) sin φ − 2c cos φ (Pa) of Kirchhoff stresses (n, 3, 3)."""
