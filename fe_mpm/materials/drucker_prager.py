@@ -1,7 +1,7 @@
 r"""Finite-strain Drucker–Prager plasticity on Hencky strains: Mast (2013) §3.6.
 
-Two laws share the cone-and-cutoff return of :mod:`~fe_mpm.materials.cone_return`
-(the step and its algorithm in that module's docstring), integrated like
+Three laws share the returns of :mod:`~fe_mpm.materials.cone_return` (the steps and
+their algorithms in that module's docstring), integrated like
 :class:`~fe_mpm.materials.MohrCoulomb`: :math:`b^{tr} = \Delta F\, b^e_n\, \Delta F^T`,
 principal Hencky strains, the return, :math:`b^e_{n+1} = \exp(2\varepsilon^e)`, and the
 exact tangent :math:`\partial\tau/\partial\Delta F` for Newton.
@@ -11,6 +11,8 @@ exact tangent :math:`\partial\tau/\partial\Delta F` for Newton.
   :math:`\varrho_F = \sqrt{2/3}\,2\sin\varphi/(3-\sin\varphi)` and
   :math:`\kappa = \sqrt{2/3}\,6c\cos\varphi/(3-\sin\varphi)`, the tension cutoff at its
   apex :math:`I_1 = 3c\cot\varphi`, and linear isotropic hardening of the cone.
+- :class:`SmoothCapDruckerPrager`, the cone ending in a circular tension cap
+  (§3.6.2).
 - :class:`ModifiedDruckerPrager`, the cone with evolving friction and dilatancy
   angles (§3.6.3–3.6.4, Eqs. 3.112–3.116), semi-implicit (§3.3.3): the angles are
   taken at the state of t_n and frozen over the step, so the step is the
@@ -75,7 +77,10 @@ def cone_radius(cohesion: float, friction_angle: float, match: str = "compressio
 
 
 class _ConeLaw(LinearisedStress, IsotropicModuli):
-    """What both cone laws share: the compiled return, the linearised UFL stress."""
+    """What the cone laws share: the compiled return, the linearised UFL stress."""
+
+    #: Whether the cone ends in Mast's smooth cap instead of the cutoff.
+    _smooth_cap = False
 
     def _cone_parameters(self, history: dict[str, np.ndarray]):
         """(ϱ_F, ϱ_G, κ, T) per point at t_n, κ with the hardening of α_n; k."""
@@ -135,7 +140,7 @@ class _ConeLaw(LinearisedStress, IsotropicModuli):
             YIELD_TOLERANCE,
             self._matsuoka_nakai_kappa(history),
             self._potential_kappa(history),
-            cap=isinstance(self, SmoothCapDruckerPrager),
+            cap=self._smooth_cap,
         )
 
         def tangent() -> np.ndarray:
@@ -179,10 +184,9 @@ class DruckerPrager(_ConeLaw):
     Plane-strain scenes that should fail where Mohr-Coulomb does take
     ``match="plane strain"``: the outer cone is stronger there (plane-strain
     compression at φ = ψ = 30° ends at 2.65 times Mohr-Coulomb's stress, at φ = 0 at
-    1.08 times). The
-    cone hardens linearly with the equivalent plastic strain α (``hardening`` k: ‖s‖
-    at I₁ = 0 grows by √(2/3) k α); the cutoff stays at the initial apex
-    I₁ = 3c cot φ.
+    1.08 times). The cone hardens linearly with the equivalent plastic strain α
+    (``hardening`` k: ‖s‖ at I₁ = 0 grows by √(2/3) k α); the cutoff stays at the
+    initial apex I₁ = 3c cot φ.
 
     Args:
         E: Young's modulus (Pa), > 0.
@@ -271,6 +275,8 @@ class SmoothCapDruckerPrager(_ConeLaw):
         density: Reference mass density ρ₀ (kg/m³), > 0, or None to take it from the
             points.
     """
+
+    _smooth_cap = True
 
     E: float
     nu: float
