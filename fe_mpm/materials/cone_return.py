@@ -273,17 +273,23 @@ def _mn_generator(theta, kappa, m):
         -2.0 * s / math.sqrt(6.0),
     )
     a0, a2, a3 = -(6.0 * kappa - 54.0), 3.0 * kappa - 9.0, 6.0 * kappa * d[0] * d[1] * d[2]
+    # The cubic rises from a₀ < 0 at r = 0; its first root is bracketed, and Newton
+    # from the root of its quadratic part, kept inside the bracket, finds it.
     hi = math.sqrt(-a0 / a2)
     while a0 + a2 * hi * hi + a3 * hi**3 <= 0.0:
         hi *= 2.0
     lo = 0.0
-    for _ in range(60):
-        mid = 0.5 * (lo + hi)
-        if a0 + a2 * mid * mid + a3 * mid**3 > 0.0:
-            hi = mid
+    r = min(math.sqrt(-a0 / a2), hi)
+    for _ in range(100):
+        value = a0 + a2 * r * r + a3 * r**3
+        if value > 0.0:
+            hi = r
         else:
-            lo = mid
-    r = 0.5 * (lo + hi)
+            lo = r
+        if value == 0.0 or hi - lo <= 1e-15 * hi:
+            break
+        step = r - value / (2.0 * a2 * r + 3.0 * a3 * r * r)
+        r = step if lo < step < hi else 0.5 * (lo + hi)
     for A in range(3):
         m[A] = -1.0 + r * d[A]
 
@@ -460,32 +466,48 @@ def _matsuoka_nakai_return(eps, K, G, kappa, rho_G, kappa_G, T, tolerance, y, D)
         samples = 24
         width = math.pi / 3.0
         found = False
-        lo = hi = theta_tr
-        if _mn_plane_gap(theta_tr, kappa, kappa_G, sign, K, G, v, m_work, g_work, dg_work) == 0.0:
+        lo = hi = theta = theta_tr
+        gap_tr = _mn_plane_gap(theta_tr, kappa, kappa_G, sign, K, G, v, m_work, g_work, dg_work)
+        gap_lo = gap_hi = gap_tr
+        if gap_tr == 0.0:
             found = True
+        last_plus = last_minus = gap_tr  # the gap at the last sample on each side
         for k in range(1, samples + 1):
             if found:
                 break
             for direction in (1.0, -1.0):
                 a = theta_tr + direction * width * (k - 1) / samples
                 b = theta_tr + direction * width * k / samples
-                gap_a = _mn_plane_gap(a, kappa, kappa_G, sign, K, G, v, m_work, g_work, dg_work)
+                gap_a = last_plus if direction > 0.0 else last_minus
                 gap_b = _mn_plane_gap(b, kappa, kappa_G, sign, K, G, v, m_work, g_work, dg_work)
+                if direction > 0.0:
+                    last_plus = gap_b
+                else:
+                    last_minus = gap_b
                 if gap_a * gap_b <= 0.0:
-                    lo, hi, found = a, b, True
+                    lo, hi, gap_lo, gap_hi, found = a, b, gap_a, gap_b, True
                     break
         if not found:
             apex = True
         else:
-            gap_lo = _mn_plane_gap(lo, kappa, kappa_G, sign, K, G, v, m_work, g_work, dg_work)
-            for _ in range(60):
-                mid = 0.5 * (lo + hi)
-                gap_mid = _mn_plane_gap(mid, kappa, kappa_G, sign, K, G, v, m_work, g_work, dg_work)
-                if gap_mid * gap_lo <= 0.0:
-                    hi = mid
+            # Regula falsi with the Illinois halving (the gap is smooth in θ).
+            theta = hi
+            side = 0
+            for _ in range(100):
+                if gap_hi == gap_lo or gap_hi == 0.0 or abs(hi - lo) <= 1e-15 * abs(hi):
+                    break
+                theta = hi - gap_hi * (hi - lo) / (gap_hi - gap_lo)
+                gap = _mn_plane_gap(theta, kappa, kappa_G, sign, K, G, v, m_work, g_work, dg_work)
+                if gap * gap_hi < 0.0:
+                    lo, gap_lo = hi, gap_hi
+                    side = 0
                 else:
-                    lo, gap_lo = mid, gap_mid
-            theta = 0.5 * (lo + hi)
+                    if side == 1:
+                        gap_lo *= 0.5
+                    side = 1
+                hi, gap_hi = theta, gap
+                if abs(gap) <= 1e-15 * (abs(gap_lo) + abs(gap_tr)):
+                    break
             _mn_plane_gap(theta, kappa, kappa_G, sign, K, G, v, m_work, g_work, dg_work)
             m = (m_work[0], m_work[1], m_work[2])
             g = (g_work[0], g_work[1], g_work[2])
