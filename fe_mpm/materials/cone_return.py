@@ -417,31 +417,34 @@ def _matsuoka_nakai_return(eps, K, G, kappa, rho_G, kappa_G, T, tolerance, y, D)
         if base - drop * norm_e >= -tolerance * scale:
             apex = True
         else:
+            # Bracket the entry on the line by the sign of F alone (a tolerance scaled
+            # by the trial would stop far from a surface point near the apex), then
+            # Newton on F kept in the bracket, to the returned stress's own size.
             lo, hi = 0.0, norm_e
-            for _ in range(40):
+            for _ in range(30):
                 mid = 0.5 * (lo + hi)
-                if _mn_outside(mid, base, n, radius_tr, G, drop, kappa, scale3, tolerance):
+                if _mn_outside(mid, base, n, radius_tr, G, drop, kappa, scale3, 0.0):
                     lo = mid
                 else:
                     hi = mid
             gamma = hi
             direction = (drop + 2.0 * G * n[0], drop + 2.0 * G * n[1], drop + 2.0 * G * n[2])
-            for _ in range(20):
+            for _ in range(100):
                 r = radius_tr - 2.0 * G * gamma
                 m = base - drop * gamma
                 s = (m + r * n[0], m + r * n[1], m + r * n[2])
                 value = _mn_value(s[0], s[1], s[2], kappa)
+                size = abs(m) + r
+                if abs(value) <= 1e-15 * size * size * size or hi - lo <= 1e-16 * norm_e:
+                    break
+                if value > 0.0:
+                    lo = gamma
+                else:
+                    hi = gamma
                 grad = _mn_gradient(s[0], s[1], s[2], kappa)
                 slope = -(grad[0] * direction[0] + grad[1] * direction[1] + grad[2] * direction[2])
-                # Converged to the returned stress's own size, which near the apex is
-                # far below the trial's.
-                size = abs(m) + r
-                if slope == 0.0 or abs(value) <= 1e-15 * size * size * size:
-                    break
-                step = gamma - value / slope
-                if step < lo or step > norm_e:  # stay on the part of the line inside
-                    break
-                gamma = step
+                step = gamma - value / slope if slope != 0.0 else lo
+                gamma = step if lo < step < hi else 0.5 * (lo + hi)
             radius = radius_tr - 2.0 * G * gamma
             m = base - drop * gamma
             for i in range(3):
