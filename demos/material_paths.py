@@ -29,9 +29,9 @@
 # Laws: `dp-modified` (Mast §3.6.3–3.6.4), `mn-dp` (Matsuoka–Nakai yield with the
 # Drucker–Prager potential, §3.7, Mast's recommendation), `mn` (Matsuoka–Nakai's own
 # potential, attached at the stress), `dp` (the traditional cone, §3.6.1,
-# cohesionless, φ = 30°, ψ = 5°), `j2` (`J2Plasticity`, σ_Y = 100 kPa, H = 10 MPa).
-# The first three share Table 3.5's evolving angles. Mast's smooth-cap cone is not in
-# fe-mpm yet.
+# cohesionless, φ = 30°, ψ = 5°), `dp-cap` (the cone with Mast's smooth cap, §3.6.2,
+# φ = 30°, μ = 1 kPa, the flow's slope that of ψ = 5°), `j2` (`J2Plasticity`,
+# σ_Y = 100 kPa, H = 10 MPa). The first three share Table 3.5's evolving angles.
 #
 # Usage: `python demos/material_paths.py --law dp-modified --path shear --json`.
 
@@ -54,7 +54,7 @@ from fe_mpm import plotting
 from fe_mpm.material_driver import MaterialDriver, mixed_control
 from fe_mpm.materials.drucker_prager import MAST_TABLE_3_5, cone_slope
 
-LAWS = ("dp-modified", "mn-dp", "mn", "dp", "j2")
+LAWS = ("dp-modified", "mn-dp", "mn", "dp", "dp-cap", "j2")
 SANDS = ("dp-modified", "mn-dp", "mn")  # the laws with Mast's evolving angles
 E, NU, P0 = 75e6, 0.33, -150e3  # Pa, Mast §3.8
 YIELD_STRESS, HARDENING = 100e3, 10e6  # the J2 law's (Pa)
@@ -104,6 +104,10 @@ elif args.law in ("mn-dp", "mn"):
     law = fe_mpm.MatsuokaNakai(E, NU, **MAST_TABLE_3_5[args.sand], potential=potential)
 elif args.law == "dp":
     law = fe_mpm.DruckerPrager(E, NU, cohesion=0.0, friction_angle=PHI, dilatancy_angle=PSI)
+elif args.law == "dp-cap":
+    law = fe_mpm.SmoothCapDruckerPrager(
+        E, NU, PHI, deviatoric_strength=1e3, associativity=cone_slope(PSI) / cone_slope(PHI)
+    )
 else:
     law = fe_mpm.J2Plasticity(E, NU, yield_stress=YIELD_STRESS, hardening=HARDENING)
 
@@ -228,7 +232,7 @@ if plt is not None:
 #   rate dε_v/dλ is below 1e-3 of its peak, and the stress has stopped changing
 #   (the last 10 % of the path moves it by less than 1e-3). On the biaxial path the
 #   dense sand first contracts (ε_v < 0), then dilates.
-# - `dp`, perfectly plastic: the plastic volume grows as the dilatancy says,
+# - `dp` and `dp-cap`, perfectly plastic: the plastic volume grows as the dilatancy says,
 #   dε_vᵖ/dλ = 3ϱ_G (Mast Eq. 3.89), with ε_vᵖ = ln(J/J₀) less the elastic
 #   ½ ln det bᵉ (the total rate differs by the elastic part: the held Cauchy stress
 #   is a growing Kirchhoff stress τ = Jσ as the sand dilates). On the biaxial path (a
@@ -264,7 +268,7 @@ if args.law in SANDS:
     if args.path == "biaxial":
         checks["least ε_v (contraction)"] = (eps_v.min(), 0.0, "<")
         checks["ε_v at the end (dilation)"] = (eps_v[-1], 0.0, ">")
-elif args.law == "dp":
+elif args.law in ("dp", "dp-cap"):
     expected = 3.0 * cone_slope(PSI)
     plastic = curves["eps_v_plastic"]
     plastic_rate = np.diff(plastic)[flowing] / d_lambda[flowing]
@@ -273,7 +277,7 @@ elif args.law == "dp":
         1e-6,
         "<",
     )
-    if args.path == "biaxial":
+    if args.path == "biaxial" and args.law == "dp":
         k = (1 + math.sin(math.radians(PHI))) / (1 - math.sin(math.radians(PHI)))
         checks["|σ₂₂/σ₁₁ − k| / k at the end"] = (
             abs(curves["sigma_22"][-1] / P0 - k) / k,
