@@ -193,6 +193,24 @@ def _cone_return(eps, K, G, rho_F, rho_G, kappa, T, k, tolerance, y, D):
 
 
 @jit
+def _return_tangent(A, g, f, D):
+    """∂τ/∂ε^tr of a return to one surface, into ``D`` (3, 3).
+
+    The return's equations a⁻¹(τ − τ^tr) + Δγ g(τ) = 0 and F(τ) = 0, differentiated
+    at their solution, with A = a⁻¹ + Δγ ∂g/∂τ and f = ∂F/∂τ:
+    D = A⁻¹ − (A⁻¹g)(fᵀA⁻¹)/(fᵀA⁻¹g).
+    """
+    Ainv = np.empty((3, 3))
+    _inverse3(A, Ainv)
+    Ag = _matvec(Ainv, g)
+    fA = _vecmat(f, Ainv)
+    denominator = _dot(f, Ag)
+    for i in range(3):
+        for j in range(3):
+            D[i, j] = Ainv[i, j] - Ag[i] * fA[j] / denominator
+
+
+@jit
 def _mn_value(s0, s1, s2, kappa):
     """Matsuoka–Nakai's F = 6κ Ī₃ + 3Ī₁‖s‖² − 2Ī₁³ = 6κ Π σ̄ + 3Ī₁ Σσ̄² − 3Ī₁³ (Eq. 3.120)."""
     I1 = s0 + s1 + s2
@@ -409,7 +427,6 @@ def _matsuoka_nakai_return(eps, K, G, kappa, rho_G, kappa_G, T, tolerance, y, D)
         return ELASTIC, 0.0
     compliance_mean = 1.0 / (9.0 * K) - 1.0 / (6.0 * G)
     A = np.empty((3, 3))
-    Ainv = np.empty((3, 3))
     apex = False
     if kappa_G < 0.0:
         # At Δγ = ‖e‖ the line meets the axis: inside the cone if the shifted mean
@@ -543,13 +560,7 @@ def _matsuoka_nakai_return(eps, K, G, kappa, rho_G, kappa_G, T, tolerance, y, D)
             for j in range(3):
                 D[i, j] = 0.0
         return CORNER, norm_e
-    _inverse3(A, Ainv)
-    Ag = _matvec(Ainv, g)
-    fA = _vecmat(f_grad, Ainv)
-    denominator = _dot(f_grad, Ag)
-    for i in range(3):
-        for j in range(3):
-            D[i, j] = Ainv[i, j] - Ag[i] * fA[j] / denominator
+    _return_tangent(A, g, f_grad, D)
     return CONE, dlambda
 
 
@@ -615,19 +626,12 @@ def _cap_return(eps, K, G, rho_F, rho_G, mu, tolerance, y, D):
             (y[2] + 2.0 / 3.0 * i1) / rho,
         )
         A_ = np.empty((3, 3))
-        Ainv = np.empty((3, 3))
         for i in range(3):
             for j in range(3):
                 hessian = ((1.0 if i == j else 0.0) + 2.0 / 3.0 - grad[i] * grad[j]) / rho
                 A_[i, j] = compliance_mean + (1.0 / (2.0 * G) if i == j else 0.0)
                 A_[i, j] += gamma * hessian
-        _inverse3(A_, Ainv)
-        Ag = _matvec(Ainv, grad)
-        gA = _vecmat(grad, Ainv)
-        denominator = _dot(grad, Ag)
-        for i in range(3):
-            for j in range(3):
-                D[i, j] = Ainv[i, j] - Ag[i] * gA[j] / denominator
+        _return_tangent(A_, grad, grad, D)
         return CAP, norm_e - sn / (2.0 * G)
     # The rim: the stress is fixed but for its deviator's direction.
     coefficient = s_t / norm_e if norm_e > 0.0 else 0.0
