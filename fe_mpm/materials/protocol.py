@@ -5,13 +5,14 @@ names whatever is missing. Two optional parts extend it:
 
 - :class:`MixedLaw`, for the u-p formulations, where the pressure is a grid field
   and the law gives only the deviatoric stress;
-- :class:`PointwiseLaw`, for laws integrated in principal space whose return map
-  runs in numpy (:class:`~fe_mpm.materials.MohrCoulomb`): the forms then see the
-  law's linearisation at the current Newton iterate
-  (:mod:`fe_mpm.materials.linearised`).
+- :class:`PointwiseLaw`, for laws whose return map runs at the points, compiled or
+  in numpy (:class:`~fe_mpm.materials.MohrCoulomb`, Mast's laws): the forms then see
+  the law's linearisation at the current Newton iterate
+  (:mod:`fe_mpm.materials.linearised`; :class:`~fe_mpm.materials.linearised.LinearisedStress`
+  gives such a law its UFL side).
 
-A new law (Drucker–Prager, Matsuoka–Nakai) implements :class:`Law`, and
-:class:`PointwiseLaw` if its return map is not written in UFL. The protocols are
+A new law implements :class:`Law`, and :class:`PointwiseLaw` if its return map is
+not written in UFL. The protocols are
 ``runtime_checkable``: ``isinstance(law, PointwiseLaw)`` asks whether the members
 exist, not whether their signatures match.
 """
