@@ -231,7 +231,9 @@ if plt is not None:
 #   end value), and the critical state is reached: by λ = 0.5 the volumetric strain
 #   rate dε_v/dλ is below 1e-3 of its peak, and the stress has stopped changing
 #   (the last 10 % of the path moves it by less than 1e-3). On the biaxial path the
-#   dense sand first contracts (ε_v < 0), then dilates.
+#   dense sand first contracts (ε_v < 0), then dilates; the contraction ends by
+#   ε₂₂ ≈ 0.005, so it takes increments finer than that (200 over the default 0.5
+#   show it; with 100 the first increment steps over it, and the check fails).
 # - `dp` and `dp-cap`, perfectly plastic: the plastic volume grows as the dilatancy says,
 #   dε_vᵖ/dλ = 3ϱ_G (Mast Eq. 3.89), with ε_vᵖ = ln(J/J₀) less the elastic
 #   ½ ln det bᵉ (the total rate differs by the elastic part: the held Cauchy stress
