@@ -356,6 +356,12 @@ class ModifiedDruckerPrager(_ConeLaw):
     critical state (ψ_G = 0) it equals the first option. The angles are taken at
     t_n (I₁ of τ_n, λ_n) and frozen over a step: the semi-implicit return of §3.3.3.
 
+    With a₀ = a₄ (Table 3.5) the cone starts with no width at I₁ = 0: a stress-free
+    point has no shear strength in its first step, and a scene started from rest
+    under gravity has a singular tangent (Newton stops in the first step, measured).
+    Mast drives that sand from a hydrostatic state (§3.8); a scene needs a₀ > a₄
+    (his Table 7.2 has 25° to 35° at the start) or an initial stress.
+
     Args:
         E: Young's modulus (Pa), > 0.
         nu: Poisson's ratio, in (-1, 0.5).
