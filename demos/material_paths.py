@@ -30,8 +30,9 @@
 # Drucker–Prager potential, §3.7, Mast's recommendation), `mn` (Matsuoka–Nakai's own
 # potential, attached at the stress), `dp` (the traditional cone, §3.6.1,
 # cohesionless, φ = 30°, ψ = 5°), `dp-cap` (the cone with Mast's smooth cap, §3.6.2,
-# φ = 30°, μ = 1 kPa, the flow's slope that of ψ = 5°), `j2` (`J2Plasticity`,
-# σ_Y = 100 kPa, H = 10 MPa). The first three share Table 3.5's evolving angles.
+# φ = 30°, μ = 1 kPa, the flow's slope that of ψ = 5°), `j2` (`HenckyJ2`, Mast §3.5,
+# σ_Y = 100 kPa, isotropic hardening k = 1 MPa, kinematic H = 10 MPa). The first
+# three share Table 3.5's evolving angles.
 #
 # Usage: `python demos/material_paths.py --law dp-modified --path shear --json`.
 
@@ -57,7 +58,7 @@ from fe_mpm.materials.drucker_prager import MAST_TABLE_3_5, cone_slope
 LAWS = ("dp-modified", "mn-dp", "mn", "dp", "dp-cap", "j2")
 SANDS = ("dp-modified", "mn-dp", "mn")  # the laws with Mast's evolving angles
 E, NU, P0 = 75e6, 0.33, -150e3  # Pa, Mast §3.8
-YIELD_STRESS, HARDENING = 100e3, 10e6  # the J2 law's (Pa)
+YIELD_STRESS, HARDENING, KINEMATIC = 100e3, 1e6, 10e6  # the J2 law's (Pa)
 PHI, PSI = 30.0, 5.0  # the traditional cone's angles (degrees)
 
 
@@ -109,7 +110,7 @@ elif args.law == "dp-cap":
         E, NU, PHI, deviatoric_strength=1e3, associativity=cone_slope(PSI) / cone_slope(PHI)
     )
 else:
-    law = fe_mpm.J2Plasticity(E, NU, yield_stress=YIELD_STRESS, hardening=HARDENING)
+    law = fe_mpm.HenckyJ2(E, NU, YIELD_STRESS, hardening=HARDENING, kinematic_hardening=KINEMATIC)
 
 
 def plastic_measure(history: dict) -> float:
@@ -137,7 +138,7 @@ F_start, J_start = F.copy(), np.linalg.det(F)
 
 
 def elastic_volume_strain() -> float:
-    """ε_vᵉ = ½ ln det bᵉ of a Hencky law (the cone laws), or NaN (J2's b̄ᵉ is isochoric)."""
+    """ε_vᵉ = ½ ln det bᵉ of a Hencky law, or NaN for a law without bᵉ."""
     if "be" not in driver.history:
         return math.nan
     return 0.5 * math.log(np.linalg.det(driver.history["be"][0]))
@@ -240,9 +241,9 @@ if plt is not None:
 #   is a growing Kirchhoff stress τ = Jσ as the sand dilates). On the biaxial path (a
 #   triaxial compression, σ₁₁ = σ₃₃) the cohesionless cone, matched to Mohr-Coulomb's
 #   compression meridian, stops at σ₂₂/σ₁₁ = (1 + sin φ)/(1 − sin φ).
-# - `j2`: the Kirchhoff stress lies on the hardened surface,
-#   ‖dev τ‖ = √(2/3)(σ_Y + H α), and the flow is isochoric: the volume follows the
-#   law's pressure alone, K J (J − 1) = tr τ/3.
+# - `j2`: the Kirchhoff stress lies on the moved and grown surface,
+#   ‖dev τ − β‖ = √(2/3)(σ_Y + k α) with the back stress β, and the flow is
+#   isochoric: the volume follows the Hencky pressure alone, K ln J = tr τ/3.
 
 # +
 lam, eps_v = curves["lambda"], curves["eps_v"]
@@ -288,16 +289,14 @@ elif args.law in ("dp", "dp-cap"):
         )
 else:
     tau = rows[-1]["tau"]
-    radius = math.sqrt(2.0 / 3.0) * (YIELD_STRESS + HARDENING * math.sqrt(2.0 / 3.0) * lam[-1])
-    dev = tau - np.trace(tau) / 3.0 * np.eye(3)
-    checks["|‖dev τ‖ − √(2/3)(σ_Y + Hα)| / σ_Y"] = (
-        abs(float(np.linalg.norm(dev)) - radius) / YIELD_STRESS,
+    history = {k: v[:1] for k, v in driver.history.items()}
+    checks["|‖dev τ − β‖ − √(2/3)(σ_Y + kα)| / σ_Y"] = (
+        abs(float(law.yield_function(tau[None], history)[0])) / YIELD_STRESS,
         1e-9,
         "<",
     )
-    J = np.linalg.det(F)
-    pressure = law.bulk_modulus * J * (J - 1.0)
-    checks["|K J (J − 1) − tr τ/3| / σ_Y"] = (
+    pressure = law.bulk_modulus * math.log(np.linalg.det(F))
+    checks["|K ln J − tr τ/3| / σ_Y"] = (
         abs(pressure - np.trace(tau) / 3.0) / YIELD_STRESS,
         1e-9,
         "<",
