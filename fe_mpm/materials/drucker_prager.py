@@ -262,7 +262,9 @@ class SmoothCapDruckerPrager(_ConeLaw):
     in the largest circle about the origin of the (I₁, ‖s‖) plane that fits in it,
     radius R_t = μ/√(1 + ϱ_F²), tangent to the cone at I_t = μϱ_F/(1 + ϱ_F²): no apex,
     no corner. One surface is active at a time. The cone's flow is n + ϱ_G 1 with
-    ϱ_G = ``associativity`` ϱ_F; the cap's is associated. No hardening. Mast used it
+    ϱ_G = ``associativity`` ϱ_F; the cap's is associated. The cap's radius follows
+    from μ and φ (the largest circle that fits), so it cannot be given wrong. No
+    hardening. Mast used it
     with a very small μ for sand, for the cap's smoothness near zero stress
     (after Swan & Seo; their compression cap is left out, as in Mast).
 
