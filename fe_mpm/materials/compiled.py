@@ -231,20 +231,50 @@ def from_principal_point(Q, values, out):
 
 
 @jit
+def point_arrays(n):
+    """The arrays a loop over ``n`` points writes, zeroed.
+
+    τ, bᵉ (n, 3, 3), a scalar (n,), the region (n,), x (n, 3), Q, F3 (n, 3, 3),
+    y (n, 3), ∂y/∂ε^tr (n, 3, 3), and two (3, 3) scratch arrays for
+    :func:`trial_point`.
+    """
+    return (
+        np.zeros((n, 3, 3)),
+        np.zeros((n, 3, 3)),
+        np.zeros(n),
+        np.zeros(n, dtype=np.int8),
+        np.zeros((n, 3)),
+        np.zeros((n, 3, 3)),
+        np.zeros((n, 3, 3)),
+        np.zeros((n, 3)),
+        np.zeros((n, 3, 3)),
+        np.zeros((3, 3)),
+        np.zeros((3, 3)),
+    )
+
+
+@jit
+def elastic_state_point(Q, y, C, out):
+    """The elastic left Cauchy–Green tensor of one returned point, into ``out``.
+
+    bᵉ = Σ exp(2εᵉ_A) n_A⊗n_A with εᵉ = a⁻¹ y (``C`` = a⁻¹); returns εᵉ as a 3-tuple.
+    """
+    strain_e = _vecmat((y[0], y[1], y[2]), C)
+    stretch = (
+        math.exp(2.0 * strain_e[0]),
+        math.exp(2.0 * strain_e[1]),
+        math.exp(2.0 * strain_e[2]),
+    )
+    from_principal_point(Q, stretch, out)
+    return strain_e
+
+
+@jit
 def _mohr_coulomb_loop(
     dF, b_n, x_given, Q_given, plane, a, C, k, m, two_c_sqrt_k, p1, p2, apex, has_apex, tolerance
 ):
     n = dF.shape[0]
-    tau = np.zeros((n, 3, 3))
-    be = np.zeros((n, 3, 3))
-    increment = np.zeros(n)
-    region = np.zeros(n, dtype=np.int8)
-    x = np.zeros((n, 3))
-    Q = np.zeros((n, 3, 3))
-    F3 = np.zeros((n, 3, 3))
-    y = np.zeros((n, 3))
-    D = np.zeros((n, 3, 3))
-    work, b = np.zeros((3, 3)), np.zeros((3, 3))
+    tau, be, increment, region, x, Q, F3, y, D, work, b = point_arrays(n)
     for p in range(n):
         trial_point(p, dF, b_n, x_given, Q_given, plane, F3, x, Q, b, work)
         eps = (0.5 * math.log(x[p, 0]), 0.5 * math.log(x[p, 1]), 0.5 * math.log(x[p, 2]))
@@ -257,13 +287,7 @@ def _mohr_coulomb_loop(
                 for j in range(3):
                     be[p, i, j] = b[i, j]
         else:
-            strain_e = _vecmat((y[p, 0], y[p, 1], y[p, 2]), C)
-            stretch = (
-                math.exp(2.0 * strain_e[0]),
-                math.exp(2.0 * strain_e[1]),
-                math.exp(2.0 * strain_e[2]),
-            )
-            from_principal_point(Q[p], stretch, be[p])
+            strain_e = elastic_state_point(Q[p], y[p], C, be[p])
             s = 0.0
             for A in range(3):
                 s += (eps[A] - strain_e[A]) ** 2
@@ -362,6 +386,23 @@ def _derivative_loop(x, Q, y, dy_dx, F3, b_n, g, repeated):
                         out[p, i, j, kk, ll] = s
                         out[p, j, i, kk, ll] = s
     return out
+
+
+def tangent_of(out: dict[str, np.ndarray], b_n: np.ndarray, g: int):
+    """The tangent of a principal return's ``out``, computed when called.
+
+    ``out`` has the eigen-pairs ``x``, ``Q``, ``F3``, the principal stresses ``y``
+    and ``dy_deps`` = ∂y/∂ε^tr of :func:`mohr_coulomb_points` or
+    :func:`~fe_mpm.materials.cone_return.cone_points`; ε^tr = ½ ln x, so
+    ∂y/∂x = ∂y/∂ε^tr / (2x). Returns a function giving ∂τ/∂ΔF (n, 3, 3, g, g).
+    """
+
+    def tangent() -> np.ndarray:
+        with np.errstate(invalid="ignore", divide="ignore"):
+            dy_dx = out["dy_deps"] / (2.0 * out["x"][:, None, :])
+        return spectral_derivative(out["x"], out["Q"], out["y"], dy_dx, out["F3"], b_n, g)
+
+    return tangent
 
 
 def spectral_derivative(

@@ -63,8 +63,10 @@ from fe_mpm.materials.compiled import (
     _dot,
     _matvec,
     _vecmat,
+    elastic_state_point,
     from_principal_point,
     jit,
+    point_arrays,
     trial_decomposition,
     trial_point,
 )
@@ -663,16 +665,11 @@ def _cone_loop(
     surface,
 ):
     n = dF.shape[0]
-    tau = np.zeros((n, 3, 3))
-    be = np.zeros((n, 3, 3))
-    dgamma = np.zeros(n)
-    region = np.zeros(n, dtype=np.int8)
-    x = np.zeros((n, 3))
-    Q = np.zeros((n, 3, 3))
-    F3 = np.zeros((n, 3, 3))
-    y = np.zeros((n, 3))
-    D = np.zeros((n, 3, 3))
-    work, b = np.zeros((3, 3)), np.zeros((3, 3))
+    tau, be, dgamma, region, x, Q, F3, y, D, work, b = point_arrays(n)
+    C = np.empty((3, 3))  # the compliance a⁻¹, for bᵉ
+    for i in range(3):
+        for j in range(3):
+            C[i, j] = 1.0 / (9.0 * K) - 1.0 / (6.0 * G) + (1.0 / (2.0 * G) if i == j else 0.0)
     for p in range(n):
         trial_point(p, dF, b_n, x_given, Q_given, plane, F3, x, Q, b, work)
         eps = (0.5 * math.log(x[p, 0]), 0.5 * math.log(x[p, 1]), 0.5 * math.log(x[p, 2]))
@@ -695,14 +692,7 @@ def _cone_loop(
                 for j in range(3):
                     be[p, i, j] = b[i, j]
         else:
-            # b^e_{n+1} = exp(2 ε^e), ε^e = a⁻¹ τ.
-            mean = (y[p, 0] + y[p, 1] + y[p, 2]) / 3.0
-            stretch = (
-                math.exp(2.0 * (mean / (3.0 * K) + (y[p, 0] - mean) / (2.0 * G))),
-                math.exp(2.0 * (mean / (3.0 * K) + (y[p, 1] - mean) / (2.0 * G))),
-                math.exp(2.0 * (mean / (3.0 * K) + (y[p, 2] - mean) / (2.0 * G))),
-            )
-            from_principal_point(Q[p], stretch, be[p])
+            elastic_state_point(Q[p], y[p], C, be[p])
     return tau, be, dgamma, region, x, Q, F3, y, D
 
 

@@ -32,6 +32,7 @@ import numpy as np
 from fe_mpm.materials.elastic import IsotropicModuli
 from fe_mpm.materials.linearised import LinearisedStress, ReturnMapResult
 from fe_mpm.materials.principal_return import YIELD_TOLERANCE
+from fe_mpm.materials.spectral import deviator, norm
 from fe_mpm.materials.state import HistoryField
 
 _SQRT_2_3 = math.sqrt(2.0 / 3.0)
@@ -142,17 +143,9 @@ class _ConeLaw(LinearisedStress, IsotropicModuli):
             self._potential_kappa(history),
             cap=self._smooth_cap,
         )
-
-        def tangent() -> np.ndarray:
-            with np.errstate(invalid="ignore", divide="ignore"):
-                dy_dx = out["dy_deps"] / (2.0 * out["x"][:, None, :])
-            return compiled.spectral_derivative(
-                out["x"], out["Q"], out["y"], dy_dx, out["F3"], b_n, dF.shape[1]
-            )
-
         return ReturnMapResult(
             tau=out["tau"],
-            derivative=tangent,
+            derivative=compiled.tangent_of(out, b_n, dF.shape[1]),
             region=out["region"],
             history={"be": out["be"], **self._updated(history, out["dgamma"])},
         )
@@ -166,11 +159,9 @@ class _ConeLaw(LinearisedStress, IsotropicModuli):
         returned stress of a step (the angles are frozen over it), with the
         plastic strain of t_{n+1} for the hardening.
         """
-        I1 = np.trace(tau, axis1=1, axis2=2)
-        s = tau - I1[:, None, None] / 3.0 * np.eye(3)
-        norm = np.sqrt(np.einsum("nij,nij->n", s, s))
+        I1, s = np.trace(tau, axis1=1, axis2=2), norm(deviator(tau))
         rho_F, _, kappa, T, _ = self._cone_parameters(history)
-        return norm + rho_F * I1 - kappa, I1 - T
+        return s + rho_F * I1 - kappa, I1 - T
 
 
 @dataclass(frozen=True)
@@ -216,8 +207,6 @@ class DruckerPrager(_ConeLaw):
         self._check("friction_angle", lo=0.0, hi=90.0, hi_open=True)
         self._check("dilatancy_angle", lo=0.0, hi=self.friction_angle)
         self._check("hardening", lo=0.0)
-        if self.density is not None:
-            self._check("density", lo=0.0, lo_open=True)
         if self.match not in MATCHES:
             raise ValueError(
                 f"DruckerPrager: match must be one of {', '.join(map(repr, MATCHES))}, "
@@ -292,8 +281,6 @@ class SmoothCapDruckerPrager(_ConeLaw):
         self._check("friction_angle", lo=0.0, hi=90.0, lo_open=True, hi_open=True)
         self._check("deviatoric_strength", lo=0.0, lo_open=True)
         self._check("associativity", lo=0.0, hi=1.0)
-        if self.density is not None:
-            self._check("density", lo=0.0, lo_open=True)
 
     @property
     def cap(self) -> tuple[float, float, float]:
@@ -321,12 +308,10 @@ class SmoothCapDruckerPrager(_ConeLaw):
         self, tau: np.ndarray, history: dict[str, np.ndarray]
     ) -> tuple[np.ndarray, np.ndarray]:
         """The cone's F (Pa) where I₁ ≤ I_t, the cap's √(I₁² + ‖s‖²) − R_t beyond; and I₁."""
-        I1 = np.trace(tau, axis1=1, axis2=2)
-        s = tau - I1[:, None, None] / 3.0 * np.eye(3)
-        norm = np.sqrt(np.einsum("nij,nij->n", s, s))
+        cone, _ = super().yield_functions(tau, history)  # the cutoff is the cap here
+        I1, s = np.trace(tau, axis1=1, axis2=2), norm(deviator(tau))
         R, I_t, _ = self.cap
-        cone = norm + cone_slope(self.friction_angle) * I1 - self.deviatoric_strength
-        return np.where(I1 <= I_t, cone, np.sqrt(I1**2 + norm**2) - R), I1
+        return np.where(I1 <= I_t, cone, np.sqrt(I1**2 + s**2) - R), I1
 
 
 #: Mast (2013) Table 3.5, the constants of the evolving angles (degrees), with a₂
@@ -406,8 +391,6 @@ class ModifiedDruckerPrager(_ConeLaw):
                 "ModifiedDruckerPrager: a0 + max over λ of (a1 λ − a4) exp(a2 I1 − a3 λ) must "
                 f"stay below 90°; the constants give φ_F up to {peak:.4g}°"
             )
-        if self.density is not None:
-            self._check("density", lo=0.0, lo_open=True)
 
     def _largest_rise(self) -> float:
         """The largest (a1 λ − a4) e^{−a3 λ} over λ ≥ 0 (degrees)."""

@@ -14,9 +14,14 @@ class IsotropicModuli:
     """Shear and bulk moduli of a law with fields ``E`` (Pa) and ``nu``."""
 
     def _check_moduli(self) -> None:
-        """Raise naming the law unless E > 0 and ν ∈ (−1, 0.5); store both as floats."""
+        """Raise naming the law unless E > 0, ν ∈ (−1, 0.5) and the density is None or > 0.
+
+        Every law has these three fields; they are stored back as floats.
+        """
         self._check("E", lo=0.0, lo_open=True)
         self._check("nu", lo=-1.0, hi=0.5, lo_open=True, hi_open=True)
+        if self.density is not None:
+            self._check("density", lo=0.0, lo_open=True)
 
     def _check(self, field: str, **bounds: float | bool) -> None:
         """Check ``field`` with :func:`~fe_mpm.checks.check_range` and store the float back.
@@ -58,8 +63,6 @@ class NeoHookean(IsotropicModuli):
 
     def __post_init__(self) -> None:
         self._check_moduli()
-        if self.density is not None:
-            self._check("density", lo=0.0, lo_open=True)
 
     @property
     def history(self) -> dict[str, HistoryField]:

@@ -43,15 +43,16 @@ from fe_mpm.materials import route
 from fe_mpm.materials.elastic import IsotropicModuli
 from fe_mpm.materials.linearised import LinearisedStress, ReturnMapResult
 from fe_mpm.materials.principal_return import YIELD_TOLERANCE
-from fe_mpm.materials.spectral import derivative_wrt_dF, from_principal, spectral_decomposition
+from fe_mpm.materials.spectral import (
+    derivative_wrt_dF,
+    deviator,
+    from_principal,
+    norm,
+    spectral_decomposition,
+)
 from fe_mpm.materials.state import HistoryField
 
 _SQRT_2_3 = math.sqrt(2.0 / 3.0)
-
-
-def _deviator(A: np.ndarray) -> np.ndarray:
-    """The deviator of tensors (n, 3, 3)."""
-    return A - np.trace(A, axis1=1, axis2=2)[:, None, None] / 3.0 * np.eye(3)
 
 
 @dataclass(frozen=True)
@@ -86,8 +87,6 @@ class HenckyJ2(LinearisedStress, IsotropicModuli):
         self._check("yield_stress", lo=0.0, lo_open=True)
         self._check("hardening", lo=0.0)
         self._check("kinematic_hardening", lo=0.0)
-        if self.density is not None:
-            self._check("density", lo=0.0, lo_open=True)
 
     @property
     def history(self) -> dict[str, HistoryField]:
@@ -119,16 +118,16 @@ class HenckyJ2(LinearisedStress, IsotropicModuli):
         with np.errstate(invalid="ignore", divide="ignore"):  # an inverted iterate: NaN
             strain = from_principal(0.5 * np.log(x), Q)
         volume = np.trace(strain, axis1=1, axis2=2)
-        eta = 2.0 * G * _deviator(strain) - history["back_stress"]
-        norm = np.sqrt(np.einsum("nij,nij->n", eta, eta))
+        eta = 2.0 * G * deviator(strain) - history["back_stress"]
+        size = norm(eta)
         radius = _SQRT_2_3 * (self.yield_stress + k * history["plastic_strain"])
-        f = norm - radius
-        plastic = f > YIELD_TOLERANCE * (norm + radius)
+        f = size - radius
+        plastic = f > YIELD_TOLERANCE * (size + radius)
         dgamma = np.where(plastic, f / (2.0 * G + 2.0 / 3.0 * (H + k)), 0.0)
         N = np.zeros_like(eta)
-        N[plastic] = eta[plastic] / norm[plastic, None, None]
+        N[plastic] = eta[plastic] / size[plastic, None, None]
         strain_e = strain - dgamma[:, None, None] * N
-        tau = K * volume[:, None, None] * np.eye(3) + 2.0 * G * _deviator(strain_e)
+        tau = K * volume[:, None, None] * np.eye(3) + 2.0 * G * deviator(strain_e)
         be = b.copy()
         if np.any(plastic):
             values, vectors = spectral_decomposition(strain_e[plastic])
@@ -146,7 +145,7 @@ class HenckyJ2(LinearisedStress, IsotropicModuli):
             else:
                 dstrain = derivative_wrt_dF(x, Q, y, dy_dx, F3, b_n, g)
             with np.errstate(invalid="ignore", divide="ignore"):
-                ratio = np.where(plastic, 2.0 * G * dgamma / norm, 0.0)
+                ratio = np.where(plastic, 2.0 * G * dgamma / size, 0.0)
             c_dev = 2.0 * G * (1.0 - ratio)
             c_N = np.where(
                 plastic, 2.0 * G * (ratio - 2.0 * G / (2.0 * G + 2.0 / 3.0 * (H + k))), 0
@@ -174,6 +173,7 @@ class HenckyJ2(LinearisedStress, IsotropicModuli):
 
     def yield_function(self, tau: np.ndarray, history: dict[str, np.ndarray]) -> np.ndarray:
         """The yield function ‖dev τ − β‖ − √(2/3)(σ_Y + k α) (Pa) of stresses (n, 3, 3)."""
-        eta = _deviator(tau) - history["back_stress"]
-        norm = np.sqrt(np.einsum("nij,nij->n", eta, eta))
-        return norm - _SQRT_2_3 * (self.yield_stress + self.hardening * history["plastic_strain"])
+        eta = deviator(tau) - history["back_stress"]
+        return norm(eta) - _SQRT_2_3 * (
+            self.yield_stress + self.hardening * history["plastic_strain"]
+        )

@@ -34,6 +34,7 @@ import numpy as np
 import ufl
 
 from fe_mpm.materials.elastic import IsotropicModuli, embed_3d, in_plane
+from fe_mpm.materials.spectral import deviator, norm
 from fe_mpm.materials.state import HistoryField, PointState
 
 _SQRT_2_3 = float(np.sqrt(2.0 / 3.0))
@@ -62,8 +63,6 @@ class J2Plasticity(IsotropicModuli):
         self._check_moduli()
         self._check("yield_stress", lo=0.0, lo_open=True)
         self._check("hardening", lo=0.0)
-        if self.density is not None:
-            self._check("density", lo=0.0, lo_open=True)
 
     @property
     def history(self) -> dict[str, HistoryField]:
@@ -113,6 +112,6 @@ class J2Plasticity(IsotropicModuli):
 
     def yield_function(self, tau: np.ndarray, plastic_strain: np.ndarray) -> np.ndarray:
         """f(τ, α) = ‖dev τ‖ − √(2/3)(σ_Y + Hα) (Pa) of Kirchhoff stresses (n, 3, 3)."""
-        dev = tau - np.trace(tau, axis1=1, axis2=2)[:, None, None] / 3.0 * np.eye(3)
-        norm = np.sqrt(np.einsum("nij,nij->n", dev, dev))
-        return norm - _SQRT_2_3 * (self.yield_stress + self.hardening * plastic_strain)
+        return norm(deviator(tau)) - _SQRT_2_3 * (
+            self.yield_stress + self.hardening * plastic_strain
+        )

@@ -63,8 +63,6 @@ class MohrCoulomb(LinearisedStress, IsotropicModuli):
         self._check("cohesion", lo=0.0)
         self._check("friction_angle", lo=0.0, hi=90.0, hi_open=True)
         self._check("dilatancy_angle", lo=0.0, hi=self.friction_angle)
-        if self.density is not None:
-            self._check("density", lo=0.0, lo_open=True)
         if self.friction_angle == 0.0 and self.cohesion == 0.0:
             raise ValueError(
                 "MohrCoulomb: cohesion must be > 0 when friction_angle = 0 "
@@ -156,17 +154,9 @@ class MohrCoulomb(LinearisedStress, IsotropicModuli):
         """:meth:`return_map` through :mod:`~fe_mpm.materials.compiled` (the same numbers)."""
         b_n = history["be"]
         out = kernels.mohr_coulomb_points(self.surface, dF, b_n)
-
-        def tangent() -> np.ndarray:
-            with np.errstate(invalid="ignore", divide="ignore"):
-                dy_dx = out["dy_deps"] / (2.0 * out["x"][:, None, :])
-            return kernels.spectral_derivative(
-                out["x"], out["Q"], out["y"], dy_dx, out["F3"], b_n, dF.shape[1]
-            )
-
         return ReturnMapResult(
             tau=out["tau"],
-            derivative=tangent,
+            derivative=kernels.tangent_of(out, b_n, dF.shape[1]),
             region=out["region"],
             history={
                 "be": out["be"],

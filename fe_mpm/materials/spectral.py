@@ -55,6 +55,16 @@ def _plane_decomposition(b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.take_along_axis(x, order, axis=1), np.take_along_axis(Q, order[:, None, :], axis=2)
 
 
+def deviator(A: np.ndarray) -> np.ndarray:
+    """The deviator A − ⅓ tr A 1 of tensors (n, 3, 3)."""
+    return A - np.trace(A, axis1=1, axis2=2)[:, None, None] / 3.0 * np.eye(3)
+
+
+def norm(A: np.ndarray) -> np.ndarray:
+    """The Frobenius norm ‖A‖ of tensors (n, 3, 3), (n,)."""
+    return np.sqrt(np.einsum("nij,nij->n", A, A))
+
+
 def from_principal(values: np.ndarray, Q: np.ndarray) -> np.ndarray:
     """Σ_A v_A n_A⊗n_A (n, 3, 3) from principal values (n, 3) and eigenvectors (n, 3, 3)."""
     # (Q diag(v)) Qᵀ as a batched matmul: three times faster than the three-operand einsum.
