@@ -144,25 +144,27 @@ def mixed_control(
     held: dict[tuple[int, int], float],
     tolerance: float = 1e-9,
     max_iterations: int = 50,
+    measure: str = "cauchy",
 ) -> tuple[np.ndarray, dict[str, np.ndarray]]:
-    """Solve for the ``free`` entries of F so that the ``held`` Cauchy stresses are met.
+    """Solve for the ``free`` entries of F so that the ``held`` stresses are met.
 
     A mixed-control material driver (Mast 2013, §3.8): some entries of the
     deformation gradient are prescribed (those of ``F`` not listed in ``free``),
     and as many Cauchy stress components as there are free entries are held.
-    Newton's Jacobian is the law's own tangent, ∂σ_ab/∂F_ij = (∂τ_ab/∂ΔF_im
-    (F_n⁻¹)_jm)/J − σ_ab (F⁻ᵀ)_ij, solved in the least-squares sense (on a
-    singular return two free entries may move together).
+    Newton's Jacobian is the law's own tangent, ∂τ_ab/∂F_ij = ∂τ_ab/∂ΔF_im (F_n⁻¹)_jm,
+    and for Cauchy stresses ∂σ_ab/∂F_ij = (∂τ_ab/∂F_ij)/J − σ_ab (F⁻ᵀ)_ij, solved in
+    the least-squares sense (on a singular return two free entries may move together).
 
     Args:
         driver: A one-point driver (``n=1``) at its committed state F_n.
         F: The deformation gradient to go to (g, g): the prescribed entries, and a
             start for the free ones.
         free: The entries (i, j) to solve for.
-        held: Stress component (a, b) -> its Cauchy stress (Pa); as many as ``free``.
+        held: Stress component (a, b) -> its value (Pa); as many as ``free``.
         tolerance: Stop when every held component is met to this fraction of the
             largest held stress (or of 1 Pa if they are all zero); Mast used 1e-6.
             The returns' own round-off is near 1e-10 of the stress.
+        measure: ``"cauchy"`` (σ, Mast's) or ``"kirchhoff"`` (τ = Jσ) for the held stresses.
         max_iterations: Newton iterations before giving up.
 
     Returns:
@@ -174,6 +176,8 @@ def mixed_control(
     """
     if driver.n != 1:
         raise ValueError(f"mixed_control: the driver must have n = 1 point, got n = {driver.n}")
+    if measure not in ("cauchy", "kirchhoff"):
+        raise ValueError(f"mixed_control: measure must be 'cauchy' or 'kirchhoff', got {measure!r}")
     if len(free) != len(held):
         raise ValueError(
             f"mixed_control: as many held stresses as free entries are needed, got "
@@ -187,7 +191,8 @@ def mixed_control(
     for _ in range(max_iterations):
         result = driver.evaluate(F[None])
         sigma = cauchy_stress(result["tau"], F[None])[0]
-        residual = np.array([sigma[a, b] for a, b in held]) - targets
+        held_stress = sigma if measure == "cauchy" else result["tau"][0]
+        residual = np.array([held_stress[a, b] for a, b in held]) - targets
         if not np.all(np.isfinite(residual)):
             raise RuntimeError(
                 "mixed_control: the law returned a non-finite stress at F = "
@@ -198,12 +203,15 @@ def mixed_control(
         D = result["tangent"][0]  # ∂τ_ab/∂ΔF_im, in-plane block
         J = np.linalg.det(F)
         F_inv_T = np.linalg.inv(F).T
-        jacobian = np.array(
-            [
-                [D[a, b, i] @ Fn_inv[j] / J - sigma[a, b] * F_inv_T[i, j] for i, j in free]
-                for a, b in held
-            ]
-        )
+        if measure == "cauchy":
+            jacobian = np.array(
+                [
+                    [D[a, b, i] @ Fn_inv[j] / J - sigma[a, b] * F_inv_T[i, j] for i, j in free]
+                    for a, b in held
+                ]
+            )
+        else:
+            jacobian = np.array([[D[a, b, i] @ Fn_inv[j] for i, j in free] for a, b in held])
         step = np.linalg.lstsq(jacobian, -residual, rcond=1e-12)[0]
         for (i, j), s in zip(free, step, strict=True):
             F[i, j] += s

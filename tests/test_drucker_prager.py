@@ -25,7 +25,7 @@ from test_mohr_coulomb import P0, confined_compression, k_of
 from test_taylor import _simulation
 
 import fe_mpm
-from fe_mpm.material_driver import MaterialDriver
+from fe_mpm.material_driver import MaterialDriver, mixed_control
 from fe_mpm.materials.cone_return import CAP, CONE, CORNER, CUTOFF, ELASTIC
 from fe_mpm.materials.drucker_prager import MAST_TABLE_3_5, cone_slope
 
@@ -421,3 +421,11 @@ def test_bad_smooth_cap_parameters_are_named(bad, match):
     base = dict(E=1e4, nu=0.3, friction_angle=30.0, deviatoric_strength=10.0)
     with pytest.raises(ValueError, match="SmoothCapDruckerPrager: " + match):
         fe_mpm.SmoothCapDruckerPrager(**{**base, **bad})
+
+
+def test_mixed_control_names_a_wrong_stress_measure_or_count():
+    driver = MaterialDriver(hardened_law(), n=1, gdim=3)
+    with pytest.raises(ValueError, match="measure must be 'cauchy' or 'kirchhoff', got 'pk2'"):
+        mixed_control(driver, np.eye(3), [(0, 0)], {(0, 0): -1.0}, measure="pk2")
+    with pytest.raises(ValueError, match="as many held stresses as free entries"):
+        mixed_control(driver, np.eye(3), [(0, 0), (1, 1)], {(0, 0): -1.0})

@@ -22,7 +22,7 @@ from layouts import embed_3d
 from test_taylor import _simulation
 
 import fe_mpm
-from fe_mpm.material_driver import MaterialDriver
+from fe_mpm.material_driver import MaterialDriver, mixed_control
 from fe_mpm.materials.principal_return import (
     APEX,
     ELASTIC,
@@ -43,42 +43,38 @@ def k_of(phi_deg):
     return (1 + s) / (1 - s)
 
 
-def mixed_control(driver, F, controlled, target, tol=1e-12):
-    """Adjust the diagonal entries ``controlled`` of F so that τ_ii = target, by Newton.
+def held_diagonal(driver, F, controlled, target, tol=1e-12):
+    """Adjust the diagonal entries ``controlled`` of F so that τ_ii = target.
 
-    The Jacobian is the law's own tangent: with ΔF = F F_n⁻¹,
-    ∂τ_ii/∂F_jj = Σ_l ∂τ_ii/∂ΔF_jl (F_n⁻¹)_jl. Returns the new F and the law's result.
+    ``fe_mpm.material_driver.mixed_control`` on Kirchhoff stresses: Newton with the
+    law's own tangent, least squares (on a line return the lateral pair moves
+    together and the Jacobian is singular). Returns the new F and the law's result.
     """
-    F = F.copy()
-    Fn_inv = np.linalg.inv(driver.F[0])
-    for _ in range(30):
-        result = driver.evaluate(F[None])
-        tau, D = result["tau"][0], result["tangent"][0]
-        r = np.array([tau[i, i] - target for i in controlled])
-        if np.abs(r).max() < tol * abs(target):
-            return F, result
-        jac = np.array([[D[i, i, j] @ Fn_inv[j] for j in controlled] for i in controlled])
-        # lstsq: on a line return the lateral pair moves together and jac is singular.
-        for j, s in zip(controlled, np.linalg.lstsq(jac, -r, rcond=1e-12)[0]):
-            F[j, j] += s
-    raise AssertionError(f"mixed control did not converge: residual {r}")
+    return mixed_control(
+        driver,
+        F,
+        [(j, j) for j in controlled],
+        {(i, i): target for i in controlled},
+        tolerance=tol,
+        measure="kirchhoff",
+    )
 
 
 def confined_compression(material, gdim, held, compressed, n_steps=40, strain=0.03):
     """Compress the axes ``compressed`` together while the ``held`` stresses stay at −P0."""
     driver = MaterialDriver(material, n=1, gdim=gdim)
     # Isotropic pre-compression to −P0 on every controlled axis first.
-    F, _ = mixed_control(driver, np.eye(gdim), list(held) + list(compressed), -P0)
+    F, _ = held_diagonal(driver, np.eye(gdim), list(held) + list(compressed), -P0)
     driver.step(F[None])
     regions, taus = [], []
     for e in np.linspace(0, strain, n_steps + 1)[1:]:
         target = F.copy()
         for axis in compressed:
             target[axis, axis] = F[axis, axis] * (1 - e)
-        Fk, result = mixed_control(driver, target, held, -P0)
+        Fk, result = held_diagonal(driver, target, held, -P0)
         driver.step(Fk[None])
-        regions.append(result["region"][0])
-        taus.append(result["tau"][0])
+        regions.append(result["region"])
+        taus.append(result["tau"])
     return np.array(regions), np.array(taus), driver
 
 
