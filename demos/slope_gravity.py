@@ -20,10 +20,12 @@
 # - ramp gravity with `body_force_scale`, and read the reaction on the base,
 # - follow a point with a marker and read Newton's verdict in each `StepReport`,
 # - swap the law: `--law drucker-prager` takes the Drucker–Prager cone that gives
-#   Mohr-Coulomb's plane-strain collapse stress (`match="plane strain"`).
+#   Mohr-Coulomb's plane-strain collapse stress (`match="plane strain"`),
+# - swap the formulation: `--formulation up` runs the frictional law in the mixed
+#   u-p form, at the mean stress of the pressure field.
 #
 # Usage: `python demos/slope_gravity.py [--h 0.5] [--steps 12] [--g-max 1.2]
-# [--law mohr-coulomb|drucker-prager] [--json]`;
+# [--law mohr-coulomb|drucker-prager] [--formulation u|up] [--json]`;
 # `mpiexec -n 2 python -m mpi4py demos/slope_gravity.py` shares the grid and its points
 # among the ranks (rank 0 builds the gmsh model and prints).
 #
@@ -70,6 +72,12 @@ def parse_args(argv=None):
         choices=("mohr-coulomb", "drucker-prager"),
         default="mohr-coulomb",
         help="the soil's law (the same c, φ, ψ)",
+    )
+    p.add_argument(
+        "--formulation",
+        choices=("u", "up"),
+        default="u",
+        help="u, or the mixed u-p form (the law then returns at the pressure field's mean stress)",
     )
     p.add_argument("--json", action="store_true", help="print a JSON summary as the last line")
     return p.parse_args(argv)
@@ -163,7 +171,7 @@ try:
         mesh,
         points,
         soil,
-        "u",
+        args.formulation,
         dirichlet=[fe_mpm.Dirichlet(base), fe_mpm.Dirichlet(sides, component=0)],
         body_force=(0.0, -G),
         body_force_scale=lambda t: args.g_max * t,
@@ -270,6 +278,7 @@ if args.json:
     print(
         json.dumps(
             {
+                "formulation": args.formulation,
                 "knee": knee,
                 "bishop": BISHOP_FACTOR,
                 "reached": float(factor[-1]),

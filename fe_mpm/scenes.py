@@ -134,6 +134,7 @@ def strip_footing(
     edge_size: float | None = None,
     edge_radius: float | None = None,
     edge_line: bool = True,
+    material=None,
     **options,
 ) -> Simulation:
     """The rigid strip footing of Iaconeta (2019) §6.2 on weightless Tresca soil.
@@ -179,6 +180,8 @@ def strip_footing(
         edge_radius: Half-width of that zone (m); 0.4 B by default.
         edge_line: The edge's path x = B/2 as a grid line (default), so that the
             footing ends on grid nodes (see :func:`fe_mpm.meshes.strip_footing`).
+        material: The soil's law; default ``MohrCoulomb.tresca(E, nu, cu)`` (then
+            ``E`` also sets the default penalty).
         options: Passed on to :class:`~fe_mpm.simulation.Simulation`.
     """
     per_cell = check_int("strip_footing", "base_points_per_cell", base_points_per_cell, lo=1)
@@ -220,7 +223,7 @@ def strip_footing(
     return Simulation(
         scene.mesh,
         points,
-        MohrCoulomb.tresca(E, nu, cu),
+        material or MohrCoulomb.tresca(E, nu, cu),
         formulation,
         facet_tags=scene.facet_tags,
         dirichlet=[

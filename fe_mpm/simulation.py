@@ -36,6 +36,7 @@ from fe_mpm.ghost import GhostStabilisation
 from fe_mpm.grid_conditions import GridConditions
 from fe_mpm.markers import Markers
 from fe_mpm.materials import ReturnMapResult
+from fe_mpm.materials.mixed_return import MixedReturnResult
 from fe_mpm.newton import NewtonResult, NewtonSolver
 from fe_mpm.output import SimulationOutput
 from fe_mpm.particles import MaterialPoints
@@ -538,7 +539,7 @@ class Simulation:
         self._current = StepInProgress(forms, layout, bary, return_map, loads, t_new - self.t)
         return forms, layout, R, J, bcs
 
-    def refresh_material(self, tangent: bool = True) -> ReturnMapResult | None:
+    def refresh_material(self, tangent: bool = True) -> ReturnMapResult | MixedReturnResult | None:
         """Evaluate a pointwise law's return map at the current grid unknown.
 
         Newton calls this before every residual and (with the ``tangent``) every

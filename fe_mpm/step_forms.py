@@ -22,7 +22,9 @@ from fe_mpm.forms import displacement, inertia, mixed_up, penalty
 from fe_mpm.forms import loads as loads_form
 from fe_mpm.formulations import FormulationSpec, GridFields
 from fe_mpm.grid_conditions import GridConditions
-from fe_mpm.materials import Linearisation, PointState, ReturnMapResult
+from fe_mpm.materials import Linearisation, PointState, ReturnMapResult, embed_3d
+from fe_mpm.materials.linearised import MixedLinearisation
+from fe_mpm.materials.mixed_return import MixedReturnResult
 from fe_mpm.materials.protocol import PointwiseLaw
 from fe_mpm.materials.runtime import with_runtime_parameters
 from fe_mpm.packing import BoundForm, PointExpression
@@ -141,8 +143,40 @@ class StepForms:
         # A pointwise law (numpy return map) enters the forms through its
         # linearisation at the current iterate, refreshed before every residual.
         self.pointwise = isinstance(material, PointwiseLaw)
+        # In u-p a pressure-dependent law returns at the field's pressure.
+        self.at_pressure = (
+            self.pointwise and spec.pressure and getattr(material, "pressure_dependent", False)
+        )
         self.linearisation, dynamic = None, set()  # slot fields that change during Newton
-        if self.pointwise:
+        mean_stress = None
+        if self.at_pressure:
+            mean_stress = -ufl.det(embed_3d(self.dF * self.F_n)) * q.at_points(fields.p)
+            lin = self.linearisation = MixedLinearisation(
+                q.function((3, 3), "s_k"),
+                q.function((9 * g * g,), "ds_dF_k"),
+                q.function((3, 3), "ds_dm_k"),
+                q.function((), "v_k"),
+                q.function((g, g), "dv_dF_k"),
+                q.function((), "dv_dm_k"),
+                q.function((g, g), "dF_k", empty=np.eye(g)),
+                q.function((), "tau_m_k"),
+                g,
+            )
+            dynamic = {
+                lin.deviator,
+                lin.deviator_tangent,
+                lin.deviator_pressure,
+                lin.volumetric,
+                lin.volumetric_tangent,
+                lin.volumetric_pressure,
+                lin.dF,
+                lin.mean_stress,
+            }
+            self.dF_at_points = PointExpression(
+                ufl.as_vector([self.dF[i, j] for i in range(g) for j in range(g)] + [mean_stress]),
+                q,
+            )
+        elif self.pointwise:
             lin = self.linearisation = Linearisation(
                 q.function((3, 3), "tau_k"),
                 q.function((9 * g * g,), "tangent_k"),
@@ -153,7 +187,7 @@ class StepForms:
             self.dF_at_points = PointExpression(
                 ufl.as_vector([self.dF[i, j] for i in range(g) for j in range(g)]), q
             )
-        self.state = PointState(self.dF, self.history, self.linearisation)
+        self.state = PointState(self.dF, self.history, self.linearisation, mean_stress)
         w = ufl.TestFunctions(fields.W)[0] if spec.pressure else ufl.TestFunction(fields.W)
         R = self._residual(fields, conditions, ppp)
         self.q_boundary = None
@@ -343,14 +377,17 @@ class ReturnMapAtIterate:
         self, forms: StepForms, layout: SlotLayout, points: MaterialPoints, w: dolfinx.fem.Function
     ):
         self.forms, self.layout, self.points, self.w = forms, layout, points, w
-        self.result: ReturnMapResult | None = None  # at the iterate self._at
+        # At the iterate self._at; a MixedReturnResult for a return at the pressure.
+        self.result: ReturnMapResult | MixedReturnResult | None = None
         self._at: np.ndarray | None = None
         self._has_tangent = False
 
-    def refresh(self, tangent: bool = True) -> ReturnMapResult:
+    def refresh(self, tangent: bool = True) -> ReturnMapResult | MixedReturnResult:
         """Evaluate the return map at ``w`` unless done at this iterate; pack it."""
         forms, layout = self.forms, self.layout
         g, q, lin = self.points.gdim, forms.q, forms.linearisation
+        if forms.at_pressure:
+            return self._refresh_at_pressure(tangent)
         if self._at is None or not np.array_equal(self._at, self.w.x.array):
             dF = forms.dF_at_points.evaluate(layout).reshape(-1, g, g)
             self.result = forms.material.return_map(dF, self.points.history)
@@ -362,6 +399,35 @@ class ReturnMapAtIterate:
             self._at, self._has_tangent = self.w.x.array.copy(), False
         if tangent and not self._has_tangent:
             q.pack(lin.tangent, layout, Linearisation.flat_tangent(self.result.tangent))
+            self._has_tangent = True
+        return self.result
+
+    def _refresh_at_pressure(self, tangent: bool) -> MixedReturnResult:
+        """:meth:`refresh` for a pressure-dependent law in u-p: the return at −J p."""
+        forms, layout = self.forms, self.layout
+        g, q, lin = self.points.gdim, forms.q, forms.linearisation
+        if self._at is None or not np.array_equal(self._at, self.w.x.array):
+            values = forms.dF_at_points.evaluate(layout)
+            dF, mean_stress = values[:, : g * g].reshape(-1, g, g), values[:, g * g]
+            self.result = forms.material.return_at_pressure(dF, mean_stress, self.points.history)
+            q.pack(lin.deviator, layout, self.result.deviator)
+            q.pack(lin.volumetric, layout, self.result.volumetric)
+            q.pack(lin.dF, layout, dF, empty=np.eye(g))
+            q.pack(lin.mean_stress, layout, mean_stress)
+            for stale in (
+                lin.deviator_tangent,
+                lin.deviator_pressure,
+                lin.volumetric_tangent,
+                lin.volumetric_pressure,
+            ):
+                q.values.pop(stale, None)
+            self._at, self._has_tangent = self.w.x.array.copy(), False
+        if tangent and not self._has_tangent:
+            ds_dF, ds_dm, dv_dF, dv_dm = self.result.tangent
+            q.pack(lin.deviator_tangent, layout, Linearisation.flat_tangent(ds_dF))
+            q.pack(lin.deviator_pressure, layout, ds_dm)
+            q.pack(lin.volumetric_tangent, layout, dv_dF)
+            q.pack(lin.volumetric_pressure, layout, dv_dm)
             self._has_tangent = True
         return self.result
 

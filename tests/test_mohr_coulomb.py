@@ -329,14 +329,14 @@ def test_a_prescribed_displacement_is_lifted_with_the_laws_own_tangent():
     assert hencky.newton_iterations == hyper.newton_iterations == 3
 
 
-@pytest.mark.parametrize("phi", [20.0, 0.5])
-def test_mixed_formulation_refuses_a_frictional_law(phi):
-    with pytest.raises(
-        ValueError,
-        match="MohrCoulomb: the u-p formulations need a pressure-"
-        "independent, isochoric law, i.e. friction_angle = dilatancy_angle = 0",
-    ):
-        _simulation(2, "up", material=fe_mpm.MohrCoulomb(10.0, 0.3, 0.05, friction_angle=phi))
+@pytest.mark.parametrize("phi, at_pressure", [(20.0, True), (0.5, True), (0.0, False)])
+def test_mixed_formulation_returns_a_frictional_law_at_the_fields_pressure(phi, at_pressure):
+    """φ > 0 returns at the pressure field's mean stress (``tests/test_frictional_up.py``);
+    Tresca keeps the forms' own volumetric law."""
+    law = fe_mpm.MohrCoulomb(10.0, 0.3, 0.05, friction_angle=phi)
+    _, sim = _simulation(2, "up", material=law)
+    forms, *_ = sim.prepare_step(1.0)
+    assert forms.at_pressure is at_pressure
 
 
 def test_the_ufl_stress_needs_the_simulations_linearisation():

@@ -146,7 +146,12 @@ def residual(
     tau, J = stress_parts(material, F, p_p, state)
     K = material.bulk_modulus
     R = mpq.sum(ufl.inner(tau * ufl.inv(dF).T / ufl.det(F_n), mpq.grad_at_points(w, u_degree)))
-    R -= mpq.sum(ufl.det(dF) * mpq.at_points(q_test) * ((J - 1.0) + p_p / K))
+    # A pressure-dependent law returns at the field's pressure and gives its own
+    # volumetric equation, with the plastic volume change (fe_mpm.materials.mixed_return).
+    volumetric = getattr(material, "volumetric_equation", lambda state: None)(state)
+    if volumetric is None:
+        volumetric = (J - 1.0) + p_p / K
+    R -= mpq.sum(ufl.det(dF) * mpq.at_points(q_test) * volumetric)
     if ppp is not None:
         x = ufl.SpatialCoordinate(mpq.mesh)
         r = x - ppp.centroid

@@ -148,6 +148,7 @@ class _ConeLaw(LinearisedStress, IsotropicModuli):
             derivative=compiled.tangent_of(out, b_n, dF.shape[1]),
             region=out["region"],
             history={"be": out["be"], **self._updated(history, out["dgamma"])},
+            principal_tangent=out["dy_deps"],
         )
 
     def yield_functions(
@@ -225,14 +226,17 @@ class DruckerPrager(_ConeLaw):
             return math.inf
         return 3.0 * self.cohesion / math.tan(math.radians(self.friction_angle))
 
-    def check_formulation(self, pressure: bool) -> None:
-        """The mixed forms take the pressure from a field: only φ = 0 (von Mises) fits them."""
-        if pressure and self.friction_angle > 0.0:
-            raise ValueError(
-                "DruckerPrager: the u-p formulations need a pressure-independent, isochoric "
-                f"law, i.e. friction_angle = 0 (von Mises); got φ = {self.friction_angle:g}°. "
-                "Use formulation='u'."
-            )
+    @property
+    def pressure_dependent(self) -> bool:
+        """Whether u-p returns at the field's pressure: φ > 0 (von Mises keeps the forms' own)."""
+        return self.friction_angle > 0.0
+
+    def largest_mean_stress(self, history: dict[str, np.ndarray]) -> float:
+        """The cutoff's mean stress c cot φ (Pa; inf for φ = 0): the most tension held.
+
+        Hardening widens the cone; the cutoff stays.
+        """
+        return self.apex / 3.0
 
     def _cone_parameters(self, history):
         kappa0 = cone_radius(self.cohesion, self.friction_angle, self.match)
@@ -293,11 +297,17 @@ class SmoothCapDruckerPrager(_ConeLaw):
         )
 
     def check_formulation(self, pressure: bool) -> None:
-        """The mixed forms take the pressure from a field; this law depends on it."""
+        """Refuse u-p: the cap has no return at the field's pressure at its top.
+
+        The cap's mean stress levels off smoothly there, and the return at the
+        field's pressure (:mod:`~fe_mpm.materials.mixed_return`) would divide by a
+        slope that goes to zero.
+        """
         if pressure:
             raise ValueError(
-                "SmoothCapDruckerPrager: the u-p formulations need a pressure-independent, "
-                "isochoric law; this one depends on the pressure. Use formulation='u'."
+                "SmoothCapDruckerPrager: the u-p formulations take the mean stress from "
+                "the pressure field, and the cap has no inverse at its top; use "
+                "formulation='u', or DruckerPrager (cone and cutoff) in u-p."
             )
 
     def _cone_parameters(self, history):
@@ -409,14 +419,6 @@ class ModifiedDruckerPrager(_ConeLaw):
             ),
         }
 
-    def check_formulation(self, pressure: bool) -> None:
-        """The mixed forms take the pressure from a field; this law depends on it."""
-        if pressure:
-            raise ValueError(
-                "ModifiedDruckerPrager: the u-p formulations need a pressure-independent, "
-                "isochoric law; this one depends on the pressure. Use formulation='u'."
-            )
-
     def angles(
         self, I1: np.ndarray, plastic_shear: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -442,6 +444,10 @@ class ModifiedDruckerPrager(_ConeLaw):
         rho_F, rho_G = cone_slope(phi_F), cone_slope(psi)
         T = 3.0 * self.apex_stress
         return rho_F, rho_G, rho_F * T, np.full_like(rho_F, T), 0.0
+
+    def largest_mean_stress(self, history: dict[str, np.ndarray]) -> float:
+        """The apex's mean stress c_F (Pa), where the cutoff is: the most tension held."""
+        return self.apex_stress
 
     def _updated(self, history, dgamma):
         return {"plastic_shear": history["plastic_shear"] + dgamma}

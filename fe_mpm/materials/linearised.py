@@ -38,12 +38,16 @@ class ReturnMapResult:
             through :attr:`tangent`, which calls it once.
         history: Internal variables at t_{n+1} by name, each ``(n, *shape)``.
         region: Optional per-point label of the return taken (n,).
+        principal_tangent: Optional ∂τ_A/∂ε^tr_B (n, 3, 3), Pa, of a principal-space
+            return: cheap, and what the return at the field's pressure steps with
+            (:mod:`~fe_mpm.materials.mixed_return`).
     """
 
     tau: np.ndarray
     derivative: Callable[[], np.ndarray]
     history: dict[str, np.ndarray]
     region: np.ndarray | None = None
+    principal_tangent: np.ndarray | None = None
 
     @cached_property
     def tangent(self) -> np.ndarray:
@@ -80,13 +84,73 @@ class Linearisation:
         return tangent.reshape(tangent.shape[0], int(np.prod(tangent.shape[1:])))
 
 
+@dataclass
+class MixedLinearisation:
+    r"""Slot fields of a pressure-dependent law's return at the field's pressure (u-p).
+
+    The law gives the deviator :math:`s` and the volumetric equation :math:`v` (strain)
+    as functions of :math:`\Delta F` and the Kirchhoff mean stress
+    :math:`\bar\tau_m = -J p` (:mod:`~fe_mpm.materials.mixed_return`); the forms see
+    both linearised at the iterate :math:`(\Delta F_k, \bar\tau_{m,k})`. Since
+    :math:`\bar\tau_m` is a UFL expression of ``du`` and ``p``, ``ufl.derivative``
+    adds the pressure coupling to the tangent.
+
+    Attributes:
+        deviator: s_k (3x3, Pa).
+        deviator_tangent: ∂s/∂ΔF at the iterate, flattened (9·g·g, Pa).
+        deviator_pressure: ∂s/∂τ̄_m (3x3, dimensionless).
+        volumetric: v_k (strain).
+        volumetric_tangent: ∂v/∂ΔF (g x g).
+        volumetric_pressure: ∂v/∂τ̄_m (1/Pa).
+        dF: ΔF_k (g x g).
+        mean_stress: τ̄_m,k (Pa).
+        gdim: Geometric dimension g.
+    """
+
+    deviator: ufl.Coefficient
+    deviator_tangent: ufl.Coefficient
+    deviator_pressure: ufl.Coefficient
+    volumetric: ufl.Coefficient
+    volumetric_tangent: ufl.Coefficient
+    volumetric_pressure: ufl.Coefficient
+    dF: ufl.Coefficient
+    mean_stress: ufl.Coefficient
+    gdim: int
+
+    def deviatoric(self, dF: ufl.core.expr.Expr, mean_stress: ufl.core.expr.Expr):
+        """s_k + ∂s/∂ΔF : (ΔF − ΔF_k) + ∂s/∂τ̄_m (τ̄_m − τ̄_m,k), 3x3 (Pa)."""
+        g = self.gdim
+        step, dm = dF - self.dF, mean_stress - self.mean_stress
+        D = self.deviator_tangent
+
+        def entry(i, j):
+            base = (3 * i + j) * g * g
+            return (
+                self.deviator[i, j]
+                + sum(D[base + g * k + m] * step[k, m] for k in range(g) for m in range(g))
+                + self.deviator_pressure[i, j] * dm
+            )
+
+        return ufl.as_matrix([[entry(i, j) for j in range(3)] for i in range(3)])
+
+    def volumetric_equation(self, dF: ufl.core.expr.Expr, mean_stress: ufl.core.expr.Expr):
+        """v_k + ∂v/∂ΔF : (ΔF − ΔF_k) + ∂v/∂τ̄_m (τ̄_m − τ̄_m,k), strain."""
+        step = dF - self.dF
+        return (
+            self.volumetric
+            + ufl.inner(self.volumetric_tangent, step)
+            + self.volumetric_pressure * (mean_stress - self.mean_stress)
+        )
+
+
 class LinearisedStress:
     """The UFL side of a law whose return map runs at the points (a mixin).
 
     The forms see the linearisation τ_k + D_k : (ΔF − ΔF_k) of the state's slot
     fields; the history comes from ``return_map``, not from UFL. The mixed forms
-    take its deviator, so a law that uses this must refuse them where it depends on
-    the pressure (``check_formulation``).
+    take its deviator; where the law depends on the pressure
+    (:attr:`pressure_dependent`) they take the deviator and the volumetric equation of
+    its return at the field's pressure instead (:class:`MixedLinearisation`).
     """
 
     def kirchhoff(self, F: ufl.core.expr.Expr, state) -> ufl.core.expr.Expr:
@@ -94,8 +158,36 @@ class LinearisedStress:
         return in_plane(self._linearised(state), ufl.shape(F)[0])
 
     def kirchhoff_deviatoric(self, F: ufl.core.expr.Expr, state) -> ufl.core.expr.Expr:
-        """Dev τ (Pa), shape of ``F``: the u-p part."""
+        """Dev τ (Pa), shape of ``F``: the u-p part (at the field's pressure, if needed)."""
+        lin = None if state is None else state.linearisation
+        if isinstance(lin, MixedLinearisation):
+            return in_plane(lin.deviatoric(state.dF, state.mean_stress), ufl.shape(F)[0])
         return in_plane(ufl.dev(self._linearised(state)), ufl.shape(F)[0])
+
+    def volumetric_equation(self, state) -> ufl.core.expr.Expr | None:
+        """The u-p volumetric equation v (strain), or None for the forms' (J − 1) + p/K."""
+        lin = None if state is None else state.linearisation
+        if isinstance(lin, MixedLinearisation):
+            return lin.volumetric_equation(state.dF, state.mean_stress)
+        return None
+
+    @property
+    def pressure_dependent(self) -> bool:
+        """Whether the return depends on the mean stress.
+
+        Then, in u-p, it runs at the field's pressure
+        (:mod:`~fe_mpm.materials.mixed_return`).
+        """
+        return True
+
+    def return_at_pressure(self, dF: np.ndarray, mean_stress: np.ndarray, history: dict):
+        """The return at the field's Kirchhoff mean stress (n,), Pa.
+
+        See :func:`~fe_mpm.materials.mixed_return.return_at_mean_stress`.
+        """
+        from fe_mpm.materials.mixed_return import return_at_mean_stress
+
+        return return_at_mean_stress(self, dF, mean_stress, history)
 
     def _linearised(self, state) -> ufl.core.expr.Expr:
         if state is None or state.linearisation is None:

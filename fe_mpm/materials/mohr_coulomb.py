@@ -97,17 +97,15 @@ class MohrCoulomb(LinearisedStress, IsotropicModuli):
             ),
         }
 
-    def check_formulation(self, pressure: bool) -> None:
-        """The mixed forms take the pressure from a field, so the law must not depend on it.
+    @property
+    def pressure_dependent(self) -> bool:
+        """Whether u-p returns at the field's pressure: φ > 0 (Tresca keeps the forms' own)."""
+        return self.friction_angle > 0.0
 
-        ψ ≤ φ, so φ = 0 means ψ = 0 too.
-        """
-        if pressure and self.friction_angle > 0.0:
-            raise ValueError(
-                "MohrCoulomb: the u-p formulations need a pressure-independent, isochoric law, "
-                f"i.e. friction_angle = dilatancy_angle = 0 (Tresca); got φ = "
-                f"{self.friction_angle:g}°, ψ = {self.dilatancy_angle:g}°. Use formulation='u'."
-            )
+    def largest_mean_stress(self, history: dict[str, np.ndarray]) -> float:
+        """The apex's mean stress c cot φ (Pa), inf for Tresca: the most tension a point holds."""
+        apex = self.surface.apex()
+        return math.inf if apex is None else float(apex)
 
     def return_map(self, dF: np.ndarray, history: dict[str, np.ndarray]) -> ReturnMapResult:
         """Stress, tangent and history at t_{n+1} for step increments ΔF.
@@ -148,6 +146,7 @@ class MohrCoulomb(LinearisedStress, IsotropicModuli):
             derivative=tangent,
             region=ret.region,
             history={"be": be, "plastic_strain": history["plastic_strain"] + increment},
+            principal_tangent=ret.tangent,
         )
 
     def _compiled_return_map(self, kernels, dF: np.ndarray, history: dict) -> ReturnMapResult:
@@ -162,6 +161,7 @@ class MohrCoulomb(LinearisedStress, IsotropicModuli):
                 "be": out["be"],
                 "plastic_strain": history["plastic_strain"] + out["increment"],
             },
+            principal_tangent=out["dy_deps"],
         )
 
     def yield_function(self, tau: np.ndarray) -> np.ndarray:

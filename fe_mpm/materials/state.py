@@ -38,9 +38,14 @@ class PointState:
             :class:`HistoryField` of the material, by name.
         linearisation: For laws whose return map runs in numpy (``return_map``),
             the slot fields of its linearisation at the current Newton iterate
-            (:class:`~fe_mpm.materials.linearised.Linearisation`); else None.
+            (:class:`~fe_mpm.materials.linearised.Linearisation`, or
+            :class:`~fe_mpm.materials.linearised.MixedLinearisation` for a
+            pressure-dependent law in the u-p forms); else None.
+        mean_stress: In the u-p forms, the Kirchhoff mean stress −J p of the pressure
+            field at the points (Pa); else None.
     """
 
     dF: ufl.core.expr.Expr
     history: dict[str, ufl.Coefficient] = field(default_factory=dict)
     linearisation: object | None = None
+    mean_stress: ufl.core.expr.Expr | None = None

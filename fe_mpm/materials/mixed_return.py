@@ -1,0 +1,410 @@
+r"""A pressure-dependent law in the u-p forms: its return at the pressure of the field.
+
+In the mixed forms the mean stress is not the law's to choose: the grid pressure
+:math:`p` gives the Kirchhoff mean stress :math:`\bar\tau_m = -J p` at a point, and
+the law supplies the deviatoric stress and the volumetric equation. For a law whose
+yield surface depends on the mean stress (Mohr-Coulomb, Drucker–Prager,
+Matsuoka–Nakai) the return must therefore run *at* :math:`\bar\tau_m`.
+
+**The volumetric shift.** Any of fe-mpm's Hencky laws maps the trial principal
+strains :math:`\varepsilon^{tr}` to a stress. Shift the trial volumetrically,
+:math:`\varepsilon^* = \varepsilon^{tr} + \tfrac{\delta}{3}\mathbf 1` (the same as
+scaling :math:`\Delta F` by :math:`e^{\delta/3}`), and choose :math:`\delta` so that the
+returned mean stress is the field's: :math:`\tau_m(\varepsilon^*) = \bar\tau_m`. At
+:math:`\varepsilon^*` the law's own return then has elastic volumetric strain
+:math:`\bar\tau_m/K`, the plastic strain of the mixed problem, and the deviator
+:math:`s = \operatorname{dev}\tau(\varepsilon^*)`. What the displacement asked for
+and the law accepted differ by
+
+.. math::  v = \varepsilon_v^{tr} - \varepsilon_v^* = -\delta,
+
+the volumetric equation of the point in strain units: elastic, it is
+:math:`\varepsilon_v^{tr} - \bar\tau_m/K`, the Hencky form of the
+:math:`(J - 1) + p/K` of :mod:`fe_mpm.forms.mixed_up`; plastic, it subtracts the plastic
+volume change :math:`\Delta\varepsilon_v^p` (e.g. :math:`3\varrho_G\Delta\gamma` on
+Drucker–Prager's cone). When the mixed problem has converged with :math:`v = 0`,
+the point's stress is the one the law gives under the displacement alone.
+
+:math:`\tau_m(\delta)` is piecewise smooth and nondecreasing (linear within each
+region for the cones and Mohr-Coulomb), so :math:`\delta` is found by Newton's
+method with the law's own slope :math:`\partial\tau_m/\partial\delta`, kept in the
+bracket the iterates build; each evaluation is the law's compiled return.
+
+**Tangent.** With :math:`D = \partial\tau/\partial\Delta F^*` at
+:math:`\Delta F^* = e^{\delta/3}\Delta F` (3D, so that the shift scales
+:math:`\Delta F_{33}` too in plane strain), :math:`m = \tfrac13\operatorname{tr} D` and
+:math:`h = \partial\tau_m/\partial\delta = \tfrac13\, m : \Delta F^*`, the implicit
+function theorem gives
+
+.. math::
+
+    \frac{\partial\delta}{\partial\Delta F} = -\frac{e^{\delta/3}\, m}{h}, \quad
+    \frac{\partial\delta}{\partial\bar\tau_m} = \frac1h, \quad
+    \frac{\partial s}{\partial\Delta F} = \operatorname{dev} D\, e^{\delta/3}
+      + \tfrac13 (\operatorname{dev} D : \Delta F^*)
+        \otimes \frac{\partial\delta}{\partial\Delta F},
+
+and :math:`\partial s/\partial\bar\tau_m = \tfrac13(\operatorname{dev} D : \Delta F^*)/h`.
+
+**Beyond the apex.** A cone's mean stress cannot exceed its apex (or cutoff)
+:math:`\tau_{max}`: there :math:`\tau_m(\delta)` is flat and has no inverse. If the
+field asks for more, the point is held at :math:`\delta_{apex}`, where the trial first
+returns to the apex, extended by a soft volumetric spring,
+
+.. math::  \delta = \delta_{apex} + (\bar\tau_m - \tau_{max})/K_{apex},
+   \qquad K_{apex} = 10^{-3} K,
+
+which keeps :math:`v` continuous and pins the pressure within
+:math:`K_{apex}` times the excess dilation of the apex (a sand pulled apart carries no
+tension; :math:`K_{apex} = K` would give it a spurious tensile stiffness). Its
+derivative comes from :math:`\tau_m(\delta_{apex}) = \tau_{max}` on the cone's side.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+
+from fe_mpm.materials import route
+
+#: The soft volumetric stiffness beyond the apex, as a fraction of K (see above).
+APEX_STIFFNESS_FRACTION = 1e-3
+#: Relative tolerance on τ_m of the volumetric shift.
+SHIFT_TOLERANCE = 1e-14
+#: The volumetric shift (strain) at which the largest mean stress is read: far enough
+#: past any elastic trial that the return is at its apex or cutoff.
+LARGEST_SHIFT = 1.0
+#: The first step down (strain) from where τ_m is flat above its target: about a
+#: step's deviatoric strain, so that the next iterate is below the root.
+FLAT_STEP = 1e-3
+#: Iterations before the search for the shift gives up.
+MAX_ITERATIONS = 100
+
+#: Region code of a point held beyond the apex by the soft spring.
+BEYOND_APEX = 9
+
+
+@dataclass(frozen=True)
+class MixedReturnResult:
+    """A law's return at prescribed Kirchhoff mean stresses, for ``n`` points.
+
+    Attributes:
+        deviator: Deviatoric Kirchhoff stress s (n, 3, 3), Pa.
+        volumetric: The volumetric equation's value v = ε_v^tr − ε_v* (n,), strain.
+        derivative: Computes the four blocks, read through :attr:`tangent`.
+        history: Internal variables at t_{n+1}, by name.
+        region: The law's return region per point (n,), or :data:`BEYOND_APEX`.
+    """
+
+    deviator: np.ndarray
+    volumetric: np.ndarray
+    derivative: Callable[[], tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]
+    history: dict[str, np.ndarray]
+    region: np.ndarray
+
+    @cached_property
+    def tangent(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """∂s/∂ΔF (n, 3, 3, g, g) Pa, ∂s/∂τ̄_m (n, 3, 3), ∂v/∂ΔF (n, g, g), ∂v/∂τ̄_m (n,) 1/Pa.
+
+        Computed on first access.
+        """
+        return self.derivative()
+
+
+def _subset(history: dict[str, np.ndarray], index: np.ndarray) -> dict[str, np.ndarray]:
+    return {name: value[index] for name, value in history.items()}
+
+
+def _det3(A: np.ndarray) -> np.ndarray:
+    """Determinants of (n, 3, 3) matrices by Sarrus's rule (LAPACK per point costs more)."""
+    return (
+        A[:, 0, 0] * (A[:, 1, 1] * A[:, 2, 2] - A[:, 1, 2] * A[:, 2, 1])
+        - A[:, 0, 1] * (A[:, 1, 0] * A[:, 2, 2] - A[:, 1, 2] * A[:, 2, 0])
+        + A[:, 0, 2] * (A[:, 1, 0] * A[:, 2, 1] - A[:, 1, 1] * A[:, 2, 0])
+    )
+
+
+class _Shifted:
+    """The law's returns for volumetrically shifted trials, each point's last one kept.
+
+    A point's search ends at an iterate that was evaluated, so the return at its
+    shift is already at hand: :meth:`last` gathers them, and only the points whose
+    shift moved after their last evaluation (beyond the apex) are evaluated again.
+    """
+
+    def __init__(self, law, F3: np.ndarray, history: dict[str, np.ndarray]):
+        self.law, self.F3, self.history = law, F3, history
+        self.parts: list[tuple[np.ndarray, np.ndarray, object]] = []  # index, δ, return
+        self.owner = np.full(len(F3), -1)  # the part holding each point's last return
+
+    def mean_and_slope(self, delta: np.ndarray, index: np.ndarray):
+        """τ_m (Pa) and ∂τ_m/∂δ = ⅑ Σ_AB ∂τ_A/∂ε^tr_B (Pa; None if the law lacks it)."""
+        out = self.evaluate(delta, index)
+        self.owner[index] = len(self.parts)
+        self.parts.append((index, delta, out))
+        mean = np.trace(out.tau, axis1=1, axis2=2) / 3.0
+        D = out.principal_tangent
+        return mean, None if D is None else D.sum(axis=(1, 2)) / 9.0
+
+    def evaluate(self, delta: np.ndarray, index: np.ndarray):
+        """The law's return at the points ``index`` shifted by ``delta`` (not kept)."""
+        # A wild Newton iterate (a pressure of many K) may overflow here: its NaN or
+        # inf reaches the residual, where Newton reports it with the step.
+        with np.errstate(over="ignore", invalid="ignore"):
+            scaled = self.F3[index] * np.exp(delta / 3.0)[:, None, None]
+            return self.law.return_map(scaled, _subset(self.history, index))
+
+    def last(self, index: np.ndarray) -> _Gathered:
+        """The last returns of the points ``index``."""
+        return _Gathered(self, index, self.owner[index].copy())
+
+
+class _Gathered:
+    """Stress, region, history and (on demand) tangent of returns kept by :class:`_Shifted`."""
+
+    def __init__(self, shifted: _Shifted, index: np.ndarray, owner: np.ndarray):
+        self.shifted, self.index, self.owner = shifted, index, owner
+        n = len(index)
+        self.tau = np.empty((n, 3, 3))
+        self.region = np.zeros(n, dtype=np.int8)
+        self.history = {k: np.empty_like(v[index]) for k, v in shifted.history.items()}
+        for part in np.unique(owner):
+            rows, where = self._rows(part)
+            out = shifted.parts[part][2]
+            self.tau[rows] = out.tau[where]
+            if out.region is not None:
+                self.region[rows] = out.region[where]
+            for key, value in out.history.items():
+                self.history[key][rows] = value[where]
+
+    def _rows(self, part: int) -> tuple[np.ndarray, np.ndarray]:
+        """Rows of this gathering held by ``part``, and where they sit in it."""
+        rows = np.flatnonzero(self.owner == part)
+        part_index = self.shifted.parts[part][0]
+        return rows, np.searchsorted(part_index, self.index[rows])
+
+    def tangent(self) -> np.ndarray:
+        """∂τ/∂ΔF* (n, 3, 3, 3, 3) at the shifted trials.
+
+        A part holding few of these points (the first evaluation, whose plastic
+        points moved on) is evaluated again on them alone: the tangent costs about
+        as much per point as the return.
+        """
+        n = len(self.index)
+        parts = np.unique(self.owner)
+        if len(parts) == 1:  # all from one evaluation (an elastic iterate): no copy
+            index, delta, out = self.shifted.parts[parts[0]]
+            if len(index) == n and np.array_equal(index, self.index):
+                return out.tangent
+        D = np.empty((n, 81))
+        for part in parts:
+            rows, where = self._rows(part)
+            index, delta, out = self.shifted.parts[part]
+            if 2 * len(rows) < len(index):
+                out, where = self.shifted.evaluate(delta[where], index[where]), slice(None)
+            D[rows] = out.tangent.reshape(-1, 81)[where]
+        return D.reshape(n, 3, 3, 3, 3)
+
+
+def _solve_shift(
+    shifted: _Shifted, target: np.ndarray, start: np.ndarray, K: float, tolerance: np.ndarray
+) -> np.ndarray:
+    """δ with τ_m(δ) = target per point (n,), NaN where not found (targets below the apex).
+
+    Newton with the law's own slope ∂τ_m/∂δ, safeguarded by the bracket the
+    iterates build (bisection where a step leaves it). τ_m is nondecreasing in δ
+    and, for the cones and Mohr-Coulomb, linear in each return region; where it is
+    also concave (dilatant flow: the slope falls from K to the cone's to 0 at the
+    apex), Newton from below the root never passes it and lands on it from within
+    its region. Where τ_m is flat above the target (the apex), the step goes down by
+    :data:`FLAT_STEP`, doubling until below. Every point's search ends at an
+    iterate that was evaluated (``shifted`` keeps it).
+    """
+    n = len(target)
+    delta, lo, hi = start.copy(), np.full(n, -np.inf), np.full(n, np.inf)
+    down = np.full(n, FLAT_STEP)  # the flat steps, doubling
+    active = np.ones(n, dtype=bool)
+    for _ in range(MAX_ITERATIONS):
+        idx = np.flatnonzero(active)
+        if idx.size == 0:
+            return delta
+        d = delta[idx]
+        mean, slope = shifted.mean_and_slope(d, idx)
+        g = mean - target[idx]
+        if slope is None:  # a law without its principal tangent: the elastic slope
+            slope = np.full(idx.size, K)
+        below = g < 0.0
+        lo[idx[below]] = np.maximum(lo[idx[below]], d[below])
+        hi[idx[~below]] = np.minimum(hi[idx[~below]], d[~below])
+        l, h = lo[idx], hi[idx]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            x = d - g / slope
+        # The apex's slope is 0 up to round-off of the principal tangent (~1e-16 K).
+        flat = ~(slope > 1e-8 * K)
+        x = np.where(flat & ~below, d - np.maximum(down[idx], g / K), x)
+        down[idx[flat & ~below]] *= 2.0
+        outside = ~np.isfinite(x) | (x <= l) | (x >= h) | (np.abs(x - d) > LARGEST_SHIFT)
+        bracketed = np.isfinite(l) & np.isfinite(h)
+        x = np.where(outside & bracketed, 0.5 * (l + h), x)
+        x = np.where(outside & ~bracketed, d + np.clip(x - d, -0.1, 0.1), x)
+        tiny = 4.0 * np.finfo(float).eps * np.maximum(1.0, np.abs(d))
+        converged = (np.abs(g) <= tolerance[idx]) | (bracketed & (h - l <= tiny))
+        converged |= np.abs(x - d) <= tiny
+        delta[idx[~converged]] = x[~converged]
+        active[idx[converged]] = False
+    # Not found (a wild Newton iterate): NaN, which Newton reports with the step.
+    delta[active] = np.nan
+    return delta
+
+
+def spring_start(top: np.ndarray, mu: float) -> np.ndarray:
+    """The mean stress (Pa) from which on the soft spring holds a point.
+
+    1e-9 of the stress scale below the law's largest mean stress ``top`` (Pa), so
+    that the apex's derivative is taken on the cone's side; ``mu`` is the shear
+    modulus (Pa).
+    """
+    return top - 1e-9 * (np.abs(top) + mu * 1e-3)
+
+
+def _largest_mean_stress(law, shifted: _Shifted, start: np.ndarray) -> np.ndarray:
+    """The law's apex or cutoff mean stress per point (Pa; inf without one).
+
+    The law's own ``largest_mean_stress(history)`` if it has it, else its return far
+    out in tension (an evaluation that :class:`_Shifted` does not keep).
+    """
+    own = getattr(law, "largest_mean_stress", None)
+    if own is not None:
+        return np.broadcast_to(np.asarray(own(shifted.history), dtype=float), start.shape)
+    scaled = shifted.F3 * np.exp((start + LARGEST_SHIFT) / 3.0)[:, None, None]
+    tau = law.return_map(scaled, shifted.history).tau
+    return np.trace(tau, axis1=1, axis2=2) / 3.0
+
+
+def return_at_mean_stress(
+    law, dF: np.ndarray, tau_m: np.ndarray, history: dict[str, np.ndarray]
+) -> MixedReturnResult:
+    """The return of a Hencky principal-space ``law`` at Kirchhoff mean stresses ``tau_m``.
+
+    Args:
+        law: A pointwise law (``return_map``, ``bulk_modulus``) whose history has
+            the elastic left Cauchy–Green tensor ``be``.
+        dF: Deformation gradient increments (n, g, g).
+        tau_m: The field's Kirchhoff mean stress −J p at the points (n,), Pa.
+        history: The law's internal variables at t_n.
+    """
+    n, g = dF.shape[0], dF.shape[1]
+    K = law.bulk_modulus
+    F3 = np.tile(np.eye(3), (n, 1, 1))
+    F3[:, :g, :g] = dF
+    with np.errstate(invalid="ignore", divide="ignore"):
+        eps_v = np.log(_det3(F3)) + 0.5 * np.log(_det3(history["be"]))
+    if not (np.all(np.isfinite(eps_v)) and np.all(np.isfinite(tau_m))):
+        # An inverted iterate: NaN, which Newton reports with the step.
+        return _nan_result(n, g, history)
+    shifted = _Shifted(law, F3, history)
+    start = tau_m / K - eps_v  # the elastic shift
+    scale = np.abs(tau_m) + law.mu * 1e-6
+    # A level just below the law's largest mean stress, from which on a point is
+    # held by the soft spring.
+    near_top = spring_start(_largest_mean_stress(law, shifted, start), law.mu)
+    beyond = tau_m > near_top
+    delta = _solve_shift(
+        shifted, np.where(beyond, near_top, tau_m), start, K, SHIFT_TOLERANCE * scale
+    )
+    if not np.all(np.isfinite(delta)):
+        return _nan_result(n, g, history)
+    beyond = np.flatnonzero(beyond)
+    at_apex = shifted.last(beyond)  # where the trial first returns to the apex
+    delta_apex = delta[beyond]
+    delta[beyond] += (tau_m[beyond] - near_top[beyond]) / (APEX_STIFFNESS_FRACTION * K)
+    if beyond.size:
+        shifted.mean_and_slope(delta[beyond], beyond)
+    final = shifted.last(np.arange(n))
+    final.region[beyond] = BEYOND_APEX
+    tau = final.tau
+    s = tau - np.trace(tau, axis1=1, axis2=2)[:, None, None] / 3.0 * np.eye(3)
+
+    # The columns kl of a (n, 9, 9) tangent that ΔF varies (the in-plane ones in 2D).
+    cols = np.array([3 * k + m for k in range(g) for m in range(g)])
+
+    def derivative():
+        lam = np.exp(delta / 3.0)
+        Fs = (F3 * lam[:, None, None]).reshape(n, 9)
+        D9 = final.tangent().reshape(n, 9, 9)
+        # Where the spring holds a point, δ_apex's derivative is the cone side's.
+        on_spring = np.zeros(n, dtype=bool)
+        on_spring[beyond] = True
+        m_apex, h_apex, lam_apex = np.zeros((n, 9)), np.ones(n), np.ones(n)
+        if beyond.size:
+            lam_apex[beyond] = np.exp(delta_apex / 3.0)
+            m_apex[beyond], h_apex[beyond] = _volumetric_parts(
+                at_apex.tangent().reshape(-1, 9, 9),
+                (F3[beyond] * lam_apex[beyond, None, None]).reshape(-1, 9),
+            )
+        args = (D9, Fs, lam, m_apex, h_apex, lam_apex, on_spring, APEX_STIFFNESS_FRACTION * K)
+        kernels = route.compiled()
+        if kernels is not None:
+            from fe_mpm.materials import mixed_compiled
+
+            ds_dF, ds_dm, dv_dF, dv_dm = mixed_compiled.blocks(*args, cols)
+        else:
+            ds_dF, ds_dm, dv_dF, dv_dm = _blocks(*args, cols)
+        return (
+            ds_dF.reshape(n, 3, 3, g, g),
+            ds_dm.reshape(n, 3, 3),
+            dv_dF.reshape(n, g, g),
+            dv_dm,
+        )
+
+    return MixedReturnResult(s, -delta, derivative, final.history, final.region)
+
+
+def _volumetric_parts(D9: np.ndarray, Fs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The volumetric parts ⅓ tr ∂τ/∂ΔF* (n, 9) and ⅓ m : ΔF* (n,) of D9 (n, 9, 9)."""
+    m = D9[:, [0, 4, 8]].sum(axis=1) / 3.0
+    return m, np.einsum("nk,nk->n", m, Fs) / 3.0
+
+
+def _blocks(D9, Fs, lam, m_apex, h_apex, lam_apex, beyond, k_apex, cols):
+    """The tangent blocks in numpy.
+
+    Arguments and results as :func:`fe_mpm.materials.mixed_compiled.blocks`, the
+    compiled route.
+    """
+    n = D9.shape[0]
+    m, h = _volumetric_parts(D9, Fs)
+    devD = D9 - np.eye(3).reshape(9)[None, :, None] * m[:, None, :]
+    devD_F = (devD @ Fs[:, :, None])[:, :, 0] / 3.0  # ∂s/∂δ
+    with np.errstate(invalid="ignore", divide="ignore"):  # h = 0 beyond the apex
+        ddelta_dF = np.where(
+            beyond[:, None],
+            -lam_apex[:, None] * m_apex[:, cols] / h_apex[:, None],
+            -lam[:, None] * m[:, cols] / h[:, None],
+        )
+        ddelta_dtau = np.where(beyond, 1.0 / k_apex, 1.0 / h)
+    ds_dF = devD[:, :, cols] * lam[:, None, None] + devD_F[:, :, None] * ddelta_dF[:, None, :]
+    return ds_dF, devD_F * ddelta_dtau[:, None], -ddelta_dF, -ddelta_dtau.reshape(n)
+
+
+def _nan_result(n: int, g: int, history: dict) -> MixedReturnResult:
+    """NaN everywhere: what a wild iterate gets, for Newton to report."""
+
+    def derivative():
+        return (
+            np.full((n, 3, 3, g, g), np.nan),
+            np.full((n, 3, 3), np.nan),
+            np.full((n, g, g), np.nan),
+            np.full(n, np.nan),
+        )
+
+    return MixedReturnResult(
+        np.full((n, 3, 3), np.nan),
+        np.full(n, np.nan),
+        derivative,
+        {name: np.full_like(value, np.nan) for name, value in history.items()},
+        np.zeros(n, dtype=np.int8),
+    )
