@@ -193,6 +193,11 @@ class _Gathered:
         points moved on) is evaluated again on them alone: the tangent costs about
         as much per point as the return.
         """
+        # A wild iterate's returns may hold inf: quiet, its NaN reaches Newton.
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+            return self._tangent()
+
+    def _tangent(self) -> np.ndarray:
         n = len(self.index)
         parts = np.unique(self.owner)
         if len(parts) == 1:  # all from one evaluation (an elastic iterate): no copy
