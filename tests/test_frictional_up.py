@@ -157,17 +157,22 @@ def test_beyond_the_apex_the_pressure_is_held_by_a_soft_spring():
         ("drucker-prager", "up"),
         ("mohr-coulomb", "up"),
         ("mn-dp", "up"),
+        ("mn", "up"),
         ("drucker-prager", "up-p2p1"),
     ],
 )
 @pytest.mark.parametrize("dim", [2, 3])
 def test_assembled_up_step_is_consistent(name, formulation, dim):
     """Taylor test of an assembled u-p (and P2/P1) step with points on the surface and
-    beyond the apex (c = 0.01 Pa, so that pressures of ±0.02 Pa put some there)."""
+    beyond the apex (c = 0.01 Pa, so that pressures of ±0.02 Pa put some there); both
+    Matsuoka–Nakai flows."""
     law = {
         "drucker-prager": fe_mpm.DruckerPrager(10.0, 0.3, 0.01, 30.0, 10.0, hardening=2.0),
         "mohr-coulomb": fe_mpm.MohrCoulomb(10.0, 0.3, 0.01, 30.0, 10.0),
         "mn-dp": fe_mpm.MatsuokaNakai(10.0, 0.3, **MAST_TABLE_3_5["dense"], apex_stress=0.01),
+        "mn": fe_mpm.MatsuokaNakai(
+            10.0, 0.3, **MAST_TABLE_3_5["dense"], apex_stress=0.01, potential="matsuoka-nakai"
+        ),
     }[name]
     rng, sim = _simulation(dim, formulation, seed=5, material=law)
     if "plastic_shear" in sim.points.history:

@@ -189,9 +189,8 @@ class _Gathered:
     def tangent(self) -> np.ndarray:
         """∂τ/∂ΔF* (n, 3, 3, 3, 3) at the shifted trials.
 
-        A part holding few of these points (the first evaluation, whose plastic
-        points moved on) is evaluated again on them alone: the tangent costs about
-        as much per point as the return.
+        A part holding few of these points is evaluated again on them alone: the
+        tangent costs about as much per point as the return.
         """
         # A wild iterate's returns may hold inf: quiet, its NaN reaches Newton.
         with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
@@ -199,12 +198,19 @@ class _Gathered:
 
     def _tangent(self) -> np.ndarray:
         n = len(self.index)
-        parts = np.unique(self.owner)
-        if len(parts) == 1:  # all from one evaluation (an elastic iterate): no copy
-            index, delta, out = self.shifted.parts[parts[0]]
-            if len(index) == n and np.array_equal(index, self.index):
-                return out.tangent
-        D = np.empty((n, 81))
+        parts = list(np.unique(self.owner))
+        # The part holding most of these points in their order (the first evaluation,
+        # where most points are elastic) lends its own array, which the rest then
+        # overwrites: only they are copied, and that part's tangent is spent.
+        D = None
+        for part in parts:
+            index, delta, out = self.shifted.parts[part]
+            if np.array_equal(index, self.index) and 2 * np.sum(self.owner == part) >= n:
+                D = out.tangent.reshape(n, 81)
+                parts.remove(part)
+                break
+        if D is None:
+            D = np.empty((n, 81))
         for part in parts:
             rows, where = self._rows(part)
             index, delta, out = self.shifted.parts[part]
@@ -337,10 +343,8 @@ def return_at_mean_stress(
     cols = np.array([3 * k + m for k in range(g) for m in range(g)])
 
     def derivative():
-        lam = np.exp(delta / 3.0)
-        Fs = (F3 * lam[:, None, None]).reshape(n, 9)
-        D9 = final.tangent().reshape(n, 9, 9)
-        # Where the spring holds a point, δ_apex's derivative is the cone side's.
+        # Where the spring holds a point, δ_apex's derivative is the cone side's. Read
+        # first: the final gathering may write into an evaluation's own tangent.
         on_spring = np.zeros(n, dtype=bool)
         on_spring[beyond] = True
         m_apex, h_apex, lam_apex = np.zeros((n, 9)), np.ones(n), np.ones(n)
@@ -350,6 +354,9 @@ def return_at_mean_stress(
                 at_apex.tangent().reshape(-1, 9, 9),
                 (F3[beyond] * lam_apex[beyond, None, None]).reshape(-1, 9),
             )
+        lam = np.exp(delta / 3.0)
+        Fs = (F3 * lam[:, None, None]).reshape(n, 9)
+        D9 = final.tangent().reshape(n, 9, 9)
         args = (D9, Fs, lam, m_apex, h_apex, lam_apex, on_spring, APEX_STIFFNESS_FRACTION * K)
         kernels = route.compiled()
         if kernels is not None:
