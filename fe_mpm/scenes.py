@@ -137,7 +137,7 @@ def strip_footing(
     material=None,
     **options,
 ) -> Simulation:
-    """The rigid strip footing of Iaconeta (2019) §6.2 on weightless Tresca soil.
+    """The rigid strip footing of Iaconeta (2019) §6.2 on weightless soil, Tresca by default.
 
     The scene of ``demos/strip_footing.py`` (which explains it): a half model with
     rollers on the sides and a fixed base; the footing is a :class:`PointDirichlet`
@@ -180,8 +180,9 @@ def strip_footing(
         edge_radius: Half-width of that zone (m); 0.4 B by default.
         edge_line: The edge's path x = B/2 as a grid line (default), so that the
             footing ends on grid nodes (see :func:`fe_mpm.meshes.strip_footing`).
-        material: The soil's law; default ``MohrCoulomb.tresca(E, nu, cu)`` (then
-            ``E`` also sets the default penalty).
+        material: The soil's law; default ``MohrCoulomb.tresca(E, nu, cu)``. Given,
+            ``nu`` and ``cu`` are not used, and ``E`` still sets the default
+            penalty: pass the law's own.
         options: Passed on to :class:`~fe_mpm.simulation.Simulation`.
     """
     per_cell = check_int("strip_footing", "base_points_per_cell", base_points_per_cell, lo=1)

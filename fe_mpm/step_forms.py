@@ -384,10 +384,10 @@ class ReturnMapAtIterate:
 
     def refresh(self, tangent: bool = True) -> ReturnMapResult | MixedReturnResult:
         """Evaluate the return map at ``w`` unless done at this iterate; pack it."""
+        if self.forms.at_pressure:
+            return self._refresh_at_pressure(tangent)
         forms, layout = self.forms, self.layout
         g, q, lin = self.points.gdim, forms.q, forms.linearisation
-        if forms.at_pressure:
-            return self._refresh_at_pressure(tangent)
         if self._at is None or not np.array_equal(self._at, self.w.x.array):
             dF = forms.dF_at_points.evaluate(layout).reshape(-1, g, g)
             self.result = forms.material.return_map(dF, self.points.history)

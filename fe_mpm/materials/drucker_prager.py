@@ -101,6 +101,11 @@ class _ConeLaw(LinearisedStress, IsotropicModuli):
         """The scalar internal variables at t_{n+1} from ‖dev Δεᵖ‖ (n,)."""
         return {"plastic_strain": history["plastic_strain"] + _SQRT_2_3 * dgamma}
 
+    @property
+    def pressure_dependent(self) -> bool:
+        """Yes: in u-p the return runs at the field's pressure."""
+        return True
+
     def _matsuoka_nakai_kappa(self, history: dict[str, np.ndarray]) -> np.ndarray | None:
         """Matsuoka–Nakai's κ_F per point, or None for the Drucker–Prager cone."""
         return None

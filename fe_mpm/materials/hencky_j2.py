@@ -99,11 +99,6 @@ class HenckyJ2(LinearisedStress, IsotropicModuli):
             ),
         }
 
-    @property
-    def pressure_dependent(self) -> bool:
-        """No: the u-p forms keep their own volumetric law."""
-        return False
-
     def return_map(self, dF: np.ndarray, history: dict[str, np.ndarray]) -> ReturnMapResult:
         """Stress, tangent and history at t_{n+1} for step increments ΔF.
 

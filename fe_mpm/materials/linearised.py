@@ -173,12 +173,13 @@ class LinearisedStress:
 
     @property
     def pressure_dependent(self) -> bool:
-        """Whether the return depends on the mean stress.
+        """Whether the return depends on the mean stress: no, unless the law says so.
 
-        Then, in u-p, it runs at the field's pressure
-        (:mod:`~fe_mpm.materials.mixed_return`).
+        A law that does (the cones, Mohr-Coulomb with φ > 0) runs in u-p at the
+        field's pressure (:mod:`~fe_mpm.materials.mixed_return`), which needs a Hencky
+        principal-space return with ``be`` in its history.
         """
-        return True
+        return False
 
     def return_at_pressure(self, dF: np.ndarray, mean_stress: np.ndarray, history: dict):
         """The return at the field's Kirchhoff mean stress (n,), Pa.

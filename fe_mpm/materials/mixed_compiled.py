@@ -14,9 +14,7 @@ from fe_mpm.materials.compiled import jit
 
 
 @jit
-def _blocks_loop(
-    D9, Fs, lam, m_apex, h_apex, lam_apex, beyond, k_apex, cols, out_s, out_sm, out_v, out_vm
-):
+def _blocks_loop(D9, Fs, lam, spring, cols, out_s, out_sm, out_v, out_vm):
     n, nc = D9.shape[0], cols.shape[0]
     m = np.empty(9)
     devD_F = np.empty(9)
@@ -35,49 +33,43 @@ def _blocks_loop(
                 dev = D9[p, r, c] - m[c] if on_diagonal else D9[p, r, c]
                 acc += dev * Fs[p, c]
             devD_F[r] = acc / 3.0
-        if beyond[p]:
-            for j in range(nc):
-                dd[j] = -lam_apex[p] * m_apex[p, cols[j]] / h_apex[p]
-            dd_tau = 1.0 / k_apex
-        else:
-            for j in range(nc):
-                dd[j] = -lam[p] * m[cols[j]] / h
-            dd_tau = 1.0 / h
+        for j in range(nc):
+            dd[j] = -lam[p] * m[cols[j]] / h
+        # On the spring s is the apex's, whatever τ̄_m; δ follows τ̄_m at its stiffness.
+        on_spring = spring[p] > 0.0
+        dd_tau = 1.0 / spring[p] if on_spring else 1.0 / h
+        ds_tau = 0.0 if on_spring else 1.0 / h
         for r in range(9):
             on_diagonal = r == 0 or r == 4 or r == 8
             for j in range(nc):
                 c = cols[j]
                 dev = D9[p, r, c] - m[c] if on_diagonal else D9[p, r, c]
                 out_s[p, r, j] = dev * lam[p] + devD_F[r] * dd[j]
-            out_sm[p, r] = devD_F[r] * dd_tau
+            out_sm[p, r] = devD_F[r] * ds_tau
         for j in range(nc):
             out_v[p, j] = -dd[j]
         out_vm[p] = -dd_tau
 
 
-def blocks(D9, Fs, lam, m_apex, h_apex, lam_apex, beyond, k_apex, cols):
+def blocks(D9, Fs, lam, spring, cols):
     """∂s/∂ΔF (n, 9, g²), ∂s/∂τ̄_m (n, 9), ∂v/∂ΔF (n, g²), ∂v/∂τ̄_m (n,).
 
     Args:
-        D9: ∂τ/∂ΔF* at the shifted trials (n, 9, 9).
-        Fs: ΔF* (n, 9).
+        D9: ∂τ/∂ΔF* at the shifted trials the returns were taken at (n, 9, 9), Pa.
+        Fs: Those ΔF* = e^{δ/3} ΔF (n, 9).
         lam: e^{δ/3} (n,).
-        m_apex: ⅓ tr ∂τ/∂ΔF* (n, 9) where the trial first reaches the apex (read
-            where ``beyond``).
-        h_apex: ⅓ m : ΔF* (n,) there.
-        lam_apex: e^{δ/3} (n,) there.
-        beyond: Whether the soft spring holds the point (n,).
-        k_apex: The spring's stiffness K_apex (Pa).
+        spring: ∂τ̄_m/∂δ (Pa) where a spring holds the point (its return is the
+            apex's, taken where the trial first reaches it), 0 elsewhere (n,).
         cols: The columns kl that ΔF varies (g²,).
     """
     n, nc = D9.shape[0], cols.shape[0]
     out_s, out_sm = np.empty((n, 9, nc)), np.empty((n, 9))
     out_v, out_vm = np.empty((n, nc)), np.empty(n)
-    arrays = [np.ascontiguousarray(a, dtype=float) for a in (D9, Fs, lam, m_apex, h_apex, lam_apex)]
     _blocks_loop(
-        *arrays,
-        np.ascontiguousarray(beyond, dtype=np.bool_),
-        float(k_apex),
+        np.ascontiguousarray(D9, dtype=float),
+        np.ascontiguousarray(Fs, dtype=float),
+        np.ascontiguousarray(lam, dtype=float),
+        np.ascontiguousarray(spring, dtype=float),
         np.ascontiguousarray(cols, dtype=np.int64),
         out_s,
         out_sm,

@@ -47,17 +47,27 @@ function theorem gives
 and :math:`\partial s/\partial\bar\tau_m = \tfrac13(\operatorname{dev} D : \Delta F^*)/h`.
 
 **Beyond the apex.** A cone's mean stress cannot exceed its apex (or cutoff)
-:math:`\tau_{max}`: there :math:`\tau_m(\delta)` is flat and has no inverse. If the
-field asks for more, the point is held at :math:`\delta_{apex}`, where the trial first
-returns to the apex, extended by a soft volumetric spring,
+:math:`\tau_{max}`: there :math:`\tau_m(\delta)` is flat and has no inverse. From
+:math:`\tau_a = \tau_{max}` less 1e-9 of the stresses on, the point keeps the return
+at :math:`\delta_{apex}`, where its trial reaches :math:`\tau_a` (on the cone's or the
+elastic side: its deviator, history and tangent), and δ goes on by a spring, stiff
+up to the apex and soft beyond,
 
-.. math::  \delta = \delta_{apex} + (\bar\tau_m - \tau_{max})/K_{apex},
+.. math::  \delta = \delta_{apex} + \frac{\min(\bar\tau_m, \tau_{max}) - \tau_a}{K}
+   + \frac{\max(\bar\tau_m - \tau_{max}, 0)}{K_{apex}},
    \qquad K_{apex} = 10^{-3} K,
 
-which keeps :math:`v` continuous and pins the pressure within
+which keeps :math:`v` and :math:`s` continuous and pins the pressure within
 :math:`K_{apex}` times the excess dilation of the apex (a sand pulled apart carries no
-tension; :math:`K_{apex} = K` would give it a spurious tensile stiffness). Its
-derivative comes from :math:`\tau_m(\delta_{apex}) = \tau_{max}` on the cone's side.
+tension; :math:`K_{apex} = K` would give it a spurious tensile stiffness). The
+derivatives are those above at :math:`\delta_{apex}`, with
+:math:`\partial s/\partial\bar\tau_m = 0` and :math:`\partial\delta/\partial\bar\tau_m`
+the spring's 1/K or 1/K_apex. Both choices matter for a cohesionless soil at rest:
+its points sit exactly at the apex (zero stress), where the first iterate of a u-p
+step (p = 0) finds them. The saturated return there has no shear stiffness, and
+the soft spring no volumetric one; the apex's return from its elastic side and the
+stiff spring give the first iterate the elastic tangent
+(``test_a_cohesionless_block_under_gravity_starts_from_rest_in_up``).
 """
 
 from __future__ import annotations
@@ -131,8 +141,8 @@ class _Shifted:
     """The law's returns for volumetrically shifted trials, each point's last one kept.
 
     A point's search ends at an iterate that was evaluated, so the return at its
-    shift is already at hand: :meth:`last` gathers them, and only the points whose
-    shift moved after their last evaluation (beyond the apex) are evaluated again.
+    shift is already at hand: :meth:`last` gathers them. Points are addressed by
+    increasing indices (``np.flatnonzero``, ``np.arange``), which :meth:`last` relies on.
     """
 
     def __init__(self, law, F3: np.ndarray, history: dict[str, np.ndarray]):
@@ -158,8 +168,11 @@ class _Shifted:
             return self.law.return_map(scaled, _subset(self.history, index))
 
     def last(self, index: np.ndarray) -> _Gathered:
-        """The last returns of the points ``index``."""
-        return _Gathered(self, index, self.owner[index].copy())
+        """The last returns of the points ``index`` (increasing), every one evaluated."""
+        owner = self.owner[index].copy()
+        if np.any(owner < 0):
+            raise RuntimeError("mixed return: a point was gathered before any return of it")
+        return _Gathered(self, index, owner)
 
 
 class _Gathered:
@@ -245,6 +258,12 @@ def _solve_shift(
         d = delta[idx]
         mean, slope = shifted.mean_and_slope(d, idx)
         g = mean - target[idx]
+        wild = ~np.isfinite(g)  # an iterate the law cannot return: no search helps
+        if np.any(wild):
+            delta[idx[wild]] = np.nan
+            active[idx[wild]] = False
+            idx, d, mean, g = idx[~wild], d[~wild], mean[~wild], g[~wild]
+            slope = None if slope is None else slope[~wild]
         if slope is None:  # a law without its principal tangent: the elastic slope
             slope = np.full(idx.size, K)
         below = g < 0.0
@@ -317,54 +336,47 @@ def return_at_mean_stress(
         # An inverted iterate: NaN, which Newton reports with the step.
         return _nan_result(n, g, history)
     shifted = _Shifted(law, F3, history)
-    start = tau_m / K - eps_v  # the elastic shift
-    scale = np.abs(tau_m) + law.mu * 1e-6
     # A level just below the law's largest mean stress, from which on a point is
     # held by the soft spring.
-    near_top = spring_start(_largest_mean_stress(law, shifted, start), law.mu)
+    top = _largest_mean_stress(law, shifted, tau_m / K - eps_v)
+    near_top = spring_start(top, law.mu)
     beyond = tau_m > near_top
-    delta = _solve_shift(
-        shifted, np.where(beyond, near_top, tau_m), start, K, SHIFT_TOLERANCE * scale
-    )
+    target = np.where(beyond, near_top, tau_m)
+    # From the elastic shift of the target: a point on the spring then reaches the apex
+    # by the same iterates whatever τ̄_m, so its state does not depend on τ̄_m at all.
+    start = target / K - eps_v
+    scale = np.abs(target) + law.mu * 1e-6
+    delta = _solve_shift(shifted, target, start, K, SHIFT_TOLERANCE * scale)
     if not np.all(np.isfinite(delta)):
         return _nan_result(n, g, history)
+    # On the spring the point keeps the state where its trial first reaches the apex
+    # (its deviator, history and tangent, all from that evaluation); only δ goes on:
+    # stiffly (K) up to the apex, 1e-9 of the stresses away, and softly beyond.
     beyond = np.flatnonzero(beyond)
-    at_apex = shifted.last(beyond)  # where the trial first returns to the apex
-    delta_apex = delta[beyond]
-    delta[beyond] += (tau_m[beyond] - near_top[beyond]) / (APEX_STIFFNESS_FRACTION * K)
-    if beyond.size:
-        shifted.mean_and_slope(delta[beyond], beyond)
+    evaluated = delta.copy()  # the shifts the kept returns were taken at
     final = shifted.last(np.arange(n))
+    k_apex = APEX_STIFFNESS_FRACTION * K
+    over = np.maximum(tau_m[beyond] - top[beyond], 0.0)
+    delta[beyond] += (tau_m[beyond] - over - near_top[beyond]) / K + over / k_apex
+    spring = np.zeros(n)  # ∂τ̄_m/∂δ on the spring (Pa), 0 elsewhere
+    spring[beyond] = np.where(over > 0.0, k_apex, K)
     final.region[beyond] = BEYOND_APEX
     tau = final.tau
     s = tau - np.trace(tau, axis1=1, axis2=2)[:, None, None] / 3.0 * np.eye(3)
-
-    # The columns kl of a (n, 9, 9) tangent that ΔF varies (the in-plane ones in 2D).
-    cols = np.array([3 * k + m for k in range(g) for m in range(g)])
+    cols = np.array([3 * k + m for k in range(g) for m in range(g)])  # the kl ΔF varies
 
     def derivative():
-        # Where the spring holds a point, δ_apex's derivative is the cone side's. Read
-        # first: the final gathering may write into an evaluation's own tangent.
-        on_spring = np.zeros(n, dtype=bool)
-        on_spring[beyond] = True
-        m_apex, h_apex, lam_apex = np.zeros((n, 9)), np.ones(n), np.ones(n)
-        if beyond.size:
-            lam_apex[beyond] = np.exp(delta_apex / 3.0)
-            m_apex[beyond], h_apex[beyond] = _volumetric_parts(
-                at_apex.tangent().reshape(-1, 9, 9),
-                (F3[beyond] * lam_apex[beyond, None, None]).reshape(-1, 9),
-            )
-        lam = np.exp(delta / 3.0)
+        lam = np.exp(evaluated / 3.0)
         Fs = (F3 * lam[:, None, None]).reshape(n, 9)
         D9 = final.tangent().reshape(n, 9, 9)
-        args = (D9, Fs, lam, m_apex, h_apex, lam_apex, on_spring, APEX_STIFFNESS_FRACTION * K)
+        args = (D9, Fs, lam, spring, cols)
         kernels = route.compiled()
         if kernels is not None:
             from fe_mpm.materials import mixed_compiled
 
-            ds_dF, ds_dm, dv_dF, dv_dm = mixed_compiled.blocks(*args, cols)
+            ds_dF, ds_dm, dv_dF, dv_dm = mixed_compiled.blocks(*args)
         else:
-            ds_dF, ds_dm, dv_dF, dv_dm = _blocks(*args, cols)
+            ds_dF, ds_dm, dv_dF, dv_dm = _blocks(*args)
         return (
             ds_dF.reshape(n, 3, 3, g, g),
             ds_dm.reshape(n, 3, 3),
@@ -381,25 +393,22 @@ def _volumetric_parts(D9: np.ndarray, Fs: np.ndarray) -> tuple[np.ndarray, np.nd
     return m, np.einsum("nk,nk->n", m, Fs) / 3.0
 
 
-def _blocks(D9, Fs, lam, m_apex, h_apex, lam_apex, beyond, k_apex, cols):
+def _blocks(D9, Fs, lam, spring, cols):
     """The tangent blocks in numpy.
 
     Arguments and results as :func:`fe_mpm.materials.mixed_compiled.blocks`, the
     compiled route.
     """
-    n = D9.shape[0]
     m, h = _volumetric_parts(D9, Fs)
     devD = D9 - np.eye(3).reshape(9)[None, :, None] * m[:, None, :]
     devD_F = (devD @ Fs[:, :, None])[:, :, 0] / 3.0  # ∂s/∂δ
-    with np.errstate(invalid="ignore", divide="ignore"):  # h = 0 beyond the apex
-        ddelta_dF = np.where(
-            beyond[:, None],
-            -lam_apex[:, None] * m_apex[:, cols] / h_apex[:, None],
-            -lam[:, None] * m[:, cols] / h[:, None],
-        )
-        ddelta_dtau = np.where(beyond, 1.0 / k_apex, 1.0 / h)
+    on_spring = spring > 0.0
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ddelta_dF = -lam[:, None] * m[:, cols] / h[:, None]
+        ddelta_dtau = 1.0 / np.where(on_spring, spring, h)
     ds_dF = devD[:, :, cols] * lam[:, None, None] + devD_F[:, :, None] * ddelta_dF[:, None, :]
-    return ds_dF, devD_F * ddelta_dtau[:, None], -ddelta_dF, -ddelta_dtau.reshape(n)
+    ds_dtau = np.where(on_spring[:, None], 0.0, devD_F / h[:, None])
+    return ds_dF, ds_dtau, -ddelta_dF, -ddelta_dtau
 
 
 def _nan_result(n: int, g: int, history: dict) -> MixedReturnResult:
