@@ -66,37 +66,31 @@ def main() -> None:
         if "plastic_shear" in history:
             history["plastic_shear"][:] = 0.01
         law.return_map(dF[:10], {k: v[:10] for k, v in history.items()}).tangent
-        returns, tangents = [], []
-        for _ in range(args.repeat):
-            t0 = time.perf_counter()
-            result = law.return_map(dF, history)
-            t1 = time.perf_counter()
-            result.tangent
-            returns.append(t1 - t0)
-            tangents.append(time.perf_counter() - t1)
-        plastic = np.mean(result.region > 0)
-        print(
-            f"{name:30s} {1e6 * statistics.median(returns) / n:8.2f} "
-            f"{1e6 * statistics.median(tangents) / n:8.2f} {plastic:8.2f}"
-        )
+        result = _row(name, lambda: law.return_map(dF, history), args.repeat, n)
         if getattr(law, "pressure_dependent", False) and _runs_in_up(law):
             mean = np.trace(result.tau, axis1=1, axis2=2) / 3.0
             mean *= 1.0 + rng.uniform(-0.05, 0.05, n)
             law.return_at_pressure(dF[:10], mean[:10], {k: v[:10] for k, v in history.items()})
-            returns, tangents = [], []
-            for _ in range(args.repeat):
-                t0 = time.perf_counter()
-                mixed = law.return_at_pressure(dF, mean, history)
-                t1 = time.perf_counter()
-                mixed.tangent
-                returns.append(t1 - t0)
-                tangents.append(time.perf_counter() - t1)
-            plastic = np.mean(mixed.region > 0)
-            print(
-                f"{'  at the field pressure (u-p)':30s} "
-                f"{1e6 * statistics.median(returns) / n:8.2f} "
-                f"{1e6 * statistics.median(tangents) / n:8.2f} {plastic:8.2f}"
-            )
+            label = "  at the field pressure (u-p)"
+            _row(label, lambda: law.return_at_pressure(dF, mean, history), args.repeat, n)
+
+
+def _row(name: str, call, repeat: int, n: int):
+    """Print the medians of ``repeat`` calls (µs per point) and the plastic share."""
+    returns, tangents = [], []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        result = call()
+        t1 = time.perf_counter()
+        result.tangent
+        returns.append(t1 - t0)
+        tangents.append(time.perf_counter() - t1)
+    plastic = np.mean(result.region > 0)
+    print(
+        f"{name:30s} {1e6 * statistics.median(returns) / n:8.2f} "
+        f"{1e6 * statistics.median(tangents) / n:8.2f} {plastic:8.2f}"
+    )
+    return result
 
 
 if __name__ == "__main__":

@@ -104,8 +104,7 @@ def parse_args(argv=None):
         "--formulation",
         choices=("u", "up"),
         default="u",
-        help="u (the thesis's), or u-p, where the law returns at the pressure field's mean "
-        "stress",
+        help="u (the thesis's), or u-p, where the law returns at the pressure field's mean stress",
     )
     p.add_argument("--output", default="column_collapse_output", help="output folder")
     p.add_argument("--no-output", action="store_true", help="write no files")

@@ -27,10 +27,11 @@ def finite_difference_error(law, dF, history, tangent, h=1e-7):
     return error, same
 
 
-def assert_step_is_consistent(sim, rng, regions_seen: int) -> None:
+def assert_step_is_consistent(sim, rng, regions_seen: int) -> np.ndarray:
     """Taylor test of an assembled step of ``sim`` (a ``test_taylor._simulation``) at a
     random iterate: first- and second-order remainders, no point changing region
-    between the evaluations, and at least ``regions_seen`` regions among the points."""
+    between the evaluations, and at least ``regions_seen`` regions among the points,
+    which it returns."""
     _, _, R, J, _ = sim.prepare_step(1.0)
     sim.w.x.array[:] = rng.uniform(-0.02, 0.02, sim.w.x.array.size)
     regions = []
@@ -44,3 +45,4 @@ def assert_step_is_consistent(sim, rng, regions_seen: int) -> None:
     assert len(np.unique(regions[0])) >= regions_seen
     assert np.all(rates(TAYLOR_EPS, r0) > 0.9)
     assert np.all(rates(TAYLOR_EPS, r1) > 1.9), f"remainders {r1}"
+    return regions[0]
