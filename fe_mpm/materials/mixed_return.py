@@ -143,6 +143,11 @@ class _Shifted:
     A point's search ends at an iterate that was evaluated, so the return at its
     shift is already at hand: :meth:`last` gathers them. Points are addressed by
     increasing indices (``np.flatnonzero``, ``np.arange``), which :meth:`last` relies on.
+
+    Args:
+        law: The pointwise law.
+        F3: The points' ΔF embedded in 3D (n, 3, 3).
+        history: The law's internal variables at t_n, each (n, ...).
     """
 
     def __init__(self, law, F3: np.ndarray, history: dict[str, np.ndarray]):
@@ -238,9 +243,10 @@ def _solve_shift(
 ) -> np.ndarray:
     """δ with τ_m(δ) = target per point (n,), NaN where not found (targets below the apex).
 
-    Newton with the law's own slope ∂τ_m/∂δ, safeguarded by the bracket the
-    iterates build (bisection where a step leaves it). τ_m is nondecreasing in δ
-    and, for the cones and Mohr-Coulomb, linear in each return region; where it is
+    ``target`` (n,) and ``tolerance`` (n,) are in Pa, ``start`` (n,) is the first δ
+    (strain), K the bulk modulus (Pa). Newton with the law's own slope ∂τ_m/∂δ,
+    safeguarded by the bracket the iterates build (bisection where a step leaves
+    it). τ_m is nondecreasing in δ and, for the cones and Mohr-Coulomb, linear in each return region; where it is
     also concave (dilatant flow: the slope falls from K to the cone's to 0 at the
     apex), Newton from below the root never passes it and lands on it from within
     its region. Where τ_m is flat above the target (the apex), the step goes down by
