@@ -246,10 +246,10 @@ def _solve_shift(
     ``target`` (n,) and ``tolerance`` (n,) are in Pa, ``start`` (n,) is the first δ
     (strain), K the bulk modulus (Pa). Newton with the law's own slope ∂τ_m/∂δ,
     safeguarded by the bracket the iterates build (bisection where a step leaves
-    it). τ_m is nondecreasing in δ and, for the cones and Mohr-Coulomb, linear in each return region; where it is
-    also concave (dilatant flow: the slope falls from K to the cone's to 0 at the
-    apex), Newton from below the root never passes it and lands on it from within
-    its region. Where τ_m is flat above the target (the apex), the step goes down by
+    it). τ_m is nondecreasing in δ and, for the cones and Mohr-Coulomb, linear in
+    each return region; where it is also concave (dilatant flow: the slope falls
+    from K to the cone's to 0 at the apex), Newton from below the root never passes
+    it and lands on it from within its region. Where τ_m is flat above the target (the apex), the step goes down by
     :data:`FLAT_STEP`, doubling until below. Every point's search ends at an
     iterate that was evaluated (``shifted`` keeps it).
     """
