@@ -249,9 +249,9 @@ def _solve_shift(
     it). τ_m is nondecreasing in δ and, for the cones and Mohr-Coulomb, linear in
     each return region; where it is also concave (dilatant flow: the slope falls
     from K to the cone's to 0 at the apex), Newton from below the root never passes
-    it and lands on it from within its region. Where τ_m is flat above the target (the apex), the step goes down by
-    :data:`FLAT_STEP`, doubling until below. Every point's search ends at an
-    iterate that was evaluated (``shifted`` keeps it).
+    it and lands on it from within its region. Where τ_m is flat above the target
+    (the apex), the step goes down by :data:`FLAT_STEP`, doubling until below. Every
+    point's search ends at an iterate that was evaluated (``shifted`` keeps it).
     """
     n = len(target)
     delta, lo, hi = start.copy(), np.full(n, -np.inf), np.full(n, np.inf)
