@@ -147,46 +147,14 @@ class StepForms:
         self.at_pressure = (
             self.pointwise and spec.pressure and getattr(material, "pressure_dependent", False)
         )
-        self.linearisation, dynamic = None, set()  # slot fields that change during Newton
-        mean_stress = None
-        if self.at_pressure:
-            mean_stress = -ufl.det(embed_3d(self.dF * self.F_n)) * q.at_points(fields.p)
-            lin = self.linearisation = MixedLinearisation(
-                q.function((3, 3), "s_k"),
-                q.function((9 * g * g,), "ds_dF_k"),
-                q.function((3, 3), "ds_dm_k"),
-                q.function((), "v_k"),
-                q.function((g, g), "dv_dF_k"),
-                q.function((), "dv_dm_k"),
-                q.function((g, g), "dF_k", empty=np.eye(g)),
-                q.function((), "tau_m_k"),
-                g,
-            )
-            dynamic = {
-                lin.deviator,
-                lin.deviator_tangent,
-                lin.deviator_pressure,
-                lin.volumetric,
-                lin.volumetric_tangent,
-                lin.volumetric_pressure,
-                lin.dF,
-                lin.mean_stress,
-            }
-            self.dF_at_points = PointExpression(
-                ufl.as_vector([self.dF[i, j] for i in range(g) for j in range(g)] + [mean_stress]),
-                q,
-            )
-        elif self.pointwise:
-            lin = self.linearisation = Linearisation(
-                q.function((3, 3), "tau_k"),
-                q.function((9 * g * g,), "tangent_k"),
-                q.function((g, g), "dF_k", empty=np.eye(g)),
-                g,
-            )
-            dynamic = {lin.tau, lin.tangent, lin.dF}
-            self.dF_at_points = PointExpression(
-                ufl.as_vector([self.dF[i, j] for i in range(g) for j in range(g)]), q
-            )
+        self.linearisation, dynamic, mean_stress = None, set(), None
+        if self.pointwise:
+            if self.at_pressure:
+                mean_stress = -ufl.det(embed_3d(self.dF * self.F_n)) * q.at_points(fields.p)
+            kind = MixedLinearisation if self.at_pressure else Linearisation
+            lin = self.linearisation = kind.on(q, g)
+            dynamic = set(lin.slot_fields)  # they change during Newton
+            self.values_at_points = PointExpression(lin.point_values(self.dF, mean_stress), q)
         self.state = PointState(self.dF, self.history, self.linearisation, mean_stress)
         w = ufl.TestFunctions(fields.W)[0] if spec.pressure else ufl.TestFunction(fields.W)
         R = self._residual(fields, conditions, ppp)
@@ -383,51 +351,27 @@ class ReturnMapAtIterate:
         self._has_tangent = False
 
     def refresh(self, tangent: bool = True) -> ReturnMapResult | MixedReturnResult:
-        """Evaluate the return map at ``w`` unless done at this iterate; pack it."""
-        if self.forms.at_pressure:
-            return self._refresh_at_pressure(tangent)
-        forms, layout = self.forms, self.layout
-        g, q, lin = self.points.gdim, forms.q, forms.linearisation
-        if self._at is None or not np.array_equal(self._at, self.w.x.array):
-            dF = forms.dF_at_points.evaluate(layout).reshape(-1, g, g)
-            self.result = forms.material.return_map(dF, self.points.history)
-            q.pack(lin.tau, layout, self.result.tau)
-            q.pack(lin.dF, layout, dF, empty=np.eye(g))
-            # The residual reads D_k only times ΔF − ΔF_k = 0: an old one must not
-            # linger (it may belong to another step's entities), none is needed.
-            q.values.pop(lin.tangent, None)
-            self._at, self._has_tangent = self.w.x.array.copy(), False
-        if tangent and not self._has_tangent:
-            q.pack(lin.tangent, layout, Linearisation.flat_tangent(self.result.tangent))
-            self._has_tangent = True
-        return self.result
+        """Evaluate the return map at ``w`` unless done at this iterate; pack it.
 
-    def _refresh_at_pressure(self, tangent: bool) -> MixedReturnResult:
-        """:meth:`refresh` for a pressure-dependent law in u-p: the return at −J p."""
+        A pressure-dependent law in u-p returns at −J p (its linearisation says so).
+        """
         forms, layout = self.forms, self.layout
-        g, q, lin = self.points.gdim, forms.q, forms.linearisation
+        q, lin, eye = forms.q, forms.linearisation, np.eye(self.points.gdim)
         if self._at is None or not np.array_equal(self._at, self.w.x.array):
-            values = forms.dF_at_points.evaluate(layout)
-            dF, mean_stress = values[:, : g * g].reshape(-1, g, g), values[:, g * g]
-            self.result = forms.material.return_at_pressure(dF, mean_stress, self.points.history)
-            q.pack(lin.deviator, layout, self.result.deviator)
-            q.pack(lin.volumetric, layout, self.result.volumetric)
-            q.pack(lin.dF, layout, dF, empty=np.eye(g))
-            q.pack(lin.mean_stress, layout, mean_stress)
-            for stale in (
-                lin.deviator_tangent,
-                lin.deviator_pressure,
-                lin.volumetric_tangent,
-                lin.volumetric_pressure,
-            ):
-                q.values.pop(stale, None)
+            values = forms.values_at_points.evaluate(layout)
+            self.result, packed = lin.returned(forms.material, values, self.points.history)
+            for field, array in packed.items():
+                q.pack(field, layout, array, empty=eye if field is lin.dF else 0.0)
+            # The residual reads the tangent only times a difference from this
+            # iterate, which is 0: an old one must not linger (it may belong to
+            # another step's entities), and none is needed.
+            for field in lin.slot_fields:
+                if field not in packed:
+                    q.values.pop(field, None)
             self._at, self._has_tangent = self.w.x.array.copy(), False
         if tangent and not self._has_tangent:
-            ds_dF, ds_dm, dv_dF, dv_dm = self.result.tangent
-            q.pack(lin.deviator_tangent, layout, Linearisation.flat_tangent(ds_dF))
-            q.pack(lin.deviator_pressure, layout, ds_dm)
-            q.pack(lin.volumetric_tangent, layout, dv_dF)
-            q.pack(lin.volumetric_pressure, layout, dv_dm)
+            for field, array in lin.tangent_values(self.result).items():
+                q.pack(field, layout, array)
             self._has_tangent = True
         return self.result
 

@@ -64,6 +64,39 @@ class Linearisation:
     dF: ufl.Coefficient
     gdim: int
 
+    @classmethod
+    def on(cls, q, g: int) -> Linearisation:
+        """The slot fields on the material-point quadrature ``q``, g dimensions."""
+        return cls(
+            q.function((3, 3), "tau_k"),
+            q.function((9 * g * g,), "tangent_k"),
+            q.function((g, g), "dF_k", empty=np.eye(g)),
+            g,
+        )
+
+    @property
+    def slot_fields(self) -> tuple[ufl.Coefficient, ...]:
+        """The fields that change at every iterate; the tangent ones last."""
+        return (self.tau, self.dF, self.tangent)
+
+    def point_values(self, dF: ufl.core.expr.Expr, mean_stress=None) -> ufl.core.expr.Expr:
+        """What the return needs at the points, as one UFL vector: ΔF's g² entries."""
+        return ufl.as_vector(_entries(dF, self.gdim))
+
+    def returned(self, material, values: np.ndarray, history: dict):
+        """The law's return at the iterate, and the slot values it sets.
+
+        ``values`` (n, g²) are :meth:`point_values` at the points; the slot values
+        are field -> (n, ...).
+        """
+        dF = values.reshape(-1, self.gdim, self.gdim)
+        result = material.return_map(dF, history)
+        return result, {self.tau: result.tau, self.dF: dF}
+
+    def tangent_values(self, result: ReturnMapResult) -> dict:
+        """The tangent's slot values, field -> (n, ...): computed only for a Jacobian."""
+        return {self.tangent: self.flat_tangent(result.tangent)}
+
     def kirchhoff(self, dF: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
         """τ_k + D_k : (ΔF − ΔF_k), 3x3 (Pa)."""
         g = self.gdim
@@ -117,6 +150,65 @@ class MixedLinearisation:
     mean_stress: ufl.Coefficient
     gdim: int
 
+    @classmethod
+    def on(cls, q, g: int) -> MixedLinearisation:
+        """The slot fields on the material-point quadrature ``q``, g dimensions."""
+        return cls(
+            q.function((3, 3), "s_k"),
+            q.function((9 * g * g,), "ds_dF_k"),
+            q.function((3, 3), "ds_dm_k"),
+            q.function((), "v_k"),
+            q.function((g, g), "dv_dF_k"),
+            q.function((), "dv_dm_k"),
+            q.function((g, g), "dF_k", empty=np.eye(g)),
+            q.function((), "tau_m_k"),
+            g,
+        )
+
+    @property
+    def slot_fields(self) -> tuple[ufl.Coefficient, ...]:
+        """The fields that change at every iterate."""
+        return (
+            self.deviator,
+            self.volumetric,
+            self.dF,
+            self.mean_stress,
+            self.deviator_tangent,
+            self.deviator_pressure,
+            self.volumetric_tangent,
+            self.volumetric_pressure,
+        )
+
+    def point_values(self, dF: ufl.core.expr.Expr, mean_stress: ufl.core.expr.Expr):
+        """What the return needs at the points, as one UFL vector: ΔF's g², then τ̄_m."""
+        return ufl.as_vector([*_entries(dF, self.gdim), mean_stress])
+
+    def returned(self, material, values: np.ndarray, history: dict):
+        """The law's return at the field's pressure at the iterate, and the slot values.
+
+        ``values`` (n, g² + 1) are :meth:`point_values` at the points; the slot values
+        are field -> (n, ...).
+        """
+        g = self.gdim
+        dF, mean_stress = values[:, : g * g].reshape(-1, g, g), values[:, g * g]
+        result = material.return_at_pressure(dF, mean_stress, history)
+        return result, {
+            self.deviator: result.deviator,
+            self.volumetric: result.volumetric,
+            self.dF: dF,
+            self.mean_stress: mean_stress,
+        }
+
+    def tangent_values(self, result) -> dict:
+        """The four tangent blocks' slot values, field -> (n, ...): only for a Jacobian."""
+        ds_dF, ds_dm, dv_dF, dv_dm = result.tangent
+        return {
+            self.deviator_tangent: Linearisation.flat_tangent(ds_dF),
+            self.deviator_pressure: ds_dm,
+            self.volumetric_tangent: dv_dF,
+            self.volumetric_pressure: dv_dm,
+        }
+
     def deviatoric(self, dF: ufl.core.expr.Expr, mean_stress: ufl.core.expr.Expr):
         """s_k + ∂s/∂ΔF : (ΔF − ΔF_k) + ∂s/∂τ̄_m (τ̄_m − τ̄_m,k), 3x3 (Pa)."""
         g = self.gdim
@@ -141,6 +233,11 @@ class MixedLinearisation:
             + ufl.inner(self.volumetric_tangent, step)
             + self.volumetric_pressure * (mean_stress - self.mean_stress)
         )
+
+
+def _entries(A: ufl.core.expr.Expr, g: int) -> list:
+    """The g² entries of a g x g UFL tensor, row by row."""
+    return [A[i, j] for i in range(g) for j in range(g)]
 
 
 class LinearisedStress:
