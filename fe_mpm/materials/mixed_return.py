@@ -79,6 +79,7 @@ from functools import cached_property
 import numpy as np
 
 from fe_mpm.materials import route
+from fe_mpm.materials.spectral import deviator
 
 #: The soft volumetric stiffness beyond the apex, as a fraction of K (see above).
 APEX_STIFFNESS_FRACTION = 1e-3
@@ -141,8 +142,8 @@ class _Shifted:
     """The law's returns for volumetrically shifted trials, each point's last one kept.
 
     A point's search ends at an iterate that was evaluated, so the return at its
-    shift is already at hand: :meth:`last` gathers them. Points are addressed by
-    increasing indices (``np.flatnonzero``, ``np.arange``), which :meth:`last` relies on.
+    shift is already at hand: :meth:`last` gathers them. Each evaluation addresses its
+    points by increasing indices (``np.flatnonzero``), which :meth:`last` relies on.
 
     Args:
         law: The pointwise law.
@@ -172,24 +173,23 @@ class _Shifted:
             scaled = self.F3[index] * np.exp(delta / 3.0)[:, None, None]
             return self.law.return_map(scaled, _subset(self.history, index))
 
-    def last(self, index: np.ndarray) -> _Gathered:
-        """The last returns of the points ``index`` (increasing), every one evaluated."""
-        owner = self.owner[index].copy()
-        if np.any(owner < 0):
+    def last(self) -> _Gathered:
+        """Every point's last return."""
+        if np.any(self.owner < 0):
             raise RuntimeError("mixed return: a point was gathered before any return of it")
-        return _Gathered(self, index, owner)
+        return _Gathered(self)
 
 
 class _Gathered:
     """Stress, region, history and (on demand) tangent of returns kept by :class:`_Shifted`."""
 
-    def __init__(self, shifted: _Shifted, index: np.ndarray, owner: np.ndarray):
-        self.shifted, self.index, self.owner = shifted, index, owner
-        n = len(index)
+    def __init__(self, shifted: _Shifted):
+        self.shifted, self.owner = shifted, shifted.owner
+        n = len(self.owner)
         self.tau = np.empty((n, 3, 3))
         self.region = np.zeros(n, dtype=np.int8)
-        self.history = {k: np.empty_like(v[index]) for k, v in shifted.history.items()}
-        for part in np.unique(owner):
+        self.history = {k: np.empty_like(v) for k, v in shifted.history.items()}
+        for part in np.unique(self.owner):
             rows, where = self._rows(part)
             out = shifted.parts[part][2]
             self.tau[rows] = out.tau[where]
@@ -199,10 +199,9 @@ class _Gathered:
                 self.history[key][rows] = value[where]
 
     def _rows(self, part: int) -> tuple[np.ndarray, np.ndarray]:
-        """Rows of this gathering held by ``part``, and where they sit in it."""
+        """The points whose last return ``part`` holds, and where they sit in it."""
         rows = np.flatnonzero(self.owner == part)
-        part_index = self.shifted.parts[part][0]
-        return rows, np.searchsorted(part_index, self.index[rows])
+        return rows, np.searchsorted(self.shifted.parts[part][0], rows)
 
     def tangent(self) -> np.ndarray:
         """∂τ/∂ΔF* (n, 3, 3, 3, 3) at the shifted trials.
@@ -215,15 +214,15 @@ class _Gathered:
             return self._tangent()
 
     def _tangent(self) -> np.ndarray:
-        n = len(self.index)
+        n = len(self.owner)
         parts = list(np.unique(self.owner))
-        # The part holding most of these points in their order (the first evaluation,
-        # where most points are elastic) lends its own array, which the rest then
-        # overwrites: only they are copied, and that part's tangent is spent.
+        # The part of all points holding most of their last returns (the first
+        # evaluation, where most points are elastic) lends its own array, which the
+        # rest then overwrites: only they are copied, and that part's tangent is spent.
         D = None
         for part in parts:
             index, delta, out = self.shifted.parts[part]
-            if np.array_equal(index, self.index) and 2 * np.sum(self.owner == part) >= n:
+            if len(index) == n and 2 * np.sum(self.owner == part) >= n:
                 D = out.tangent.reshape(n, 81)
                 parts.remove(part)
                 break
@@ -360,15 +359,14 @@ def return_at_mean_stress(
     # stiffly (K) up to the apex, 1e-9 of the stresses away, and softly beyond.
     beyond = np.flatnonzero(beyond)
     evaluated = delta.copy()  # the shifts the kept returns were taken at
-    final = shifted.last(np.arange(n))
+    final = shifted.last()
     k_apex = APEX_STIFFNESS_FRACTION * K
     over = np.maximum(tau_m[beyond] - top[beyond], 0.0)
     delta[beyond] += (tau_m[beyond] - over - near_top[beyond]) / K + over / k_apex
     spring = np.zeros(n)  # ∂τ̄_m/∂δ on the spring (Pa), 0 elsewhere
     spring[beyond] = np.where(over > 0.0, k_apex, K)
     final.region[beyond] = BEYOND_APEX
-    tau = final.tau
-    s = tau - np.trace(tau, axis1=1, axis2=2)[:, None, None] / 3.0 * np.eye(3)
+    s = deviator(final.tau)
     cols = np.array([3 * k + m for k in range(g) for m in range(g)])  # the kl ΔF varies
 
     def derivative():
