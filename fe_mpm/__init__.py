@@ -18,7 +18,7 @@ Typical use::
 # dolfinx must be imported through fe_mpm._dolfinx first: the PyPI wheel needs
 # `import dolfinx_solver` before dolfinx, petsc4py and mpi4py.
 from fe_mpm import _dolfinx  # noqa: F401, I001
-from fe_mpm.boundary import Dirichlet, PointDirichlet, PointTraction, Traction
+from fe_mpm.boundary import STICKING, Dirichlet, PointDirichlet, PointTraction, RigidWall, Traction
 from fe_mpm.checkpoint import CheckpointError
 from fe_mpm.errors import ConvergenceError, PointsOutsideError
 from fe_mpm.materials import (
@@ -34,6 +34,7 @@ from fe_mpm.materials import (
 from fe_mpm.particles import MaterialPoints, merge, seed
 from fe_mpm.report import StepReport
 from fe_mpm.simulation import Simulation
+from fe_mpm.walls import WallForces
 
 __version__ = "0.1.0"
 
@@ -52,10 +53,13 @@ __all__ = [
     "PointDirichlet",
     "PointTraction",
     "PointsOutsideError",
+    "RigidWall",
+    "STICKING",
     "Simulation",
     "SmoothCapDruckerPrager",
     "StepReport",
     "Traction",
+    "WallForces",
     "merge",
     "seed",
 ]

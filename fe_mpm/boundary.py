@@ -7,6 +7,7 @@ vertices' coordinates (shape ``(3, n)``), as in ``dolfinx.mesh.locate_entities_b
 
 from __future__ import annotations
 
+import math
 import numbers
 import reprlib
 from collections.abc import Callable, Sequence
@@ -369,3 +370,54 @@ class PointTraction:
         """
         factor = _scale_at(f"PointTraction {self.name!r}", self.scale, t)
         return factor * np.asarray(self.value, dtype=np.float64)
+
+
+#: ``RigidWall(friction=STICKING)``: the wall does not let the body slip while they touch.
+STICKING = math.inf
+
+
+@dataclass(frozen=True)
+class RigidWall:
+    """A fixed rigid face on the grid's boundary: unilateral contact with Coulomb friction.
+
+    The face is a plane of exterior grid facets (a channel bed, a wall, the face of
+    a column the grid is meshed around). The body may press on it, slide along it
+    and leave it; it cannot pass through. The wall acts on its grid nodes through a
+    penalty spring per node (:mod:`fe_mpm.forms.contact`): a body pressing with
+    pressure p enters it by p / ``penalty``, and that entry does not grow over
+    steps (the springs keep their extension from step to step). Its force on the
+    body is reported in ``StepReport.reactions[name]`` and, split into normal and
+    tangential parts and node by node, in ``StepReport.walls[name]``.
+
+    Args:
+        name: Name of the wall in the reports.
+        where: Facet tag or boundary marker of its facets, all on one plane.
+        friction: Coulomb's friction coefficient μ ≥ 0 (μ = tan θ_fr): 0 is a
+            smooth wall; :data:`STICKING` (∞) lets no slip happen while in contact.
+        penalty: Spring stiffness per unit area β (Pa/m), > 0 (along the wall too
+            when sticking); None: 10³ E / h, with E the law's Young's modulus and h
+            the mean size of the wall's facets.
+        slip_scale: The slip s over which friction rises to μ p (m), > 0: it
+            reaches 76 % at s, 99.5 % at 3 s (see :mod:`fe_mpm.forms.contact`).
+            None: 10⁻³ h.
+    """
+
+    name: str
+    where: Where
+    friction: float = 0.0
+    penalty: float | None = None
+    slip_scale: float | None = None
+
+    def __post_init__(self) -> None:
+        owner = f"RigidWall {self.name!r}"
+        if not isinstance(self.name, str) or not self.name:
+            raise TypeError(f"RigidWall: name must be a non-empty string, got {self.name!r}")
+        _check_where(owner, self.where)
+        friction = self.friction
+        if not (isinstance(friction, numbers.Real) and friction == math.inf):
+            friction = check_range(owner, "friction", friction, lo=0.0)
+        object.__setattr__(self, "friction", float(friction))
+        for field in ("penalty", "slip_scale"):
+            if getattr(self, field) is not None:
+                value = check_range(owner, field, getattr(self, field), lo=0.0, lo_open=True)
+                object.__setattr__(self, field, value)

@@ -12,7 +12,7 @@ import numpy as np
 
 from fe_mpm import parallel
 from fe_mpm._dolfinx import dolfinx
-from fe_mpm.boundary import PointDirichlet
+from fe_mpm.boundary import PointDirichlet, RigidWall
 from fe_mpm.checks import check_choice, check_range
 from fe_mpm.formulations import FORMULATIONS, FormulationSpec
 from fe_mpm.ghost import WITH_DOMAINS
@@ -191,7 +191,7 @@ def take_density(material, points: MaterialPoints) -> None:
         )
 
 
-def check_supports(conditions, boundary, occupied: np.ndarray) -> None:
+def check_supports(conditions, boundary, occupied: np.ndarray, walls=None) -> None:
     """Refuse a static model whose supports leave a rigid translation free.
 
     Without inertia, a body that nothing holds in some direction has a singular
@@ -204,20 +204,57 @@ def check_supports(conditions, boundary, occupied: np.ndarray) -> None:
         boundary: The :class:`~fe_mpm.boundary_points.BoundaryPointStep`, or None
             (``PointDirichlet`` hold their components too).
         occupied: The cells that hold material.
+        walls: The grid's :class:`~fe_mpm.walls.RigidWalls`, or None: a wall holds
+            the body along its normal, and with friction along its plane too.
     """
     point_conditions = [] if boundary is None else boundary.points.conditions
-    if not (conditions.loads_or_supports or point_conditions):
+    if not (conditions.loads_or_supports or point_conditions or walls):
         return
     held = conditions.held_components(occupied).copy()
     for condition in point_conditions:
         if isinstance(condition, PointDirichlet):
             held[list(condition.components or range(held.size))] = True
-    if not held.all():
-        free = ", ".join("xyz"[c] for c in np.flatnonzero(~held))
+    directions = list(np.eye(held.size)[held])
+    directions += [] if walls is None else walls.held_directions(occupied)
+    g = held.size
+    basis = np.vstack([np.array(directions).reshape(-1, g), np.zeros((1, g))])
+    free = np.linalg.svd(basis)[2][np.linalg.matrix_rank(basis) :]
+    if len(free):
+        names = ", ".join(
+            "xyz"[int(np.argmax(np.abs(d)))]
+            if np.isclose(np.abs(d).max(), 1.0)
+            else str(d.round(3))
+            for d in free
+        )
         raise ValueError(
             f"Simulation: a static model needs supports that stop every rigid "
-            f"translation, but nothing holds the material in {free}: no Dirichlet "
-            "condition (or PointDirichlet) on that component touches a node of an "
-            "occupied cell. The tangent would be singular (a rigid-body mode). Add a "
+            f"translation, but nothing holds the material in {names}: no Dirichlet "
+            "condition (or PointDirichlet, or RigidWall) on that direction touches a node "
+            "of an occupied cell. The tangent would be singular (a rigid-body mode). Add a "
             "support, or pass dynamic=True."
         )
+
+
+def check_walls(walls, spec, formulation: str, point_domains: bool) -> tuple:
+    """The rigid walls as a tuple, or raise where they cannot act yet.
+
+    Raises:
+        TypeError: An entry is not a :class:`~fe_mpm.boundary.RigidWall`.
+        NotImplementedError: P2 displacements (the walls' springs sit on the
+            vertices only) or point domains (their steps do not carry the springs).
+    """
+    walls = tuple(walls)
+    for wall in walls:
+        if not isinstance(wall, RigidWall):
+            raise TypeError(f"Simulation: walls must be RigidWall objects, got {wall!r}")
+    if walls and spec.u_degree != 1:
+        raise NotImplementedError(
+            f"Simulation: walls with formulation={formulation!r}: a wall's springs sit on "
+            "the grid's vertices, so they need P1 displacements ('u', 'up' or 'up-nostab')"
+        )
+    if walls and point_domains:
+        raise NotImplementedError(
+            "Simulation: walls with point_domains=True: the steps of point domains do "
+            "not carry the walls' springs yet; run one without the other"
+        )
+    return walls

@@ -14,6 +14,7 @@ from fe_mpm.errors import ConvergenceError
 from fe_mpm.force_test import NewtonResult
 from fe_mpm.quadrature import SlotLayout
 from fe_mpm.tracking import hinge_diagnosis
+from fe_mpm.walls import WallForces
 
 
 @dataclass
@@ -55,6 +56,8 @@ class StepReport:
             ``newton_iterations`` counts those of the accepted placement (both of
             its line searches when the first failed). Set by
             :meth:`Simulation.run <fe_mpm.Simulation.run>`; 0 for a direct ``step``.
+        walls: The force of each rigid wall on the body, name ->
+            :class:`~fe_mpm.walls.WallForces` (normal, tangential, node by node).
     """
 
     step: int
@@ -75,6 +78,7 @@ class StepReport:
     relative_residual: float = 0.0
     lost_load: dict[str, float] = field(default_factory=dict)
     failed_iterations: int = 0
+    walls: dict[str, WallForces] = field(default_factory=dict)
 
     @classmethod
     def of_step(

@@ -24,7 +24,7 @@ import numpy as np
 
 from fe_mpm import balance, checkpoint, model_checks, parallel
 from fe_mpm._dolfinx import dolfinx
-from fe_mpm.boundary import Dirichlet, PointDirichlet, PointTraction, Traction
+from fe_mpm.boundary import Dirichlet, PointDirichlet, PointTraction, RigidWall, Traction
 from fe_mpm.boundary_points import BoundaryPointStep
 from fe_mpm.checks import check_finite, check_int, check_range
 from fe_mpm.domains import PointDomains, step_with_domains
@@ -52,6 +52,7 @@ from fe_mpm.step_forms import (
 )
 from fe_mpm.tracker import Tracker
 from fe_mpm.tracking import PointTracking, check_points_per_cell
+from fe_mpm.walls import RigidWalls
 
 #: A run ends when less than this fraction of its nominal step is left to ``t_end``.
 END_OF_RUN = 1e-12
@@ -91,6 +92,9 @@ class Simulation:
             grid does not follow (a rigid footing); forces in ``StepReport.reactions``.
         point_tractions: Tractions on boundary points that move with the body (a grid
             ``Traction`` stays on its facets); forces in ``StepReport.reactions``.
+        walls: Fixed rigid faces of the grid's boundary that the body presses on,
+            slides along with Coulomb friction, or leaves (:class:`~fe_mpm.RigidWall`);
+            their forces in ``StepReport.reactions`` and ``StepReport.walls``.
         body_force: Body force per unit mass (m/s², length g), e.g. gravity.
         body_force_scale: Load factor of the body force, ``t -> float``; 1 if None
             (``lambda t: t`` ramps self-weight over static load steps).
@@ -157,6 +161,7 @@ class Simulation:
         tractions: Sequence[Traction] = (),
         point_dirichlet: Sequence[PointDirichlet] = (),
         point_tractions: Sequence[PointTraction] = (),
+        walls: Sequence[RigidWall] = (),
         body_force: Sequence[float] | None = None,
         body_force_scale: Callable[[float], float] | None = None,
         facet_tags: dolfinx.mesh.MeshTags | None = None,
@@ -227,6 +232,7 @@ class Simulation:
         # What the grid's objects are built from, again after a repartition.
         self._given = {
             "conditions": (dirichlet, tractions, body_force, body_force_scale, reactions),
+            "walls": model_checks.check_walls(walls, self.spec, formulation, point_domains),
             "boundary": [*point_dirichlet, *point_tractions],
             "dynamics": (damping, petsc_options),
             "ppp_alpha": ppp_alpha,
@@ -273,6 +279,9 @@ class Simulation:
             self.dynamics = NewmarkDynamics(self.fields, damping, self.linear_solver, petsc_options)
         self.conditions = GridConditions(self.fields, *self._given["conditions"], facet_tags)
         self.conditions._warned_share = self._conditions_warned  # warned once per run
+        self.walls = RigidWalls(
+            self.fields.du, self._given["walls"], mesh, facet_tags, self.material
+        )
         if self._boundary is None:
             self._boundary = BoundaryPointStep.of(self._given["boundary"], self.tracker)
         else:
@@ -288,6 +297,7 @@ class Simulation:
             ppp,
             self.dynamics,
             self._given["mass"],
+            self.walls,
         )
         self._current: StepInProgress | None = None
         self._newton: NewtonSolver | None = None
@@ -481,12 +491,15 @@ class Simulation:
         self._update_points(forms, layout, k, t_new, dt)
         if self._boundary is not None:
             reactions.update(self._boundary.convect(forms, t_new))
+        walls = self.walls.finish_step()
+        reactions.update({name: force.total for name, force in walls.items()})
         self._add_time("update", t0)
         self.tracking.remember(layout.cell)
         self.t, self.step_number = t_new, k
         report = StepReport.of_step(
             k, t_new, result, self._current, reactions, self.markers, self.tracking, self.conditions
         )
+        report.walls = walls
         self.history.append(report)
         self._write_output()
         return report
@@ -505,9 +518,12 @@ class Simulation:
         """
         layout = self._track(self.step_number + 1, t_new, hold=not rebin)
         if self.step_number == 0 and not self.dynamic:
-            model_checks.check_supports(self.conditions, self._boundary, layout.occupied)
+            model_checks.check_supports(
+                self.conditions, self._boundary, layout.occupied, self.walls
+            )
         self.conditions.check_loaded_facets(layout.occupied, t_new)
         bcs = self.conditions.impose(layout.occupied, self.t, t_new)
+        self.walls.start_step(layout.occupied)
         tied = None  # cells the ghost penalty ties to a neighbour need fewer points
         if self.ghost is not None:
             need, volume = self.spec.min_points_per_cell, self.points.volume

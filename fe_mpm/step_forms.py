@@ -32,6 +32,7 @@ from fe_mpm.particles import MaterialPoints
 from fe_mpm.quadrature import BOUNDARY_POINTS, OCCUPIED, MaterialPointQuadrature, SlotLayout
 from fe_mpm.tracker import Tracker
 from fe_mpm.transfer import second_moments
+from fe_mpm.walls import RigidWalls
 
 
 @dataclass(frozen=True)
@@ -113,6 +114,7 @@ class StepForms:
         ppp: PPP data (u-p), or None.
         newmark: Newmark's fields and constants (dynamics), or None.
         lumped: Whether the mass matrix is lumped (dynamics).
+        walls: The rigid walls of the grid, or None.
     """
 
     def __init__(
@@ -127,6 +129,7 @@ class StepForms:
         ppp: mixed_up.PPPData | None = None,
         newmark: inertia.NewmarkData | None = None,
         lumped: bool = False,
+        walls: RigidWalls | None = None,
     ):
         mesh, g = fields.W.mesh, fields.W.mesh.geometry.dim
         self.mesh, self.spec, self.material, self.newmark = mesh, spec, material, newmark
@@ -161,10 +164,15 @@ class StepForms:
         self.q_boundary = None
         if nslot_boundary:
             R += self._boundary_points(fields, w, nslot_boundary)
+        facets = dict(conditions.traction_facets)
+        if walls:
+            R += walls.residual(w)
+            facets.update(walls.facet_domains)
         rules = {OCCUPIED: q, BOUNDARY_POINTS: self.q_boundary}
-        facets = conditions.traction_facets
         loads = self._loads(w, conditions)  # alone, for the Newton test's force scale
-        self.loads = None if loads is None else StepForm(loads, mesh, facets, rules)
+        self.loads = None
+        if loads is not None:
+            self.loads = StepForm(loads, mesh, conditions.traction_facets, rules)
         self.lumping = q.function((g, g), "second_moment") if lumped else None
         if newmark is not None:
             R += inertia.inertia(fields.du, w, q, self.density, newmark, self.lumping)
@@ -295,6 +303,7 @@ class FormsBySlotCount:
         ppp: PPP data (u-p), or None.
         dynamics: Newmark's rule, or None (static).
         mass: ``"consistent"`` or ``"lumped"`` (dynamics).
+        walls: The rigid walls of the grid, or None.
     """
 
     def __init__(
@@ -306,9 +315,11 @@ class FormsBySlotCount:
         ppp: mixed_up.PPPData | None,
         dynamics,
         mass: str,
+        walls: RigidWalls | None = None,
     ):
         self.fields, self.spec, self.material = fields, spec, material
         self.options = dict(
+            walls=walls,
             conditions=conditions,
             ppp=ppp,
             lumped=mass == "lumped",

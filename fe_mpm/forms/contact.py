@@ -1,0 +1,154 @@
+r"""Contact with a fixed rigid wall: a penalty spring per grid node, with Coulomb friction.
+
+At a node of the wall, with the grid's outward normal :math:`\mathbf n` (pointing into
+the wall), the spring's extension at the iterate is
+
+.. math::  \mathbf d = \mathbf e_n + \Delta\mathbf u,
+
+where :math:`\mathbf e_n` is its extension at the end of the last step: how far the
+body has entered the wall and how far it has slipped elastically. Keeping it is what
+stops both from growing step after step on a grid that is reset. With the penalty
+stiffness :math:`\beta` (Pa/m), Coulomb's coefficient :math:`\mu` and a slip scale
+:math:`s` (m), the normal pressure and the friction are
+
+.. math::
+
+   p_N = \beta\,\langle d_N\rangle, \quad d_N = \mathbf d\cdot\mathbf n, \qquad
+   \mathbf t_T = -\mu\, p_N \tanh\!\Big(\frac{|\mathbf d_T|}{s}\Big)
+   \frac{\mathbf d_T}{|\mathbf d_T|}, \quad \mathbf d_T = \mathbf d - d_N\mathbf n.
+
+The wall's traction on the body is :math:`\mathbf t = -p_N\mathbf n + \mathbf t_T` (Pa),
+and the residual gains :math:`-\int_\Gamma \mathbf t\cdot\delta\mathbf u\,d\Gamma`,
+integrated with the vertex rule so that each node carries its own spring (a lumped,
+node-to-wall contact, as Mast's grid-node boundaries). The contact is closed at zero
+extension, so the first Jacobian of a step already holds the body along the normal.
+The consistent tangent is ``ufl.derivative`` of this residual.
+
+The friction is Coulomb's, smoothed over slips of the order of s: below s the wall
+holds like a spring of stiffness μ p_N / s; beyond 3 s the force is μ p_N to
+0.5 % (tanh 3 = 0.995), beyond 10 s to round-off. With the exact law (a kink where
+the spring's force reaches μ p_N, a nanometre of slip on a steel block), Newton
+cycled between sliding both ways at the nodes of a block on an incline that were
+about to slip. A smooth wall has μ = 0; a sticking one is the spring alone,
+:math:`\mathbf t_T = -\beta\,\mathbf d_T`.
+
+Between steps the springs keep :math:`\mathbf e_{n+1} = \langle d_N\rangle\mathbf n +
+\mathbf d_T \min(1, X s/|\mathbf d_T|)` with X = :data:`KEPT_SLIP`: a block at rest
+on an incline does not creep, and one that slid on keeps at most X s of its slip.
+"""
+
+from __future__ import annotations
+
+import math
+
+import ufl
+
+#: The vertex rule of UFL's facet measures: one quadrature point per facet vertex.
+VERTEX_RULE = {"quadrature_rule": "vertex", "quadrature_degree": 1}
+
+#: A slip of this length (m) stands in for zero in ``|d_T|``, so that its derivative
+#: stays finite.
+ZERO_SLIP = 1e-30
+
+#: The springs keep at most this many slip scales s along the wall.
+KEPT_SLIP = 3.0
+
+#: Below this |d_T| / s, tanh(x)/x is its series 1 − x²/3 (to round-off).
+SMALL_X = 1e-4
+
+
+def _parts(d, n, beta, friction, slip_scale):
+    """(d_N, touching, p_N, d_T, |d_T| / s or None) of the law at extension ``d``."""
+    entry = ufl.dot(d, n)
+    touching = ufl.ge(entry, 0.0)
+    pressure = ufl.conditional(touching, beta * entry, 0.0)
+    tangential = d - entry * n
+    x = None
+    if not _smooth(friction) and not _sticking(friction):
+        x = ufl.sqrt(ufl.dot(tangential, tangential) + ZERO_SLIP**2) / slip_scale
+    return entry, touching, pressure, tangential, x
+
+
+def _smooth(friction) -> bool:
+    return isinstance(friction, float | int) and friction == 0.0
+
+
+def _sticking(friction) -> bool:
+    return isinstance(friction, float | int) and friction == math.inf
+
+
+def wall_traction(
+    extension: ufl.core.expr.Expr,
+    normal: ufl.core.expr.Expr,
+    stiffness: ufl.core.expr.Expr,
+    friction: ufl.core.expr.Expr | float,
+    slip_scale: ufl.core.expr.Expr,
+) -> ufl.core.expr.Expr:
+    r"""The wall's traction :math:`\mathbf t` on the body (Pa), shape (g,).
+
+    Args:
+        extension: The spring's extension :math:`\mathbf d` (g,), m.
+        normal: The wall's unit normal :math:`\mathbf n` (g,), pointing into the wall.
+        stiffness: β (Pa/m).
+        friction: μ > 0 (a UFL constant), 0.0 for a smooth wall, or ``math.inf``
+            for a sticking one.
+        slip_scale: s (m), > 0.
+    """
+    law = (extension, normal, stiffness, friction, slip_scale)
+    _, touching, pressure, tangential, x = _parts(*law)
+    push = -pressure * normal
+    if _smooth(friction):
+        return push
+    if _sticking(friction):
+        return push - ufl.conditional(touching, stiffness, 0.0) * tangential
+    # −μ p_N tanh(x) d_T/|d_T| = −(μ p_N / s) (tanh(x)/x) d_T, tanh(x)/x → 1 at x → 0.
+    ratio = ufl.conditional(ufl.lt(x, SMALL_X), 1.0 - x**2 / 3.0, ufl.tanh(x) / x)
+    return push - friction * pressure / slip_scale * ratio * tangential
+
+
+def kept_extension(
+    extension: ufl.core.expr.Expr,
+    normal: ufl.core.expr.Expr,
+    stiffness: ufl.core.expr.Expr,
+    friction: ufl.core.expr.Expr | float,
+    slip_scale: ufl.core.expr.Expr,
+) -> ufl.core.expr.Expr:
+    """The extension the springs keep into the next step (m), shape (g,).
+
+    The entry into the wall, and along it the slip, at most :data:`KEPT_SLIP` s;
+    nothing where the body has left the wall.
+    """
+    entry, touching, _, tangential, x = _parts(extension, normal, stiffness, friction, slip_scale)
+    kept = ufl.conditional(touching, entry, 0.0) * normal
+    if _smooth(friction):
+        return kept
+    if _sticking(friction):
+        return kept + ufl.conditional(touching, 1.0, 0.0) * tangential
+    share = ufl.conditional(ufl.le(x, KEPT_SLIP), 1.0, KEPT_SLIP / x)
+    return kept + ufl.conditional(touching, share, 0.0) * tangential
+
+
+def residual(
+    du: ufl.core.expr.Expr,
+    w: ufl.core.expr.Expr,
+    extension: ufl.Coefficient,
+    normal: ufl.core.expr.Expr,
+    stiffness: ufl.core.expr.Expr,
+    friction: ufl.core.expr.Expr | float,
+    slip_scale: ufl.core.expr.Expr,
+    ds: ufl.Measure,
+) -> ufl.Form:
+    """The wall's share of the residual, ``−∫ t·δu dΓ`` over its facets by the vertex rule.
+
+    Args:
+        du: Grid displacement increment Δu (P1).
+        w: Displacement test function.
+        extension: The springs' extension at the end of the last step (P1 vector).
+        normal: The wall's unit normal (g,), pointing into the wall.
+        stiffness: β (Pa/m).
+        friction: μ ≥ 0, or ``math.inf`` (sticking).
+        slip_scale: s (m).
+        ds: The wall's facets, with :data:`VERTEX_RULE` as metadata.
+    """
+    traction = wall_traction(extension + du, normal, stiffness, friction, slip_scale)
+    return -ufl.dot(traction, w) * ds

@@ -1,0 +1,260 @@
+"""Fixed rigid walls on the grid's boundary: their springs, their state and their forces.
+
+A :class:`~fe_mpm.boundary.RigidWall` is a plane of exterior grid facets that the
+body presses on, slides along with Coulomb friction, or leaves
+(:mod:`fe_mpm.forms.contact` is the law). :class:`RigidWalls` sets them up for a
+grid: each wall's normal (checked to be one plane), its penalty, the spring
+extension each node keeps from step to step, and after a step the force the wall
+puts on the body, node by node.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import ufl
+
+from fe_mpm import parallel
+from fe_mpm._dolfinx import dolfinx
+from fe_mpm.boundary import RigidWall, boundary_facets
+from fe_mpm.forms import contact
+from fe_mpm.transfer import summed_over_ranks
+
+#: The default penalty is this many times E / h (E the law's Young's modulus, h the
+#: wall's facet size): a body pressing with p enters the wall by p h / (10³ E).
+PENALTY_FACTOR = 1e3
+
+#: The default slip scale of friction is this many times h (h the wall's facet size).
+SLIP_SCALE_FACTOR = 1e-3
+
+#: Facet normals of one wall may differ by this much (a plane, up to round-off).
+PLANE_TOLERANCE = 1e-8
+
+#: ``StepForms`` numbers the walls' facet subdomains from here (tractions count from 1).
+FIRST_WALL_ID = 1000
+
+
+@dataclass(frozen=True)
+class WallForces:
+    """The force a rigid wall put on the body at the end of a step.
+
+    In 2D forces are per unit thickness (N/m), else N.
+
+    Attributes:
+        total: The whole force (g,).
+        normal: Its normal part, the body's push on the wall (≥ 0): −total·n.
+        tangential: Its part along the wall (g,): the friction.
+        nodes: Positions of the wall's grid nodes that carry a force (k, g), m.
+        nodal: The force at each of them (k, g).
+    """
+
+    total: np.ndarray
+    normal: float
+    tangential: np.ndarray
+    nodes: np.ndarray
+    nodal: np.ndarray
+
+
+def young_modulus(material) -> float:
+    """Young's modulus E = 9Kμ / (3K + μ) of a law with ``mu`` and ``bulk_modulus`` (Pa)."""
+    K, mu = float(material.bulk_modulus), float(material.mu)
+    return 9.0 * K * mu / (3.0 * K + mu)
+
+
+def plane_normal(mesh: dolfinx.mesh.Mesh, facets: np.ndarray, owner: str) -> np.ndarray:
+    """The common outward unit normal (g,) of exterior ``facets``, or raise if they are no plane.
+
+    Raises:
+        ValueError: The facets' normals differ by more than :data:`PLANE_TOLERANCE`.
+    """
+    g, tdim = mesh.geometry.dim, mesh.topology.dim
+    mesh.topology.create_connectivity(tdim - 1, tdim)
+    x = mesh.geometry.x[:, :g]
+    corners = x[dolfinx.mesh.entities_to_geometry(mesh, tdim - 1, facets)]  # (nf, g, g)
+    cells = mesh.topology.connectivity(tdim - 1, tdim)
+    owner_cells = np.array([cells.links(f)[0] for f in facets], dtype=np.int32)
+    centroids = x[dolfinx.mesh.entities_to_geometry(mesh, tdim, owner_cells)].mean(axis=1)
+    edges = corners[:, 1:] - corners[:, :1]
+    if g == 2:
+        n = np.column_stack([edges[:, 0, 1], -edges[:, 0, 0]])
+    else:
+        n = np.cross(edges[:, 0], edges[:, 1])
+    n /= np.linalg.norm(n, axis=1)[:, None]
+    outward = np.einsum("fi,fi->f", n, corners.mean(axis=1) - centroids)
+    n *= np.sign(outward)[:, None]
+    every = parallel.gathered(mesh.comm, n.reshape(-1)).reshape(-1, g)
+    spread = np.abs(every - every[0]).max()
+    if spread > PLANE_TOLERANCE:
+        raise ValueError(
+            f"{owner}: its facets are not on one plane (their normals differ by up to "
+            f"{spread:.3g}); give each planar face its own RigidWall"
+        )
+    return every[0] / np.linalg.norm(every[0])
+
+
+class _Wall:
+    """One wall on the grid: facets, normal, stiffness, friction and spring extension."""
+
+    def __init__(self, spec: RigidWall, facets: np.ndarray, space, E: float, subdomain: int):
+        mesh = space.mesh
+        g, fdim = mesh.geometry.dim, mesh.topology.dim - 1
+        owner = f"RigidWall {spec.name!r}"
+        self.spec, self.facets, self.subdomain = spec, facets, subdomain
+        self.normal = plane_normal(mesh, facets, owner)
+        corners = mesh.geometry.x[dolfinx.mesh.entities_to_geometry(mesh, fdim, facets), :g]
+        sizes = np.linalg.norm(corners[:, 1] - corners[:, 0], axis=1)  # an edge of each facet
+        count = parallel.total(mesh.comm, int(sizes.size))
+        h = parallel.total(mesh.comm, float(sizes.sum())) / count
+        self.penalty = spec.penalty if spec.penalty is not None else PENALTY_FACTOR * E / h
+        self.slip_scale = spec.slip_scale if spec.slip_scale is not None else SLIP_SCALE_FACTOR * h
+        self.s = dolfinx.fem.Constant(mesh, float(self.slip_scale))
+        self.n = dolfinx.fem.Constant(mesh, self.normal)
+        self.beta = dolfinx.fem.Constant(mesh, float(self.penalty))
+        if spec.friction in (0.0, math.inf):
+            self.mu = spec.friction
+        else:
+            self.mu = dolfinx.fem.Constant(mesh, float(spec.friction))
+        self.extension = dolfinx.fem.Function(space, name=f"extension {spec.name}")
+        self.dofs = dolfinx.fem.locate_dofs_topological(space, fdim, facets)  # blocked
+        cells = mesh.topology.connectivity(fdim, fdim + 1)
+        self.cells = np.unique(np.concatenate([cells.links(f) for f in facets] or [[]]))
+        self.cells = self.cells.astype(np.int32)
+        # The step forms bind the facets to this id themselves (StepForm's facet_domains).
+        self.ds = ufl.Measure("ds", domain=mesh, metadata=contact.VERTEX_RULE)(subdomain)
+        order = np.argsort(facets)
+        tags = dolfinx.mesh.meshtags(
+            mesh, fdim, facets[order], np.full(facets.size, subdomain, dtype=np.int32)
+        )
+        self.ds_tagged = ufl.Measure(
+            "ds", domain=mesh, subdomain_data=tags, metadata=contact.VERTEX_RULE
+        )(subdomain)
+
+
+class RigidWalls:
+    """The rigid walls of a grid.
+
+    Args:
+        du: The grid displacement increment (UFL, P1).
+        walls: The walls.
+        facet_tags: Facet tags for walls given by tag.
+        material: The law (its E sets the default penalty).
+
+    Attributes:
+        facet_domains: ``ds`` subdomain id -> the exterior facets of each wall.
+    """
+
+    def __init__(
+        self,
+        du: ufl.core.expr.Expr,
+        walls: Sequence[RigidWall],
+        mesh: dolfinx.mesh.Mesh,
+        facet_tags: dolfinx.mesh.MeshTags | None,
+        material,
+    ):
+        names = [w.name for w in walls]
+        if len(set(names)) != len(names):
+            raise ValueError(f"Simulation: walls need distinct names, got {names}")
+        g = mesh.geometry.dim
+        self.mesh, self.du = mesh, du
+        self.space = dolfinx.fem.functionspace(mesh, ("Lagrange", 1, (g,)))
+        E = young_modulus(material) if walls else 0.0
+        self.walls = [
+            _Wall(spec, boundary_facets(mesh, spec.where, facet_tags), self.space, E, i)
+            for i, spec in enumerate(walls, start=FIRST_WALL_ID)
+        ]
+        self.facet_domains = {wall.subdomain: wall.facets for wall in self.walls}
+        v = ufl.TestFunction(self.space)
+        points = self.space.element.interpolation_points
+        self._kept, self._traction, self._forces = [], [], []
+        self._next = dolfinx.fem.Function(self.space)
+        self._converged = dolfinx.fem.Function(self.space)  # a wall's traction at the end
+        for wall in self.walls:
+            d = wall.extension + du
+            law = (d, wall.n, wall.beta, wall.mu, wall.s)
+            self._kept.append(dolfinx.fem.Expression(contact.kept_extension(*law), points))
+            self._traction.append(dolfinx.fem.Expression(contact.wall_traction(*law), points))
+            # The wall's nodal forces on the body: the vertex rule, as in the residual.
+            self._forces.append(dolfinx.fem.form(ufl.dot(self._converged, v) * wall.ds_tagged))
+
+    def __bool__(self) -> bool:
+        return bool(self.walls)
+
+    def residual(self, w: ufl.core.expr.Expr) -> ufl.Form | None:
+        """The walls' share of the residual with displacement test function ``w``, or None."""
+        terms = [
+            contact.residual(
+                self.du, w, wall.extension, wall.n, wall.beta, wall.mu, wall.s, wall.ds
+            )
+            for wall in self.walls
+        ]
+        return sum(terms[1:], terms[0]) if terms else None
+
+    def held_directions(self, occupied: np.ndarray) -> list[np.ndarray]:
+        """Directions (g,) the walls hold the material in: the normal, with friction the plane.
+
+        A wall counts where it touches a node of an ``occupied`` cell (on some rank).
+        """
+        held = []
+        touched = np.zeros(
+            self.space.dofmap.index_map.size_local + self.space.dofmap.index_map.num_ghosts,
+            dtype=bool,
+        )
+        touched[self.space.dofmap.list[occupied].ravel()] = True
+        for wall in self.walls:
+            if not parallel.any_rank(self.mesh.comm, bool(touched[wall.dofs].any())):
+                continue
+            held.append(wall.normal)
+            if wall.spec.friction > 0.0:
+                held.extend(np.linalg.svd(wall.normal[None, :])[2][1:])
+        return held
+
+    def start_step(self, occupied: np.ndarray) -> None:
+        """Release the springs of nodes that no occupied cell touches: the body has left them."""
+        if not self.walls:
+            return
+        uses = np.bincount(
+            self.space.dofmap.list[occupied].ravel(),
+            minlength=self.space.dofmap.index_map.size_local
+            + self.space.dofmap.index_map.num_ghosts,
+        ).astype(np.float64)
+        idle = summed_over_ranks(self.space, uses) == 0
+        g = self.mesh.geometry.dim
+        for wall in self.walls:
+            wall.extension.x.array.reshape(-1, g)[idle] = 0.0
+
+    def finish_step(self) -> dict[str, WallForces]:
+        """Keep the springs' extension at the converged Δu, and report each wall's force."""
+        forces = {}
+        g, comm = self.mesh.geometry.dim, self.mesh.comm
+        owned = self.space.dofmap.index_map.size_local
+        coords = self.space.tabulate_dof_coordinates()[:, :g]
+        for wall, kept, traction, force in zip(
+            self.walls, self._kept, self._traction, self._forces, strict=True
+        ):
+            self._converged.x.array[:] = 0.0
+            self._converged.interpolate(traction, cells0=wall.cells)
+            self._converged.x.scatter_forward()
+            b = dolfinx.fem.assemble_vector(force)
+            b.scatter_reverse(dolfinx.la.InsertMode.add)
+            self._next.x.array[:] = 0.0
+            self._next.interpolate(kept, cells0=wall.cells)
+            e = wall.extension.x.array.reshape(-1, g)
+            e[:] = 0.0
+            e[wall.dofs] = self._next.x.array.reshape(-1, g)[wall.dofs]
+            wall.extension.x.scatter_forward()
+            nodal = b.array.reshape(-1, g)
+            mine = wall.dofs[wall.dofs < owned]
+            touching = mine[np.abs(nodal[mine]).sum(axis=1) > 0.0]
+            total = np.array([parallel.total(comm, float(nodal[mine, c].sum())) for c in range(g)])
+            normal_part = float(total @ wall.normal)
+            forces[wall.spec.name] = WallForces(
+                total=total,
+                normal=-normal_part,
+                tangential=total - normal_part * wall.normal,
+                nodes=parallel.gathered(comm, coords[touching].reshape(-1)).reshape(-1, g),
+                nodal=parallel.gathered(comm, nodal[touching].reshape(-1)).reshape(-1, g),
+            )
+        return forces

@@ -1,0 +1,207 @@
+"""Rigid walls: unilateral contact with Coulomb friction on grid facets (fe_mpm.walls).
+
+The references are a rigid block on an incline: frictionless it slides at g sin θ, with
+friction μ < tan θ at g (sin θ − μ cos θ), with μ > tan θ it stays; and a block at rest
+on a wall, whose force on it is its weight. The tangent is checked by a Taylor test at
+an iterate where the wall's nodes stick, slip and have left it.
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+import fe_mpm
+from fe_mpm.forms import contact
+from fe_mpm.meshes import rectangle_mesh
+from fe_mpm.verification import rates, taylor_remainders
+from fe_mpm.walls import PENALTY_FACTOR, SLIP_SCALE_FACTOR
+
+G = 9.81
+E, NU, RHO = 2e8, 0.3, 7800.0  # the thesis's steel disk, as demos/sliding_block.py
+H = 0.1  # cell size (m)
+on_base = lambda x: np.isclose(x[1], 0.0)  # noqa: E731
+
+
+def _block(theta_deg: float, friction: float, dynamic: bool = True, **options):
+    """A 1 m x 0.5 m block on the base wall of a 3 m x 1 m grid, gravity tilted by θ."""
+    grid = rectangle_mesh((0.0, 0.0), (3.0, 1.0), (30, 10))
+    centroids = grid.geometry.x[grid.geometry.dofmaps[0]][:, :, :2].mean(axis=1)
+    cells = np.flatnonzero((centroids[:, 0] < 1.0) & (centroids[:, 1] < 0.5))
+    points = fe_mpm.seed(grid, per_cell=3, density=RHO, cells=cells)
+    theta = math.radians(theta_deg)
+    sim = fe_mpm.Simulation(
+        grid,
+        points,
+        fe_mpm.NeoHookean(E, NU, RHO),
+        dynamic=dynamic,
+        walls=[fe_mpm.RigidWall("base", on_base, friction=friction)],
+        body_force=(G * math.sin(theta), -G * math.cos(theta)),
+        **options,
+    )
+    return sim, points
+
+
+def _slide(points) -> float:
+    """Down-slope motion of the centre of mass (m)."""
+    return float(points.mass @ (points.x - points.x0)[:, 0] / points.mass.sum())
+
+
+def _run(sim, points, dt: float, steps: int):
+    slides, reports = [], []
+    for k in range(1, steps + 1):
+        reports.append(sim.step(k * dt))
+        slides.append(_slide(points))
+    return np.array(slides), reports
+
+
+def test_smooth_wall_lets_a_block_slide_as_a_rigid_body():
+    """μ = 0: s = ½ g sin θ t² to round-off, and the wall pushes along its normal only.
+
+    Rigid sliding on a smooth plane is an exact discrete solution (as the slip
+    condition of demos/sliding_block.py); the wall's springs only carry the weight.
+    """
+    sim, points = _block(30.0, 0.0)
+    dt, steps = 0.01, 30
+    slides, reports = _run(sim, points, dt, steps)
+    t = dt * np.arange(1, steps + 1)
+    exact = 0.5 * G * math.sin(math.radians(30.0)) * t**2
+    assert np.max(np.abs(slides - exact)) < 1e-12
+    last = reports[-1].walls["base"]
+    assert np.all(last.tangential == 0.0)
+    assert last.normal > 0.0
+    np.testing.assert_allclose(reports[-1].reactions["base"], last.total, rtol=0, atol=0)
+
+
+def test_coulomb_wall_slows_a_sliding_block_to_g_sin_minus_mu_cos():
+    """μ = 0.1 < tan 30°: s = ½ g (sin θ − μ cos θ) t², and the friction is μ × the push.
+
+    The smoothed friction reaches μ p only beyond a few slip scales (10⁻⁴ m here): in
+    the first step the block slips 1.5 slip scales and gets about 90 % of the friction,
+    which shifts the slide by 3e-4 m after 0.5 s (6e-4 relative, measured); 2e-3 bounds
+    it with room for round-off, and is 30 times below the effect of friction (0.06).
+    Once it slides, every node is far beyond the slip scale and the friction is μ times
+    the push to round-off.
+    """
+    mu, theta = 0.1, math.radians(30.0)
+    sim, points = _block(30.0, mu)
+    dt, steps = 0.01, 50
+    slides, reports = _run(sim, points, dt, steps)
+    exact = 0.5 * G * (math.sin(theta) - mu * math.cos(theta)) * (dt * steps) ** 2
+    assert abs(slides[-1] / exact - 1.0) < 2e-3
+    for report in reports[10:]:
+        wall = report.walls["base"]
+        assert np.linalg.norm(wall.tangential) == pytest.approx(mu * wall.normal, rel=1e-9)
+        assert wall.tangential[0] < 0.0  # against the slide
+        np.testing.assert_allclose(wall.nodal.sum(axis=0), wall.total, rtol=1e-12)
+
+
+def test_coulomb_wall_holds_a_block_below_its_friction_angle():
+    """μ = 0.3 > tan 10°: the block stays, within a few slip scales, and does not creep.
+
+    Released at rest, the block rocks on its springs about a rest position without
+    damping. Measured over 100 steps (slip scale s = 10⁻⁴ m): the slide stays within
+    [0, 2.97 s], and its means over blocks of 25 steps are 1.28 s, then 1.80–1.90 s
+    (the same over 200 steps): the springs keep their extension, so the block does not
+    slip a little more at every step. Bounds: within 4 s, and the later block means
+    within 0.3 s of each other. The wall's force balances the weight along the slope on
+    average over the last 50 steps (to 5 %; the rocking is undamped).
+    """
+    sim, points = _block(10.0, 0.3)
+    slides, reports = _run(sim, points, 0.01, 100)
+    scale = SLIP_SCALE_FACTOR * H
+    assert np.all(np.abs(slides) < 4.0 * scale)
+    means = slides.reshape(4, 25).mean(axis=1)[1:]
+    assert np.ptp(means) < 0.3 * scale
+    weight = G * points.mass.sum()
+    along = np.mean([r.walls["base"].total[0] for r in reports[-50:]])
+    assert along == pytest.approx(-weight * math.sin(math.radians(10.0)), rel=0.05)
+
+
+def test_block_at_rest_on_a_wall_weighs_on_it_in_a_static_run():
+    """Static, gravity ramped: nothing but the wall holds the block, and it carries m g.
+
+    The wall holds the block in y by its normal and in x by friction (the support check
+    counts both), and at equilibrium its force is the weight to Newton's tolerance.
+    """
+    sim, points = _block(0.0, 0.5, dynamic=False, body_force_scale=lambda t: t)
+    reports = sim.run(t_end=1.0, n_steps=2)
+    weight = G * points.mass.sum()
+    force = reports[-1].walls["base"]
+    assert force.normal == pytest.approx(weight, rel=1e-9)
+    assert force.total[1] == pytest.approx(weight, rel=1e-9)
+    # The springs' entry into the wall: about the mean pressure (weight over the 1 m
+    # base) over β, twice that at most where the block's edges press harder.
+    wall = sim.walls.walls[0]
+    entry = -wall.extension.x.array.reshape(-1, 2)[wall.dofs, 1]
+    mean_pressure = weight / 1.0
+    assert np.all(entry >= 0.0)
+    assert 0.5 < entry.max() * PENALTY_FACTOR * E / H / mean_pressure < 2.0
+
+
+def test_a_body_leaves_a_wall_and_the_wall_lets_go():
+    """Gravity turned upward: the block lifts off, and the wall pulls on nothing.
+
+    The contact is unilateral: once the nodes move away, their springs carry no
+    tension, and a wall whose nodes touch no material keeps no extension.
+    """
+    sim, points = _block(0.0, 0.3, body_force_scale=lambda t: 1.0 if t < 0.05 else -1.0)
+    _run(sim, points, 0.01, 15)
+    assert np.min(points.x[:, 1] - points.x0[:, 1]) > 0.0  # everything has lifted
+    last = sim.history[-1].walls["base"]
+    assert np.all(last.total == 0.0) and last.normal == 0.0
+    assert np.all(sim.walls.walls[0].extension.x.array == 0.0)
+
+
+@pytest.mark.parametrize("friction", [0.0, 0.3, fe_mpm.STICKING])
+def test_wall_tangent_is_consistent(friction):
+    """Taylor test of a step's residual with the wall at an iterate where its nodes
+    press (sticking and slipping) and have left it: the first-order remainder falls
+    as ε².
+
+    The springs' extensions are set by hand: entries of ±2 cm into or out of the wall
+    and slips of up to 10 slip scales, so that the tanh's every part is in play.
+    """
+    sim, _ = _block(0.0, friction)
+    rng = np.random.default_rng(7)
+    _, _, R, J, _ = sim.prepare_step(1.0)
+    wall = sim.walls.walls[0]
+    e = wall.extension.x.array.reshape(-1, 2)
+    nodes = wall.dofs
+    e[nodes, 1] = rng.uniform(-2e-2, 2e-2, nodes.size) * 1e-3
+    e[nodes, 0] = rng.uniform(-10.0, 10.0, nodes.size) * wall.slip_scale
+    sim.w.x.array[:] = rng.uniform(-1e-6, 1e-6, sim.w.x.array.size)
+    d = rng.uniform(-1.0, 1.0, sim.w.x.array.size)
+    eps = (8e-8, 4e-8, 2e-8, 1e-8)
+    r0, r1 = taylor_remainders(R, J, sim.w, d, eps)
+    assert np.all(rates(eps, r0) > 0.9)
+    assert np.all(rates(eps, r1) > 1.9), f"remainders {r1}"
+
+
+def test_wall_bad_input_names_the_field():
+    with pytest.raises(ValueError, match="friction"):
+        fe_mpm.RigidWall("base", on_base, friction=-0.1)
+    with pytest.raises(ValueError, match="penalty"):
+        fe_mpm.RigidWall("base", on_base, penalty=0.0)
+    with pytest.raises(ValueError, match="slip_scale"):
+        fe_mpm.RigidWall("base", on_base, slip_scale=-1.0)
+    with pytest.raises(TypeError, match="name"):
+        fe_mpm.RigidWall("", on_base)
+    grid = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (4, 4))
+    points = fe_mpm.seed(grid, per_cell=1, density=RHO)
+    law = fe_mpm.NeoHookean(E, NU, RHO)
+    corner = lambda x: np.isclose(x[0], 0.0) | np.isclose(x[1], 0.0)  # noqa: E731
+    with pytest.raises(ValueError, match="not on one plane"):
+        fe_mpm.Simulation(grid, points, law, walls=[fe_mpm.RigidWall("L", corner)])
+    outside = lambda x: x[1] < -1.0  # noqa: E731  # a structure the grid does not reach
+    with pytest.raises(ValueError, match="selects no exterior facets"):
+        fe_mpm.Simulation(grid, points, law, walls=[fe_mpm.RigidWall("far", outside)])
+    with pytest.raises(NotImplementedError, match="P1 displacements"):
+        fe_mpm.Simulation(grid, points, law, "up-p2p1", walls=[fe_mpm.RigidWall("base", on_base)])
+    with pytest.raises(ValueError, match="distinct names"):
+        fe_mpm.Simulation(
+            grid,
+            points,
+            law,
+            walls=[fe_mpm.RigidWall("w", on_base), fe_mpm.RigidWall("w", on_base)],
+        )
