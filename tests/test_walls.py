@@ -12,7 +12,6 @@ import numpy as np
 import pytest
 
 import fe_mpm
-from fe_mpm.forms import contact
 from fe_mpm.meshes import rectangle_mesh
 from fe_mpm.verification import rates, taylor_remainders
 from fe_mpm.walls import PENALTY_FACTOR, SLIP_SCALE_FACTOR
