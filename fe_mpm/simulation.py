@@ -52,7 +52,7 @@ from fe_mpm.step_forms import (
 )
 from fe_mpm.tracker import Tracker
 from fe_mpm.tracking import PointTracking, check_points_per_cell
-from fe_mpm.walls import RigidWalls
+from fe_mpm.walls import RigidWalls, write_wall_forces
 
 #: A run ends when less than this fraction of its nominal step is left to ``t_end``.
 END_OF_RUN = 1e-12
@@ -103,7 +103,8 @@ class Simulation:
             and of the linear solver's (:data:`fe_mpm.newton.LINEAR_SOLVERS`).
         points_leaving: ``"raise"`` (default) stops when points leave the grid; ``"drop"``
             removes them with a warning and counts them in ``dropped``.
-        output_dir: Folder for ParaView output (``particles.pvd``, ``grid.bp``), or None.
+        output_dir: Folder for ParaView output (``particles.pvd``, ``grid.bp``), and
+            ``walls.csv`` with the walls' forces after every step, or None.
         output_every: Write every this many steps (and always the last).
         ppp_alpha: The thesis's PPP coefficient α ≥ 0 (``up``), times Kratos's factor
             (8 in 2D, 10 in 3D) in the form; α = 1 reproduces the thesis.
@@ -644,6 +645,8 @@ class Simulation:
     def _write_output(self, force: bool = False) -> None:
         t0, out = time.perf_counter(), self.output
         if out is not None and out.write(self.step_number, self.t, self.points, force=force):
+            if self.walls and self.history and parallel.on_rank_zero(self.mesh.comm):
+                write_wall_forces(self.history, out.folder / "walls.csv")
             self._add_time("output", t0)
 
     def _add_time(self, key: str, t0: float) -> None:

@@ -13,6 +13,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 import ufl
@@ -49,6 +50,7 @@ class WallForces:
         tangential: Its part along the wall (g,): the friction.
         nodes: Positions of the wall's grid nodes that carry a force (k, g), m.
         nodal: The force at each of them (k, g).
+        direction: The wall's unit normal n (g,), pointing into the wall.
     """
 
     total: np.ndarray
@@ -56,6 +58,7 @@ class WallForces:
     tangential: np.ndarray
     nodes: np.ndarray
     nodal: np.ndarray
+    direction: np.ndarray
 
 
 def young_modulus(material) -> float:
@@ -256,5 +259,68 @@ class RigidWalls:
                 tangential=total - normal_part * wall.normal,
                 nodes=parallel.gathered(comm, coords[touching].reshape(-1)).reshape(-1, g),
                 nodal=parallel.gathered(comm, nodal[touching].reshape(-1)).reshape(-1, g),
+                direction=wall.normal.copy(),
             )
         return forces
+
+
+def write_wall_forces(history: Sequence, path: str | Path) -> Path:
+    """Write every wall's force after every step of ``history`` as CSV; returns the path.
+
+    Columns: ``step, t, wall, F_x, F_y[, F_z], normal, tangential`` (the friction's
+    magnitude); forces as in :class:`WallForces`. Every rank's reports carry the same
+    totals, so call it on one.
+
+    Args:
+        history: The :class:`~fe_mpm.StepReport` objects of a run (``Simulation.history``).
+        path: The CSV file to write.
+    """
+    g = next((f.total.size for r in history for f in r.walls.values()), 0)
+    lines = [
+        ",".join(["step", "t", "wall", *(f"F_{c}" for c in "xyz"[:g]), "normal", "tangential"])
+    ]
+    for report in history:
+        for name, force in report.walls.items():
+            values = [*force.total, force.normal, np.linalg.norm(force.tangential)]
+            lines.append(
+                ",".join([str(report.step), repr(report.t), name, *map(repr, map(float, values))])
+            )
+    path = Path(path)
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def plot_wall_forces(history: Sequence, path: str | Path, pyplot) -> Path:
+    """Plot each wall's push and friction against time, and node by node at the end.
+
+    Args:
+        history: The :class:`~fe_mpm.StepReport` objects of a run.
+        path: The image file to write.
+        pyplot: ``matplotlib.pyplot`` (see :func:`fe_mpm.plotting.pyplot`).
+    """
+    fig, (over_time, along) = pyplot.subplots(1, 2, figsize=(10, 3.6))
+    t = [report.t for report in history]
+    for name in history[-1].walls:
+        forces = [report.walls[name] for report in history]
+        over_time.plot(t, [f.normal for f in forces], label=f"{name}: push")
+        friction = [np.linalg.norm(f.tangential) for f in forces]
+        over_time.plot(t, friction, "--", label=f"{name}: friction")
+        last = forces[-1]
+        if len(last.nodes):
+            axis = int(np.argmax(np.ptp(last.nodes, axis=0)))  # the face's longest extent
+            order = np.argsort(last.nodes[:, axis])
+            push = -last.nodal[order] @ last.direction
+            along_wall = np.linalg.norm(last.nodal[order] + np.outer(push, last.direction), axis=1)
+            x = last.nodes[order, axis]
+            along.plot(x, push, "o-", ms=3, label=f"{name}: push")
+            along.plot(x, along_wall, "s--", ms=3, label=f"{name}: friction")
+            along.set_xlabel(f"{'xyz'[axis]} (m)")
+    over_time.set_xlabel("t (s)")
+    over_time.set_ylabel("force on the body (N; N/m in 2D)")
+    over_time.legend(fontsize=7)
+    along.set_ylabel("nodal force at the end (N; N/m in 2D)")
+    along.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    pyplot.close(fig)
+    return Path(path)

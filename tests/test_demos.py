@@ -112,6 +112,28 @@ def test_sliding_block_json_contract(tmp_path):
     assert out["steps"] == 20 and out["error"] < 1e-10 and out["check_passed"]
 
 
+def test_sliding_block_on_a_frictional_wall_writes_its_forces(tmp_path):
+    """μ = 0.1: the slide is g (sin θ − μ cos θ) t²/2 to 2e-3 (the demo's check), and
+    the wall's CSV has a row per step whose friction is μ times its push once sliding."""
+    out = _last_json(
+        run_demo(
+            "sliding_block.py",
+            "--friction",
+            "0.1",
+            "--t-end",
+            "0.5",
+            "--json",
+            "--output",
+            str(tmp_path / "out"),
+            cwd=tmp_path,
+        )
+    )
+    assert out["check_passed"] and out["friction"] == 0.1 and out["steps"] == 50
+    rows = np.genfromtxt(tmp_path / "out" / "walls.csv", delimiter=",", names=True, dtype=None)
+    assert rows.size == 50
+    np.testing.assert_allclose(rows["tangential"][10:], 0.1 * rows["normal"][10:], rtol=1e-9)
+
+
 def test_tension_test_json_contract_and_plastic_output_and_two_runs_agree(tmp_path):
     """J2, u-p, 10 load steps, run twice: the summary (but for the wall-clock time) and
     every field of the last ParaView frame agree to the last bit (no unordered sets,
