@@ -345,8 +345,8 @@ def _check_held(got: dict, want: dict, case: str) -> None:
 def test_a_block_sliding_on_a_frictional_wall_gives_the_serial_answer_on_two_ranks(tmp_path):
     """A rigid wall's springs, friction and forces on a distributed grid: an elastic block
     slides 12 steps down a 30° slope with μ = 0.1, on both ranks' cells (each holds
-    some of its points). Each node's spring lives on the ranks that hold it; the wall's force is summed
-    over owned nodes once, and its node-by-node distribution is gathered whole. Same
+    some of its points). Each node's spring lives on the ranks that hold it; the wall's
+    force is summed over owned nodes once, and its node-by-node distribution is gathered whole. Same
     Newton iterations; slide and forces as serial to 1e-10 (measured 4e-16 and 1e-13)."""
     (serial,) = _run(tmp_path, "wall", 1)
     for got in _run(tmp_path, "wall", 2):

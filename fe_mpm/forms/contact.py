@@ -53,7 +53,7 @@ ZERO_SLIP = 1e-30
 #: The springs keep at most this many slip scales s along the wall.
 KEPT_SLIP = 3.0
 
-#: Below this |d_T| / s, tanh(x)/x is its series 1 − x²/3 (to round-off).
+#: Below this x = ``|d_T| / s``, tanh(x)/x is its series 1 − x²/3 (to round-off).
 SMALL_X = 1e-4
 
 
