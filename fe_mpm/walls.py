@@ -113,13 +113,14 @@ class _Wall:
         h = parallel.total(mesh.comm, float(sizes.sum())) / count
         self.penalty = spec.penalty if spec.penalty is not None else PENALTY_FACTOR * E / h
         self.slip_scale = spec.slip_scale if spec.slip_scale is not None else SLIP_SCALE_FACTOR * h
-        self.s = dolfinx.fem.Constant(mesh, float(self.slip_scale))
-        self.n = dolfinx.fem.Constant(mesh, self.normal)
-        self.beta = dolfinx.fem.Constant(mesh, float(self.penalty))
+        beta = dolfinx.fem.Constant(mesh, float(self.penalty))
         if spec.friction in (0.0, math.inf):
-            self.mu = spec.friction
+            mu = spec.friction
         else:
-            self.mu = dolfinx.fem.Constant(mesh, float(spec.friction))
+            mu = dolfinx.fem.Constant(mesh, float(spec.friction))
+        n = dolfinx.fem.Constant(mesh, self.normal)
+        s = dolfinx.fem.Constant(mesh, float(self.slip_scale))
+        self.law = contact.WallLaw(normal=n, stiffness=beta, friction=mu, slip_scale=s)
         self.extension = dolfinx.fem.Function(space, name=f"extension {spec.name}")
         self.dofs = dolfinx.fem.locate_dofs_topological(space, fdim, facets)  # blocked
         cells = mesh.topology.connectivity(fdim, fdim + 1)
@@ -176,9 +177,10 @@ class RigidWalls:
         self._converged = dolfinx.fem.Function(self.space)  # a wall's traction at the end
         for wall in self.walls:
             d = wall.extension + du
-            law = (d, wall.n, wall.beta, wall.mu, wall.s)
-            self._kept.append(dolfinx.fem.Expression(contact.kept_extension(*law), points))
-            self._traction.append(dolfinx.fem.Expression(contact.wall_traction(*law), points))
+            self._kept.append(dolfinx.fem.Expression(contact.kept_extension(d, wall.law), points))
+            self._traction.append(
+                dolfinx.fem.Expression(contact.wall_traction(d, wall.law), points)
+            )
             # The wall's nodal forces on the body: the vertex rule, as in the residual.
             self._forces.append(dolfinx.fem.form(ufl.dot(self._converged, v) * wall.ds_tagged))
 
@@ -188,10 +190,7 @@ class RigidWalls:
     def residual(self, w: ufl.core.expr.Expr) -> ufl.Form | None:
         """The walls' share of the residual with displacement test function ``w``, or None."""
         terms = [
-            contact.residual(
-                self.du, w, wall.extension, wall.n, wall.beta, wall.mu, wall.s, wall.ds
-            )
-            for wall in self.walls
+            contact.residual(self.du, w, wall.extension, wall.law, wall.ds) for wall in self.walls
         ]
         return sum(terms[1:], terms[0]) if terms else None
 

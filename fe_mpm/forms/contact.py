@@ -40,6 +40,7 @@ on an incline does not creep, and one that slid on keeps at most X s of its slip
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import ufl
 
@@ -57,15 +58,33 @@ KEPT_SLIP = 3.0
 SMALL_X = 1e-4
 
 
-def _parts(d, n, beta, friction, slip_scale):
+@dataclass(frozen=True)
+class WallLaw:
+    """One wall's springs.
+
+    Attributes:
+        normal: The wall's unit normal n (g,), pointing into the wall (UFL).
+        stiffness: β (Pa/m), UFL.
+        friction: μ > 0 (UFL), 0.0 for a smooth wall, or ``math.inf`` for a sticking one.
+        slip_scale: s (m), > 0, UFL.
+    """
+
+    normal: ufl.core.expr.Expr
+    stiffness: ufl.core.expr.Expr
+    friction: ufl.core.expr.Expr | float
+    slip_scale: ufl.core.expr.Expr
+
+
+def _parts(d, law: WallLaw):
     """(d_N, touching, p_N, d_T, |d_T| / s or None) of the law at extension ``d``."""
+    n = law.normal
     entry = ufl.dot(d, n)
     touching = ufl.ge(entry, 0.0)
-    pressure = ufl.conditional(touching, beta * entry, 0.0)
+    pressure = ufl.conditional(touching, law.stiffness * entry, 0.0)
     tangential = d - entry * n
     x = None
-    if not _smooth(friction) and not _sticking(friction):
-        x = ufl.sqrt(ufl.dot(tangential, tangential) + ZERO_SLIP**2) / slip_scale
+    if not _smooth(law.friction) and not _sticking(law.friction):
+        x = ufl.sqrt(ufl.dot(tangential, tangential) + ZERO_SLIP**2) / law.slip_scale
     return entry, touching, pressure, tangential, x
 
 
@@ -77,52 +96,35 @@ def _sticking(friction) -> bool:
     return isinstance(friction, float | int) and friction == math.inf
 
 
-def wall_traction(
-    extension: ufl.core.expr.Expr,
-    normal: ufl.core.expr.Expr,
-    stiffness: ufl.core.expr.Expr,
-    friction: ufl.core.expr.Expr | float,
-    slip_scale: ufl.core.expr.Expr,
-) -> ufl.core.expr.Expr:
+def wall_traction(extension: ufl.core.expr.Expr, law: WallLaw) -> ufl.core.expr.Expr:
     r"""The wall's traction :math:`\mathbf t` on the body (Pa), shape (g,).
 
     Args:
         extension: The spring's extension :math:`\mathbf d` (g,), m.
-        normal: The wall's unit normal :math:`\mathbf n` (g,), pointing into the wall.
-        stiffness: β (Pa/m).
-        friction: μ > 0 (a UFL constant), 0.0 for a smooth wall, or ``math.inf``
-            for a sticking one.
-        slip_scale: s (m), > 0.
+        law: The wall's springs.
     """
-    law = (extension, normal, stiffness, friction, slip_scale)
-    _, touching, pressure, tangential, x = _parts(*law)
-    push = -pressure * normal
-    if _smooth(friction):
+    _, touching, pressure, tangential, x = _parts(extension, law)
+    push = -pressure * law.normal
+    if _smooth(law.friction):
         return push
-    if _sticking(friction):
-        return push - ufl.conditional(touching, stiffness, 0.0) * tangential
+    if _sticking(law.friction):
+        return push - ufl.conditional(touching, law.stiffness, 0.0) * tangential
     # −μ p_N tanh(x) d_T/|d_T| = −(μ p_N / s) (tanh(x)/x) d_T, tanh(x)/x → 1 at x → 0.
     ratio = ufl.conditional(ufl.lt(x, SMALL_X), 1.0 - x**2 / 3.0, ufl.tanh(x) / x)
-    return push - friction * pressure / slip_scale * ratio * tangential
+    return push - law.friction * pressure / law.slip_scale * ratio * tangential
 
 
-def kept_extension(
-    extension: ufl.core.expr.Expr,
-    normal: ufl.core.expr.Expr,
-    stiffness: ufl.core.expr.Expr,
-    friction: ufl.core.expr.Expr | float,
-    slip_scale: ufl.core.expr.Expr,
-) -> ufl.core.expr.Expr:
+def kept_extension(extension: ufl.core.expr.Expr, law: WallLaw) -> ufl.core.expr.Expr:
     """The extension the springs keep into the next step (m), shape (g,).
 
     The entry into the wall, and along it the slip, at most :data:`KEPT_SLIP` s;
     nothing where the body has left the wall.
     """
-    entry, touching, _, tangential, x = _parts(extension, normal, stiffness, friction, slip_scale)
-    kept = ufl.conditional(touching, entry, 0.0) * normal
-    if _smooth(friction):
+    entry, touching, _, tangential, x = _parts(extension, law)
+    kept = ufl.conditional(touching, entry, 0.0) * law.normal
+    if _smooth(law.friction):
         return kept
-    if _sticking(friction):
+    if _sticking(law.friction):
         return kept + ufl.conditional(touching, 1.0, 0.0) * tangential
     share = ufl.conditional(ufl.le(x, KEPT_SLIP), 1.0, KEPT_SLIP / x)
     return kept + ufl.conditional(touching, share, 0.0) * tangential
@@ -132,10 +134,7 @@ def residual(
     du: ufl.core.expr.Expr,
     w: ufl.core.expr.Expr,
     extension: ufl.Coefficient,
-    normal: ufl.core.expr.Expr,
-    stiffness: ufl.core.expr.Expr,
-    friction: ufl.core.expr.Expr | float,
-    slip_scale: ufl.core.expr.Expr,
+    law: WallLaw,
     ds: ufl.Measure,
 ) -> ufl.Form:
     """The wall's share of the residual, ``−∫ t·δu dΓ`` over its facets by the vertex rule.
@@ -144,11 +143,7 @@ def residual(
         du: Grid displacement increment Δu (P1).
         w: Displacement test function.
         extension: The springs' extension at the end of the last step (P1 vector).
-        normal: The wall's unit normal (g,), pointing into the wall.
-        stiffness: β (Pa/m).
-        friction: μ ≥ 0, or ``math.inf`` (sticking).
-        slip_scale: s (m).
+        law: The wall's springs.
         ds: The wall's facets, with :data:`VERTEX_RULE` as metadata.
     """
-    traction = wall_traction(extension + du, normal, stiffness, friction, slip_scale)
-    return -ufl.dot(traction, w) * ds
+    return -ufl.dot(wall_traction(extension + du, law), w) * ds
