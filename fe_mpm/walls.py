@@ -143,6 +143,7 @@ class RigidWalls:
     Args:
         du: The grid displacement increment (UFL, P1).
         walls: The walls.
+        mesh: The grid.
         facet_tags: Facet tags for walls given by tag.
         material: The law (its E sets the default penalty).
 
