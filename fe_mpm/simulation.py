@@ -524,7 +524,7 @@ class Simulation:
             )
         self.conditions.check_loaded_facets(layout.occupied, t_new)
         bcs = self.conditions.impose(layout.occupied, self.t, t_new)
-        self.walls.start_step(layout.occupied)
+        self.walls.start_step(layout.occupied, self.points.x, self.points.volume)
         tied = None  # cells the ghost penalty ties to a neighbour need fewer points
         if self.ghost is not None:
             need, volume = self.spec.min_points_per_cell, self.points.volume

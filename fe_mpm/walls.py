@@ -101,7 +101,9 @@ def plane_normal(mesh: dolfinx.mesh.Mesh, facets: np.ndarray, owner: str) -> np.
 class _Wall:
     """One wall on the grid: facets, normal, stiffness, friction and spring extension."""
 
-    def __init__(self, spec: RigidWall, facets: np.ndarray, space, E: float, subdomain: int):
+    def __init__(
+        self, spec: RigidWall, facets: np.ndarray, space, gap_space, E: float, subdomain: int
+    ):
         mesh = space.mesh
         g, fdim = mesh.geometry.dim, mesh.topology.dim - 1
         owner = f"RigidWall {spec.name!r}"
@@ -120,7 +122,13 @@ class _Wall:
             mu = dolfinx.fem.Constant(mesh, float(spec.friction))
         n = dolfinx.fem.Constant(mesh, self.normal)
         s = dolfinx.fem.Constant(mesh, float(self.slip_scale))
-        self.law = contact.WallLaw(normal=n, stiffness=beta, friction=mu, slip_scale=s)
+        self.size = h
+        self.gap = dolfinx.fem.Function(gap_space, name=f"gap {spec.name}")
+        self.gap_nodes = dolfinx.fem.locate_dofs_topological(gap_space, fdim, facets)
+        self.gap_positions = gap_space.tabulate_dof_coordinates()[self.gap_nodes, :g]
+        self.law = contact.WallLaw(
+            normal=n, stiffness=beta, friction=mu, slip_scale=s, gap=self.gap
+        )
         self.extension = dolfinx.fem.Function(space, name=f"extension {spec.name}")
         self.dofs = dolfinx.fem.locate_dofs_topological(space, fdim, facets)  # blocked
         cells = mesh.topology.connectivity(fdim, fdim + 1)
@@ -165,9 +173,10 @@ class RigidWalls:
         g = mesh.geometry.dim
         self.mesh, self.du = mesh, du
         self.space = dolfinx.fem.functionspace(mesh, ("Lagrange", 1, (g,)))
+        gaps = dolfinx.fem.functionspace(mesh, ("Lagrange", 1))
         E = young_modulus(material) if walls else 0.0
         self.walls = [
-            _Wall(spec, boundary_facets(mesh, spec.where, facet_tags), self.space, E, i)
+            _Wall(spec, boundary_facets(mesh, spec.where, facet_tags), self.space, gaps, E, i)
             for i, spec in enumerate(walls, start=FIRST_WALL_ID)
         ]
         self.facet_domains = {wall.subdomain: wall.facets for wall in self.walls}
@@ -214,10 +223,43 @@ class RigidWalls:
                 held.extend(np.linalg.svd(wall.normal[None, :])[2][1:])
         return held
 
-    def start_step(self, occupied: np.ndarray) -> None:
-        """Release the springs of nodes that no occupied cell touches: the body has left them."""
+    def start_step(self, occupied: np.ndarray, x: np.ndarray, volume: np.ndarray) -> None:
+        """Set each node's gap to the body, and release the springs the body has left.
+
+        Grid-node contact acts on a node as soon as a point of the cells around it
+        moves toward the wall, a cell before the body itself arrives: a rolling disk
+        then rides on the nodes ahead of it. So each node's spring waits for the
+        body: its gap is the least distance from the wall of the points within a
+        facet size of it (along the wall), less each point's half-width
+        V_p^{1/g} / 2, and at least 0. A body that rests on the wall has none.
+
+        Args:
+            occupied: The cells that hold points: nodes no such cell touches are released.
+            x: The points' positions (n, g) at the start of the step (m).
+            volume: Their volumes (n,) (m³; m² in 2D).
+        """
         if not self.walls:
             return
+        g = self.mesh.geometry.dim
+        half_width = 0.5 * volume ** (1.0 / g)
+        for wall in self.walls:
+            origin = wall.gap_positions[0] if wall.gap_positions.size else np.zeros(g)
+            origin = parallel.gathered(self.mesh.comm, origin[None, :])[0]
+            distance = (origin - x) @ wall.normal - half_width  # ≤ 0: at the wall
+            near = distance < 2.0 * wall.size
+            near_x = parallel.gathered(self.mesh.comm, x[near].reshape(-1)).reshape(-1, g)
+            near_d = parallel.gathered(self.mesh.comm, distance[near])
+            gap = np.zeros(wall.gap_nodes.size)
+            if near_d.size and gap.size:
+                offset = near_x[None, :, :] - wall.gap_positions[:, None, :]
+                along = (
+                    offset - np.einsum("npg,g->np", offset, wall.normal)[..., None] * wall.normal
+                )
+                around = np.linalg.norm(along, axis=2) < wall.size
+                least = np.where(around, near_d[None, :], np.inf).min(axis=1)
+                gap = np.where(np.isfinite(least), np.maximum(least, 0.0), 0.0)
+            wall.gap.x.array[:] = 0.0
+            wall.gap.x.array[wall.gap_nodes] = gap
         uses = np.bincount(
             self.space.dofmap.list[occupied].ravel(),
             minlength=self.space.dofmap.index_map.size_local

@@ -112,6 +112,15 @@ def test_sliding_block_json_contract(tmp_path):
     assert out["steps"] == 20 and out["error"] < 1e-10 and out["check_passed"]
 
 
+def test_rolling_disk_rolls_on_a_frictional_wall(tmp_path):
+    """R = 0.2 m on h = R/10 (the demo's coarse check, 15 %; measured −11.7 %): the disk
+    rolls, neither glued to the grid (−100 %) nor sliding (+50 %), and spins at about
+    v / R (measured ωR/v = 0.87)."""
+    out = _last_json(run_demo("rolling_disk.py", "--h", "0.02", "--json", cwd=tmp_path))
+    assert out["check_passed"] and abs(out["relative_error"]) <= 0.15
+    assert 0.8 < out["spin_ratio"] <= 1.05
+
+
 def test_sliding_block_on_a_frictional_wall_writes_its_forces(tmp_path):
     """μ = 0.1: the slide is g (sin θ − μ cos θ) t²/2 to 2e-3 (the demo's check), and
     the wall's CSV has a row per step whose friction is μ times its push once sliding."""

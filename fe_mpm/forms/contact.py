@@ -13,11 +13,13 @@ stiffness :math:`\beta` (Pa/m), Coulomb's coefficient :math:`\mu` and a slip sca
 
 .. math::
 
-   p_N = \beta\,\langle d_N\rangle, \quad d_N = \mathbf d\cdot\mathbf n, \qquad
+   p_N = \beta\,\langle d_N\rangle, \quad d_N = \mathbf d\cdot\mathbf n - g_0, \qquad
    \mathbf t_T = -\mu\, p_N \tanh\!\Big(\frac{|\mathbf d_T|}{s}\Big)
-   \frac{\mathbf d_T}{|\mathbf d_T|}, \quad \mathbf d_T = \mathbf d - d_N\mathbf n.
+   \frac{\mathbf d_T}{|\mathbf d_T|}, \quad \mathbf d_T = \mathbf d - (\mathbf d\cdot\mathbf n)\,\mathbf n,
 
-The wall's traction on the body is :math:`\mathbf t = -p_N\mathbf n + \mathbf t_T` (Pa),
+where :math:`g_0 \ge 0` is the node's gap to the body at the start of the step
+(:meth:`fe_mpm.walls.RigidWalls.start_step`). The wall's traction on the body is
+:math:`\mathbf t = -p_N\mathbf n + \mathbf t_T` (Pa),
 and the residual gains :math:`-\int_\Gamma \mathbf t\cdot\delta\mathbf u\,d\Gamma`,
 integrated with the vertex rule so that each node carries its own spring (a lumped,
 node-to-wall contact, as Mast's grid-node boundaries). The contact is closed at zero
@@ -67,21 +69,24 @@ class WallLaw:
         stiffness: β (Pa/m), UFL.
         friction: μ > 0 (UFL), 0.0 for a smooth wall, or ``math.inf`` for a sticking one.
         slip_scale: s (m), > 0, UFL.
+        gap: How far the body is from the wall at the node at the start of the
+            step (m, ≥ 0, UFL): the spring engages once the node has moved that far.
     """
 
     normal: ufl.core.expr.Expr
     stiffness: ufl.core.expr.Expr
     friction: ufl.core.expr.Expr | float
     slip_scale: ufl.core.expr.Expr
+    gap: ufl.core.expr.Expr | float = 0.0
 
 
 def _parts(d, law: WallLaw):
     """(d_N, touching, p_N, d_T, |d_T| / s or None) of the law at extension ``d``."""
     n = law.normal
-    entry = ufl.dot(d, n)
+    entry = ufl.dot(d, n) - law.gap
     touching = ufl.ge(entry, 0.0)
     pressure = ufl.conditional(touching, law.stiffness * entry, 0.0)
-    tangential = d - entry * n
+    tangential = d - ufl.dot(d, n) * n
     x = None
     if not _smooth(law.friction) and not _sticking(law.friction):
         x = ufl.sqrt(ufl.dot(tangential, tangential) + ZERO_SLIP**2) / law.slip_scale
