@@ -148,8 +148,8 @@ print(
 # With friction the wall's force rises to μ p over a slip of a few slip scales
 # (10⁻³ h = 0.1 mm here), so the first step, which slides about 1.5 of them, gets
 # about 90 % of the friction and the block ends slightly ahead: measured
-# +4.4e-6 relative at θ = 30°, μ = 0.1 after 1 s (Δt = 0.01 s, the default grid).
-# It passes within 2e-3 of the slide; a friction off by 1 % of μ would show as 3e-3.
+# +3.1e-4 relative at θ = 30°, μ = 0.1 after 1 s (6.2e-4 after 0.5 s; Δt = 0.01 s).
+# It passes within 2e-3 of the slide; a friction off by 1 % of μ would show as 2.1e-3.
 # Below the friction angle (tan θ ≤ μ) the block rocks on the wall's springs and
 # must stay within 4 slip scales.
 #
