@@ -252,10 +252,10 @@ if not args.no_output and rank0:
 # points, 333 steps, 17.6 Newton iterations per step, 168 s): DP, a = 2, L_f = 1.272
 # and H_f = 1.239 at t_f = 0.28 s, against [1.286, 2.083] and [1.068, 1.254]: the
 # height is inside, the run-out 1.1 % short of the lower bound, so the check fails.
-# (Before the bed's springs waited for the sand by a gap, L_f was 1.236.) The front,
-# the farthest point, ends at L = 1.66, next to Mast's best fit 1.687: on this grid
-# Mast's l, the mean over a one-cell strip along the bed (two rows of points), reads
-# the toe short. The 5 mm grid (`--full`) was not run.
+# (Before the bed's springs waited for the sand by a gap, L_f was 1.236, and the
+# front, the farthest point, ended at L = 1.66, next to Mast's best fit 1.687.) On
+# this grid Mast's l, the mean over a one-cell strip along the bed (two rows of
+# points), reads the toe short. The 5 mm grid (`--full`) was not run.
 
 # +
 passed = bool(
