@@ -21,7 +21,11 @@ import numpy as np
 import ufl
 
 from fe_mpm._dolfinx import dolfinx
-from fe_mpm.transfer import mass_weighted_projection, nodal_sum_norm, summed_over_ranks
+from fe_mpm.transfer import (
+    mass_weighted_projection,
+    nodal_sum_norm,
+    touched_nodes,
+)
 
 
 @dataclass(frozen=True)
@@ -99,9 +103,8 @@ class GridFields:
         """Zero conditions on every dof outside the occupied cells (they have no equation)."""
         bcs = []
         for sub, collapsed, to_parent, zero in self._pinnable:
-            uses = np.bincount(collapsed.dofmap.list[occupied].ravel(), minlength=to_parent.size)
             # A node on a rank boundary is supported if a cell of either rank is occupied.
-            supported = summed_over_ranks(collapsed, uses.astype(np.float64)) > 0
+            supported = touched_nodes(collapsed, occupied)
             bcs.append(dolfinx.fem.dirichletbc(zero, to_parent[~supported], sub))
         return bcs
 

@@ -55,6 +55,15 @@ def summed_over_ranks(
     return vector.array.reshape(nodal.shape).copy()
 
 
+def touched_nodes(space: dolfinx.fem.FunctionSpace, cells: np.ndarray) -> np.ndarray:
+    """Which nodes of a P1 space (owned and ghost) some rank's ``cells`` touch, (nodes,) bool."""
+    index_map = space.dofmap.index_map
+    uses = np.bincount(
+        space.dofmap.list[cells].ravel(), minlength=index_map.size_local + index_map.num_ghosts
+    )
+    return summed_over_ranks(index_map, uses.astype(np.float64)) > 0
+
+
 def mass_weighted_projection(
     space: dolfinx.fem.FunctionSpace,
     cells: np.ndarray,
