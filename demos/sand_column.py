@@ -88,7 +88,7 @@ K, G = 29.5e6, 13.6e6
 E, nu = 9 * K * G / (3 * K + G), (3 * K - 2 * G) / (2 * (3 * K + G))
 a, h = args.aspect, args.h or (0.005 if args.full else 0.01)
 h0 = a * l0
-# Long enough to fall and spread: measured at a = 2, l settled at 0.33 s of 0.46 s.
+# Long enough to fall and spread: measured at a = 2, it settled at 0.28 s of 0.46 s.
 t_end = args.t_end or 0.1 + 2.5 * math.sqrt(2.0 * h0 / g)
 
 

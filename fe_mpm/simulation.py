@@ -245,6 +245,7 @@ class Simulation:
         self._conditions_warned: dict[int, float] = {}
         self._iterations_of_old_grids = 0  # Newton iterations on grids since repartitioned
         self.output = None
+        self._wall_rows = 0  # steps whose wall forces are in the output's walls.csv
         self._set_grid(mesh, facet_tags)
         self._add_time("setup", t0)
         self._track()  # once now, so a bad initial layout fails at set-up
@@ -646,7 +647,10 @@ class Simulation:
         t0, out = time.perf_counter(), self.output
         if out is not None and out.write(self.step_number, self.t, self.points, force=force):
             if self.walls and self.history and parallel.on_rank_zero(self.mesh.comm):
-                write_wall_forces(self.history, out.folder / "walls.csv")
+                # The rows of the steps since the last output only: a long run's file
+                # grows by its new steps, not rewritten whole.
+                write_wall_forces(self.history, out.folder / "walls.csv", self._wall_rows)
+            self._wall_rows = len(self.history)
             self._add_time("output", t0)
 
     def _add_time(self, key: str, t0: float) -> None:

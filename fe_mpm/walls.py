@@ -22,7 +22,7 @@ from fe_mpm import parallel
 from fe_mpm._dolfinx import dolfinx
 from fe_mpm.boundary import RigidWall, boundary_facets
 from fe_mpm.forms import contact
-from fe_mpm.transfer import summed_over_ranks
+from fe_mpm.transfer import touched_nodes
 
 #: The default penalty is this many times E / h (E the law's Young's modulus, h the
 #: wall's facet size): a body pressing with p enters the wall by p h / (10³ E).
@@ -67,8 +67,10 @@ def young_modulus(material) -> float:
     return 9.0 * K * mu / (3.0 * K + mu)
 
 
-def plane_normal(mesh: dolfinx.mesh.Mesh, facets: np.ndarray, owner: str) -> np.ndarray:
-    """The common outward unit normal (g,) of exterior ``facets``, or raise if they are no plane.
+def wall_plane(mesh: dolfinx.mesh.Mesh, facets: np.ndarray, owner: str) -> tuple[np.ndarray, float]:
+    """The plane of exterior ``facets``: unit outward normal n (g,) and n·x on it (m).
+
+    Raise if they are no plane.
 
     Raises:
         ValueError: The facets' normals differ by more than :data:`PLANE_TOLERANCE`.
@@ -95,20 +97,29 @@ def plane_normal(mesh: dolfinx.mesh.Mesh, facets: np.ndarray, owner: str) -> np.
             f"{owner}: its facets are not on one plane (their normals differ by up to "
             f"{spread:.3g}); give each planar face its own RigidWall"
         )
-    return every[0] / np.linalg.norm(every[0])
+    normal = every[0] / np.linalg.norm(every[0])
+    on_plane = parallel.gathered(mesh.comm, corners.reshape(-1, g) @ normal)
+    return normal, float(np.mean(on_plane))
 
 
 class _Wall:
     """One wall on the grid: facets, normal, stiffness, friction and spring extension."""
 
     def __init__(
-        self, spec: RigidWall, facets: np.ndarray, space, gap_space, E: float, subdomain: int
+        self,
+        spec: RigidWall,
+        facets: np.ndarray,
+        space,
+        gap_space,
+        gap_coordinates: np.ndarray,
+        E: float,
+        subdomain: int,
     ):
         mesh = space.mesh
         g, fdim = mesh.geometry.dim, mesh.topology.dim - 1
         owner = f"RigidWall {spec.name!r}"
         self.spec, self.facets, self.subdomain = spec, facets, subdomain
-        self.normal = plane_normal(mesh, facets, owner)
+        self.normal, self.offset = wall_plane(mesh, facets, owner)
         corners = mesh.geometry.x[dolfinx.mesh.entities_to_geometry(mesh, fdim, facets), :g]
         sizes = np.linalg.norm(corners[:, 1] - corners[:, 0], axis=1)  # an edge of each facet
         count = parallel.total(mesh.comm, int(sizes.size))
@@ -125,7 +136,7 @@ class _Wall:
         self.size = h
         self.gap = dolfinx.fem.Function(gap_space, name=f"gap {spec.name}")
         self.gap_nodes = dolfinx.fem.locate_dofs_topological(gap_space, fdim, facets)
-        self.gap_positions = gap_space.tabulate_dof_coordinates()[self.gap_nodes, :g]
+        self.gap_positions = gap_coordinates[self.gap_nodes]
         self.law = contact.WallLaw(
             normal=n, stiffness=beta, friction=mu, slip_scale=s, gap=self.gap
         )
@@ -174,9 +185,19 @@ class RigidWalls:
         self.mesh, self.du = mesh, du
         self.space = dolfinx.fem.functionspace(mesh, ("Lagrange", 1, (g,)))
         gaps = dolfinx.fem.functionspace(mesh, ("Lagrange", 1))
+        # The node positions, once: the spaces share the grid's P1 nodes.
+        self.coordinates = self.space.tabulate_dof_coordinates()[:, :g]
         E = young_modulus(material) if walls else 0.0
         self.walls = [
-            _Wall(spec, boundary_facets(mesh, spec.where, facet_tags), self.space, gaps, E, i)
+            _Wall(
+                spec,
+                boundary_facets(mesh, spec.where, facet_tags),
+                self.space,
+                gaps,
+                gaps.tabulate_dof_coordinates()[:, :g],
+                E,
+                i,
+            )
             for i, spec in enumerate(walls, start=FIRST_WALL_ID)
         ]
         self.facet_domains = {wall.subdomain: wall.facets for wall in self.walls}
@@ -210,11 +231,7 @@ class RigidWalls:
         A wall counts where it touches a node of an ``occupied`` cell (on some rank).
         """
         held = []
-        touched = np.zeros(
-            self.space.dofmap.index_map.size_local + self.space.dofmap.index_map.num_ghosts,
-            dtype=bool,
-        )
-        touched[self.space.dofmap.list[occupied].ravel()] = True
+        touched = touched_nodes(self.space, occupied)
         for wall in self.walls:
             if not parallel.any_rank(self.mesh.comm, bool(touched[wall.dofs].any())):
                 continue
@@ -240,42 +257,25 @@ class RigidWalls:
         """
         if not self.walls:
             return
-        g = self.mesh.geometry.dim
+        g, comm = self.mesh.geometry.dim, self.mesh.comm
         half_width = 0.5 * volume ** (1.0 / g)
+        idle = ~touched_nodes(self.space, occupied)
         for wall in self.walls:
-            origin = wall.gap_positions[0] if wall.gap_positions.size else np.zeros(g)
-            origin = parallel.gathered(self.mesh.comm, origin[None, :])[0]
-            distance = (origin - x) @ wall.normal - half_width  # ≤ 0: at the wall
+            distance = wall.offset - x @ wall.normal - half_width  # ≤ 0: at the wall
             near = distance < 2.0 * wall.size
-            near_x = parallel.gathered(self.mesh.comm, x[near].reshape(-1)).reshape(-1, g)
-            near_d = parallel.gathered(self.mesh.comm, distance[near])
-            gap = np.zeros(wall.gap_nodes.size)
-            if near_d.size and gap.size:
-                offset = near_x[None, :, :] - wall.gap_positions[:, None, :]
-                along = (
-                    offset - np.einsum("npg,g->np", offset, wall.normal)[..., None] * wall.normal
-                )
-                around = np.linalg.norm(along, axis=2) < wall.size
-                least = np.where(around, near_d[None, :], np.inf).min(axis=1)
-                gap = np.where(np.isfinite(least), np.maximum(least, 0.0), 0.0)
+            near_x = parallel.gathered(comm, x[near].reshape(-1)).reshape(-1, g)
+            near_d = parallel.gathered(comm, distance[near])
             wall.gap.x.array[:] = 0.0
-            wall.gap.x.array[wall.gap_nodes] = gap
-        uses = np.bincount(
-            self.space.dofmap.list[occupied].ravel(),
-            minlength=self.space.dofmap.index_map.size_local
-            + self.space.dofmap.index_map.num_ghosts,
-        ).astype(np.float64)
-        idle = summed_over_ranks(self.space, uses) == 0
-        g = self.mesh.geometry.dim
-        for wall in self.walls:
+            wall.gap.x.array[wall.gap_nodes] = _least_distances(
+                wall.gap_positions, near_x, near_d, wall.normal, wall.size
+            )
             wall.extension.x.array.reshape(-1, g)[idle] = 0.0
 
     def finish_step(self) -> dict[str, WallForces]:
         """Keep the springs' extension at the converged Δu, and report each wall's force."""
         forces = {}
         g, comm = self.mesh.geometry.dim, self.mesh.comm
-        owned = self.space.dofmap.index_map.size_local
-        coords = self.space.tabulate_dof_coordinates()[:, :g]
+        owned, coords = self.space.dofmap.index_map.size_local, self.coordinates
         for wall, kept, traction, force in zip(
             self.walls, self._kept, self._traction, self._forces, strict=True
         ):
@@ -306,7 +306,32 @@ class RigidWalls:
         return forces
 
 
-def write_wall_forces(history: Sequence, path: str | Path) -> Path:
+#: At most this many (node, point) pairs at a time in :func:`_least_distances`.
+PAIRS_AT_ONCE = 2_000_000
+
+
+def _least_distances(
+    nodes: np.ndarray, x: np.ndarray, distance: np.ndarray, normal: np.ndarray, reach: float
+) -> np.ndarray:
+    """Each node's gap to the body (k,), m.
+
+    The least ``distance`` of the points ``x`` (n, g) within ``reach`` of the node along
+    the wall (normal ``normal``), at least 0; 0 where no point is.
+    """
+    gaps = np.zeros(len(nodes))
+    if not len(nodes) or not len(x):
+        return gaps
+    chunk = max(1, PAIRS_AT_ONCE // len(x))  # bounds the memory of a long wall
+    for start in range(0, len(nodes), chunk):
+        offset = x[None, :, :] - nodes[start : start + chunk, None, :]
+        along = offset - np.einsum("npg,g->np", offset, normal)[..., None] * normal
+        around = np.linalg.norm(along, axis=2) < reach
+        least = np.where(around, distance[None, :], np.inf).min(axis=1)
+        gaps[start : start + chunk] = np.where(np.isfinite(least), np.maximum(least, 0.0), 0.0)
+    return gaps
+
+
+def write_wall_forces(history: Sequence, path: str | Path, first: int = 0) -> Path:
     """Write every wall's force after every step of ``history`` as CSV; returns the path.
 
     Columns: ``step, t, wall, F_x, F_y[, F_z], normal, tangential`` (the friction's
@@ -316,19 +341,21 @@ def write_wall_forces(history: Sequence, path: str | Path) -> Path:
     Args:
         history: The :class:`~fe_mpm.StepReport` objects of a run (``Simulation.history``).
         path: The CSV file to write.
+        first: 0 writes the file anew; k > 0 appends the rows of ``history[k:]`` to
+            it, as a run does at each output (each step's rows written once).
     """
     g = next((f.total.size for r in history for f in r.walls.values()), 0)
-    lines = [
-        ",".join(["step", "t", "wall", *(f"F_{c}" for c in "xyz"[:g]), "normal", "tangential"])
-    ]
-    for report in history:
+    header = ["step", "t", "wall", *(f"F_{c}" for c in "xyz"[:g]), "normal", "tangential"]
+    lines = [] if first else [",".join(header)]
+    for report in history[first:]:
         for name, force in report.walls.items():
             values = [*force.total, force.normal, np.linalg.norm(force.tangential)]
             lines.append(
                 ",".join([str(report.step), repr(report.t), name, *map(repr, map(float, values))])
             )
     path = Path(path)
-    path.write_text("\n".join(lines) + "\n")
+    with path.open("a" if first else "w") as csv:
+        csv.write("".join(line + "\n" for line in lines))
     return path
 
 

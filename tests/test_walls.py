@@ -117,14 +117,26 @@ def test_coulomb_wall_holds_a_block_below_its_friction_angle():
     assert along == pytest.approx(-weight * math.sin(math.radians(10.0)), rel=0.05)
 
 
-def test_block_at_rest_on_a_wall_weighs_on_it_in_a_static_run():
+def test_block_at_rest_on_a_wall_weighs_on_it_in_a_static_run(tmp_path):
     """Static, gravity ramped: nothing but the wall holds the block, and it carries m g.
 
     The wall holds the block in y by its normal and in x by friction (the support check
     counts both), and at equilibrium its force is the weight to Newton's tolerance.
+    The run's ``walls.csv`` (written at the outputs of steps 2 and 3, appended) has
+    each step's row once, with the reports' numbers.
     """
-    sim, points = _block(0.0, 0.5, dynamic=False, body_force_scale=lambda t: t)
-    reports = sim.run(t_end=1.0, n_steps=2)
+    sim, points = _block(
+        0.0,
+        0.5,
+        dynamic=False,
+        body_force_scale=lambda t: t,
+        output_dir=tmp_path,
+        output_every=2,
+    )
+    reports = sim.run(t_end=1.0, n_steps=3)
+    rows = np.genfromtxt(tmp_path / "walls.csv", delimiter=",", names=True, dtype=None)
+    assert list(rows["step"]) == [1, 2, 3]
+    np.testing.assert_array_equal(rows["normal"], [r.walls["base"].normal for r in reports])
     weight = G * points.mass.sum()
     force = reports[-1].walls["base"]
     assert force.normal == pytest.approx(weight, rel=1e-9)

@@ -15,7 +15,8 @@ stiffness :math:`\beta` (Pa/m), Coulomb's coefficient :math:`\mu` and a slip sca
 
    p_N = \beta\,\langle d_N\rangle, \quad d_N = \mathbf d\cdot\mathbf n - g_0, \qquad
    \mathbf t_T = -\mu\, p_N \tanh\!\Big(\frac{|\mathbf d_T|}{s}\Big)
-   \frac{\mathbf d_T}{|\mathbf d_T|}, \quad \mathbf d_T = \mathbf d - (\mathbf d\cdot\mathbf n)\,\mathbf n,
+   \frac{\mathbf d_T}{|\mathbf d_T|}, \quad
+   \mathbf d_T = \mathbf d - (\mathbf d\cdot\mathbf n)\,\mathbf n,
 
 where :math:`g_0 \ge 0` is the node's gap to the body at the start of the step
 (:meth:`fe_mpm.walls.RigidWalls.start_step`). The wall's traction on the body is
