@@ -53,7 +53,7 @@ class NewmarkDynamics:
         mesh = fields.W.mesh
         self.n_unknowns = fields.w.x.array.size
         # The grid velocity/acceleration live on the displacement space itself.
-        if fields.spec.pressure:
+        if fields.spec.mixed:
             V1, self.u_dofs = collapse(fields.W.sub(0))
         else:
             V1, self.u_dofs = fields.W, np.arange(fields.w.x.array.size)

@@ -1,13 +1,17 @@
 """The grid unknowns of each formulation, and what the time loop needs from them.
 
-=============  ===============  =====================
-name           unknowns         stabilisation
-=============  ===============  =====================
-``u``          Δu (P1)          none
-``up``         Δu (P1), p (P1)  PPP (Dohrmann–Bochev)
-``up-nostab``  Δu (P1), p (P1)  none
-``up-p2p1``    Δu (P2), p (P1)  none (Taylor–Hood)
-=============  ===============  =====================
+=============  ===============  ==============================================
+name           unknowns         against locking
+=============  ===============  ==============================================
+``u``          Δu (P1)          nothing (locks when nearly incompressible)
+``u-nbva``     Δu (P1), θ (P1)  node-based volumetric averaging (Mast, NB-VA)
+``up``         Δu (P1), p (P1)  pressure field, PPP (Dohrmann–Bochev)
+``up-nostab``  Δu (P1), p (P1)  pressure field, no stabilisation
+``up-p2p1``    Δu (P2), p (P1)  pressure field (Taylor–Hood)
+=============  ===============  ==============================================
+
+θ is the step's volume change averaged over each node's patch
+(:mod:`fe_mpm.forms.volume_average`).
 
 The weak forms themselves live in :mod:`fe_mpm.forms`.
 """
@@ -38,6 +42,13 @@ class FormulationSpec:
     ppp: bool
     #: Fewest material points an occupied cell may hold (rank of the P2 strain).
     min_points_per_cell: int = 1
+    #: Whether the second field is the averaged volume change θ (NB-VA) instead of p.
+    volume_average: bool = False
+
+    @property
+    def mixed(self) -> bool:
+        """Whether a P1 scalar field (p or θ) joins Δu in the unknown."""
+        return self.pressure or self.volume_average
 
     def multi_step_warning(self) -> str:
         """Why a P2 displacement is not yet trustworthy beyond its first step."""
@@ -53,6 +64,7 @@ class FormulationSpec:
 
 FORMULATIONS = {
     "u": FormulationSpec("u", 1, pressure=False, ppp=False),
+    "u-nbva": FormulationSpec("u-nbva", 1, pressure=False, ppp=False, volume_average=True),
     "up": FormulationSpec("up", 1, pressure=True, ppp=True),
     "up-nostab": FormulationSpec("up-nostab", 1, pressure=True, ppp=False),
     "up-p2p1": FormulationSpec("up-p2p1", 2, pressure=True, ppp=False, min_points_per_cell=3),
@@ -64,11 +76,14 @@ class GridFields:
 
     Attributes:
         W: Space of the unknown (P1/P2 vector, or mixed displacement–pressure).
-        w: The unknown: Δu, or (Δu, p).
+        w: The unknown: Δu, or (Δu, p), or (Δu, θ).
         du: UFL displacement increment (a view of ``w``).
         p: UFL pressure (a view of ``w``), or None.
+        volume_change: UFL averaged volume change θ of the step (a view of
+            ``w``, NB-VA), or None.
         U: The displacement (sub)space, where Dirichlet conditions act.
-        Q: The collapsed pressure space and its dofs in ``W``, or None.
+        Q: The collapsed space of the scalar field (p or θ) and its dofs in ``W``,
+            or None.
     """
 
     def __init__(self, mesh: dolfinx.mesh.Mesh, spec: FormulationSpec):
@@ -76,7 +91,7 @@ class GridFields:
         g = mesh.geometry.dim
         cell = mesh.topology.cell_name()
         u_el = basix.ufl.element("Lagrange", cell, spec.u_degree, shape=(g,))
-        if spec.pressure:
+        if spec.mixed:
             p_el = basix.ufl.element("Lagrange", cell, 1)
             self.W = dolfinx.fem.functionspace(mesh, basix.ufl.mixed_element([u_el, p_el]))
             self.U = self.W.sub(0)
@@ -87,12 +102,17 @@ class GridFields:
             self.Q = None
         self.w = dolfinx.fem.Function(self.W, name="unknown")
         self._scalar_element = basix.ufl.element("Lagrange", cell, spec.u_degree)
-        if spec.pressure:
-            self.du, self.p = ufl.split(self.w)
+        self.p = self.volume_change = None
+        if spec.mixed:
+            self.du, scalar_field = ufl.split(self.w)
+            if spec.pressure:
+                self.p = scalar_field
+            else:
+                self.volume_change = scalar_field
         else:
-            self.du, self.p = self.w, None
+            self.du = self.w
         # Scalar subspaces, each collapsed once, to pin the dofs no point reaches.
-        scalar = [self.U.sub(c) for c in range(g)] + ([self.W.sub(1)] if spec.pressure else [])
+        scalar = [self.U.sub(c) for c in range(g)] + ([self.W.sub(1)] if spec.mixed else [])
         self._pinnable = []
         for sub in scalar:
             collapsed, to_parent = collapse(sub)
@@ -147,11 +167,12 @@ class GridFields:
             self.set_pressure(nodal[:, 0])
 
     def pressure_volume(self, cells: np.ndarray, bary: np.ndarray, volume: np.ndarray) -> float:
-        """‖V‖: the points' volumes (n,) gathered on the pressure nodes (m³; m² in 2D).
+        """‖V‖: the points' volumes (n,) gathered on the scalar field's nodes (m³; m² in 2D).
 
-        The scale of the pressure rows in the Newton test (0 without pressure).
+        The scale of the rows of the pressure (or θ) in the Newton test, whose
+        equations are volume × strain; 0 without a scalar field.
         """
-        if not self.spec.pressure:
+        if not self.spec.mixed:
             return 0.0
         return nodal_sum_norm(self.Q[0], cells, bary, volume)
 

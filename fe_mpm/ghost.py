@@ -50,7 +50,7 @@ class GhostStabilisation:
         W = fields.W
         mesh = W.mesh
         trial, test = ufl.TrialFunction(W), ufl.TestFunction(W)
-        if fields.spec.pressure:
+        if fields.spec.mixed:
             trial, test = ufl.split(trial)[0], ufl.split(test)[0]
         self.scale = dolfinx.fem.Constant(mesh, 2.0 * gamma * mu)
         form = ghost_penalty(trial, test, self.scale, fields.spec.u_degree)

@@ -116,14 +116,23 @@ def check_domains(
     ghost_penalty: float | None,
     points: MaterialPoints,
     points_leaving: str,
-    u_degree: int,
+    spec: FormulationSpec,
 ) -> None:
-    """Point domains: on or off, P2 in 2D only, with every point kept. Ghost penalty: γ ≥ 0."""
+    """Point domains: on or off, P2 in 2D only, not with NB-VA, with every point kept.
+
+    Ghost penalty: γ ≥ 0.
+    """
     if ghost_penalty is not None:
         check_range("Simulation", "ghost_penalty", ghost_penalty, lo=0.0)
     if not isinstance(point_domains, bool | np.bool_):
         raise TypeError(f"Simulation: point_domains must be True or False, got {point_domains!r}")
-    if point_domains and points.gdim == 3 and u_degree != 1:
+    if point_domains and spec.volume_average:
+        raise NotImplementedError(
+            f"Simulation: point_domains with formulation {spec.name!r}: the volume "
+            "average is not yet defined over the sub-points of the domains; use "
+            "'up' (or 'u') with point domains"
+        )
+    if point_domains and points.gdim == 3 and spec.u_degree != 1:
         raise NotImplementedError(
             "Simulation: point_domains on tetrahedra works with P1 displacements "
             "(formulation 'u' or 'up') for now, not with P2 ('up-p2p1')"

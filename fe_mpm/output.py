@@ -59,13 +59,14 @@ class SimulationOutput:
         self._open_grid()
 
     def _grid_functions(self) -> tuple[list[dolfinx.fem.Function], list]:
-        """Collapsed copies of Δu (and p) for VTX output, with their dofs in ``w``."""
+        """Collapsed copies of Δu (and p or θ) for VTX output, with their dofs in ``w``."""
         W = self.fields.W
-        if not self.fields.spec.pressure:
+        if not self.fields.spec.mixed:
             return [dolfinx.fem.Function(W, name="du")], [slice(None)]
         U, u_map = collapse(W.sub(0))
         Q, p_map = self.fields.Q
-        return [dolfinx.fem.Function(U, name="du"), dolfinx.fem.Function(Q, name="p")], [
+        name = "p" if self.fields.spec.pressure else "volume_change"
+        return [dolfinx.fem.Function(U, name="du"), dolfinx.fem.Function(Q, name=name)], [
             u_map,
             p_map,
         ]

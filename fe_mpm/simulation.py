@@ -83,7 +83,8 @@ class Simulation:
         points: The material points (moved and updated in place).
         material: Constitutive law (see :mod:`fe_mpm.materials`); its internal
             variables are added to ``points.history`` if missing.
-        formulation: ``"u"`` (irreducible), ``"up"`` (mixed P1/P1 with PPP),
+        formulation: ``"u"`` (irreducible), ``"u-nbva"`` (irreducible with
+            node-based volumetric averaging), ``"up"`` (mixed P1/P1 with PPP),
             ``"up-nostab"`` (mixed P1/P1) or ``"up-p2p1"`` (mixed Taylor–Hood);
             see :mod:`fe_mpm.formulations`.
         dirichlet: Prescribed grid displacements.
@@ -195,9 +196,7 @@ class Simulation:
         model_checks.check_ranges(max_step_cells, ppp_alpha, damping, output_every)
         model_checks.check_dynamics(dynamic, formulation, damping, mass)
         self.spec = FORMULATIONS[formulation]
-        model_checks.check_domains(
-            point_domains, ghost_penalty, points, points_leaving, self.spec.u_degree
-        )
+        model_checks.check_domains(point_domains, ghost_penalty, points, points_leaving, self.spec)
         model_checks.check_serial_only(
             mesh.comm,
             {
@@ -596,7 +595,15 @@ class Simulation:
             options = (self.petsc_options, self.timings, self.linear_solver, self.fields.U)
             coupling = None if self.ghost is None else self.ghost.pattern
             size = parallel.largest(self.mesh.comm, float(self.tracker.sizes.max()))
-            self._newton = NewtonSolver(self.w, pattern, prefix, *options, size, coupling)
+            self._newton = NewtonSolver(
+                self.w,
+                pattern,
+                prefix,
+                *options,
+                size,
+                coupling,
+                strain_field=self.spec.volume_average,
+            )
 
         def attempt(search: str | None) -> NewtonResult:
             self._initial_guess()

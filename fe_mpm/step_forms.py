@@ -18,7 +18,7 @@ import ufl
 
 from fe_mpm._dolfinx import dolfinx
 from fe_mpm.assembly import StepForm
-from fe_mpm.forms import displacement, inertia, mixed_up, penalty
+from fe_mpm.forms import displacement, inertia, mixed_up, penalty, volume_average
 from fe_mpm.forms import loads as loads_form
 from fe_mpm.formulations import FormulationSpec, GridFields
 from fe_mpm.grid_conditions import GridConditions
@@ -142,7 +142,16 @@ class StepForms:
         self.history = {
             name: q.function(h.shape, name, empty=h.initial) for name, h in material.history.items()
         }
-        self.dF = ufl.Identity(g) + q.grad_at_points(fields.du, spec.u_degree)
+        # ΔF of the grid's motion, and the ΔF the law sees (ΔF̄ with NB-VA).
+        self.dF_grid = ufl.Identity(g) + q.grad_at_points(fields.du, spec.u_degree)
+        self.dF = self.dF_grid
+        self.second_moment = None
+        if spec.volume_average:
+            theta = q.at_points(fields.volume_change)
+            self.dF = volume_average.averaged_increment(self.dF_grid, theta)
+            self.second_moment = q.function((g, g), "second_moment")
+        if lumped and self.second_moment is None:
+            self.second_moment = q.function((g, g), "second_moment")
         # A pointwise law (numpy return map) enters the forms through its
         # linearisation at the current iterate, refreshed before every residual.
         self.pointwise = isinstance(material, PointwiseLaw)
@@ -159,7 +168,7 @@ class StepForms:
             dynamic = set(lin.slot_fields)  # they change during Newton
             self.values_at_points = PointExpression(lin.point_values(self.dF, mean_stress), q)
         self.state = PointState(self.dF, self.history, self.linearisation, mean_stress)
-        w = ufl.TestFunctions(fields.W)[0] if spec.pressure else ufl.TestFunction(fields.W)
+        w = ufl.TestFunctions(fields.W)[0] if spec.mixed else ufl.TestFunction(fields.W)
         R = self._residual(fields, conditions, ppp)
         self.q_boundary = None
         if nslot_boundary:
@@ -173,7 +182,7 @@ class StepForms:
         self.loads = None
         if loads is not None:
             self.loads = StepForm(loads, mesh, conditions.traction_facets, rules)
-        self.lumping = q.function((g, g), "second_moment") if lumped else None
+        self.lumping = self.second_moment if lumped else None
         if newmark is not None:
             R += inertia.inertia(fields.du, w, q, self.density, newmark, self.lumping)
             V1 = newmark.a_n.function_space
@@ -206,9 +215,9 @@ class StepForms:
         q.pack(self.density, layout, points.density)
         for name, h in self.material.history.items():
             q.pack(self.history[name], layout, points.history[name], empty=h.initial)
-        if self.lumping is not None:
+        if self.second_moment is not None:
             vertices = self.mesh.geometry.x[self.mesh.geometry.dofmaps[0][layout.cell], :g]
-            q.pack(self.lumping, layout, second_moments(vertices, points.x, bary))
+            q.pack(self.second_moment, layout, second_moments(vertices, points.x, bary))
         if self.ppp is not None:
             volume = np.bincount(layout.cell, weights=points.volume, minlength=tracker.num_cells)
             q.pack_cell_field(self.ppp.fill, layout, volume / tracker.volumes)
@@ -235,15 +244,31 @@ class StepForms:
                 u_degree=deg,
                 state=state,
             )
-        return displacement.residual(
+        if not self.spec.volume_average:
+            return displacement.residual(
+                fields.du,
+                ufl.TestFunction(fields.W),
+                q,
+                self.F_n,
+                self.density,
+                lambda F: material.kirchhoff(F, state),
+                conditions.body_force,
+                conditions.traction_terms,
+            )
+        w, w_theta = ufl.TestFunctions(fields.W)
+        R_u = displacement.residual(
             fields.du,
-            ufl.TestFunction(fields.W),
+            w,
             q,
             self.F_n,
             self.density,
             lambda F: material.kirchhoff(F, state),
             conditions.body_force,
             conditions.traction_terms,
+            material_increment=self.dF,
+        )
+        return R_u + volume_average.projection_residual(
+            q, self.dF_grid, fields.volume_change, w_theta, self.second_moment
         )
 
     def _boundary_points(self, fields: GridFields, w, nslot: int) -> ufl.Form:

@@ -230,8 +230,9 @@ def test_modified_angles_follow_masts_equations():
             fe_mpm.ModifiedDruckerPrager(10.0, 0.3, **MAST_TABLE_3_5["dense"], apex_stress=0.05),
             3,
         ),
+        ("u-nbva", fe_mpm.DruckerPrager(10.0, 0.3, 0.05, 30.0, 10.0, hardening=2.0), 3),
     ],
-    ids=["dp-u", "von-mises-up", "modified-u"],
+    ids=["dp-u", "von-mises-up", "modified-u", "dp-u-nbva"],
 )
 @pytest.mark.parametrize("dim", [2, 3])
 def test_step_residual_and_jacobian_are_consistent(dim, formulation, law, regions_seen):

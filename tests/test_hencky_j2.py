@@ -121,7 +121,7 @@ def test_small_strains_agree_with_simos_j2():
     assert np.abs(taus[0] - taus[1]).max() < 2e-3 * np.abs(taus[1]).max()
 
 
-@pytest.mark.parametrize("formulation", ["u", "up"])
+@pytest.mark.parametrize("formulation", ["u", "up", "u-nbva"])
 @pytest.mark.parametrize("dim", [2, 3])
 def test_step_residual_and_jacobian_are_consistent(dim, formulation):
     j2 = fe_mpm.HenckyJ2(10.0, 0.3, 0.5, hardening=2.0, kinematic_hardening=3.0)

@@ -115,7 +115,7 @@ def test_algorithmic_tangent_matches_finite_differences(gdim):
         assert np.allclose(D[:, :, k, l], fd, rtol=0, atol=1e-5 * np.abs(D).max())
 
 
-@pytest.mark.parametrize("formulation", ["u", "up"])
+@pytest.mark.parametrize("formulation", ["u", "up", "u-nbva"])
 def test_elastoplastic_step_residual_and_jacobian_are_consistent(formulation):
     """Taylor test of the assembled J2 step (u and u-p forms) with every point plastic."""
     rng, sim = _simulation(2, formulation, material=fe_mpm.J2Plasticity(10.0, 0.3, 0.05, 1.0))

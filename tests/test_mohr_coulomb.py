@@ -245,7 +245,9 @@ def test_plane_spectral_decomposition_is_lapacks_in_closed_form():
     assert np.abs(rebuilt - symmetric).max() < 1e-14 * np.abs(b).max()
 
 
-@pytest.mark.parametrize("formulation, phi", [("u", 30.0), ("u", 0.0), ("up", 0.0)])
+@pytest.mark.parametrize(
+    "formulation, phi", [("u", 30.0), ("u", 0.0), ("up", 0.0), ("u-nbva", 30.0)]
+)
 @pytest.mark.parametrize("dim", [2, 3])
 def test_step_residual_and_jacobian_are_consistent(dim, formulation, phi):
     """Taylor test of an assembled step with points in several return regions.

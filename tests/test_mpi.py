@@ -159,7 +159,7 @@ def wall_block(steps):
 try:
     if case == "cook":
         result = {f"{f} {n} {k}": cook(f, n, k) for f, n, k in
-                  (("u", 16, 1), ("up", 16, 1), ("up", 8, 4), ("u", 8, 4))}
+                  (("u", 16, 1), ("up", 16, 1), ("up", 8, 4), ("u", 8, 4), ("u-nbva", 8, 4))}
         result["output"] = cook("up", 8, 2, output_dir=folder / f"out{MPI.COMM_WORLD.size}")
         result["up-p2p1 8 2"] = cook("up-p2p1", 8, 2, per_cell=3)  # Taylor-Hood
         for f in ("u", "up") if MPI.COMM_WORLD.size < 3 else ():  # GAMG; Schur field split
@@ -248,7 +248,8 @@ def _run(tmp_path: Path, case: str, ranks: int) -> list:
 
 
 def test_cook_on_two_and_three_ranks_gives_the_serial_answer(tmp_path):
-    """Cook u and u-p (one step at n = 16, four at n = 8) and P2/P1 (two steps at n =
+    """Cook u and u-p (one step at n = 16, four at n = 8), u-nbva (four at n = 8) and
+    P2/P1 (two steps at n =
     8, three points per cell) on 1, 2 and 3 ranks; its
     point output on 2 ranks: a piece per rank, every point once; and one step with the
     iterative solvers on 1 and 2 ranks."""
@@ -270,7 +271,7 @@ def test_cook_on_two_and_three_ranks_gives_the_serial_answer(tmp_path):
 
 def _check_cook(serial: dict, runs: list, ranks: int) -> None:
     for rank, result in enumerate(runs):
-        for case in ("u 16 1", "up 16 1", "up 8 4", "u 8 4", "up-p2p1 8 2"):
+        for case in ("u 16 1", "up 16 1", "up 8 4", "u 8 4", "up-p2p1 8 2", "u-nbva 8 4"):
             want, got = serial[case], result[case]
             assert got["iterations"] == want["iterations"], (case, rank)
             # The same on every rank. The clamp's horizontal force is zero to Newton's

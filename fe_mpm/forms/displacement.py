@@ -51,6 +51,7 @@ def residual(
     kirchhoff,
     body_force: ufl.core.expr.Expr | None = None,
     tractions: Sequence[tuple[ufl.core.expr.Expr, ufl.Measure]] = (),
+    material_increment: ufl.core.expr.Expr | None = None,
 ) -> ufl.Form:
     """Residual R(Δu; w) of one static step.
 
@@ -63,9 +64,11 @@ def residual(
         kirchhoff: Callable F -> Kirchhoff stress τ (Pa), the material law.
         body_force: Body force per unit mass b (m/s²), or None.
         tractions: Pairs (t̄, ds) of traction vector (Pa) and facet measure.
+        material_increment: The increment the law sees, if not ΔF (the averaged
+            ΔF̄ of :mod:`fe_mpm.forms.volume_average`); ΔF still maps ∇w.
     """
     dF = deformation_increment(q, du)
-    F = dF * F_n
+    F = (dF if material_increment is None else material_increment) * F_n
     tau = kirchhoff(F)
     R = q.sum(ufl.inner(tau * ufl.inv(dF).T / ufl.det(F_n), q.grad_at_points(w)))
     loads = external_work(w, q, density, body_force, tractions)
