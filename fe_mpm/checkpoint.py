@@ -5,15 +5,17 @@ A checkpoint is a folder ``step_NNNNNN`` holding
 - ``points_rNNNN.npz``, one piece per rank that wrote it: every per-point field of
   :class:`~fe_mpm.particles.MaterialPoints` and the law's history, and the markers
   these points host;
-- ``shared.npz``: the boundary points' positions and the markers' positions;
+- ``shared.npz``: the boundary points' positions, the markers' positions and the
+  rigid walls' springs (their extension at each node, by the node's grid input index);
 - ``state.json``: what the run is (fe-mpm version, formulation, law and its
   parameters, the grid's size and extent) and where it stands (time, step, slot
   counts), with the SHA-256 of every file.
 
 The points and their history are the whole state of a run between steps: the grid
 is reset after every step, and a dynamic run carries its velocities and
-accelerations on the points. A restart rebuilds the simulation with the same script
-and calls :meth:`Simulation.restore <fe_mpm.simulation.Simulation.restore>`: on N
+accelerations on the points. The one exception is the rigid walls' springs, which
+keep their extension from step to step (:mod:`fe_mpm.walls`). A restart rebuilds the
+simulation with the same script and calls :meth:`Simulation.restore <fe_mpm.simulation.Simulation.restore>`: on N
 ranks, rank r reads the pieces r, r + N, ... and every point then moves to the rank
 that owns its cell (:mod:`fe_mpm.migration`), so a checkpoint written on 2 ranks
 continues on 3. The points come back in another order than they had, so sums over
@@ -116,9 +118,13 @@ def write(sim, directory: str | Path) -> Path:
     parallel.raise_together(comm, error)
     pieces = comm.gather({"file": piece, "points": len(sim.points), "sha256": digest})
     fingerprint, dropped = scene(sim), sim.dropped  # collective: before rank 0 goes alone
+    springs = sim.walls.springs()
     if comm.rank == 0:
         try:
             shared = {f"marker.{k}": x for k, x in sim.markers.positions().items()}
+            for name, (nodes, extension) in springs.items():
+                shared[f"wall.{name}.nodes"] = nodes
+                shared[f"wall.{name}.extension"] = extension
             if sim._boundary is not None:
                 shared["boundary_x"] = sim._boundary.points.x
             state = {
@@ -202,6 +208,15 @@ def read(sim, path: str | Path) -> None:
         if key.startswith("marker."):
             name = key.removeprefix("marker.")
             markers.place(name, x, hosts.get(name, -1))
+    springs = {
+        key[len("wall.") : -len(".nodes")]: (
+            shared[key],
+            shared[key[: -len("nodes")] + "extension"],
+        )
+        for key in shared
+        if key.startswith("wall.") and key.endswith(".nodes")
+    }
+    sim.walls.set_springs(springs)
     if sim._boundary is not None:
         sim._boundary.points.x[:] = shared["boundary_x"]
         sim._boundary._nslot = state["boundary_slots"]

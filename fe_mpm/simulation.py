@@ -376,7 +376,9 @@ class Simulation:
         if self._newton is not None:
             self._iterations_of_old_grids += self._newton.iterations_total
             self._newton.destroy()
+        springs = self.walls.springs()
         self._set_grid(mesh, tags)
+        self.walls.set_springs(springs)
         if keep_home:
             self.tracking._home = balance.owners_of_original_cells(mesh, home)
         # The next tracking starts from the cell each point was in, where this rank

@@ -187,6 +187,12 @@ class RigidWalls:
         gaps = dolfinx.fem.functionspace(mesh, ("Lagrange", 1))
         # The node positions, once: the spaces share the grid's P1 nodes.
         self.coordinates = self.space.tabulate_dof_coordinates()[:, :g]
+        # And their grid input indices (a P1 cell lists its dofs in its nodes' order),
+        # by which checkpoints and repartitions carry the springs.
+        node_of_dof = np.empty(self.coordinates.shape[0], dtype=np.int64)
+        node_of_dof[self.space.dofmap.list.reshape(-1)] = mesh.geometry.dofmaps[0].reshape(-1)
+        inputs = np.asarray(mesh.geometry.input_global_indices, dtype=np.int64)
+        self._node_inputs = inputs[node_of_dof]
         E = young_modulus(material) if walls else 0.0
         self.walls = [
             _Wall(
@@ -270,6 +276,43 @@ class RigidWalls:
                 wall.gap_positions, near_x, near_d, wall.normal, wall.size
             )
             wall.extension.x.array.reshape(-1, g)[idle] = 0.0
+
+    def springs(self) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+        """Each wall's spring extensions (m) by node, gathered on every rank; collective.
+
+        The nodes are known by their grid input indices, which a repartitioned grid
+        keeps: name -> (input indices (k,), extensions (k, g)).
+        """
+        g, comm = self.mesh.geometry.dim, self.mesh.comm
+        owned = self.space.dofmap.index_map.size_local
+        out = {}
+        for wall in self.walls:
+            mine = wall.dofs[wall.dofs < owned]
+            values = wall.extension.x.array.reshape(-1, g)[mine]
+            out[wall.spec.name] = (
+                parallel.gathered(comm, self._node_inputs[mine]).astype(np.int64),
+                parallel.gathered(comm, values.reshape(-1)).reshape(-1, g),
+            )
+        return out
+
+    def set_springs(self, springs: dict[str, tuple[np.ndarray, np.ndarray]]) -> None:
+        """Give the walls the extensions of :meth:`springs` (from this grid or a repartition).
+
+        A wall missing from ``springs`` keeps its springs.
+        """
+        g = self.mesh.geometry.dim
+        for wall in self.walls:
+            if wall.spec.name not in springs:
+                continue
+            inputs, values = springs[wall.spec.name]
+            order = np.argsort(inputs)
+            inputs, values = np.asarray(inputs)[order], np.asarray(values).reshape(-1, g)[order]
+            wanted = self._node_inputs[wall.dofs]
+            at = np.clip(np.searchsorted(inputs, wanted), 0, max(inputs.size - 1, 0))
+            found = inputs[at] == wanted if inputs.size else np.zeros(wanted.size, dtype=bool)
+            e = wall.extension.x.array.reshape(-1, g)
+            e[wall.dofs[found]] = values[at[found]]
+            wall.extension.x.scatter_forward()
 
     def finish_step(self) -> dict[str, WallForces]:
         """Keep the springs' extension at the converged Δu, and report each wall's force."""
