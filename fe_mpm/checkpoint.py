@@ -15,8 +15,9 @@ The points and their history are the whole state of a run between steps: the gri
 is reset after every step, and a dynamic run carries its velocities and
 accelerations on the points. The one exception is the rigid walls' springs, which
 keep their extension from step to step (:mod:`fe_mpm.walls`). A restart rebuilds the
-simulation with the same script and calls :meth:`Simulation.restore <fe_mpm.simulation.Simulation.restore>`: on N
-ranks, rank r reads the pieces r, r + N, ... and every point then moves to the rank
+simulation with the same script and calls
+:meth:`Simulation.restore <fe_mpm.simulation.Simulation.restore>`: on N ranks, rank r
+reads the pieces r, r + N, ... and every point then moves to the rank
 that owns its cell (:mod:`fe_mpm.migration`), so a checkpoint written on 2 ranks
 continues on 3. The points come back in another order than they had, so sums over
 them round off differently: the answers agree to round-off, not bit for bit.

@@ -31,6 +31,7 @@ from fe_mpm.meshes.cook import (
     body_cells,
     cook_membrane,
 )
+from fe_mpm.meshes.cylinder import cylinder
 from fe_mpm.meshes.disk import disk
 from fe_mpm.meshes.facet_points import facet_points
 from fe_mpm.meshes.footing import (
@@ -58,6 +59,7 @@ __all__ = [
     "COLLAPSE_COLUMN",
     "COLLAPSE_WALL",
     "granular_column",
+    "cylinder",
     "disk",
     "facet_points",
     "COLUMN_BASE",
