@@ -145,13 +145,12 @@ class StepForms:
         # ΔF of the grid's motion, and the ΔF the law sees (ΔF̄ with NB-VA).
         self.dF_grid = ufl.Identity(g) + q.grad_at_points(fields.du, spec.u_degree)
         self.dF = self.dF_grid
-        self.second_moment = None
         if spec.volume_average:
             theta = q.at_points(fields.volume_change)
             self.dF = volume_average.averaged_increment(self.dF_grid, theta)
-            self.second_moment = q.function((g, g), "second_moment")
-        if lumped and self.second_moment is None:
-            self.second_moment = q.function((g, g), "second_moment")
+        # The points' second moments C_p: the lumped mass and the average's lumping.
+        moments = lumped or spec.volume_average
+        self.second_moment = q.function((g, g), "second_moment") if moments else None
         # A pointwise law (numpy return map) enters the forms through its
         # linearisation at the current iterate, refreshed before every residual.
         self.pointwise = isinstance(material, PointwiseLaw)
@@ -244,19 +243,12 @@ class StepForms:
                 u_degree=deg,
                 state=state,
             )
-        if not self.spec.volume_average:
-            return displacement.residual(
-                fields.du,
-                ufl.TestFunction(fields.W),
-                q,
-                self.F_n,
-                self.density,
-                lambda F: material.kirchhoff(F, state),
-                conditions.body_force,
-                conditions.traction_terms,
-            )
-        w, w_theta = ufl.TestFunctions(fields.W)
-        R_u = displacement.residual(
+        averaged = self.spec.volume_average
+        if averaged:
+            w, w_theta = ufl.TestFunctions(fields.W)
+        else:
+            w = ufl.TestFunction(fields.W)
+        R = displacement.residual(
             fields.du,
             w,
             q,
@@ -265,11 +257,13 @@ class StepForms:
             lambda F: material.kirchhoff(F, state),
             conditions.body_force,
             conditions.traction_terms,
-            material_increment=self.dF,
+            material_increment=self.dF if averaged else None,
         )
-        return R_u + volume_average.projection_residual(
-            q, self.dF_grid, fields.volume_change, w_theta, self.second_moment
-        )
+        if averaged:
+            R += volume_average.projection_residual(
+                q, self.dF_grid, fields.volume_change, w_theta, self.second_moment
+            )
+        return R
 
     def _boundary_points(self, fields: GridFields, w, nslot: int) -> ufl.Form:
         """The penalty and point loads of the boundary points, on their own rule."""
