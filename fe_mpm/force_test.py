@@ -87,7 +87,9 @@ class ForceTest:
     divergence, inertia, penalties — including the rows of supported dofs, whose
     internal force is the reaction. :math:`f_\varepsilon =` ``ROUND_OFF_FACTOR`` ε h
     ‖diag K‖ is the round-off floor: what a displacement error of 10 ε h (h the
-    largest cell size) would unbalance. The pressure rows of a mixed form (volume ×
+    largest cell size) would unbalance (with volumetric averaging, plus what an
+    error of 10 ε in the averaged volume change would: the bulk stiffness couples
+    Δu to it, off the diagonal). The pressure rows of a mixed form (volume ×
     strain) pass when :math:`\|R_p\| \le \max(\mathrm{rtol}, 1000 ε) \|V\|`, with
     :math:`\|V\|` the norm of the nodal volumes: a volumetric strain error of rtol.
     A step that starts in equilibrium passes at iteration 0.
