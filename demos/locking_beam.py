@@ -33,7 +33,7 @@
 # φ₁(x) = cosh β₁x − cos β₁x − σ₁ (sinh β₁x − sin β₁x). The theory neglects shear
 # deformation and rotary inertia, which lengthen the period slightly at L/H = 10.
 #
-# Usage: `python demos/vibrating_beam.py --nu 0.49 --formulation u-nbva --json`, or
+# Usage: `python demos/locking_beam.py --nu 0.49 --formulation u-nbva --json`, or
 # `--sweep` for Table 6.4 in the three formulations (about two minutes).
 
 # +
@@ -72,7 +72,7 @@ def parse_args(argv=None):
     p.add_argument("--h", type=float, default=0.125, help="cell size (m)")
     p.add_argument("--points-per-cell", type=int, default=3, help="points per triangle")
     p.add_argument("--steps", type=int, default=100, help="time steps in the period")
-    p.add_argument("--output", default="vibrating_beam_output", help="output folder (plot)")
+    p.add_argument("--output", default="locking_beam_output", help="output folder (plot)")
     p.add_argument("--no-output", action="store_true", help="write no files")
     p.add_argument("--json", action="store_true", help="print a JSON summary as the last line")
     return p.parse_args(argv)
@@ -191,7 +191,7 @@ try:
             f"{args.steps} steps, {r['run_time_s']:.1f} s)"
         )
 except (ValueError, fe_mpm.ConvergenceError, fe_mpm.PointsOutsideError) as err:
-    sys.exit(f"vibrating_beam.py: {err}")
+    sys.exit(f"locking_beam.py: {err}")
 # -
 
 # ## Check against the reference
@@ -241,8 +241,8 @@ if not args.no_output and parallel.on_rank_zero(MPI.COMM_WORLD):
             axes.plot(t, amplitude * np.sin(omega * t), label="beam theory")
             axes.set(xlabel="t (s)", ylabel="tip deflection (m)", title=f"ν = {args.nu}")
             axes.legend()
-        fig.savefig(out / "vibrating_beam.png", dpi=120)
-        print(f"  wrote {out}/vibrating_beam.png")
+        fig.savefig(out / "locking_beam.png", dpi=120)
+        print(f"  wrote {out}/locking_beam.png")
 if args.json:
     summary = [{k: v for k, v in r.items() if k != "tip"} for r in runs]
     print(
@@ -256,5 +256,5 @@ if args.json:
         )
     )
 if not passed:
-    sys.exit(f"vibrating_beam.py: a ratio is {100 * error:.2f} % from beam theory")
+    sys.exit(f"locking_beam.py: a ratio is {100 * error:.2f} % from beam theory")
 # -
