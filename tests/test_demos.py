@@ -159,6 +159,9 @@ def test_the_taylor_bar_hits_its_wall_with_the_momentum_it_loses(tmp_path):
     assert out["momentum_lost_Ns"] > 0.1 * rod
     assert out["impulse_Ns"] == pytest.approx(out["momentum_lost_Ns"], rel=1e-9)
     assert out["check_passed"] and out["steps"] == 20
+    # The contract: L/L₀ and R/R₀ at the end, and their history.
+    assert len(out["history"]) == 20 and out["history"][-1][1] == out["final_length_ratio"]
+    assert 0.9 < out["final_length_ratio"] < 1.0 < out["final_radius_ratio"]
 
 
 def test_sliding_block_on_a_frictional_wall_writes_its_forces(tmp_path):
