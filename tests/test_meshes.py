@@ -1,5 +1,7 @@
 """gmsh scene builders."""
 
+import math
+
 import numpy as np
 import pytest
 
@@ -231,3 +233,31 @@ def test_the_footing_grid_is_finer_along_its_edges_path():
     ):
         with pytest.raises(ValueError, match=name):
             meshes.strip_footing(1.0, h=0.2, **bad)
+
+
+def test_a_quarter_cylinder_fills_its_sector():
+    """The Taylor bar's quarter rod: every node in x, y ≥ 0 within the radius and the
+    length; the volume that of the quarter, to the chord error of its curved face
+    (measured 0.76 % short with four cells across the radius)."""
+    rod = meshes.cylinder(3.2e-3, 32.4e-3, 0.8e-3, sector=math.pi / 2).mesh
+    x = rod.geometry.x
+    assert x[:, :2].min() >= -1e-15 and np.hypot(x[:, 0], x[:, 1]).max() <= 3.2e-3 * (1 + 1e-12)
+    assert np.isclose(x[:, 2].min(), 0.0) and np.isclose(x[:, 2].max(), 32.4e-3)
+    cells = rod.geometry.dofmaps[0]
+    e = x[cells[:, 1:]] - x[cells[:, :1]]
+    volume = np.abs(np.linalg.det(e)).sum() / 6.0
+    exact = math.pi * 3.2e-3**2 / 4 * 32.4e-3
+    assert 0.98 * exact < volume < exact
+
+
+@pytest.mark.parametrize(
+    "bad, match",
+    [
+        (dict(radius=0.0), r"cylinder: radius must lie in \(0, inf"),
+        (dict(h=1.0), r"cylinder: h must lie in \(0, 0.1\]"),
+        (dict(sector=7.0), r"cylinder: sector must lie in \(0, 6.28"),
+    ],
+)
+def test_a_cylinder_with_bad_sizes_is_refused_by_name(bad, match):
+    with pytest.raises(ValueError, match=match):
+        meshes.cylinder(**{**dict(radius=0.1, length=1.0, h=0.05), **bad})
