@@ -141,3 +141,21 @@ def test_step_residual_and_jacobian_are_consistent(dim, formulation):
 def test_bad_parameters_are_named(bad, match):
     with pytest.raises(ValueError, match=match):
         fe_mpm.HenckyJ2(**{**dict(E=1e4, nu=0.3, yield_stress=10.0), **bad})
+
+
+def test_a_non_finite_iterate_gives_nan_at_its_point_and_no_exception():
+    """A diverging Newton iterate (a NaN in ΔF at one point) must come back as NaN
+    there, so that the residual is not finite and Newton stops with its own message;
+    LAPACK's eigh raised instead ("Eigenvalues did not converge"), a traceback that
+    ended a 3D Taylor bar run. The other points are returned as usual."""
+    j2 = fe_mpm.HenckyJ2(10.0, 0.3, 0.5, hardening=2.0)
+    dF = np.tile(np.eye(3), (3, 1, 1))
+    dF[0, 0, 1] = 0.01
+    dF[1, 2, 0] = np.nan
+    dF[2, 0, 2] = 0.02
+    history = {name: h.initial_values(3) for name, h in j2.history.items()}
+    result = j2.return_map(dF, history)
+    assert np.isnan(result.tau[1]).all()
+    assert np.isfinite(result.tau[[0, 2]]).all()
+    alone = j2.return_map(dF[[0, 2]], {k: v[[0, 2]] for k, v in history.items()})
+    np.testing.assert_array_equal(result.tau[[0, 2]], alone.tau)

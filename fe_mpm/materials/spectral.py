@@ -31,6 +31,13 @@ def spectral_decomposition(b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Eigenvalues in descending order (n, 3) and eigenvectors as columns (n, 3, 3)."""
     if not (b[:, 2, :2].any() or b[:, :2, 2].any()):
         return _plane_decomposition(b)
+    finite = np.isfinite(b).all(axis=(1, 2))
+    if not finite.all():
+        # A diverging Newton iterate: NaN where it is not finite (LAPACK would raise),
+        # so that the residual is not finite and Newton stops as it should.
+        x, Q = np.full((b.shape[0], 3), np.nan), np.full(b.shape, np.nan)
+        x[finite], Q[finite] = spectral_decomposition(b[finite])
+        return x, Q
     x, Q = np.linalg.eigh(b)
     return x[:, ::-1], Q[:, :, ::-1]
 
