@@ -89,7 +89,8 @@ E, nu = 9 * K * G / (3 * K + G), (3 * K - 2 * G) / (2 * (3 * K + G))
 a, h = args.aspect, args.h or (0.005 if args.full else 0.01)
 h0 = a * l0
 # Long enough to fall and spread: measured at a = 2, it settled at 0.28 s of 0.46 s.
-t_end = args.t_end or 0.1 + 2.5 * math.sqrt(2.0 * h0 / g)
+full_time = 0.1 + 2.5 * math.sqrt(2.0 * h0 / g)
+t_end = args.t_end or full_time
 
 
 def bound(coefficients: tuple[float, float]) -> float:
@@ -261,10 +262,13 @@ if not args.no_output and rank0:
 passed = bool(
     runout_range[0] <= L_f <= runout_range[1] and height_range[0] <= H_f <= height_range[1]
 )
+verdict = "PASS" if passed else "FAIL"
+if not settled.size and t_end < full_time:  # Mast's bounds are on the deposit at rest
+    passed, verdict = True, f"not checked (cut short at t = {t[-1]:.3f} s, still moving)"
 print(
     f"check: L_f {L_f:.3f} in [{runout_range[0]:.3f}, {runout_range[1]:.3f}] and H_f "
     f"{H_f:.3f} in [{height_range[0]:.3f}, {height_range[1]:.3f}] (Mast's Tables 7.4, 7.6, "
-    f"{'DP' if args.law == 'dp' else 'MN with DP G'}): {'PASS' if passed else 'FAIL'}"
+    f"{'DP' if args.law == 'dp' else 'MN with DP G'}): {verdict}"
 )
 if args.json:
     print(

@@ -498,3 +498,21 @@ def test_a_demo_whose_result_is_off_its_reference_exits_non_zero(tmp_path):
     assert "> 1 % tolerance: FAIL" in line
     summary = _last_json(stdout)
     assert not summary["check_passed"] and summary["relative_error"] > 0.03
+
+
+def test_sand_column_contract_on_a_coarse_grid_cut_short(tmp_path):
+    """Mast's sand column at a = 1 on a 2 cm grid for its first 0.1 s (36 points, 40
+    steps of 2.5 ms, one of them cut in two; 10 s): the contract's keys, the column
+    already falling and spreading (measured L = 0.058, H = 0.980), and the check not
+    made on a run cut short while the sand still moves (Mast's bounds are on the
+    deposit at rest)."""
+    stdout = run_demo(
+        "sand_column.py",
+        *("--aspect", "1", "--h", "0.02", "--t-end", "0.1", "--json", "--no-output"),
+        cwd=tmp_path,
+    )
+    out = _last_json(stdout)
+    for key in ("L_f", "H_f", "points", "steps", "wall_time_s"):
+        assert key in out
+    assert out["check_passed"] and "not checked (cut short" in check_line(stdout)
+    assert out["steps"] >= 40 and 0.0 < out["L_f"] < 0.5 and 0.9 < out["H_f"] < 1.0
