@@ -12,8 +12,8 @@ The scenes:
   under a sloping line (a slope);
 - a Neo-Hookean, J2 or Mohr-Coulomb law, E 1e6–1e8 Pa, ν 0–0.45, ρ 500–3000 kg/m³ (given
   to ``seed`` only; the body force acts through the points' mass);
-- formulation ``u``, ``up`` (the laws with ``kirchhoff_deviatoric``; Mohr-Coulomb only as
-  Tresca there) or ``up-p2p1`` (Neo-Hookean with ≥ 3 points per cell);
+- formulation ``u``, ``u-nbva`` (any law), ``up`` (the laws with ``kirchhoff_deviatoric``;
+  Mohr-Coulomb only as Tresca there) or ``up-p2p1`` (Neo-Hookean with ≥ 3 points per cell);
 - gravity along −y (y is "up" in 2D and 3D), constant or ramped, and on a fully seeded
   block optionally a grid traction on the top facets (same load factor as gravity);
 - the base (y = 0) fixed, optionally rollers on the sides (normal component fixed);
@@ -342,7 +342,7 @@ def scenes(
 
     is_static = draw(st.booleans()) if static is None else static
     law = draw(laws(demand, strength, names, E))
-    forms = ["u"]
+    forms = ["u", "u-nbva"]
     if law.name != "MohrCoulomb" or law.friction_angle == 0.0:
         forms.append("up")
     if law.name == "NeoHookean" and per_cell >= 3 and is_static:
