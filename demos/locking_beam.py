@@ -176,8 +176,10 @@ def swing(nu: float, formulation: str) -> dict:
     }
 
 
-cases = [(nu, f) for nu in TABLE_6_4 for f in FORMULATIONS] if args.sweep else None
-cases = cases or [(args.nu, args.formulation)]
+if args.sweep:
+    cases = [(nu, f) for nu in TABLE_6_4 for f in FORMULATIONS]
+else:
+    cases = [(args.nu, args.formulation)]
 try:
     if not 0.0 <= args.nu < 0.5:
         raise ValueError(f"--nu must lie in [0, 0.5), got {args.nu}")

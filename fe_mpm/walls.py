@@ -185,6 +185,7 @@ class RigidWalls:
         self.mesh, self.du = mesh, du
         self.space = dolfinx.fem.functionspace(mesh, ("Lagrange", 1, (g,)))
         gaps = dolfinx.fem.functionspace(mesh, ("Lagrange", 1))
+        gap_coordinates = gaps.tabulate_dof_coordinates()[:, :g]
         # The node positions, once: the spaces share the grid's P1 nodes.
         self.coordinates = self.space.tabulate_dof_coordinates()[:, :g]
         # And their grid input indices (a P1 cell lists its dofs in its nodes' order),
@@ -200,7 +201,7 @@ class RigidWalls:
                 boundary_facets(mesh, spec.where, facet_tags),
                 self.space,
                 gaps,
-                gaps.tabulate_dof_coordinates()[:, :g],
+                gap_coordinates,
                 E,
                 i,
             )

@@ -186,11 +186,9 @@ def trial_decomposition(dF: np.ndarray, b_n: np.ndarray) -> tuple[bool, np.ndarr
     F3 = np.tile(np.eye(3), (n, 1, 1))
     F3[:, :g, :g] = dF
     b = F3 @ b_n @ np.swapaxes(F3, 1, 2)
-    # A non-finite trial (an inverted iterate) gives NaN, as in plane strain, for
-    # Newton to report; LAPACK would raise instead.
-    finite = np.isfinite(b).all(axis=(1, 2))
-    x_given, Q_given = np.full((n, 3), np.nan), np.full((n, 3, 3), np.nan)
-    x_given[finite], Q_given[finite] = spectral_decomposition(b[finite])
+    # A non-finite trial (an inverted iterate) gives NaN there (spectral_decomposition
+    # says so), as in plane strain, for Newton to report. C order, as the kernels take.
+    x_given, Q_given = (np.ascontiguousarray(a) for a in spectral_decomposition(b))
     return False, x_given, Q_given
 
 
