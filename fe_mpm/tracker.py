@@ -75,8 +75,10 @@ class Tracker:
 
         Args:
             x: Point coordinates, shape ``(n, g)``.
-            guess: Start cells for the walk, shape ``(n,)``; entries < 0 (or no
-                guess) go straight to the tree search.
+            guess: Start cells for the walk, shape ``(n,)``; entries outside
+                ``[0, num_cells)`` (or no guess) go straight to the tree search. Points
+                seeded in a mesh of their own (a disk, a rod) arrive with cells of that
+                mesh, which may number more than this grid's.
         """
         n = x.shape[0]
         cells = np.full(n, -1, dtype=np.int32)
@@ -84,10 +86,11 @@ class Tracker:
             todo = np.arange(n)
         else:
             guess = np.asarray(guess, dtype=np.int32)
-            walking = np.flatnonzero(guess >= 0)
+            usable = (guess >= 0) & (guess < self.num_cells)
+            walking = np.flatnonzero(usable)
             cells[walking] = guess[walking]
             lost = self._walk(x, cells, walking)
-            todo = np.concatenate([np.flatnonzero(guess < 0), lost])
+            todo = np.concatenate([np.flatnonzero(~usable), lost])
         if todo.size:
             cells[todo] = self._tree_search(x[todo])
         return cells

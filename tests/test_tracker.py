@@ -43,6 +43,19 @@ def test_walk_from_far_cells_finds_the_containing_cell(dim):
     assert np.array_equal(walked, cells) or np.all(_inside(mesh, x, walked))
 
 
+def test_a_guess_beyond_the_grids_cells_is_no_guess():
+    """Points seeded in a mesh of their own (a disk, a rod) carry that mesh's cells as
+    the tracker's first guess; one past the grid's last cell must go to the tree search
+    (it raised IndexError: a 3D rod of more tetrahedra than its grid could not start)."""
+    mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (3, 3))
+    tracker = Tracker(mesh)
+    x = np.array([[0.2, 0.3], [0.7, 0.8], [0.5, 0.1]])
+    guess = np.array([tracker.num_cells, 10 * tracker.num_cells, -1])
+    cells = tracker.locate(x, guess)
+    assert np.array_equal(cells, tracker.locate(x))
+    assert np.all(_inside(mesh, x, cells))
+
+
 @pytest.mark.parametrize("dim", [2, 3])
 def test_cell_neighbours_are_mutual_and_minus_one_exactly_on_exterior_facets(dim):
     """The walk's map: the cell across the facet opposite each local vertex. Every
