@@ -1,10 +1,11 @@
-"""Implicit Newmark dynamics of the points (trapezoidal rule, β = 1/4, γ = 1/2).
+"""Implicit Newmark dynamics of the points, with Bossak's numerical dissipation.
 
 Iaconeta (2019) §2.3. Each step projects the points' velocity and acceleration
 to the grid (mass weighted, Eqs. 2.6–2.9), sets Newmark's coefficients for the
 step length, and after the solve updates the points' velocities (Eq. 2.16). The
 first step starts from accelerations in equilibrium with the initial loads.
-The weak-form terms are in :mod:`fe_mpm.forms.inertia`.
+Bossak's α_B = 0 is the thesis's trapezoidal rule (β = 1/4, γ = 1/2); the weak-form
+terms and the scheme are in :mod:`fe_mpm.forms.inertia`.
 """
 
 from __future__ import annotations
@@ -29,6 +30,7 @@ class NewmarkDynamics:
     Args:
         fields: The grid unknowns; the displacement must be P1.
         damping: Mass-proportional Rayleigh coefficient α_R (1/s), ≥ 0.
+        bossak_alpha: Bossak's α_B in [−1/3, 0]; 0 is the trapezoidal rule.
         linear_solver: ``"direct"`` or ``"iterative"``, as for Newton: the mass
             system of the initial acceleration is solved the same way.
         petsc_options: The user's PETSc overrides; those for the linear solver (all but
@@ -47,6 +49,7 @@ class NewmarkDynamics:
         self,
         fields: GridFields,
         damping: float,
+        bossak_alpha: float = 0.0,
         linear_solver: str = "direct",
         petsc_options: dict | None = None,
     ):
@@ -57,13 +60,15 @@ class NewmarkDynamics:
             V1, self.u_dofs = collapse(fields.W.sub(0))
         else:
             V1, self.u_dofs = fields.W, np.arange(fields.w.x.array.size)
+        coefficients = ("c_a", "c_av", "c_aa", "c_v", "c_vv", "c_va")
         self.data = inertia.NewmarkData(
             v_n=dolfinx.fem.Function(V1, name="v_n"),
             a_n=dolfinx.fem.Function(V1, name="a_n"),
-            c_a=dolfinx.fem.Constant(mesh, 0.0),
-            c_v=dolfinx.fem.Constant(mesh, 0.0),
+            **{name: dolfinx.fem.Constant(mesh, 0.0) for name in coefficients},
+            bossak=dolfinx.fem.Constant(mesh, float(bossak_alpha)),
             damping=dolfinx.fem.Constant(mesh, float(damping)),
         )
+        self.beta, self.gamma = inertia.newmark_parameters(float(bossak_alpha))
         self.grid_mass: np.ndarray | None = None
         self._solver_options = {
             **LINEAR_SOLVERS[linear_solver, False],
@@ -87,7 +92,7 @@ class NewmarkDynamics:
         """Project the points' velocity and acceleration to the nodes and set Δt.
 
         Mass weighted: ``ṽ_I = Σ_p N_I m_p v_p / Σ_p N_I m_p``, likewise ã; and
-        Newmark's coefficients ``4/Δt²`` and ``2/Δt`` for a step of length ``dt`` (s).
+        Newmark's coefficients for a step of length ``dt`` (s).
 
         Args:
             cells: The points' cells (n,).
@@ -102,8 +107,7 @@ class NewmarkDynamics:
         nodal, self.grid_mass = mass_weighted_projection(self.space, cells, bary, mass, both)
         self.data.v_n.x.array.reshape(-1, g)[:] = nodal[:, :g]
         self.data.a_n.x.array.reshape(-1, g)[:] = nodal[:, g:]
-        self.data.c_a.value = 4.0 / dt**2
-        self.data.c_v.value = 2.0 / dt
+        self.data.set_step(dt)
 
     def initial_acceleration(
         self,
@@ -122,7 +126,7 @@ class NewmarkDynamics:
         Args:
             residual_at_rest: Assembles the step's residual (over the whole unknown
                 ``w``) at Δu = 0; called here with the Newmark terms reduced to
-                ``α_R M ṽ`` (no ã, and the damping sign flipped), so that it returns
+                ``α_R M ṽ`` (no acceleration, and v_{n+1} = ṽ), so that it returns
                 ``f_int − f_ext + α_R M ṽ``.
             mass_matrix: The step's mass form (:class:`~fe_mpm.assembly.StepForm`).
             layout: The step's slot layout, to bind the mass form; ``layout.cell``
@@ -135,15 +139,18 @@ class NewmarkDynamics:
             The points' accelerations (n, g) in m/s².
         """
         nm = self.data
-        # With Δu = 0 and c_a = c_v = 0 the Newmark velocity is −ṽ and the acceleration
-        # −ã; so ã = 0 and the damping coefficient negated leave f_int − f_ext + α_R M ṽ.
-        saved = (nm.c_a.value.copy(), nm.c_v.value.copy(), nm.damping.value.copy())
-        nm.c_a.value, nm.c_v.value, nm.damping.value = 0.0, 0.0, -saved[2]
+        # With ã = 0 and every coefficient 0 but ṽ's weight in v_{n+1} (1), the
+        # acceleration terms vanish and the damping term is α_R M ṽ.
+        coefficients = [nm.c_a, nm.c_av, nm.c_aa, nm.c_v, nm.c_vv, nm.c_va]
+        saved = [c.value.copy() for c in coefficients]
+        for c, value in zip(coefficients, (0.0, 0.0, 0.0, 0.0, 1.0, 0.0), strict=True):
+            c.value = value
         nm.a_n.x.array[:] = 0.0
         try:
             b = residual_at_rest()
         finally:
-            nm.c_a.value, nm.c_v.value, nm.damping.value = saved
+            for c, value in zip(coefficients, saved, strict=True):
+                c.value = value
         rhs = dolfinx.fem.Function(self.space)
         rhs.x.array[:] = -b[self.u_dofs]
         # The pattern of all cells (explicit zeros where empty) keeps every diagonal
@@ -209,9 +216,12 @@ class NewmarkDynamics:
         )
         self.project(layout.cell, bary, points.mass, points.velocity, points.acceleration, dt)
 
-    @staticmethod
     def updated_velocity(
-        velocity: np.ndarray, acceleration: np.ndarray, new_acceleration: np.ndarray, dt: float
+        self,
+        velocity: np.ndarray,
+        acceleration: np.ndarray,
+        new_acceleration: np.ndarray,
+        dt: float,
     ) -> np.ndarray:
-        """``v_{n+1} = v_n + Δt (a_n + a_{n+1}) / 2`` (Eq. 2.16), (n, g) in m/s."""
-        return velocity + 0.5 * dt * (acceleration + new_acceleration)
+        """``v_{n+1} = v_n + Δt ((1 − γ) a_n + γ a_{n+1})`` (Eq. 2.16), (n, g) in m/s."""
+        return velocity + dt * ((1.0 - self.gamma) * acceleration + self.gamma * new_acceleration)

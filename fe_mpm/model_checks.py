@@ -65,8 +65,10 @@ def check_rebalance(rebalance_above: float | None) -> float | None:
     )
 
 
-def check_dynamics(dynamic: bool, formulation: str, damping: float, mass: str) -> None:
-    """Dynamics needs a P1 displacement; damping and a lumped mass need dynamics."""
+def check_dynamics(
+    dynamic: bool, formulation: str, damping: float, mass: str, bossak_alpha: float = 0.0
+) -> None:
+    """Dynamics needs a P1 displacement; damping, Bossak's α and a lumped mass need it."""
     spec = FORMULATIONS[formulation]
     if dynamic and spec.u_degree != 1:
         raise ValueError(
@@ -75,6 +77,10 @@ def check_dynamics(dynamic: bool, formulation: str, damping: float, mass: str) -
         )
     if not dynamic and damping:
         raise ValueError("Simulation: damping needs dynamic=True")
+    # Below −1/3 Bossak's scheme loses unconditional stability.
+    check_range("Simulation", "bossak_alpha", bossak_alpha, lo=-1.0 / 3.0, hi=0.0)
+    if not dynamic and bossak_alpha:
+        raise ValueError("Simulation: bossak_alpha needs dynamic=True")
     if not dynamic and mass != "consistent":
         raise ValueError("Simulation: mass='lumped' needs dynamic=True")
 

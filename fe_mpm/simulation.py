@@ -109,10 +109,15 @@ class Simulation:
         output_every: Write every this many steps (and always the last).
         ppp_alpha: The thesis's PPP coefficient α ≥ 0 (``up``), times Kratos's factor
             (8 in 2D, 10 in 3D) in the form; α = 1 reproduces the thesis.
-        dynamic: Implicit Newmark dynamics (β = 1/4, γ = 1/2); False (default): static.
+        dynamic: Implicit Newmark dynamics (β = 1/4, γ = 1/2 unless ``bossak_alpha``
+            is set); False (default): static.
         mass: ``"consistent"`` (default, as the thesis) or ``"lumped"`` (dynamic only).
         damping: Mass-proportional Rayleigh damping α_R ≥ 0 (1/s), dynamic only;
             default 0 (the thesis uses 1.5 for the granular collapse).
+        bossak_alpha: Bossak's α_B in [−1/3, 0], dynamic only: numerical dissipation of
+            the modes the step cannot resolve (a reaction that rings from step to step),
+            second-order accurate. 0 (default) is the thesis's trapezoidal rule, which
+            dissipates nothing; Kratos MPM's Bossak scheme uses −0.3.
         reactions: Boundaries whose reaction force is computed after every step,
             name -> facet tag or marker (see ``StepReport.reactions``).
         min_step: Shortest step :meth:`run` may cut to (s); default 1/1024 of nominal.
@@ -174,6 +179,7 @@ class Simulation:
         ppp_alpha: float = 1.0,
         dynamic: bool = False,
         damping: float = 0.0,
+        bossak_alpha: float = 0.0,
         mass: str = "consistent",
         reactions: dict[str, int | Callable] | None = None,
         min_step: float | None = None,
@@ -194,7 +200,7 @@ class Simulation:
             formulation, mass, points_leaving, linear_solver, line_search, fallback_line_search
         )
         model_checks.check_ranges(max_step_cells, ppp_alpha, damping, output_every)
-        model_checks.check_dynamics(dynamic, formulation, damping, mass)
+        model_checks.check_dynamics(dynamic, formulation, damping, mass, bossak_alpha)
         self.spec = FORMULATIONS[formulation]
         model_checks.check_domains(point_domains, ghost_penalty, points, points_leaving, self.spec)
         model_checks.check_serial_only(
@@ -234,7 +240,7 @@ class Simulation:
             "conditions": (dirichlet, tractions, body_force, body_force_scale, reactions),
             "walls": model_checks.check_walls(walls, self.spec, formulation, point_domains),
             "boundary": [*point_dirichlet, *point_tractions],
-            "dynamics": (damping, petsc_options),
+            "dynamics": (damping, bossak_alpha, petsc_options),
             "ppp_alpha": ppp_alpha,
             "mass": mass,
             "points_leaving": points_leaving,
@@ -276,8 +282,10 @@ class Simulation:
         self.fields = GridFields(mesh, self.spec)
         self.dynamics = None
         if self.dynamic:
-            damping, petsc_options = self._given["dynamics"]
-            self.dynamics = NewmarkDynamics(self.fields, damping, self.linear_solver, petsc_options)
+            damping, bossak_alpha, petsc_options = self._given["dynamics"]
+            self.dynamics = NewmarkDynamics(
+                self.fields, damping, bossak_alpha, self.linear_solver, petsc_options
+            )
         self.conditions = GridConditions(self.fields, *self._given["conditions"], facet_tags)
         self.conditions._warned_share = self._conditions_warned  # warned once per run
         self.walls = RigidWalls(

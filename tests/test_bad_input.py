@@ -116,6 +116,13 @@ def test_other_bad_values():
         fe_mpm.Simulation(mesh, points, material, dynamic=True, mass="diagonal")
     with pytest.raises(ValueError, match=r"Simulation: damping must lie in \[0"):
         fe_mpm.Simulation(mesh, points, material, dynamic=True, damping=-1.0)
+    for alpha in (-0.5, 0.1, float("nan")):
+        with pytest.raises(
+            ValueError, match=r"Simulation: bossak_alpha must lie in \[-0.333333, 0\]"
+        ):
+            fe_mpm.Simulation(mesh, points, material, dynamic=True, bossak_alpha=alpha)
+    with pytest.raises(ValueError, match="bossak_alpha needs dynamic=True"):
+        fe_mpm.Simulation(mesh, points, material, bossak_alpha=-0.1)
     with pytest.raises(ValueError, match="mass='lumped' needs dynamic=True"):
         fe_mpm.Simulation(mesh, points, material, mass="lumped")
     with pytest.raises(ValueError, match="unknown fallback_line_search 'newton'"):

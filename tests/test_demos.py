@@ -512,7 +512,7 @@ def test_sand_column_contract_on_a_coarse_grid_cut_short(tmp_path):
         cwd=tmp_path,
     )
     out = _last_json(stdout)
-    for key in ("L_f", "H_f", "points", "steps", "wall_time_s"):
+    for key in ("L_f", "H_f", "points", "steps", "wall_time_s", "bed_push_last_steps"):
         assert key in out
     assert out["check_passed"] and "not checked (cut short" in check_line(stdout)
     assert out["steps"] >= 40 and 0.0 < out["L_f"] < 0.5 and 0.9 < out["H_f"] < 1.0

@@ -1,23 +1,30 @@
-r"""Inertia of the material points with Newmark's trapezoidal rule (β = 1/4, γ = 1/2).
+r"""Inertia of the material points with Newmark's rule and Bossak's α.
 
-Iaconeta (2019) Eqs. 2.10–2.12. The grid starts every step from rest in its own
-frame: its nodal velocity :math:`\tilde v` and acceleration :math:`\tilde a` at
-:math:`t_n` come from the mass-weighted projection of the particles' (Eqs.
-2.6–2.9). With the step's displacement increment :math:`\Delta u`,
+Iaconeta (2019) Eqs. 2.10–2.12, with the Bossak–Newmark variant (Wood, Bossak and
+Zienkiewicz 1980) that Kratos MPM offers beside it. The grid starts every step from
+rest in its own frame: its nodal velocity :math:`\tilde v` and acceleration
+:math:`\tilde a` at :math:`t_n` come from the mass-weighted projection of the
+particles' (Eqs. 2.6–2.9). With the step's displacement increment :math:`\Delta u`,
 
 .. math::
 
-    a_{n+1} = \frac{4}{\Delta t^2}\Delta u - \frac{4}{\Delta t}\tilde v - \tilde a, \qquad
-    v_{n+1} = \frac{2}{\Delta t}\Delta u - \tilde v,
+    a_{n+1} = \frac{\Delta u - \Delta t\,\tilde v}{\beta\Delta t^2}
+              - \Big(\frac{1}{2\beta} - 1\Big)\tilde a, \qquad
+    v_{n+1} = \tilde v + \Delta t\big((1-\gamma)\,\tilde a + \gamma\, a_{n+1}\big),
 
 and the inertia (plus optional mass-proportional Rayleigh damping α_R) enters
 the residual as the particle sum
 
-.. math::  \sum_p m_p \,\big(a_{n+1} + \alpha_R v_{n+1}\big)(x_p) \cdot w(x_p),
+.. math::  \sum_p m_p \,\big((1-\alpha_B)\, a_{n+1} + \alpha_B\,\tilde a
+           + \alpha_R v_{n+1}\big)(x_p) \cdot w(x_p),
 
 i.e. with the consistent mass matrix :math:`M_{IJ} = \sum_p m_p N_I(x_p) N_J(x_p)`,
-which is what the thesis uses (Eqs. 4.31, 4.36). Its tangent,
-:math:`(4/\Delta t^2 + 2\alpha_R/\Delta t) M`, comes from ``ufl.derivative``.
+which is what the thesis uses (Eqs. 4.31, 4.36). Bossak's α_B ∈ [−1/3, 0] sets
+β = (1 − α_B)²/4 and γ = 1/2 − α_B: α_B = 0 is the thesis's trapezoidal rule
+(β = 1/4, γ = 1/2, no numerical dissipation); α_B < 0 damps the modes that the
+step cannot resolve (spectral radius (1 + α_B)/(1 − α_B) as Δt ω → ∞) and keeps
+second-order accuracy. Its tangent, :math:`((1-\alpha_B)/(\beta\Delta t^2) +
+\alpha_R\gamma/(\beta\Delta t)) M`, comes from ``ufl.derivative``.
 
 **Lumped mass.** The row-sum mass :math:`M^L_{II} = \sum_p m_p N_I(x_p)` gives the
 term :math:`\sum_p m_p \sum_I N_I(x_p)\, a_I \cdot w_I`. For a P1 field the nodal
@@ -43,33 +50,61 @@ import ufl
 from fe_mpm.quadrature import MaterialPointQuadrature
 
 
+def newmark_parameters(bossak_alpha: float) -> tuple[float, float]:
+    """Newmark's (β, γ) for Bossak's α_B: ((1 − α_B)²/4, 1/2 − α_B)."""
+    return (1.0 - bossak_alpha) ** 2 / 4.0, 0.5 - bossak_alpha
+
+
 @dataclass
 class NewmarkData:
     """Grid state and coefficients of one dynamic step.
 
+    The coefficients are Constants so that a new Δt or α_B needs no new kernels;
+    :meth:`set_step` fills them.
+
     Attributes:
         v_n: Projected nodal velocity ṽ at t_n (P1 vector function, m/s).
         a_n: Projected nodal acceleration ã at t_n (P1 vector function, m/s²).
-        c_a: Constant 4/Δt² (1/s²).
-        c_v: Constant 2/Δt (1/s).
+        c_a: 1/(βΔt²) (1/s²), the weight of Δu in a_{n+1}.
+        c_av: 1/(βΔt) (1/s), the weight of ṽ in a_{n+1}.
+        c_aa: 1/(2β) − 1, the weight of ã in a_{n+1}.
+        c_v: γ/(βΔt) (1/s), the weight of Δu in v_{n+1}.
+        c_vv: 1 − γ/β, the weight of ṽ in v_{n+1}.
+        c_va: Δt (1 − γ/(2β)) (s), the weight of ã in v_{n+1}.
+        bossak: Bossak's α_B (the weight of ã in the inertia), a Constant.
         damping: Mass-proportional Rayleigh coefficient α_R (1/s), a Constant.
     """
 
     v_n: ufl.Coefficient
     a_n: ufl.Coefficient
     c_a: ufl.Constant
+    c_av: ufl.Constant
+    c_aa: ufl.Constant
     c_v: ufl.Constant
+    c_vv: ufl.Constant
+    c_va: ufl.Constant
+    bossak: ufl.Constant
     damping: ufl.Constant
+
+    def set_step(self, dt: float) -> None:
+        """Newmark's coefficients for a step of ``dt`` seconds (> 0) at the current α_B."""
+        beta, gamma = newmark_parameters(float(self.bossak.value))
+        self.c_a.value = 1.0 / (beta * dt**2)
+        self.c_av.value = 1.0 / (beta * dt)
+        self.c_aa.value = 0.5 / beta - 1.0
+        self.c_v.value = gamma / (beta * dt)
+        self.c_vv.value = 1.0 - gamma / beta
+        self.c_va.value = dt * (1.0 - 0.5 * gamma / beta)
 
 
 def acceleration(du: ufl.core.expr.Expr, nm: NewmarkData) -> ufl.core.expr.Expr:
     """Grid acceleration a_{n+1} (m/s²) of the increment Δu (Eq. 2.12)."""
-    return nm.c_a * du - 2.0 * nm.c_v * nm.v_n - nm.a_n
+    return nm.c_a * du - nm.c_av * nm.v_n - nm.c_aa * nm.a_n
 
 
 def velocity(du: ufl.core.expr.Expr, nm: NewmarkData) -> ufl.core.expr.Expr:
     """Grid velocity v_{n+1} (m/s) of the increment Δu (Eq. 2.11)."""
-    return nm.c_v * du - nm.v_n
+    return nm.c_v * du + nm.c_vv * nm.v_n + nm.c_va * nm.a_n
 
 
 def mass_product(
@@ -94,10 +129,11 @@ def inertia(
     nm: NewmarkData,
     lumping: ufl.Coefficient | None = None,
 ) -> ufl.Form:
-    """The inertia and damping terms ``w·M (a + α_R v)`` of the residual.
+    """The inertia and damping terms ``w·M ((1 − α_B) a + α_B ã + α_R v)`` of the residual.
 
     ``lumping`` is the per-point second moment C_p (m², a g×g slot field) for the
     lumped mass; None gives the consistent mass.
     """
-    a = acceleration(du, nm) + nm.damping * velocity(du, nm)
+    a = (1.0 - nm.bossak) * acceleration(du, nm) + nm.bossak * nm.a_n
+    a += nm.damping * velocity(du, nm)
     return mass_product(a, w, mpq, density, lumping)
