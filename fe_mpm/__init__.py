@@ -29,6 +29,7 @@ from fe_mpm.materials import (
     ModifiedDruckerPrager,
     MohrCoulomb,
     NeoHookean,
+    NewtonianFluid,
     SmoothCapDruckerPrager,
 )
 from fe_mpm.particles import MaterialPoints, merge, seed
@@ -50,6 +51,7 @@ __all__ = [
     "ModifiedDruckerPrager",
     "MohrCoulomb",
     "NeoHookean",
+    "NewtonianFluid",
     "PointDirichlet",
     "PointTraction",
     "PointsOutsideError",

@@ -548,6 +548,7 @@ class Simulation:
         boundary = None if self._boundary is None else self._boundary.locate(layout.occupied, t_new)
         nslot_b = 0 if boundary is None else boundary.nslot
         forms = self._forms.get(layout.nslot, nslot_b)
+        self._forms.set_step_length(t_new - self.t)
         self._add_time("compile", t0)
 
         t0, pts = time.perf_counter(), self.points

@@ -115,6 +115,7 @@ class StepForms:
         newmark: Newmark's fields and constants (dynamics), or None.
         lumped: Whether the mass matrix is lumped (dynamics).
         walls: The rigid walls of the grid, or None.
+        step_length: The step's length Δt (s) as a constant, for rate-dependent laws.
     """
 
     def __init__(
@@ -130,6 +131,7 @@ class StepForms:
         newmark: inertia.NewmarkData | None = None,
         lumped: bool = False,
         walls: RigidWalls | None = None,
+        step_length: ufl.Constant | None = None,
     ):
         mesh, g = fields.W.mesh, fields.W.mesh.geometry.dim
         self.mesh, self.spec, self.material, self.newmark = mesh, spec, material, newmark
@@ -166,7 +168,7 @@ class StepForms:
             lin = self.linearisation = kind.on(q, g)
             dynamic = set(lin.slot_fields)  # they change during Newton
             self.values_at_points = PointExpression(lin.point_values(self.dF, mean_stress), q)
-        self.state = PointState(self.dF, self.history, self.linearisation, mean_stress)
+        self.state = PointState(self.dF, self.history, self.linearisation, mean_stress, step_length)
         w = ufl.TestFunctions(fields.W)[0] if spec.mixed else ufl.TestFunction(fields.W)
         R = self._residual(fields, conditions, ppp)
         self.q_boundary = None
@@ -337,14 +339,21 @@ class FormsBySlotCount:
         walls: RigidWalls | None = None,
     ):
         self.fields, self.spec, self.material = fields, spec, material
+        #: The step's length Δt (s), set before each step (:meth:`set_step_length`).
+        self.step_length = dolfinx.fem.Constant(fields.W.mesh, 1.0)
         self.options = dict(
             walls=walls,
             conditions=conditions,
             ppp=ppp,
             lumped=mass == "lumped",
             newmark=None if dynamics is None else dynamics.data,
+            step_length=self.step_length,
         )
         self._forms: dict[tuple[int, int], StepForms] = {}
+
+    def set_step_length(self, dt: float) -> None:
+        """The length (s) of the step the forms are bound for next."""
+        self.step_length.value = dt
 
     def get(self, nslot: int, nslot_boundary: int) -> StepForms:
         """The forms for ``nslot`` slots per entity (``nslot_boundary`` of boundary points)."""

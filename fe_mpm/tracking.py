@@ -94,7 +94,10 @@ class PointTracking:
         if parallel.any_rank(comm, outside.size > 0):
             cells = self._drop(points, markers, cells, outside, where)
         points.cell = cells
-        self._nslot = slot_count(np.bincount(cells), self._nslot, comm)
+        try:
+            self._nslot = slot_count(np.bincount(cells), self._nslot, comm)
+        except ValueError as err:  # the points piled up: say where and when
+            raise ValueError(f"{where}: {err}") from None
         return SlotLayout.from_cells(cells, self._nslot)
 
     def _hold(self, points: MaterialPoints, markers: Markers, cells: np.ndarray) -> np.ndarray:

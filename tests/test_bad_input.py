@@ -531,3 +531,13 @@ def test_boundary_conditions_refuse_bad_constants(make, error, match):
 def test_callable_boundary_values_must_return_finite_numbers(condition, match):
     with pytest.raises(ValueError, match=match):
         condition.at(0.5)
+
+
+def test_more_points_in_a_cell_than_the_slots_hold_names_the_cell_count_and_when():
+    """Points that pile up (a collapsed flow, a grid far too coarse) stop the run with
+    the count and the step, not an index error."""
+    mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (2, 2))
+    x = np.full((300, 2), 0.1) + 1e-4 * np.arange(300)[:, None]
+    piled = fe_mpm.MaterialPoints(x=x, volume=np.full(300, 1e-3), mass=np.full(300, 1e-3))
+    with pytest.raises(ValueError, match="set-up: 300 material points in one cell exceeds"):
+        fe_mpm.Simulation(mesh, piled, fe_mpm.NeoHookean(1.0, 0.3))

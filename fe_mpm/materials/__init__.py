@@ -22,6 +22,7 @@ from fe_mpm.materials.drucker_prager import (
     SmoothCapDruckerPrager,
 )
 from fe_mpm.materials.elastic import NeoHookean, embed_3d, in_plane
+from fe_mpm.materials.fluid import NewtonianFluid
 from fe_mpm.materials.hencky_j2 import HenckyJ2
 from fe_mpm.materials.j2 import J2Plasticity
 from fe_mpm.materials.linearised import Linearisation, ReturnMapResult
@@ -42,6 +43,7 @@ __all__ = [
     "ModifiedDruckerPrager",
     "MohrCoulomb",
     "NeoHookean",
+    "NewtonianFluid",
     "PointState",
     "PointwiseLaw",
     "ReturnMapResult",

@@ -43,9 +43,13 @@ class PointState:
             pressure-dependent law in the u-p forms); else None.
         mean_stress: In the u-p forms, the Kirchhoff mean stress −J p of the pressure
             field at the points (Pa); else None.
+        step_length: The step's length Δt (s), a constant, for rate-dependent laws
+            (:class:`~fe_mpm.materials.fluid.NewtonianFluid`); None where there is
+            no step (a material driver at rest).
     """
 
     dF: ufl.core.expr.Expr
     history: dict[str, ufl.Coefficient] = field(default_factory=dict)
     linearisation: object | None = None
     mean_stress: ufl.core.expr.Expr | None = None
+    step_length: ufl.core.expr.Expr | None = None

@@ -1,0 +1,290 @@
+# ---
+# jupyter:
+#   jupytext:
+#     text_representation:
+#       format_name: light
+# ---
+
+# # Dam break (Mast 2013, §6.1.1) against Martin & Moyce (1952)
+#
+# A column of water l₀ wide and h₀ high stands against the left wall of a tank and
+# collapses when the dam holding it is removed. Martin & Moyce filmed it and
+# tabulated the surge front x against time, and the column's height at the wall;
+# they are the classic check of a free-surface flow code. Mast ran it with his
+# nearly incompressible Newtonian fluid (his Eq. 6.1) and volumetric averaging.
+# This demo illustrates how to:
+#
+# - give a material a rate-dependent law: `fe_mpm.NewtonianFluid`, whose viscous
+#   stress reads the step's length;
+# - run a nearly incompressible flow with the u-p form and Bossak's dissipation
+#   (`Simulation(bossak_alpha=)`), whose pressure waves the step cannot resolve;
+# - measure a surge front and a height robustly, ignoring detached droplets.
+#
+# **Data** (Mast's Table 6.1 and §6.1): water, ρ₀ = 997.5 kg/m³, K = 2.0 GPa,
+# μ_v = 1.0e-3 Pa·s; l₀ = 0.05715 m (Martin & Moyce's a = 2¼ in), h₀ = 2 l₀ (their
+# n² = 2); cells of 8.75 mm; slip on every wall; g = 9.81 m/s². Mast's explicit code
+# took steps of 0.5 µs; this implicit one takes 1 ms.
+#
+# **Reference.** Martin & Moyce (1952), Phil. Trans. R. Soc. A 244, 312–324, Tables 2
+# and 6 for n² = 2, a = 2¼ in: the front Z = x/a at T = t √(2g/a) (at h₀ = 2l₀ this is
+# Mast's scaling, his Eq. 6.3), and the height H = h/(n²a) at τ = t √(g/a). The
+# numbers are those reproduced by Lethe's and other validation suites. No tabulated
+# data for n² = 1 were found, so `--aspect 1` runs unchecked.
+#
+# Usage: `python demos/dam_break.py --json`.
+
+# +
+import time
+
+START = time.perf_counter()
+
+import argparse
+import json
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+
+import fe_mpm
+from fe_mpm import parallel
+from fe_mpm.meshes import rectangle_mesh
+from fe_mpm.plotting import pyplot
+
+#: Martin & Moyce (1952), n² = 2, a = 2¼ in: the surge front (Table 2), Z = x/a at
+#: T = t √(2g/a), and the height at the wall (Table 6), H = h/(n²a) at τ = t √(g/a).
+FRONT_T = (0.41, 0.84, 1.19, 1.43, 1.63, 1.83, 1.98, 2.20, 2.32, 2.51, 2.65, 2.83, 2.98, 3.11, 3.33)
+FRONT_Z = (1.11, 1.22, 1.44, 1.67, 1.89, 2.11, 2.33, 2.56, 2.78, 3.00, 3.22, 3.44, 3.67, 3.89, 4.11)
+HEIGHT_TAU = (0.56, 0.77, 0.93, 1.08, 1.28, 1.46, 1.66, 1.84, 2.00, 2.21, 2.45, 2.70)
+HEIGHT_H = (0.94, 0.89, 0.83, 0.78, 0.72, 0.67, 0.61, 0.56, 0.50, 0.44, 0.39, 0.33)
+#: The check's bands, relative to the experiment. Every numerical run of this case
+#: leads the film: the dam took time to lift, and the tank's floor was not
+#: frictionless (Mast: his averaged runs "flow slightly faster than observed").
+FRONT_BAND = (-0.10, 0.25)
+HEIGHT_BAND = (-0.10, 0.10)
+
+
+def parse_args(argv=None):
+    """The command-line contract of the demo."""
+    p = argparse.ArgumentParser(description="Dam break (Mast 2013, §6.1.1)")
+    p.add_argument("--aspect", type=float, default=2.0, help="h0/l0: 2 (checked) or 1")
+    p.add_argument("--formulation", choices=("up", "u", "u-nbva"), default="up")
+    p.add_argument(
+        "--h", type=float, default=0.00875, help="cell size (m), rounded to fit l0 whole"
+    )
+    p.add_argument("--points-per-cell", type=int, default=12, help="points per triangle")
+    p.add_argument("--dt", type=float, default=1.0e-3, help="time step (s)")
+    p.add_argument("--T-end", type=float, default=3.4, help="end time T = t sqrt(2g/l0)")
+    p.add_argument("--bulk-modulus", type=float, default=2.0e9, help="K (Pa)")
+    p.add_argument("--viscosity", type=float, default=1.0e-3, help="mu_v (Pa s)")
+    p.add_argument("--bossak-alpha", type=float, default=-0.3, help="Bossak's alpha")
+    p.add_argument("--output", default="dam_break_output", help="output folder")
+    p.add_argument("--no-output", action="store_true", help="write no files")
+    p.add_argument("--json", action="store_true", help="print a JSON summary as the last line")
+    return p.parse_args(argv)
+
+
+args = parse_args()
+rank0 = parallel.print_on_rank_zero()
+rho, g, l0 = 997.5, 9.81, 0.05715
+h0 = args.aspect * l0
+across = max(1, round(l0 / args.h))  # cells across the column: its sides are grid lines
+h = l0 / across
+time_scale = math.sqrt(2.0 * g / l0)  # T = t · time_scale
+t_end = args.T_end / time_scale
+# -
+
+# ## Scene
+#
+# The tank is 7 l₀ long and two cells higher than the column, with slip walls (the
+# normal displacement held) on the left, the right and the floor. The cell size is
+# Mast's 8.75 mm rounded so that the column is a whole number of cells (l₀/7 = 8.16
+# mm), and the points fill those cells. The mass is lumped, as for the sand
+# column: the thin surge carries no stress, and only its mass holds its nodes.
+#
+# The u-p form's pressure stabilisation (PPP) is scaled by the law's shear modulus;
+# water has none, so `NewtonianFluid(shear_scale=)` stands in for it: the surge's
+# stagnation pressure ρ₀ v² with Ritter's speed scale v = √(2 g h₀), 2.2 kPa here
+# (from 1 to 10 kPa the front moves by less than 1 %; see `fe_mpm.materials.fluid`).
+
+# +
+nx, ny = 7 * across, math.ceil(h0 / h - 1e-9) + 2
+width = nx * h
+grid = rectangle_mesh((0.0, 0.0), (width, ny * h), (nx, ny))
+owned = grid.topology.index_map(2).size_local  # each rank seeds the cells it owns
+centroids = grid.geometry.x[grid.geometry.dofmaps[0][:owned]][:, :, :2].mean(axis=1)
+column = np.flatnonzero((centroids[:, 0] < l0) & (centroids[:, 1] < h0))
+try:
+    points = fe_mpm.seed(grid, args.points_per_cell, density=rho, cells=column)
+    water = fe_mpm.NewtonianFluid(
+        args.bulk_modulus, args.viscosity, shear_scale=rho * 2.0 * g * h0, density=rho
+    )
+    sim = fe_mpm.Simulation(
+        grid,
+        points,
+        water,
+        args.formulation,
+        dirichlet=[
+            fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0), component=0),
+            fe_mpm.Dirichlet(lambda x: np.isclose(x[0], width), component=0),
+            fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0), component=1),
+        ],
+        body_force=(0.0, -g),
+        dynamic=True,
+        mass="lumped",
+        bossak_alpha=args.bossak_alpha,
+        output_dir=None if args.no_output else args.output,
+        output_every=max(1, round(t_end / args.dt) // 40),
+    )
+except ValueError as err:
+    sys.exit(f"dam_break.py: {err}")
+# -
+
+# ## Front and height
+#
+# The surge front is the farthest point within one cell of the floor that the water
+# reaches without a gap: walking along the floor from the wall, the first gap wider
+# than a cell ends it, so a droplet thrown ahead does not count. The height is the
+# same walk up the left wall.
+
+# +
+history = []
+
+
+def reach(coordinates: np.ndarray) -> float:
+    """The end of the water's unbroken run along a wall (m), from 0 outwards."""
+    run = np.sort(coordinates)
+    gaps = np.flatnonzero(np.diff(run) > h)
+    return float(run[gaps[0]] if gaps.size else run[-1])
+
+
+def record(report: fe_mpm.StepReport) -> None:
+    """Front Z = x/l₀ and height h/h₀ after a step."""
+    x = parallel.gathered(grid.comm, points.x)
+    front = reach(x[x[:, 1] < h, 0]) / l0
+    height = reach(x[x[:, 0] < h, 1]) / h0
+    history.append((report.t, front, height))
+
+
+try:
+    reports = sim.run(t_end, round(t_end / args.dt), progress=not args.json, on_step=record)
+except (fe_mpm.ConvergenceError, fe_mpm.PointsOutsideError, ValueError) as err:
+    sys.exit(f"dam_break.py: {err}")
+t, Z, H = np.array(history).T
+T = t * time_scale
+# -
+
+# ## Against the experiment
+#
+# The run is interpolated at the film's times. Martin & Moyce's height is h/(n²a)
+# with n²a = h₀, so it is H here, at τ = T/√2.
+
+# +
+wall = time.perf_counter() - START
+iterations = [r.newton_iterations for r in reports]
+n_points = int(parallel.total(grid.comm, len(points)))
+checked = abs(args.aspect - 2.0) < 1e-12
+front_T, front_Z = np.array(FRONT_T), np.array(FRONT_Z)
+height_T, height_H = np.sqrt(2.0) * np.array(HEIGHT_TAU), np.array(HEIGHT_H)
+in_front, in_height = front_T <= T[-1], height_T <= T[-1]
+front_error = np.interp(front_T[in_front], T, Z) / front_Z[in_front] - 1.0
+height_error = np.interp(height_T[in_height], T, H) / height_H[in_height] - 1.0
+print(
+    f"Dam break, {args.formulation}, h0/l0 = {args.aspect:g}: {n_points} points, "
+    f"{len(reports)} steps of up to {args.dt:g} s, h = {h:g} m, wall time {wall:.1f} s"
+)
+print(
+    f"  front Z = x/l0 at T = {T[-1]:.2f}: {Z[-1]:.3f}; height h/h0 {H[-1]:.3f}; "
+    f"Newton per step mean {np.mean(iterations):.2f}, max {max(iterations)}"
+)
+if checked:
+    print(
+        f"  against Martin & Moyce: front {100 * front_error.min():+.1f} … "
+        f"{100 * front_error.max():+.1f} %, height {100 * height_error.min():+.1f} … "
+        f"{100 * height_error.max():+.1f} % over their {front_error.size} and "
+        f"{height_error.size} points"
+    )
+if not args.no_output and rank0:
+    out = Path(args.output)
+    np.savetxt(
+        out / "front.csv",
+        np.column_stack([t, T, Z, H]),
+        delimiter=",",
+        header="t,T,Z,H",
+        comments="",
+    )
+    plt = pyplot()
+    if plt is not None:
+        fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(9, 3.6))
+        ax1.plot(T, Z, label=f"fe-mpm ({args.formulation})")
+        ax2.plot(T / np.sqrt(2.0), H, label=f"fe-mpm ({args.formulation})")
+        if checked:
+            ax1.plot(FRONT_T, FRONT_Z, "ko", ms=4, label="Martin & Moyce (1952)")
+            ax2.plot(HEIGHT_TAU, HEIGHT_H, "ko", ms=4, label="Martin & Moyce (1952)")
+        ax1.set_xlabel("T = t √(2g/a)")
+        ax1.set_ylabel("front Z = x/a")
+        ax2.set_xlabel("τ = t √(g/a)")
+        ax2.set_ylabel("height H = h/(n²a)")
+        ax1.legend()
+        fig.tight_layout()
+        fig.savefig(out / "dam_break.png", dpi=120)
+    print(f"  wrote {out}/particles.pvd, front.csv" + (" and dam_break.png" if plt else ""))
+# -
+
+# ## Check against the reference
+#
+# Measured (2026-12-03, u-p, the defaults: 2352 points, 184 steps, 3.1 Newton
+# iterations per step, 9 s): the front runs −4.2 to +15.2 % ahead of the film (behind
+# only at its first point, T = 0.41), the height 1.1 to 6.1 % below it, as Mast found
+# with averaging ("slightly faster than observed"). Halving Δt or doubling it moves
+# the front by less than 0.2 %. The displacement form (`--formulation u`) keeps the
+# column taller, +1.2 to +9.1 %, its front −6.8 to +17 %: the locking of the pressure
+# shows in the height. `u-nbva` does not get through: at T ≈ 1.3 a point is thrown
+# out of the tank (with K = 20 MPa, points pile up in one cell instead, more than 256).
+# The check asks the front to
+# lie within −10 … +25 % and the height within ±10 % at every tabulated time the run
+# reaches; the u form lies inside these bands too.
+
+# +
+passed = bool(
+    np.all((FRONT_BAND[0] <= front_error) & (front_error <= FRONT_BAND[1]))
+    and np.all((HEIGHT_BAND[0] <= height_error) & (height_error <= HEIGHT_BAND[1]))
+)
+if checked:
+    verdict = "PASS" if passed else "FAIL"
+    line = (
+        f"front {100 * front_error.min():+.1f} … {100 * front_error.max():+.1f} % in "
+        f"[{100 * FRONT_BAND[0]:+.0f}, {100 * FRONT_BAND[1]:+.0f}] % and height "
+        f"{100 * height_error.min():+.1f} … {100 * height_error.max():+.1f} % in "
+        f"[{100 * HEIGHT_BAND[0]:+.0f}, {100 * HEIGHT_BAND[1]:+.0f}] % of Martin & Moyce"
+    )
+else:
+    passed, verdict = True, "not checked"
+    line = f"h0/l0 = {args.aspect:g}: no tabulated experiment"
+print(f"check: {line}: {verdict}")
+if args.json:
+    print(
+        json.dumps(
+            {
+                "formulation": args.formulation,
+                "aspect": args.aspect,
+                "T": T.tolist(),
+                "front_Z": Z.tolist(),
+                "height_H": H.tolist(),
+                "front_relative_error": front_error.tolist() if checked else None,
+                "height_relative_error": height_error.tolist() if checked else None,
+                "points": n_points,
+                "steps": len(reports),
+                "h": h,
+                "dt": args.dt,
+                "newton_iterations_mean": float(np.mean(iterations)),
+                "newton_iterations_max": int(max(iterations)),
+                "wall_time_s": wall,
+                "ranks": grid.comm.size,
+                "check_passed": passed,
+            }
+        )
+    )
+if not passed:
+    sys.exit("dam_break.py: the run lies outside the experiment's bands")
+# -

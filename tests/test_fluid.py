@@ -1,0 +1,82 @@
+"""Mast's Newtonian fluid (``fe_mpm.NewtonianFluid``): its viscous stress and tangent.
+
+References: simple shear at a constant rate, σ_xy = μ_v γ̇ exactly (the backward
+difference of one step is exact for a uniform increment); the Taylor test of the
+step's residual and Jacobian. The dam break against Martin & Moyce is in
+``tests/test_demos.py``.
+"""
+
+import numpy as np
+import pytest
+from test_taylor import _simulation
+
+import fe_mpm
+from fe_mpm.meshes import rectangle_mesh
+from fe_mpm.verification import rates, taylor_remainders
+
+VISCOSITY = 3.0
+
+
+def shear_reactions(formulation: str, rate: float, dt: float, steps: int = 3) -> np.ndarray:
+    """Top reactions (N/m) of a unit square of fluid sheared at ``rate`` (1/s), step by step.
+
+    Every boundary node follows u = (rate · t · y, 0), so each step's increment is a
+    uniform simple shear of the current square.
+    """
+    mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (4, 4))
+    points = fe_mpm.seed(mesh, per_cell=3, density=1000.0)
+    water = fe_mpm.NewtonianFluid(2.0e6, VISCOSITY, shear_scale=1.0e3, density=1000.0)
+
+    def shear(x, t):
+        return np.vstack([rate * t * x[1], np.zeros_like(x[1])])
+
+    sim = fe_mpm.Simulation(
+        mesh,
+        points,
+        water,
+        formulation,
+        dirichlet=[fe_mpm.Dirichlet(lambda x: np.full(x.shape[1], True), profile=shear)],
+        reactions={"top": lambda x: np.isclose(x[1], 1.0)},
+    )
+    reports = sim.run(steps * dt, steps, progress=False)
+    return np.array([r.reactions["top"] for r in reports]), sim
+
+
+@pytest.mark.parametrize("formulation", ["u", "up"])
+def test_simple_shear_gives_the_viscous_stress_at_any_step_length(formulation):
+    """σ_xy = μ_v γ̇ on the top (width 1 m), whatever the step length; no normal
+    stress (the shear keeps the volume). Measured: the shear force to 2e-15 relative;
+    the normal force 0 (u) and 3.6e-11 of the shear force (u-p: its pressure, at
+    Newton's tolerance of 1e-10 of the force scale)."""
+    rate = 0.02  # small: the sheared square stays inside its grid
+    for dt in (0.5, 0.25):
+        forces, sim = shear_reactions(formulation, rate, dt)
+        assert np.allclose(forces[:, 0], VISCOSITY * rate, rtol=1e-10, atol=0)
+        assert np.allclose(forces[:, 1], 0.0, rtol=0, atol=1e-9 * VISCOSITY * rate)
+        assert np.allclose(sim.points.stress[:, 0, 1], VISCOSITY * rate, rtol=1e-10, atol=0)
+    # Twice the rate, twice the stress: the law reads the step's rate.
+    forces, _ = shear_reactions(formulation, 2 * rate, 0.5)
+    assert np.allclose(forces[:, 0], 2 * VISCOSITY * rate, rtol=1e-10, atol=0)
+
+
+@pytest.mark.parametrize("formulation", ["u", "up"])
+@pytest.mark.parametrize("dim", [2, 3])
+def test_the_fluid_steps_residual_and_jacobian_are_consistent(dim, formulation):
+    water = fe_mpm.NewtonianFluid(50.0, 2.0, shear_scale=10.0)
+    rng, sim = _simulation(dim, formulation, material=water)
+    _, _, R, J, _ = sim.prepare_step(0.5)
+    sim.w.x.array[:] = rng.uniform(-0.02, 0.02, sim.w.x.array.size)
+    d = rng.uniform(-1.0, 1.0, sim.w.x.array.size)
+    eps = (1e-3, 5e-4, 2.5e-4, 1.25e-4)
+    r0, r1 = taylor_remainders(R, J, sim.w, d, eps)
+    assert np.all(rates(eps, r0) > 0.9)
+    assert np.all(rates(eps, r1) > 1.9), f"remainders {r1}"
+
+
+def test_bad_fluid_parameters_are_refused_by_name():
+    with pytest.raises(ValueError, match=r"NewtonianFluid: viscosity must lie in \[0, inf\]"):
+        fe_mpm.NewtonianFluid(2e9, -1.0, shear_scale=1.0)
+    with pytest.raises(ValueError, match=r"NewtonianFluid: bulk_modulus must lie in \(0, inf\]"):
+        fe_mpm.NewtonianFluid(0.0, 1e-3, shear_scale=1.0)
+    with pytest.raises(ValueError, match=r"NewtonianFluid: shear_scale must lie in \(0, inf\]"):
+        fe_mpm.NewtonianFluid(2e9, 1e-3, shear_scale=0.0)
