@@ -298,7 +298,7 @@ def test_taylor_hood_up_residual_and_stress_equal_particle_sums(dim):
 @pytest.mark.parametrize("lumped", [False, True])
 @pytest.mark.parametrize("dim", [2, 3])
 def test_inertia_equals_particle_sum(dim, lumped):
-    """The Newmark inertia and damping term against a loop over the points: the
+    """The Newmark–Bossak inertia and damping term against a loop over the points: the
     consistent mass Σ_p m_p N_I N_J, or the row-sum lumped mass Σ_p m_p N_I on the
     diagonal, reached through the second moments C_p = Σ_I N_I r_I ⊗ r_I."""
     rng, mesh, pts, layout, q = _setup(dim, seed=4)
@@ -306,8 +306,19 @@ def test_inertia_equals_particle_sum(dim, lumped):
     du, v_n, a_n = (dolfinx.fem.Function(V) for _ in range(3))
     for f in (du, v_n, a_n):
         f.x.array[:] = rng.uniform(-1.0, 1.0, f.x.array.size)
-    c_a, c_v, alpha = 400.0, 20.0, 0.3
-    nm = inertia.NewmarkData(v_n, a_n, *(dolfinx.fem.Constant(mesh, c) for c in (c_a, c_v, alpha)))
+    # Bossak's α_B = −0.2 (β = 0.36, γ = 0.7) exercises every coefficient of the rule.
+    dt, bossak, alpha = 0.05, -0.2, 0.3
+    beta, gamma = (1 - bossak) ** 2 / 4, 0.5 - bossak
+    names = ("c_a", "c_av", "c_aa", "c_v", "c_vv", "c_va")
+    constants = {name: dolfinx.fem.Constant(mesh, 0.0) for name in names}
+    nm = inertia.NewmarkData(
+        v_n,
+        a_n,
+        **constants,
+        bossak=dolfinx.fem.Constant(mesh, bossak),
+        damping=dolfinx.fem.Constant(mesh, alpha),
+    )
+    nm.set_step(dt)
     rho = q.function((), "density")
     q.pack(rho, layout, pts.density)
     X = V.tabulate_dof_coordinates()[:, :dim]
@@ -320,12 +331,11 @@ def test_inertia_equals_particle_sum(dim, lumped):
         q.pack(lumping, layout, C)
     R_mp = _assemble(inertia.inertia(du, ufl.TestFunction(V), q, rho, nm, lumping), mesh, layout, q)
 
-    a_nodes = (
-        c_a * du.x.array
-        - 2 * c_v * v_n.x.array
-        - a_n.x.array
-        + alpha * (c_v * du.x.array - v_n.x.array)
-    ).reshape(-1, dim)
+    # Newmark's a_{n+1} and v_{n+1} written out from β and γ, then Bossak's weighting.
+    du_, v_, a_ = du.x.array, v_n.x.array, a_n.x.array
+    a_new = (du_ - dt * v_ - dt**2 * (0.5 - beta) * a_) / (beta * dt**2)
+    v_new = v_ + dt * ((1 - gamma) * a_ + gamma * a_new)
+    a_nodes = ((1 - bossak) * a_new + bossak * a_ + alpha * v_new).reshape(-1, dim)
     R_bf = np.zeros_like(R_mp).reshape(-1, dim)
     for (nodes, N, _), m in zip(bases, pts.mass):
         if lumped:
