@@ -241,9 +241,8 @@ if not args.no_output and rank0:
 # column taller, +1.2 to +9.1 %, its front −6.8 to +17 %: the locking of the pressure
 # shows in the height. `u-nbva` does not get through: at T ≈ 1.3 a point is thrown
 # out of the tank (with K = 20 MPa, points pile up in one cell instead, more than 256).
-# The check asks the front to
-# lie within −10 … +25 % and the height within ±10 % at every tabulated time the run
-# reaches; the u form lies inside these bands too.
+# The check asks the front to lie within −10 … +25 % and the height within ±10 % at
+# every tabulated time the run reaches; the u form lies inside these bands too.
 
 # +
 passed = bool(
