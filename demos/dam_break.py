@@ -74,7 +74,7 @@ def parse_args(argv=None):
     )
     p.add_argument("--points-per-cell", type=int, default=12, help="points per triangle")
     p.add_argument("--dt", type=float, default=1.0e-3, help="time step (s)")
-    p.add_argument("--T-end", type=float, default=3.4, help="end time T = t sqrt(2g/l0)")
+    p.add_argument("--T-end", type=float, default=3.4, help="end time T = t sqrt(g h0)/l0")
     p.add_argument("--bulk-modulus", type=float, default=2.0e9, help="K (Pa)")
     p.add_argument("--viscosity", type=float, default=1.0e-3, help="mu_v (Pa s)")
     p.add_argument("--bossak-alpha", type=float, default=-0.3, help="Bossak's alpha")
@@ -93,7 +93,8 @@ rho, g, l0 = 997.5, 9.81, 0.05715
 h0 = args.aspect * l0
 across = max(1, round(l0 / args.h))  # cells across the column: its sides are grid lines
 h = l0 / across
-time_scale = math.sqrt(2.0 * g / l0)  # T = t · time_scale
+# Mast's T = t √(g h₀)/l₀ (his Eq. 6.3): Martin & Moyce's t √(n² g/a), √(2g/a) at h₀ = 2a.
+time_scale = math.sqrt(g * h0) / l0
 t_end = args.T_end / time_scale
 # -
 
@@ -183,7 +184,7 @@ T = t * time_scale
 # ## Against the experiment
 #
 # The run is interpolated at the film's times. Martin & Moyce's height is h/(n²a)
-# with n²a = h₀, so it is H here, at τ = T/√2.
+# with n²a = h₀, so it is H here, at τ = t √(g/a) = T/n.
 
 # +
 wall = time.perf_counter() - START
@@ -191,7 +192,7 @@ iterations = [r.newton_iterations for r in reports]
 n_points = int(parallel.total(grid.comm, len(points)))
 checked = abs(args.aspect - 2.0) < 1e-12
 front_T, front_Z = np.array(FRONT_T), np.array(FRONT_Z)
-height_T, height_H = np.sqrt(2.0) * np.array(HEIGHT_TAU), np.array(HEIGHT_H)
+height_T, height_H = np.sqrt(args.aspect) * np.array(HEIGHT_TAU), np.array(HEIGHT_H)
 in_front, in_height = front_T <= T[-1], height_T <= T[-1]
 front_error = np.interp(front_T[in_front], T, Z) / front_Z[in_front] - 1.0
 height_error = np.interp(height_T[in_height], T, H) / height_H[in_height] - 1.0
@@ -223,11 +224,11 @@ if not args.no_output and rank0:
     if plt is not None:
         fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(9, 3.6))
         ax1.plot(T, Z, label=f"fe-mpm ({args.formulation})")
-        ax2.plot(T / np.sqrt(2.0), H, label=f"fe-mpm ({args.formulation})")
+        ax2.plot(T / np.sqrt(args.aspect), H, label=f"fe-mpm ({args.formulation})")
         if checked:
             ax1.plot(FRONT_T, FRONT_Z, "ko", ms=4, label="Martin & Moyce (1952)")
             ax2.plot(HEIGHT_TAU, HEIGHT_H, "ko", ms=4, label="Martin & Moyce (1952)")
-        ax1.set_xlabel("T = t √(2g/a)")
+        ax1.set_xlabel("T = t √(n²g/a)")
         ax1.set_ylabel("front Z = x/a")
         ax2.set_xlabel("τ = t √(g/a)")
         ax2.set_ylabel("height H = h/(n²a)")
