@@ -60,15 +60,13 @@ class NewmarkDynamics:
             V1, self.u_dofs = collapse(fields.W.sub(0))
         else:
             V1, self.u_dofs = fields.W, np.arange(fields.w.x.array.size)
-        coefficients = ("c_a", "c_av", "c_aa", "c_v", "c_vv", "c_va")
         self.data = inertia.NewmarkData(
             v_n=dolfinx.fem.Function(V1, name="v_n"),
             a_n=dolfinx.fem.Function(V1, name="a_n"),
-            **{name: dolfinx.fem.Constant(mesh, 0.0) for name in coefficients},
+            **{name: dolfinx.fem.Constant(mesh, 0.0) for name in inertia.COEFFICIENTS},
             bossak=dolfinx.fem.Constant(mesh, float(bossak_alpha)),
             damping=dolfinx.fem.Constant(mesh, float(damping)),
         )
-        self.beta, self.gamma = inertia.newmark_parameters(float(bossak_alpha))
         self.grid_mass: np.ndarray | None = None
         self._solver_options = {
             **LINEAR_SOLVERS[linear_solver, False],
@@ -141,10 +139,10 @@ class NewmarkDynamics:
         nm = self.data
         # With ã = 0 and every coefficient 0 but ṽ's weight in v_{n+1} (1), the
         # acceleration terms vanish and the damping term is α_R M ṽ.
-        coefficients = [nm.c_a, nm.c_av, nm.c_aa, nm.c_v, nm.c_vv, nm.c_va]
+        coefficients = [getattr(nm, name) for name in inertia.COEFFICIENTS]
         saved = [c.value.copy() for c in coefficients]
-        for c, value in zip(coefficients, (0.0, 0.0, 0.0, 0.0, 1.0, 0.0), strict=True):
-            c.value = value
+        for name, c in zip(inertia.COEFFICIENTS, coefficients, strict=True):
+            c.value = 1.0 if name == "c_vv" else 0.0
         nm.a_n.x.array[:] = 0.0
         try:
             b = residual_at_rest()
@@ -224,4 +222,5 @@ class NewmarkDynamics:
         dt: float,
     ) -> np.ndarray:
         """``v_{n+1} = v_n + Δt ((1 − γ) a_n + γ a_{n+1})`` (Eq. 2.16), (n, g) in m/s."""
-        return velocity + dt * ((1.0 - self.gamma) * acceleration + self.gamma * new_acceleration)
+        gamma = self.data.gamma
+        return velocity + dt * ((1.0 - gamma) * acceleration + gamma * new_acceleration)

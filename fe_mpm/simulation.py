@@ -117,7 +117,7 @@ class Simulation:
         bossak_alpha: Bossak's α_B in [−1/3, 0], dynamic only: numerical dissipation of
             the modes the step cannot resolve (a reaction that rings from step to step),
             second-order accurate. 0 (default) is the thesis's trapezoidal rule, which
-            dissipates nothing; Kratos MPM's Bossak scheme uses −0.3.
+            dissipates nothing; Kratos MPM's documentation shows its Bossak scheme with −0.3.
         reactions: Boundaries whose reaction force is computed after every step,
             name -> facet tag or marker (see ``StepReport.reactions``).
         min_step: Shortest step :meth:`run` may cut to (s); default 1/1024 of nominal.

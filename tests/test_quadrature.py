@@ -309,8 +309,7 @@ def test_inertia_equals_particle_sum(dim, lumped):
     # Bossak's α_B = −0.2 (β = 0.36, γ = 0.7) exercises every coefficient of the rule.
     dt, bossak, alpha = 0.05, -0.2, 0.3
     beta, gamma = (1 - bossak) ** 2 / 4, 0.5 - bossak
-    names = ("c_a", "c_av", "c_aa", "c_v", "c_vv", "c_va")
-    constants = {name: dolfinx.fem.Constant(mesh, 0.0) for name in names}
+    constants = {name: dolfinx.fem.Constant(mesh, 0.0) for name in inertia.COEFFICIENTS}
     nm = inertia.NewmarkData(
         v_n,
         a_n,

@@ -49,6 +49,10 @@ import ufl
 
 from fe_mpm.quadrature import MaterialPointQuadrature
 
+#: The names of Newmark's coefficients in :class:`NewmarkData`, as :meth:`NewmarkData.set_step`
+#: fills them.
+COEFFICIENTS = ("c_a", "c_av", "c_aa", "c_v", "c_vv", "c_va")
+
 
 def newmark_parameters(bossak_alpha: float) -> tuple[float, float]:
     """Newmark's (β, γ) for Bossak's α_B: ((1 − α_B)²/4, 1/2 − α_B)."""
@@ -85,6 +89,11 @@ class NewmarkData:
     c_va: ufl.Constant
     bossak: ufl.Constant
     damping: ufl.Constant
+
+    @property
+    def gamma(self) -> float:
+        """Newmark's γ = 1/2 − α_B at the current α_B."""
+        return newmark_parameters(float(self.bossak.value))[1]
 
     def set_step(self, dt: float) -> None:
         """Newmark's coefficients for a step of ``dt`` seconds (> 0) at the current α_B."""

@@ -10,7 +10,24 @@ from fe_mpm.checks import check_range
 from fe_mpm.materials.state import HistoryField, PointState
 
 
-class IsotropicModuli:
+class CheckedFields:
+    """A frozen dataclass law whose numeric fields are checked and stored as floats."""
+
+    def _check(self, field: str, **bounds: float | bool) -> None:
+        """Check ``field`` with :func:`~fe_mpm.checks.check_range` and store the float back.
+
+        A law then never keeps a string, a bool or a numpy scalar.
+        """
+        value = check_range(type(self).__name__, field, getattr(self, field), **bounds)
+        object.__setattr__(self, field, value)  # the laws are frozen dataclasses
+
+    def _check_density(self) -> None:
+        """The density is None (the points give it) or > 0."""
+        if self.density is not None:
+            self._check("density", lo=0.0, lo_open=True)
+
+
+class IsotropicModuli(CheckedFields):
     """Shear and bulk moduli of a law with fields ``E`` (Pa) and ``nu``."""
 
     def _check_moduli(self) -> None:
@@ -20,16 +37,7 @@ class IsotropicModuli:
         """
         self._check("E", lo=0.0, lo_open=True)
         self._check("nu", lo=-1.0, hi=0.5, lo_open=True, hi_open=True)
-        if self.density is not None:
-            self._check("density", lo=0.0, lo_open=True)
-
-    def _check(self, field: str, **bounds: float | bool) -> None:
-        """Check ``field`` with :func:`~fe_mpm.checks.check_range` and store the float back.
-
-        A law then never keeps a string, a bool or a numpy scalar.
-        """
-        value = check_range(type(self).__name__, field, getattr(self, field), **bounds)
-        object.__setattr__(self, field, value)  # the laws are frozen dataclasses
+        self._check_density()
 
     @property
     def mu(self) -> float:

@@ -37,13 +37,12 @@ from dataclasses import dataclass
 
 import ufl
 
-from fe_mpm.checks import check_range
-from fe_mpm.materials.elastic import embed_3d, in_plane
+from fe_mpm.materials.elastic import CheckedFields, embed_3d, in_plane
 from fe_mpm.materials.state import HistoryField, PointState
 
 
 @dataclass(frozen=True)
-class NewtonianFluid:
+class NewtonianFluid(CheckedFields):
     """A nearly incompressible viscous fluid: water, a slurry, a debris flow's liquid.
 
     Args:
@@ -61,19 +60,10 @@ class NewtonianFluid:
     density: float | None = None
 
     def __post_init__(self) -> None:
-        name = type(self).__name__
-        for field, bounds in (
-            ("bulk_modulus", {"lo": 0.0, "lo_open": True}),
-            ("viscosity", {"lo": 0.0}),
-            ("shear_scale", {"lo": 0.0, "lo_open": True}),
-        ):
-            object.__setattr__(
-                self, field, check_range(name, field, getattr(self, field), **bounds)
-            )
-        if self.density is not None:
-            object.__setattr__(
-                self, "density", check_range(name, "density", self.density, lo=0.0, lo_open=True)
-            )
+        self._check("bulk_modulus", lo=0.0, lo_open=True)
+        self._check("viscosity", lo=0.0)
+        self._check("shear_scale", lo=0.0, lo_open=True)
+        self._check_density()
 
     @property
     def mu(self) -> float:
