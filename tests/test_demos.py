@@ -540,3 +540,12 @@ def test_dam_break_follows_martin_and_moyce_up_to_t_1_5(tmp_path):
     assert out["newton_iterations_max"] <= 6
     for key in ("T", "front_Z", "height_H", "points", "steps", "wall_time_s"):
         assert key in out
+
+
+def test_dam_break_cut_short_before_the_first_tabulated_time_is_not_checked(tmp_path):
+    """A run that ends before Martin & Moyce's first time (T = 0.41) has nothing to
+    compare: the demo says so and exits 0 (it raised on an empty error array)."""
+    stdout = run_demo("dam_break.py", "--T-end", "0.3", "--json", "--no-output", cwd=tmp_path)
+    out = _last_json(stdout)
+    assert "before Martin & Moyce's first time: not checked" in check_line(stdout)
+    assert out["check_passed"] and out["front_relative_error"] is None
