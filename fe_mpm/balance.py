@@ -16,7 +16,10 @@ and every node's input index, so a cell is the same cell on any partition:
 by their nodes (:func:`carried_facet_tags`). The grid is rebuilt from the whole
 topology gathered on rank 0, as a mesh is when it is read from gmsh; the partition
 is computed there too, so it is the same in every run on the same number of ranks.
-The new grid has no ghost cells: fe-mpm tracks and assembles on owned cells only.
+A grid with ghost cells (DOLFINx's ``GhostMode.shared_facet``, the default of
+``create_rectangle``/``create_box`` and of fe-mpm's gmsh scenes) keeps them: each
+rank also holds the cells across its facets on other ranks, which the ghost
+penalty's facet integrals need. A grid without them gets none.
 """
 
 from __future__ import annotations
@@ -109,6 +112,7 @@ def repartitioned(mesh: dolfinx.mesh.Mesh, weights: np.ndarray) -> dolfinx.mesh.
         return mesh
     _pymetis()  # on every rank: a missing pymetis stops them all, not rank 0 alone
     tdim, gdim = mesh.topology.dim, mesh.geometry.dim
+    ghosted = parallel.any_rank(comm, mesh.topology.index_map(tdim).num_ghosts > 0)
     owned = mesh.topology.index_map(tdim).size_local
     node_input = np.asarray(mesh.geometry.input_global_indices, dtype=np.int64)
     cells = node_input[mesh.geometry.dofmaps[0][:owned]]
@@ -133,7 +137,10 @@ def repartitioned(mesh: dolfinx.mesh.Mesh, weights: np.ndarray) -> dolfinx.mesh.
         except (ValueError, RuntimeError, MemoryError) as err:  # METIS's own included
             error = err
     parallel.raise_together(comm, error)  # rank 0 alone may fail; the others would wait
-    destinations = dolfinx.graph.adjacencylist(parts)
+    if ghosted:
+        destinations = dolfinx.graph.adjacencylist(*with_facet_neighbours(all_cells, parts))
+    else:
+        destinations = dolfinx.graph.adjacencylist(parts)
 
     def partitioner(comm, nparts, cell_types, topology):
         # Called by create_mesh with the cells as given: all on rank 0, in original order.
@@ -173,6 +180,33 @@ def _partitioned(gathered: list, size: int, tdim: int, gdim: int):
     parts = partition(all_cells, cell_weight, size)
     now = np.repeat(np.arange(size), [len(g[0]) for g in gathered])[order]
     return all_cells, x, _kept_in_place(parts, now, cell_weight, size)
+
+
+def with_facet_neighbours(cells: np.ndarray, parts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each cell's ranks: its owner first, then the other owners of its facet neighbours.
+
+    The destinations of a shared-facet ghost layer, as DOLFINx's own partitioners
+    give them with ``GhostMode.shared_facet``.
+
+    Args:
+        cells: The nodes of each simplex, shape (n, t + 1).
+        parts: The owning rank of each cell (n,).
+
+    Returns:
+        ``(data, offsets)`` of an adjacency list (int32).
+    """
+    n = len(parts)
+    if n == 0:  # a rank other than the one that holds the whole grid
+        return np.zeros(0, dtype=np.int32), np.zeros(1, dtype=np.int32)
+    xadj, adjncy = dual_graph(cells)
+    cell = np.repeat(np.arange(n), np.diff(xadj))
+    other = parts[adjncy]
+    pairs = np.unique(np.column_stack([cell, other])[other != parts[cell]], axis=0)
+    pairs = np.concatenate([np.column_stack([np.arange(n), parts]), pairs])
+    pairs = pairs[np.argsort(pairs[:, 0], kind="stable")]  # the owner stays first
+    offsets = np.zeros(n + 1, dtype=np.int32)
+    np.cumsum(np.bincount(pairs[:, 0], minlength=n), out=offsets[1:])
+    return pairs[:, 1].astype(np.int32), offsets
 
 
 def partition(cells: np.ndarray, weights: np.ndarray, parts: int) -> np.ndarray:

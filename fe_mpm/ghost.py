@@ -7,6 +7,12 @@ or that holds fewer points than its displacement needs (3 for P2).
 The penalty is linear in Δu, so each step assembles it once: as ``full`` (no
 conditions, for the residual ``G Δu``) and as ``constrained`` (the rows and
 columns of Dirichlet dofs zeroed, to add to the tangent).
+
+Under MPI a facet between two ranks joins an owned cell to a ghost: the grid needs
+DOLFINx's shared-facet ghost layer (the default of ``create_rectangle`` and
+``create_box``, and of fe-mpm's gmsh scenes). The points' fill of each cell is
+summed on the rank that owns it and sent to the ranks that hold it as a ghost, so
+every rank picks the same facets; each facet is assembled by the rank that owns it.
 """
 
 from __future__ import annotations
@@ -15,6 +21,7 @@ import dolfinx.fem.petsc as fem_petsc
 import numpy as np
 import ufl
 
+from fe_mpm import parallel
 from fe_mpm._dolfinx import FormFactory, dolfinx
 from fe_mpm.forms.ghost import GHOST_FACETS, ghost_penalty
 from fe_mpm.formulations import GridFields
@@ -60,12 +67,23 @@ class GhostStabilisation:
         mesh.topology.create_connectivity(tdim - 1, tdim)
         mesh.topology.create_connectivity(tdim, tdim - 1)
         self._topology = mesh.topology
+        self._comm = mesh.comm
+        require_facet_ghosts(mesh)
         facet_cells = mesh.topology.connectivity(tdim - 1, tdim)
         owned = mesh.topology.index_map(tdim - 1).size_local
         offsets = facet_cells.offsets
-        self._interior = np.flatnonzero(np.diff(offsets)[:owned] == 2).astype(np.int32)
-        first = offsets[self._interior]
+        # Every facet between two cells this rank holds (ghosts included), to join
+        # cells into groups; the owned ones among them are integrated here.
+        self._links = np.flatnonzero(np.diff(offsets) == 2).astype(np.int32)
+        first = offsets[self._links]
         self._cells = np.column_stack([facet_cells.array[first], facet_cells.array[first + 1]])
+        self._owned = self._links < owned
+        self._interior = self._links[self._owned]
+        cell_map = mesh.topology.index_map(tdim)
+        self._owned_cells = cell_map.size_local
+        self._num_cells = cell_map.size_local + cell_map.num_ghosts
+        self._cell_values = dolfinx.la.vector(cell_map, bs=2)  # fill, count
+        self._force = dolfinx.fem.Function(W)
         self.pattern = self._bind(self._interior)
         self.full = fem_petsc.create_matrix(self.pattern)
         self.constrained = fem_petsc.create_matrix(self.pattern)
@@ -100,26 +118,54 @@ class GhostStabilisation:
             min_points: A cell with fewer points than this is poorly filled too
                 (3 for P2: fewer leave some of its strain modes unseen).
         """
-        fill = np.bincount(cells, weights=volume, minlength=cell_volume.size) / cell_volume
-        count = np.bincount(cells, minlength=cell_volume.size)
+        owned = self._owned_cells
+        fill = np.bincount(cells, weights=volume, minlength=owned)[:owned] / cell_volume[:owned]
+        count = np.bincount(cells, minlength=owned)[:owned]
+        fill, count = self._with_ghosts(np.column_stack([fill, count])).T
         poor = (fill < POORLY_FILLED) | (count < min_points)
         a, b = self._cells[:, 0], self._cells[:, 1]
         ghost = (count[a] > 0) & (count[b] > 0) & (poor[a] | poor[b])
-        self.facets = self._interior[ghost]
-        tied = np.unique(self._cells[ghost])
+        self.facets = self._links[ghost & self._owned]
+        edges = self._cells[ghost]
+        tied = np.unique(edges)
         if min_points > 1:
             # The penalty makes the cells it joins share one polynomial, so a cell
             # with too few points is held only if its group has a cell with enough.
-            group = connected_groups(self._cells[ghost], cell_volume.size)
-            held = np.zeros(cell_volume.size, dtype=bool)
-            held[group[count >= min_points]] = True
-            tied = tied[held[group[tied]]]
+            held = self._held(edges, count >= min_points)
+            tied = tied[held[tied]]
         self._tied = tied
         form = self._bind(self.facets)
         for matrix, conditions, diagonal in ((self.full, [], 1.0), (self.constrained, bcs, 0.0)):
             matrix.zeroEntries()
             fem_petsc.assemble_matrix(matrix, form, bcs=conditions, diag=diagonal)
             matrix.assemble()
+
+    def _with_ghosts(self, values: np.ndarray) -> np.ndarray:
+        """Per-cell values (owned cells, 2) extended to the ghosts by their owners."""
+        data = self._cell_values.array
+        data[: values.size] = values.ravel()
+        self._cell_values.scatter_forward()
+        return data.reshape(-1, 2)[: self._num_cells].copy()
+
+    def _held(self, edges: np.ndarray, enough: np.ndarray) -> np.ndarray:
+        """Whether each cell's group (cells joined by ``edges``) has one with enough points.
+
+        On many ranks a group may cross several, so each rank passes what it found
+        to its neighbours' ghosts until no rank learns more.
+        """
+        held = enough.copy()
+        while True:
+            group = connected_groups(edges, self._num_cells)
+            found = np.zeros(self._num_cells, dtype=bool)
+            found[group[held]] = True
+            found = found[group]
+            if self._comm.size == 1:
+                return found
+            spread = self._with_ghosts(np.repeat(found[: self._owned_cells], 2)) > 0.5
+            found = spread[:, 0] | found  # a ghost keeps what it was told here too
+            if not parallel.any_rank(self._comm, bool(np.any(found != held))):
+                return found
+            held = found
 
     def tied_cells(self) -> np.ndarray:
         """The cells held by the penalty this step (sorted).
@@ -130,17 +176,41 @@ class GhostStabilisation:
         return self._tied
 
     def force(self, w: dolfinx.fem.Function) -> np.ndarray:
-        """The penalty's nodal force G Δu at the unknown ``w`` (every local dof)."""
-        y = self.full.createVecLeft()
-        self.full.mult(w.x.petsc_vec, y)
-        force = y.array.copy()
-        y.destroy()
-        return force
+        """The penalty's nodal force G Δu at the unknown ``w`` (owned and ghost dofs)."""
+        y = self._force.x
+        self.full.mult(w.x.petsc_vec, y.petsc_vec)
+        y.scatter_forward()
+        return y.array.copy()
 
     def destroy(self) -> None:
         """Free the PETSc matrices."""
         self.full.destroy()
         self.constrained.destroy()
+
+
+def require_facet_ghosts(mesh: dolfinx.mesh.Mesh) -> None:
+    """Refuse, on every rank, a distributed grid without shared-facet ghost cells.
+
+    Raises:
+        ValueError: Some facet between two ranks has its cell on one side only.
+    """
+    if mesh.comm.size == 1:
+        return
+    tdim = mesh.topology.dim
+    facet_cells = mesh.topology.connectivity(tdim - 1, tdim)
+    owned = mesh.topology.index_map(tdim - 1).size_local
+    one_sided = np.flatnonzero(np.diff(facet_cells.offsets)[:owned] == 1)
+    exterior = dolfinx.mesh.exterior_facet_indices(mesh.topology)
+    missing = np.setdiff1d(one_sided, exterior).size
+    if parallel.any_rank(mesh.comm, missing > 0):
+        raise ValueError(
+            "Simulation: the ghost penalty on a grid distributed over "
+            f"{mesh.comm.size} MPI ranks needs the cells across each rank's facets "
+            "(DOLFINx's ghost mode shared_facet); this grid has none. Build it with "
+            "ghost_mode=dolfinx.mesh.GhostMode.shared_facet (create_rectangle/create_box) "
+            "or partitioner=dolfinx.mesh.create_cell_partitioner("
+            "dolfinx.mesh.GhostMode.shared_facet, 2) (create_mesh, gmsh's model_to_mesh)"
+        )
 
 
 def connected_groups(edges: np.ndarray, n: int) -> np.ndarray:

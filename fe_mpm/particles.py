@@ -195,11 +195,12 @@ def seed(
         density: Mass density ρ₀ (kg/m³), > 0. None takes the law's ``density``
             when the simulation starts (1 if the law has none either); give it
             here to seed zones of different densities (see :func:`merge`).
-        cells: Cells to seed: a 1-D array of local indices of owned cells
-            (``0 <= c < size_local``; ghost cells cannot be seeded), each once; all
+        cells: Cells to seed: a 1-D array of local cell indices, each once; all
             cells by default. Under MPI every rank calls ``seed`` with its own
-            selection, which may be empty on some ranks but not on all. A
-            boolean mask is refused: pass ``np.flatnonzero(mask)``.
+            selection, which may be empty on some ranks but not on all; ghost
+            cells in it (``c >= size_local``, as ``cell_tags.find`` returns them)
+            are left to the rank that owns them, which seeds them from its own
+            selection. A boolean mask is refused: pass ``np.flatnonzero(mask)``.
         volumes: ``"gauss"`` gives each point the Gauss weight times the cell
             volume (exact quadrature of the initial body); ``"equal"`` splits the
             cell volume equally, as in the thesis.
@@ -211,21 +212,25 @@ def seed(
         TypeError: ``per_cell`` is not an int, or ``cells`` is a boolean mask or
             not integer indices.
         ValueError: A value lies outside its range, or ``cells`` is not 1-D, is
-            empty, holds duplicates or indices outside ``[0, size_local)``.
+            empty, holds duplicates or indices of no cell on this rank.
     """
     if density is not None:
         check_range("seed", "density", density, lo=0.0, lo_open=True)
     check_choice("seed", "volumes", volumes, ("gauss", "equal"))
     per_cell = check_int("seed", "per_cell", per_cell, lo=1)
     tdim = mesh.topology.dim
-    num_cells = mesh.topology.index_map(tdim).size_local
+    cell_map = mesh.topology.index_map(tdim)
+    num_cells = cell_map.size_local
     # A rank may own no cells, or none of the selection: it seeds nothing. Only a
     # selection that is empty on every rank is an error.
     if parallel.total(mesh.comm, num_cells) == 0:
         raise ValueError("seed: the mesh has no cells")
     cell_type = simplex_cell_type(mesh)
     ref_pts, ref_wts = _rule_with_count(cell_type, per_cell)
-    cells = np.arange(num_cells, dtype=np.int32) if cells is None else _cells(cells, num_cells)
+    if cells is None:
+        cells = np.arange(num_cells, dtype=np.int32)
+    else:
+        cells = _cells(cells, num_cells, cell_map.num_ghosts)
     if parallel.total(mesh.comm, cells.size) == 0:
         raise ValueError("seed: no cells to seed")
 
@@ -250,13 +255,17 @@ def seed(
     )
 
 
-def _cells(cells: npt.ArrayLike, num_cells: int) -> np.ndarray:
+def _cells(cells: npt.ArrayLike, num_cells: int, num_ghosts: int = 0) -> np.ndarray:
     """The cells to seed as int32 local indices, or raise saying what is wrong with them.
 
     Args:
         cells: The ``cells`` given to :func:`seed`.
-        num_cells: Number of cells this rank owns (``size_local``); the ghost cells
-            after them belong to another rank, which seeds them.
+        num_cells: Number of cells this rank owns (``size_local``).
+        num_ghosts: Number of ghost cells after them, which belong to another rank
+            that seeds them: dropped here.
+
+    Returns:
+        The owned cells among ``cells``, int32, in the order given.
     """
     a = np.asarray(cells)
     # np.asarray(mask, np.int32) would read a mask as the indices 0 and 1.
@@ -273,12 +282,12 @@ def _cells(cells: npt.ArrayLike, num_cells: int) -> np.ndarray:
         raise TypeError(
             f"seed: cells must be integer cell indices, got {reprlib.repr(cells)} (dtype {a.dtype})"
         )
-    outside = np.flatnonzero((a < 0) | (a >= num_cells))
+    local = num_cells + num_ghosts
+    outside = np.flatnonzero((a < 0) | (a >= local))
     if outside.size:
         raise ValueError(
-            f"seed: cells must lie in [0, {num_cells - 1}] (this rank's {num_cells} owned cells), "
-            f"got {a[outside[0]]}; ghost cells (index >= size_local = {num_cells}) cannot be "
-            "seeded: the rank that owns them seeds them"
+            f"seed: cells must lie in [0, {local - 1}] (this rank's {num_cells} owned and "
+            f"{num_ghosts} ghost cells), got {a[outside[0]]}"
         )
     values, counts = np.unique(a, return_counts=True)
     repeated = np.flatnonzero(counts > 1)
@@ -289,7 +298,7 @@ def _cells(cells: npt.ArrayLike, num_cells: int) -> np.ndarray:
             f"seed: cells holds duplicates, e.g. cell {cell} {times}; each cell "
             "would get its points again"
         )
-    return a.astype(np.int32)
+    return a[a < num_cells].astype(np.int32)
 
 
 def merge(*sets: MaterialPoints) -> MaterialPoints:

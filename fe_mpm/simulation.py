@@ -205,10 +205,7 @@ class Simulation:
         model_checks.check_domains(point_domains, ghost_penalty, points, points_leaving, self.spec)
         model_checks.check_serial_only(
             mesh.comm,
-            {
-                "point_domains=True": bool(point_domains),
-                "a ghost penalty": bool(ghost_penalty),
-            },
+            {"point_domains=True": bool(point_domains)},
         )
         model_checks.check_law(material, self.spec, formulation)
         model_checks.take_density(material, points)
@@ -257,8 +254,11 @@ class Simulation:
         self.domains = None
         if point_domains:
             self.domains = PointDomains(points, self.tracker, self.spec.u_degree)
-        gamma = model_checks.ghost_factor(ghost_penalty, point_domains, self.spec.u_degree)
-        self.ghost = GhostStabilisation(self.fields, gamma, material.mu) if gamma else None
+        self._ghost_factor = model_checks.ghost_factor(
+            ghost_penalty, point_domains, self.spec.u_degree
+        )
+        self.ghost = None
+        self._set_ghost_penalty()
         #: Grid repartitions so far (:meth:`rebalance`).
         self.repartitions = 0
         self.rebalancing = balance.RebalanceRule(model_checks.check_rebalance(rebalance_above))
@@ -266,6 +266,13 @@ class Simulation:
             self._track()
         if output_dir is not None:  # on the grid the run starts on
             self.output = SimulationOutput(output_dir, self.fields, output_every)
+
+    def _set_ghost_penalty(self) -> None:
+        """The ghost penalty on the current grid (none if its factor is 0)."""
+        if self.ghost is not None:
+            self.ghost.destroy()
+        gamma = self._ghost_factor
+        self.ghost = GhostStabilisation(self.fields, gamma, self.material.mu) if gamma else None
 
     def _set_grid(self, mesh: dolfinx.mesh.Mesh, facet_tags) -> None:
         """Build everything that lives on the grid: at set-up and after a repartition.
@@ -387,6 +394,7 @@ class Simulation:
         springs = self.walls.springs()
         self._set_grid(mesh, tags)
         self.walls.set_springs(springs)
+        self._set_ghost_penalty()
         if keep_home:
             self.tracking._home = balance.owners_of_original_cells(mesh, home)
         # The next tracking starts from the cell each point was in, where this rank

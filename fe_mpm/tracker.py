@@ -272,7 +272,10 @@ class Tracker:
 
     def _tree_search(self, x: np.ndarray) -> np.ndarray:
         if self._tree is None:
-            self._tree = dolfinx.geometry.bb_tree(self.mesh, self.mesh.topology.dim)
+            # Owned cells only: a point on a facet between an owned cell and a ghost
+            # must not be reported in the ghost, which belongs to another rank.
+            owned = np.arange(self.num_cells, dtype=np.int32)
+            self._tree = dolfinx.geometry.bb_tree(self.mesh, self.mesh.topology.dim, entities=owned)
         pts = np.zeros((x.shape[0], 3))
         pts[:, : x.shape[1]] = x
         candidates = dolfinx.geometry.compute_collisions_points(self._tree, pts)
@@ -281,7 +284,6 @@ class Tracker:
         found = offsets[1:] > offsets[:-1]
         cells = np.full(x.shape[0], -1, dtype=np.int32)
         cells[found] = colliding.array[offsets[:-1][found]]
-        cells[cells >= self.num_cells] = -1  # ghost cells belong to another rank
         return cells
 
 

@@ -29,5 +29,11 @@ def gmsh_session(name: str) -> Iterator[gmsh.model]:
 
 
 def to_dolfinx(model: gmsh.model, gdim: int, comm: MPI.Comm = MPI.COMM_WORLD):
-    """Convert the meshed gmsh model (on rank 0) into DOLFINx mesh data."""
-    return dolfinx.io.gmsh.model_to_mesh(model, comm, rank=0, gdim=gdim)
+    """Convert the meshed gmsh model (on rank 0) into DOLFINx mesh data.
+
+    Under MPI each rank also holds the cells across its facets on other ranks
+    (``GhostMode.shared_facet``, as ``create_rectangle`` gives by default), which the
+    ghost penalty's facet integrals need.
+    """
+    partitioner = dolfinx.mesh.create_cell_partitioner(dolfinx.mesh.GhostMode.shared_facet, 2)
+    return dolfinx.io.gmsh.model_to_mesh(model, comm, rank=0, gdim=gdim, partitioner=partitioner)
