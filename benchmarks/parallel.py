@@ -13,6 +13,10 @@ Scenes (``--scenes``):
   steps of 10 mm; the answer is q/c_u at the last step.
 - ``cook``: Cook's membrane, u-p, n = 256, one point per triangle, one step; the
   answer is the tip displacement.
+- ``block3d``: an elastic cube of 257 250 tetrahedra (35³ hexahedra) with 4 points
+  each (1 029 000 points) settling under its weight in 2 steps
+  (``benchmarks/block_3d.py``); the answer is the top's settlement.
+  ``block3d-iterative`` is the same with ``linear_solver="iterative"`` (GAMG).
 - ``collapse``: the granular column, a = 3, h = 5 mm, 3 points per cell (7140), the
   first 0.1 s (40 steps; its own check of the deposit then fails). The column starts
   in a corner of the grid, so on 2 ranks one holds every point;
@@ -50,6 +54,12 @@ SCENES = {
         ["demos/cook_membrane.py", "--formulation", "up", "--n", "256", "--nu", "0.499"],
         lambda out: out["tip_displacement_y"],
         "u_A,y",
+    ),
+    "block3d": (["benchmarks/block_3d.py"], lambda out: out["settlement_m"], "settlement"),
+    "block3d-iterative": (
+        ["benchmarks/block_3d.py", "--linear-solver", "iterative"],
+        lambda out: out["settlement_m"],
+        "settlement",
     ),
     "collapse": (COLLAPSE, lambda out: out["runout"], "d_inf"),
     "collapse-balanced": (
