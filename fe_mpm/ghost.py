@@ -55,7 +55,7 @@ class GhostStabilisation:
         pattern: The penalty over every interior facet (a sparsity pattern).
         full: G on the step's facets (PETSc matrix).
         constrained: The same with the Dirichlet rows and columns zeroed.
-        facets: The step's ghost facets (local indices).
+        facets: The step's ghost facets that this rank owns and assembles (local indices).
     """
 
     def __init__(self, fields: GridFields, gamma: float, mu: float):
@@ -116,9 +116,9 @@ class GhostStabilisation:
         """Pick the step's ghost facets and assemble G there.
 
         Args:
-            cells: The cell of each point (n,).
+            cells: The (owned) cell of each of this rank's points (n,).
             volume: The points' volumes (n,).
-            cell_volume: The volume of every cell (nc,).
+            cell_volume: The volume of every owned cell (nc,).
             bcs: The step's Dirichlet conditions.
             min_points: A cell with fewer points than this is poorly filled too
                 (3 for P2: fewer leave some of its strain modes unseen).
