@@ -28,8 +28,10 @@
 # **Reference.** Martin & Moyce (1952), Phil. Trans. R. Soc. A 244, 312–324, Tables 2
 # and 6 for n² = 2, a = 2¼ in: the front Z = x/a at T = t √(2g/a) (at h₀ = 2l₀ this is
 # Mast's scaling, his Eq. 6.3), and the height H = h/(n²a) at τ = t √(g/a). The
-# numbers are those reproduced by Lethe's and other validation suites. No tabulated
-# data for n² = 1 were found, so `--aspect 1` runs unchecked.
+# numbers are those reproduced by Lethe's and other validation suites. For n² = 1
+# (`--aspect 1`, h₀ = l₀) the numbers are Martin & Moyce's as Adami, Hu & Adams
+# (2012) plot them against the same T, which Koshizuka & Oka's (1996) square column
+# confirms within 7 %. Other aspects run unchecked.
 #
 # Usage: `python demos/dam_break.py --json`.
 
@@ -51,12 +53,38 @@ from fe_mpm import parallel
 from fe_mpm.meshes import rectangle_mesh
 from fe_mpm.plotting import pyplot
 
-#: Martin & Moyce (1952), n² = 2, a = 2¼ in: the surge front (Table 2), Z = x/a at
-#: T = t √(2g/a), and the height at the wall (Table 6), H = h/(n²a) at τ = t √(g/a).
-FRONT_T = (0.41, 0.84, 1.19, 1.43, 1.63, 1.83, 1.98, 2.20, 2.32, 2.51, 2.65, 2.83, 2.98, 3.11, 3.33)
-FRONT_Z = (1.11, 1.22, 1.44, 1.67, 1.89, 2.11, 2.33, 2.56, 2.78, 3.00, 3.22, 3.44, 3.67, 3.89, 4.11)
-HEIGHT_TAU = (0.56, 0.77, 0.93, 1.08, 1.28, 1.46, 1.66, 1.84, 2.00, 2.21, 2.45, 2.70)
-HEIGHT_H = (0.94, 0.89, 0.83, 0.78, 0.72, 0.67, 0.61, 0.56, 0.50, 0.44, 0.39, 0.33)
+#: Martin & Moyce (1952), by n² = h₀/l₀: the surge front Z = x/a at T = t √(n²g/a)
+#: (Mast's T), and the height at the wall H = h/(n²a) at τ = t √(g/a), each as
+#: (times, values). n² = 2, a = 2¼ in: their Tables 2 and 6. n² = 1: as Adami, Hu &
+#: Adams (2012, J. Comput. Phys. 231, their dam-break figure) plot it, with the times
+#: on this T; Koshizuka & Oka's (1996) own square column agrees with its front within
+#: 7 % (their 1.505, 2.241 and 3.003 at T = 0.815, 1.368 and 1.923 here).
+REFERENCE = {
+    2.0: {
+        "front": (
+            (0.41, 0.84, 1.19, 1.43, 1.63, 1.83, 1.98, 2.20, 2.32, 2.51, 2.65, 2.83, 2.98, 3.11,
+             3.33),
+            (1.11, 1.22, 1.44, 1.67, 1.89, 2.11, 2.33, 2.56, 2.78, 3.00, 3.22, 3.44, 3.67, 3.89,
+             4.11),
+        ),
+        "height": (
+            (0.56, 0.77, 0.93, 1.08, 1.28, 1.46, 1.66, 1.84, 2.00, 2.21, 2.45, 2.70),
+            (0.94, 0.89, 0.83, 0.78, 0.72, 0.67, 0.61, 0.56, 0.50, 0.44, 0.39, 0.33),
+        ),
+    },
+    1.0: {
+        "front": (
+            (0.43, 0.62, 0.80, 0.97, 1.14, 1.29, 1.45, 1.62, 1.76, 1.93, 2.07, 2.24, 2.40, 2.54,
+             2.71, 2.87, 3.04, 3.21, 3.29, 3.32),
+            (1.11, 1.22, 1.44, 1.67, 1.89, 2.11, 2.33, 2.56, 2.78, 3.00, 3.22, 3.44, 3.67, 3.89,
+             4.11, 4.33, 4.56, 4.78, 4.89, 5.00),
+        ),
+        "height": (
+            (0.80, 1.29, 1.74, 2.15, 2.57, 3.08, 4.27, 6.29),
+            (0.89, 0.78, 0.67, 0.56, 0.44, 0.33, 0.22, 0.11),
+        ),
+    },
+}  # fmt: skip
 #: The check's bands, relative to the experiment. Every numerical run of this case
 #: leads the film: the dam took time to lift, and the tank's floor was not
 #: frictionless (Mast: his averaged runs "flow slightly faster than observed").
@@ -67,7 +95,7 @@ HEIGHT_BAND = (-0.10, 0.10)
 def parse_args(argv=None):
     """The command-line contract of the demo."""
     p = argparse.ArgumentParser(description="Dam break (Mast 2013, §6.1.1)")
-    p.add_argument("--aspect", type=float, default=2.0, help="h0/l0: 2 (checked) or 1")
+    p.add_argument("--aspect", type=float, default=2.0, help="h0/l0: 2 or 1 (checked), or other")
     p.add_argument("--formulation", choices=("up", "u", "u-nbva"), default="up")
     p.add_argument(
         "--h", type=float, default=0.00875, help="cell size (m), rounded to fit l0 whole"
@@ -193,13 +221,17 @@ T = t * time_scale
 wall = time.perf_counter() - START
 iterations = [r.newton_iterations for r in reports]
 n_points = int(parallel.total(grid.comm, len(points)))
-front_T, front_Z = np.array(FRONT_T), np.array(FRONT_Z)
-height_T, height_H = np.sqrt(args.aspect) * np.array(HEIGHT_TAU), np.array(HEIGHT_H)
+reference = next((r for a, r in REFERENCE.items() if abs(args.aspect - a) < 1e-12), None)
+(front_T, front_Z), (height_tau, height_H) = (
+    (np.array(times), np.array(values))
+    for times, values in (reference or {"front": ((), ()), "height": ((), ())}).values()
+)
+height_T = np.sqrt(args.aspect) * height_tau
 in_front, in_height = front_T <= T[-1], height_T <= T[-1]
 front_error = np.interp(front_T[in_front], T, Z) / front_Z[in_front] - 1.0
 height_error = np.interp(height_T[in_height], T, H) / height_H[in_height] - 1.0
-# Only h₀ = 2 l₀ has a reference, and only once the run reaches its first time.
-checked = abs(args.aspect - 2.0) < 1e-12 and front_error.size > 0
+# Only h₀ = 2 l₀ and h₀ = l₀ have a reference, once the run reaches its first time.
+checked = reference is not None and front_error.size > 0
 
 
 def span(errors: np.ndarray) -> str:
@@ -237,8 +269,8 @@ if not args.no_output and rank0:
         ax1.plot(T, Z, label=f"fe-mpm ({args.formulation})")
         ax2.plot(T / np.sqrt(args.aspect), H, label=f"fe-mpm ({args.formulation})")
         if checked:
-            ax1.plot(FRONT_T, FRONT_Z, "ko", ms=4, label="Martin & Moyce (1952)")
-            ax2.plot(HEIGHT_TAU, HEIGHT_H, "ko", ms=4, label="Martin & Moyce (1952)")
+            ax1.plot(front_T, front_Z, "ko", ms=4, label="Martin & Moyce (1952)")
+            ax2.plot(height_tau, height_H, "ko", ms=4, label="Martin & Moyce (1952)")
         ax1.set_xlabel("T = t √(n²g/a)")
         ax1.set_ylabel("front Z = x/a")
         ax2.set_xlabel("τ = t √(g/a)")
@@ -254,7 +286,12 @@ if not args.no_output and rank0:
 # Measured (2026-12-03, u-p, the defaults: 2352 points, 184 steps, 3.1 Newton
 # iterations per step, 9 s): the front runs −4.2 to +15.2 % ahead of the film (behind
 # only at its first point, T = 0.41), the height 1.1 to 6.1 % below it, as Mast found
-# with averaging ("slightly faster than observed"). Halving Δt or doubling it moves
+# with averaging ("slightly faster than observed"). With h₀ = l₀ (`--aspect 1`,
+# 2026-12-04: 1176 points, 260 steps, 3 s) the front leads by +2.7 to +22.9 % and the
+# height lies 0.0 to 8.1 % below, the same with Δt halved. On cells of half the size
+# both fronts stay in the band (n² = 2: −1.9 … +19.8 %; n² = 1: +7.2 … +23.3 %) but
+# the heights fall further below (−9.5 % and −13.7 %, the latter outside it): the
+# check holds on the demo's grid, not yet on a converged one. Halving Δt or doubling it moves
 # the front by less than 0.2 %. The displacement form (`--formulation u`) keeps the
 # column taller, +1.2 to +9.1 %, its front −6.8 to +17 %: the locking of the pressure
 # shows in the height. `u-nbva` does not get through: Newton cuts its steps (465 for
@@ -279,7 +316,7 @@ else:
     passed, verdict = True, "not checked"
     line = (
         f"h0/l0 = {args.aspect:g}: no tabulated experiment"
-        if abs(args.aspect - 2.0) >= 1e-12
+        if reference is None
         else f"the run ends at T = {T[-1]:.2f}, before Martin & Moyce's first time"
     )
 print(f"check: {line}: {verdict}")

@@ -526,15 +526,19 @@ def test_sand_column_contract_on_a_coarse_grid_cut_short(tmp_path):
     assert out["steps"] >= 40 and 0.0 < out["L_f"] < 0.5 and 0.9 < out["H_f"] < 1.0
 
 
-def test_dam_break_follows_martin_and_moyce_up_to_t_1_5(tmp_path):
-    """The dam break of Mast §6.1.1 (h₀ = 2 l₀) to T = 1.5 (81 steps): the front and
-    the height at Martin & Moyce's first four and three tabulated times lie in the
-    demo's bands. Measured: front −4.2, +7.9, +14.3, +15.0 %; height −1.3, −2.1, −1.1 %
-    (4 s)."""
-    stdout = run_demo("dam_break.py", "--T-end", "1.5", "--json", "--no-output", cwd=tmp_path)
+@pytest.mark.parametrize("aspect, fronts, heights", [("2", 4, 3), ("1", 7, 2)])
+def test_dam_break_follows_martin_and_moyce_up_to_t_1_5(tmp_path, aspect, fronts, heights):
+    """The dam break of Mast §6.1.1 to T = 1.5: the front and the height at Martin &
+    Moyce's tabulated times lie in the demo's bands. Measured: h₀ = 2 l₀ (81 steps)
+    front −4.2, +7.9, +14.3, +15.0 %, height −1.3, −2.1, −1.1 % (4 s); h₀ = l₀ (114
+    steps) front +2.7, +7.6, +6.1, +5.7, +7.3, +7.7, +9.1 %, height −3.4, −5.5 % (3 s)."""
+    stdout = run_demo(
+        "dam_break.py", "--aspect", aspect, "--T-end", "1.5", "--json", "--no-output", cwd=tmp_path
+    )
     out = _last_json(stdout)
     assert out["check_passed"] and check_line(stdout).endswith(": PASS")
-    assert len(out["front_relative_error"]) == 4 and len(out["height_relative_error"]) == 3
+    assert len(out["front_relative_error"]) == fronts
+    assert len(out["height_relative_error"]) == heights
     assert -0.10 <= min(out["front_relative_error"]) and max(out["front_relative_error"]) <= 0.25
     assert max(abs(e) for e in out["height_relative_error"]) <= 0.10
     assert out["newton_iterations_max"] <= 6
