@@ -29,9 +29,10 @@
 # and 6 for n² = 2, a = 2¼ in: the front Z = x/a at T = t √(2g/a) (at h₀ = 2l₀ this is
 # Mast's scaling, his Eq. 6.3), and the height H = h/(n²a) at τ = t √(g/a). The
 # numbers are those reproduced by Lethe's and other validation suites. For n² = 1
-# (`--aspect 1`, h₀ = l₀) the numbers are Martin & Moyce's as Adami, Hu & Adams
-# (2012) plot them against the same T, which Koshizuka & Oka's (1996) square column
-# confirms within 7 %. Other aspects run unchecked.
+# (`--aspect 1`, h₀ = l₀) they are the square column's numbers that SPH validation
+# suites credit to Martin & Moyce (as plotted, e.g., by Adami, Hu & Adams 2012),
+# against the same T; Koshizuka & Oka's (1996) own square column agrees with their
+# front within 7 %. Other aspects run unchecked.
 #
 # Usage: `python demos/dam_break.py --json`.
 
@@ -55,10 +56,11 @@ from fe_mpm.plotting import pyplot
 
 #: Martin & Moyce (1952), by n² = h₀/l₀: the surge front Z = x/a at T = t √(n²g/a)
 #: (Mast's T), and the height at the wall H = h/(n²a) at τ = t √(g/a), each as
-#: (times, values). n² = 2, a = 2¼ in: their Tables 2 and 6. n² = 1: as Adami, Hu &
-#: Adams (2012, J. Comput. Phys. 231, their dam-break figure) plot it, with the times
-#: on this T; Koshizuka & Oka's (1996) own square column agrees with its front within
-#: 7 % (their 1.505, 2.241 and 3.003 at T = 0.815, 1.368 and 1.923 here).
+#: (times, values). n² = 2, a = 2¼ in: their Tables 2 and 6. n² = 1: the square
+#: column's numbers SPH validation suites credit to them (e.g. as Adami, Hu & Adams
+#: 2012, J. Comput. Phys. 231, plot them), times on this T; Koshizuka & Oka's (1996)
+#: own square column agrees with the front within 7 % (their 1.505, 2.241 and 3.003
+#: at T = 0.815, 1.368 and 1.923 here).
 REFERENCE = {
     2.0: {
         "front": (
