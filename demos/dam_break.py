@@ -288,13 +288,13 @@ if not args.no_output and rank0:
 # Measured (2026-12-03, u-p, the defaults: 2352 points, 184 steps, 3.1 Newton
 # iterations per step, 9 s): the front runs −4.2 to +15.2 % ahead of the film (behind
 # only at its first point, T = 0.41), the height 1.1 to 6.1 % below it, as Mast found
-# with averaging ("slightly faster than observed"). With h₀ = l₀ (`--aspect 1`,
-# 2026-12-04: 1176 points, 260 steps, 3 s) the front leads by +2.7 to +22.9 % and the
-# height lies 0.0 to 8.1 % below, the same with Δt halved. On cells of half the size
-# both fronts stay in the band (n² = 2: −1.9 … +19.8 %; n² = 1: +7.2 … +23.3 %) but
-# the heights fall further below (−9.5 % and −13.7 %, the latter outside it): the
-# check holds on the demo's grid, not yet on a converged one. Halving Δt or doubling it moves
-# the front by less than 0.2 %. The displacement form (`--formulation u`) keeps the
+# with averaging ("slightly faster than observed"). Halving Δt or doubling it moves
+# the front by less than 0.2 %. With h₀ = l₀ (`--aspect 1`, 2026-12-04: 1176 points,
+# 260 steps, 3 s) the front leads by +2.7 to +22.9 % and the height lies 0.0 to 8.1 %
+# below, the same with Δt halved. On cells of half the size both fronts stay in the
+# band (n² = 2: −1.9 … +19.8 %; n² = 1: +7.2 … +23.3 %) but the heights fall further
+# below (−9.5 % and −13.7 %, the latter outside it): the check holds on the demo's
+# grid, not yet on a converged one. The displacement form (`--formulation u`) keeps the
 # column taller, +1.2 to +9.1 %, its front −6.8 to +17 %: the locking of the pressure
 # shows in the height. `u-nbva` does not get through: Newton cuts its steps (465 for
 # the first 0.07 s, against 70) and at T ≈ 1.3 a point is thrown out of the top of the
