@@ -130,15 +130,16 @@ def repartitioned(mesh: dolfinx.mesh.Mesh, weights: np.ndarray) -> dolfinx.mesh.
     parts = np.zeros(0, dtype=np.int32)
     all_cells = np.zeros((0, tdim + 1), dtype=np.int64)
     x = np.zeros((0, gdim))
+    graph = (np.zeros(1, dtype=np.int64), np.zeros(0, dtype=np.int64))
     error = None
     if comm.rank == 0:
         try:
-            all_cells, x, parts = _partitioned(gathered, comm.size, tdim, gdim)
+            all_cells, x, parts, graph = _partitioned(gathered, comm.size, tdim, gdim)
         except (ValueError, RuntimeError, MemoryError) as err:  # METIS's own included
             error = err
     parallel.raise_together(comm, error)  # rank 0 alone may fail; the others would wait
     if ghosted:
-        destinations = dolfinx.graph.adjacencylist(*with_facet_neighbours(all_cells, parts))
+        destinations = dolfinx.graph.adjacencylist(*with_facet_neighbours(graph, parts))
     else:
         destinations = dolfinx.graph.adjacencylist(parts)
 
@@ -151,7 +152,9 @@ def repartitioned(mesh: dolfinx.mesh.Mesh, weights: np.ndarray) -> dolfinx.mesh.
 
 
 def _partitioned(gathered: list, size: int, tdim: int, gdim: int):
-    """On rank 0: every cell's nodes and every node's position in input order, and parts.
+    """On rank 0: the cells' nodes, the nodes' positions, the parts and the dual graph.
+
+    Cells and nodes are in input order; the dual graph is (xadj, adjncy).
 
     Args:
         gathered: Each rank's (original cell indices, cell nodes, weights, node input
@@ -177,19 +180,22 @@ def _partitioned(gathered: list, size: int, tdim: int, gdim: int):
     inputs = np.concatenate([g[3] for g in gathered])
     x = np.zeros((int(inputs.max()) + 1, gdim))  # rows no cell uses are never read
     x[inputs] = np.concatenate([g[4] for g in gathered])
-    parts = partition(all_cells, cell_weight, size)
+    graph = dual_graph(all_cells)  # METIS's, and the ghost layer's if the grid has one
+    parts = partition(all_cells, cell_weight, size, graph)
     now = np.repeat(np.arange(size), [len(g[0]) for g in gathered])[order]
-    return all_cells, x, _kept_in_place(parts, now, cell_weight, size)
+    return all_cells, x, _kept_in_place(parts, now, cell_weight, size), graph
 
 
-def with_facet_neighbours(cells: np.ndarray, parts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def with_facet_neighbours(
+    graph: tuple[np.ndarray, np.ndarray], parts: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """Each cell's ranks: its owner first, then the other owners of its facet neighbours.
 
     The destinations of a shared-facet ghost layer, as DOLFINx's own partitioners
     give them with ``GhostMode.shared_facet``.
 
     Args:
-        cells: The nodes of each simplex, shape (n, t + 1).
+        graph: The cells' facet adjacency (xadj, adjncy), as :func:`dual_graph` gives it.
         parts: The owning rank of each cell (n,).
 
     Returns:
@@ -198,7 +204,7 @@ def with_facet_neighbours(cells: np.ndarray, parts: np.ndarray) -> tuple[np.ndar
     n = len(parts)
     if n == 0:  # a rank other than the one that holds the whole grid
         return np.zeros(0, dtype=np.int32), np.zeros(1, dtype=np.int32)
-    xadj, adjncy = dual_graph(cells)
+    xadj, adjncy = graph
     cell = np.repeat(np.arange(n), np.diff(xadj))
     other = parts[adjncy]
     pairs = np.unique(np.column_stack([cell, other])[other != parts[cell]], axis=0)
@@ -209,18 +215,24 @@ def with_facet_neighbours(cells: np.ndarray, parts: np.ndarray) -> tuple[np.ndar
     return pairs[:, 1].astype(np.int32), offsets
 
 
-def partition(cells: np.ndarray, weights: np.ndarray, parts: int) -> np.ndarray:
+def partition(
+    cells: np.ndarray,
+    weights: np.ndarray,
+    parts: int,
+    graph: tuple[np.ndarray, np.ndarray] | None = None,
+) -> np.ndarray:
     """The part (0 to ``parts`` − 1) of each cell: METIS on the cells' dual graph.
 
     Args:
         cells: The nodes of each simplex, shape (n, t + 1).
         weights: Integer weight of each cell (n,), ≥ 1.
         parts: How many parts.
+        graph: The cells' :func:`dual_graph`, if already built; None builds it.
 
     Returns:
         Shape (n,), int32: parts of about equal total weight, with few facets cut.
     """
-    xadj, adjncy = dual_graph(cells)
+    xadj, adjncy = dual_graph(cells) if graph is None else graph
     metis = _pymetis()
     graph = metis.CSRAdjacency(xadj, adjncy)
     _, membership = metis.part_graph(parts, adjacency=graph, vweights=weights)
