@@ -6,6 +6,9 @@ import numpy as np
 
 from fe_mpm.simulation import Simulation
 
+#: Point pairs whose distances :func:`stress_oscillation` holds at once (about 16 MB).
+PAIRS_PER_BLOCK = 2**21
+
 
 def pressure_oscillation(sim: Simulation) -> float:
     """Mean jump of the nodal pressure between neighbouring nodes over its range.
@@ -47,10 +50,16 @@ def stress_oscillation(x: np.ndarray, values: np.ndarray, neighbours: int = 8) -
     n = x.shape[0]
     if n <= neighbours:
         raise ValueError(f"stress_oscillation: need more than {neighbours} points, got {n}")
-    d2 = np.sum((x[:, None, :] - x[None, :, :]) ** 2, axis=2)
-    np.fill_diagonal(d2, np.inf)
-    nearest = np.argpartition(d2, neighbours, axis=1)[:, :neighbours]
-    local_mean = values[nearest].mean(axis=1)
+    local_mean = np.empty(n)
+    # The distances of a block of points to all points at a time: a whole n x n
+    # matrix would take 8 n² bytes (80 GB for 10⁵ points).
+    rows = max(1, PAIRS_PER_BLOCK // n)
+    for start in range(0, n, rows):
+        block = slice(start, min(start + rows, n))
+        d2 = np.sum((x[block, None, :] - x[None, :, :]) ** 2, axis=2)
+        d2[np.arange(d2.shape[0]), np.arange(block.start, block.stop)] = np.inf
+        nearest = np.argpartition(d2, neighbours, axis=1)[:, :neighbours]
+        local_mean[block] = values[nearest].mean(axis=1)
     return float(np.sqrt(np.mean((values - local_mean) ** 2)))
 
 
