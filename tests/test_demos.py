@@ -526,6 +526,28 @@ def test_sand_column_contract_on_a_coarse_grid_cut_short(tmp_path):
     assert out["steps"] >= 40 and 0.0 < out["L_f"] < 0.5 and 0.9 < out["H_f"] < 1.0
 
 
+def test_column_impact_contract_on_a_short_block_cut_short(tmp_path):
+    """Mast's soil surge against a wall (§7.4) with a block 2 m long and high, for its
+    first second (768 points, about 40 steps of up to 0.1 s; 40 s): the contract's
+    keys, the soil's front reaching the face 1 m ahead after it has slumped across the
+    gap (measured at t = 0.91–0.93 s), the bed carrying the soil's weight over the
+    last second to 10 % (measured 0.961: the block still settles), and the check not
+    made on a run cut short."""
+    stdout = run_demo(
+        "column_impact.py",
+        *("--height", "2", "--length", "2", "--t-end", "1.0", "--dt", "0.1"),
+        *("--json", "--no-output"),
+        cwd=tmp_path,
+    )
+    out = _last_json(stdout)
+    for key in ("R_pk", "R_ss", "H_act", "face_force_peak_N", "points", "steps", "wall_time_s"):
+        assert key in out
+    assert out["check_passed"] and "not checked (cut short" in check_line(stdout)
+    assert out["points"] == 768 and out["face_force_peak_N"] > 0.0 and out["H_act"] > 0.0
+    assert 0.7 < out["t_pk"] <= 1.0
+    assert out["bed_push_over_weight"] == pytest.approx(1.0, abs=0.1)
+
+
 @pytest.mark.parametrize("aspect, fronts, heights", [("2", 4, 3), ("1", 7, 2)])
 def test_dam_break_follows_martin_and_moyce_up_to_t_1_5(tmp_path, aspect, fronts, heights):
     """The dam break of Mast §6.1.1 to T = 1.5: the front and the height at Martin &
