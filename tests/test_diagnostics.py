@@ -16,9 +16,10 @@ def test_contiguous_front_ignores_points_thrown_ahead():
 
 
 def test_stress_oscillation_sees_scatter_and_not_a_smooth_field_block_by_block(monkeypatch):
-    """A smooth field over a lattice gives about its gradient times the spacing,
-    scatter gives about its own size; computed a block of points at a time (here 7
-    blocks), the answer is that of all pairs at once."""
+    """A linear field over a lattice deviates from its neighbours' mean only along
+    the edges (measured 0.025, its gradient times half the spacing), a ±0.3 scatter by
+    about its own size (measured 0.291); computed a block of points at a time (here 7
+    blocks), the answer is that of all pairs at once to the last bit."""
     side = np.linspace(0.0, 1.0, 21)
     x = np.array(np.meshgrid(side, side)).reshape(2, -1).T  # spacing 0.05
     smooth = 2.0 * x[:, 0] + x[:, 1]
