@@ -132,12 +132,14 @@ box = dolfinx.mesh.create_box(
     dolfinx.mesh.CellType.tetrahedron,
     ghost_mode=dolfinx.mesh.GhostMode.shared_facet,
 )
-cell_map = box.topology.index_map(3)
-middle = box.geometry.x[box.geometry.dofmaps[0]].mean(axis=1)
 tol = 1e-6 * h
-in_column = (middle[:, 0] > x_face) & (middle[:, 0] < x_face + l_c) & (middle[:, 1] < w_c / 2)
-keep = np.flatnonzero(~in_column[: cell_map.size_local]).astype(np.int32)
-grid = dolfinx.mesh.create_submesh(box, 3, keep)[0] if not wall else box
+grid = box
+if not wall:  # the column's cells cut out of the box
+    middle = box.geometry.x[box.geometry.dofmaps[0]].mean(axis=1)
+    in_column = (middle[:, 0] > x_face) & (middle[:, 0] < x_face + l_c) & (middle[:, 1] < w_c / 2)
+    owned = box.topology.index_map(3).size_local
+    keep = np.flatnonzero(~in_column[:owned]).astype(np.int32)
+    grid = dolfinx.mesh.create_submesh(box, 3, keep)[0]
 owned = grid.topology.index_map(3).size_local
 centres = grid.geometry.x[grid.geometry.dofmaps[0][:owned]].mean(axis=1)
 block = np.flatnonzero((centres[:, 0] > 2.0) & (centres[:, 0] < 2.0 + L_b) & (centres[:, 2] < H_b))
@@ -220,7 +222,7 @@ t, force, height, bed_push = np.array(history).T
 # ## Peak and steady state
 #
 # Mast's coefficients (his Eqs. 7.17–7.19): the static force is that of the earth
-# pressure at rest over the height pressing on the face,
+# pressure at rest over the height of the soil against the face,
 # f_st = ½ K₀ ρ₀ g H_act² w_c, and R_pk = f_pk / f_st, R_ss = f_ss / f_st. The peak is
 # the largest force of any step, the steady state the mean over the last second
 # (Mast: a running average), and H_act is its mean over that second too.
@@ -229,7 +231,7 @@ t, force, height, bed_push = np.array(history).T
 last = t >= t[-1] - 1.0
 H_act = float(height[last].mean())
 if H_act == 0.0:
-    sys.exit(f"column_impact.py: no soil pressed on the face in the last second (t = {t[-1]:g} s)")
+    sys.exit(f"column_impact.py: no soil reached the face in the last second (t = {t[-1]:g} s)")
 f_pk, f_ss = float(force.max()), float(force[last].mean())
 f_st = 0.5 * K0 * rho * g * H_act**2 * face_width
 R_pk, R_ss = f_pk / f_st, f_ss / f_st
@@ -240,7 +242,7 @@ t_pk = float(t[np.argmax(force)])
 wall_time = time.perf_counter() - START
 iterations = [r.newton_iterations for r in reports]
 n_points = int(parallel.total(grid.comm, len(points)))
-scale = B_b / across if wall else 2.0  # from this model to the whole face
+scale = w_c / face_width  # from this model's share of the face to the whole face
 print(
     f"Soil surge on a {'wall' if wall else f'column {w_c:g} m wide'}, H_b = {H_b:g} m, "
     f"φ = {args.phi:g}°: {n_points} points on {grid.comm.size} rank(s), {len(reports)} steps "

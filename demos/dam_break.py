@@ -224,10 +224,9 @@ wall = time.perf_counter() - START
 iterations = [r.newton_iterations for r in reports]
 n_points = int(parallel.total(grid.comm, len(points)))
 reference = next((r for a, r in REFERENCE.items() if abs(args.aspect - a) < 1e-12), None)
-(front_T, front_Z), (height_tau, height_H) = (
-    (np.array(times), np.array(values))
-    for times, values in (reference or {"front": ((), ()), "height": ((), ())}).values()
-)
+none = ((), ())  # no tabulated times for another aspect
+front_T, front_Z = map(np.array, reference["front"] if reference else none)
+height_tau, height_H = map(np.array, reference["height"] if reference else none)
 height_T = np.sqrt(args.aspect) * height_tau
 in_front, in_height = front_T <= T[-1], height_T <= T[-1]
 front_error = np.interp(front_T[in_front], T, Z) / front_Z[in_front] - 1.0

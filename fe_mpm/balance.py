@@ -234,8 +234,8 @@ def partition(
     """
     xadj, adjncy = dual_graph(cells) if graph is None else graph
     metis = _pymetis()
-    graph = metis.CSRAdjacency(xadj, adjncy)
-    _, membership = metis.part_graph(parts, adjacency=graph, vweights=weights)
+    adjacency = metis.CSRAdjacency(xadj, adjncy)
+    _, membership = metis.part_graph(parts, adjacency=adjacency, vweights=weights)
     return np.asarray(membership, dtype=np.int32)
 
 
