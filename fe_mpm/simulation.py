@@ -214,7 +214,9 @@ class Simulation:
         self.mesh, self.points, self.material = mesh, points, material
         self.formulation, self.gdim, self.dynamic = formulation, mesh.geometry.dim, bool(dynamic)
         if line_search == "auto":
-            line_search = auto_line_search(bool(material.history), bool(dynamic))
+            line_search = auto_line_search(
+                has_history=bool(material.history), dynamic=bool(dynamic)
+            )
         self.petsc_options = {"snes_linesearch_type": line_search, **(petsc_options or {})}
         self.linear_solver = linear_solver
         self.max_step_cells, self.min_step = max_step_cells, min_step

@@ -29,24 +29,29 @@ NEWTON_OPTIONS = {
 }
 
 
-def auto_line_search(plastic: bool, dynamic: bool) -> str:
+def auto_line_search(has_history: bool, dynamic: bool) -> str:
     """The SNES line search that ``Simulation(line_search="auto")`` takes.
 
-    Full steps (``"basic"``) for a law without internal variables: an elastic step
-    converges quadratically from its first iterate. With internal variables the
-    active set can chatter under full steps. In a static run backtracking on ‖R‖²
-    (``"bt"``) holds it (the strip footing reaches s/B = 2 with it). In a dynamic
-    run the inertia already steadies Newton and ``"bt"`` often crawls at λ ≈ 0.1
-    for many iterations: PETSc's ``"l2"`` search was measured faster than ``"bt"``
-    on four of five dynamic scenes, 2.2 times on the soil–column impact and 5.7
-    times on the sand column, 10 % slower on the column collapse
-    (the table is in the documentation's Dynamics page).
+    - A law without internal variables: full steps (``"basic"``); an elastic step
+      converges quadratically from its first iterate.
+    - With internal variables the active set can chatter under full steps. In a
+      static run: backtracking on ‖R‖² (``"bt"``), with full steps as the retry
+      (:mod:`fe_mpm.retry`: together they take the strip footing to s/B = 2).
+    - In a dynamic run: PETSc's ``"l2"``. There ``"bt"`` was seen to crawl at
+      λ ≈ 0.1 for up to 25 iterations before the full steps took over, and
+      ``"l2"`` was faster than ``"bt"`` on five of six dynamic scenes measured
+      side by side: 2.2 times on the soil–column impact, 1.3 times on the dam
+      break; 10 % slower on the column collapse (the table is in the
+      documentation's Dynamics page).
 
     Args:
-        plastic: Whether the law has internal variables (``material.history``).
+        has_history: Whether the law has internal variables (``material.history``).
         dynamic: Whether the run is dynamic (Newmark).
+
+    Returns:
+        ``"basic"``, ``"bt"`` or ``"l2"``.
     """
-    if not plastic:
+    if not has_history:
         return "basic"
     return "l2" if dynamic else "bt"
 

@@ -118,7 +118,7 @@ def test_auto_line_search_picks_by_the_law_and_the_analysis_and_falls_back_to_an
     collapse from 26.0 s to 12.3 s, and the 3D locking cantilever (elastic) from 5
     Newton iterations to 18, so "auto" picks by the law. In a dynamic run
     backtracking crawls instead (docs/dynamics.md: l2 is 2.2 times faster on the
-    soil–column impact and 5.7 times on the sand column), so "auto" takes l2 there.
+    soil–column impact), so "auto" takes l2 there.
     """
     mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (2, 2))
     fixed = [fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))]
