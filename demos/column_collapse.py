@@ -182,10 +182,6 @@ try:
         # The column fills a corner of the grid: under MPI, --rebalance-above 1.25
         # partitions the grid by its points (docs/limitations.md: here it does not pay).
         rebalance_above=args.rebalance_above,
-        # Backtracking, not the "l2" that a dynamic plastic run takes by default: here
-        # it was the fastest (a = 3, h = 1 cm: 59 s against 65 s with l2, 78 s with
-        # full steps), and the results pages were run with it.
-        line_search="bt",
         output_dir=None if args.no_output else args.output,
         output_every=max(1, int(round(t_end / args.dt)) // 40),
     )

@@ -144,8 +144,8 @@ try:
         bossak_alpha=args.bossak_alpha,
         points_leaving="drop",
         # Measured at a = 2: 287 steps and 15.6 Newton iterations per step with
-        # PETSc's l2 line search (what "auto" gives a dynamic plastic run), 915 and 28
-        # with backtracking (5.7x the time).
+        # PETSc's l2 line search, 915 and 28 with the default backtracking (5.7x the
+        # time; docs/dynamics.md compares the searches on other dynamic scenes).
         line_search="l2",
         output_dir=None if args.no_output else args.output,
         output_every=max(1, round(t_end / args.dt) // 40),

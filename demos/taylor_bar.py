@@ -102,7 +102,7 @@ def parse_args(argv=None):
         "--line-search",
         choices=("basic", "bt", "l2", "auto"),
         default="basic",
-        help="Newton's SNES line search (default: basic, full steps; auto gives l2 here)",
+        help="Newton's SNES line search (default: basic, full steps; auto gives bt)",
     )
     p.add_argument("--output", default="taylor_bar_output", help="output folder")
     p.add_argument("--no-output", action="store_true", help="write no files")
@@ -149,10 +149,10 @@ try:
         mass="lumped",
         output_dir=None if args.no_output else args.output,
         output_every=max(1, steps // 8),
-        # Full Newton steps, not the "l2" that "auto" gives a dynamic plastic run: on
-        # Mast's bar (h = 2 cm, 200 steps) 50 s against 79 s (84 s with backtracking,
-        # which crawled at λ ≈ 0.1 for up to 25 iterations), the same answer to 1e-10;
-        # on the copper bar (h = 1.33 mm) 70 s against 76 s (80 s).
+        # Full Newton steps, not the backtracking of "auto" (a law with history): on
+        # Mast's bar (h = 2 cm, 200 steps) 50 s against 84 s (backtracking crawled at
+        # λ ≈ 0.1 for up to 25 iterations; 79 s with PETSc's l2), the same answer to
+        # 1e-10; on the copper bar (h = 1.33 mm) 70 s against 80 s (76 s).
         line_search=args.line_search,
     )
     sim.add_marker("top", (0.0, 0.0, LENGTH))

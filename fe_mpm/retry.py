@@ -3,11 +3,9 @@
 At one step length it makes up to four attempts, in this order (:meth:`RetryLadder.attempts`):
 
 1. the points re-binned into the cells they now lie in, Newton as configured
-   (by default full steps for an elastic law, for a law with internal variables
-   backtracking in a static run and ``"l2"`` in a dynamic one, see
-   :func:`~fe_mpm.solver_options.auto_line_search`);
-2. the same, with the fallback line search (by default full steps after
-   backtracking, else backtracking), from the same start;
+   (full steps by default);
+2. the same, with the fallback line search (``"bt"`` by default), from the same
+   start;
 3. in a static run, every point held in the cell it was in during the last step
    (``Simulation.step(rebin=False)``), Newton as configured;
 4. held, with the fallback line search.

@@ -44,7 +44,6 @@ from fe_mpm.point_update import apply_update, checked_update
 from fe_mpm.quadrature import SlotLayout
 from fe_mpm.report import ProgressBar, StepReport, imbalance, newton_failure
 from fe_mpm.retry import RetryLadder, StepLength
-from fe_mpm.solver_options import auto_line_search
 from fe_mpm.step_forms import (
     FormsBySlotCount,
     ReturnMapAtIterate,
@@ -123,10 +122,11 @@ class Simulation:
             name -> facet tag or marker (see ``StepReport.reactions``).
         min_step: Shortest step :meth:`run` may cut to (s); default 1/1024 of nominal.
         line_search: Newton's SNES line search: ``"basic"`` (full steps), ``"bt"``
-            (backtracking on ‖R‖²), ``"l2"``, ``"cp"``, or ``"auto"`` (default, see
-            :func:`~fe_mpm.solver_options.auto_line_search`): ``"basic"`` for a law
-            without internal variables, else ``"bt"`` in a static run and ``"l2"`` in
-            a dynamic one. ``petsc_options``'s ``snes_linesearch_type`` overrides it.
+            (backtracking on ‖R‖²), ``"l2"``, ``"cp"``, or ``"auto"`` (default):
+            ``"bt"`` for a law with internal variables (plasticity: the active set
+            chatters under full steps), ``"basic"`` otherwise (an elastic step
+            converges quadratically from the first iterate). ``petsc_options``'s
+            ``snes_linesearch_type`` overrides it.
         fallback_line_search: SNES line search with which a failed step is retried
             from its start before it is cut (None: cut at once; ``"auto"``, default:
             ``"basic"`` after ``"bt"``, else ``"bt"``; see :mod:`fe_mpm.retry`).
@@ -214,9 +214,7 @@ class Simulation:
         self.mesh, self.points, self.material = mesh, points, material
         self.formulation, self.gdim, self.dynamic = formulation, mesh.geometry.dim, bool(dynamic)
         if line_search == "auto":
-            line_search = auto_line_search(
-                has_history=bool(material.history), dynamic=bool(dynamic)
-            )
+            line_search = "bt" if material.history else "basic"
         self.petsc_options = {"snes_linesearch_type": line_search, **(petsc_options or {})}
         self.linear_solver = linear_solver
         self.max_step_cells, self.min_step = max_step_cells, min_step

@@ -28,34 +28,6 @@ NEWTON_OPTIONS = {
     "snes_divergence_tolerance": "unlimited",
 }
 
-
-def auto_line_search(has_history: bool, dynamic: bool) -> str:
-    """The SNES line search that ``Simulation(line_search="auto")`` takes.
-
-    - A law without internal variables: full steps (``"basic"``); an elastic step
-      converges quadratically from its first iterate.
-    - With internal variables the active set can chatter under full steps. In a
-      static run: backtracking on ‖R‖² (``"bt"``), with full steps as the retry
-      (:mod:`fe_mpm.retry`: together they take the strip footing to s/B = 2).
-    - In a dynamic run: PETSc's ``"l2"``. There ``"bt"`` was seen to crawl at
-      λ ≈ 0.1 for up to 25 iterations before the full steps took over, and
-      ``"l2"`` was faster than ``"bt"`` on five of six dynamic scenes measured
-      side by side: 2.2 times on the soil–column impact, 1.3 times on the dam
-      break; 10 % slower on the column collapse (the table is in the
-      documentation's Dynamics page).
-
-    Args:
-        has_history: Whether the law has internal variables (``material.history``).
-        dynamic: Whether the run is dynamic (Newmark).
-
-    Returns:
-        ``"basic"``, ``"bt"`` or ``"l2"``.
-    """
-    if not has_history:
-        return "basic"
-    return "l2" if dynamic else "bt"
-
-
 #: MUMPS LU. PCREDISTRIBUTE drops the constrained rows (Dirichlet and the pinned
 #: dofs of empty cells) before MUMPS sees the matrix, so empty grid costs no
 #: factorisation time.
