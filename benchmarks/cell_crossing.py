@@ -11,7 +11,7 @@ ghost penalty by default (γ = 0.1 for P1, 0.01 for P2, :mod:`fe_mpm.ghost`; the
 γ = 0 rows leave it out).
 
 Usage: ``./run python benchmarks/cell_crossing.py [--quick] [--nu 0.499 0.33]
-[--formulations up up-p2p1] [--load 5] [--sizes 16 32 64] [--steps 20]``; above 5 N
+[--formulations up up-p2p1] [--load 5] [--sizes 16 32 64] [--steps 20] [--hold K]``; above 5 N
 the grid's margins are n rows instead of n / 2. P2/P1 rows: standard MPM needs three
 points in every cell; the ghost penalty ties cells left with fewer
 (:mod:`fe_mpm.ghost`); with domains each piece has three sub-points, so one point per
@@ -20,6 +20,9 @@ cell is enough.
 plane-strain rollers (``cook_membrane(thickness=44 / n)``), u-p only, with 1 and 4
 points per cell (point domains on tetrahedra are P1 only); its answer converges to
 the same 2D limit.
+``--hold K`` then takes K more steps at the full load: at equilibrium such a step
+has nothing to do, so whatever the tip moves is what the update of a step adds (with
+point domains it moves; see ``docs/cell_crossing.md``).
 Prints the tip displacement, its error against the converged answer and the wall time
 of every case. Not a test.
 """
@@ -28,6 +31,8 @@ from __future__ import annotations
 
 import argparse
 import time
+
+import numpy as np
 
 import fe_mpm
 from fe_mpm import scenes
@@ -56,6 +61,31 @@ CASES_3D = [
 ]
 
 
+def _cook(
+    n: int,
+    nu: float,
+    formulation: str,
+    per_cell: int,
+    options: dict | None = None,
+    load: str = "points",
+    margin: int | None = None,
+    force: float = LOAD,
+    dim: int = 2,
+) -> fe_mpm.Simulation:
+    """Cook's membrane as the table runs it (see :func:`tip` for the arguments)."""
+    return scenes.cook_membrane(
+        n,
+        nu,
+        formulation,
+        per_cell=per_cell,
+        traction=force / 16,
+        load=load,
+        margin=n // 2 if margin is None else margin,
+        thickness=None if dim == 2 else 44.0 / n,
+        **(options or {}),
+    )
+
+
 def tip(
     n: int,
     nu: float,
@@ -75,23 +105,45 @@ def tip(
     deep into tetrahedra.
     """
     t0 = time.perf_counter()
-    sim = scenes.cook_membrane(
-        n,
-        nu,
-        formulation,
-        per_cell=per_cell,
-        traction=force / 16,
-        load=load,
-        margin=n // 2 if margin is None else margin,
-        thickness=None if dim == 2 else 44.0 / n,
-        **(options or {}),
-    )
+    sim = _cook(n, nu, formulation, per_cell, options, load, margin, force, dim)
     try:
         sim.run(1.0, steps, progress=False)
     except fe_mpm.ConvergenceError as err:
         print(f"  ({str(err).split(':')[0]})", flush=True)
         return float("nan"), time.perf_counter() - t0
     return scenes.tip_deflection(sim), time.perf_counter() - t0
+
+
+def held_tips(
+    n: int,
+    nu: float,
+    formulation: str,
+    per_cell: int,
+    steps: int,
+    hold: int,
+    options: dict | None = None,
+    margin: int | None = None,
+    force: float = LOAD,
+) -> np.ndarray:
+    """Cook's tip after its load and after each of ``hold`` further steps at that load.
+
+    The tip (m) after the load is reached in ``steps`` steps, then after each of ``hold``
+    more steps at the full load, shape ``(hold + 1,)`` (NaN from a failed step on).
+
+    At equilibrium a step with no change of load has nothing to do: an elastic body
+    should not move. Whatever it does move is what the step's own update adds.
+    """
+    sim = _cook(n, nu, formulation, per_cell, options, "points", margin, force)
+    tips = np.full(hold + 1, np.nan)
+    try:
+        sim.run(1.0, steps, progress=False)
+        tips[0] = scenes.tip_deflection(sim)
+        for k in range(1, hold + 1):
+            sim.run(1.0 + k / steps, 1, progress=False)  # the scene holds its load after t = 1
+            tips[k] = scenes.tip_deflection(sim)
+    except fe_mpm.ConvergenceError as err:
+        print(f"  ({str(err).split(':')[0]})", flush=True)
+    return tips
 
 
 def converged_fem(nu: float, force: float = LOAD, sizes=(16, 32, 64)) -> float:
@@ -111,6 +163,13 @@ def main() -> None:
     p.add_argument("--load", type=float, default=LOAD, help="total load (N)")
     p.add_argument("--sizes", type=int, nargs="+", default=None, help="grids n (16 32 64)")
     p.add_argument("--dim", type=int, choices=(2, 3), default=2, help="3: on tetrahedra")
+    p.add_argument(
+        "--hold",
+        type=int,
+        default=0,
+        help="then this many steps at the full load: each cell gives the tip after the "
+        "load, after the hold, and the change (2D only)",
+    )
     args = p.parse_args()
     cases = CASES if args.dim == 2 else CASES_3D
     sizes = args.sizes or ((16, 32) if args.quick else (16, 32, 64))
@@ -132,6 +191,13 @@ def main() -> None:
                 continue
             cells = []
             for n in sizes:
+                if args.hold:
+                    t = held_tips(
+                        n, nu, formulation, per_cell, args.steps, args.hold, options,
+                        margin[n], args.load,
+                    )  # fmt: skip
+                    cells.append(f"{t[0]:.4f} → {t[-1]:.4f} {100 * (t[-1] / t[0] - 1):+5.2f} %")
+                    continue
                 u, wall = tip(
                     n,
                     nu,
@@ -144,7 +210,8 @@ def main() -> None:
                     dim=args.dim,
                 )
                 cells.append(f"{u:>10.4f} {100 * (u / limit - 1):+6.1f} % {wall:4.0f}s")
-            print(f"{label:<24}" + "".join(f"{c:>22}" for c in cells), flush=True)
+            width = 30 if args.hold else 22
+            print(f"{label:<24}" + "".join(f"{c:>{width}}" for c in cells), flush=True)
 
 
 if __name__ == "__main__":

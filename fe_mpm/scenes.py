@@ -20,6 +20,11 @@ from fe_mpm.report import StepReport
 from fe_mpm.simulation import Simulation
 
 
+def _ramp_then_hold(t: float) -> float:
+    """The load factor of :func:`cook_membrane`: ``t`` up to 1, then 1."""
+    return min(t, 1.0)
+
+
 def cook_membrane(
     n: int = 16,
     nu: float = 0.33,
@@ -40,8 +45,8 @@ def cook_membrane(
     """Cook's membrane as in Iaconeta (2019) Table 5.1, with marker ``"A"`` at (48, 60).
 
     Clamped left edge, vertical traction 1/16 on the right edge ramped with the
-    pseudo-time ``t`` (full load at ``t = 1``), Neo-Hookean material unless
-    another law is given.
+    pseudo-time ``t`` (full load at ``t = 1``, held after), Neo-Hookean material
+    unless another law is given.
 
     Args:
         n: Elements per side of the structured grid.
@@ -76,12 +81,12 @@ def cook_membrane(
         supports.append(Dirichlet(meshes.COOK_FACES, 0.0, component=2))
     loads = {}
     if load == "grid":
-        loads["tractions"] = [Traction(meshes.COOK_LOADED, shear, scale=lambda t: t)]
+        loads["tractions"] = [Traction(meshes.COOK_LOADED, shear, scale=_ramp_then_hold)]
     elif load == "points":
         loaded = scene.facet_tags.find(meshes.COOK_LOADED)
         spec = FORMULATIONS.get(formulation)  # an unknown one is Simulation's to refuse
         x, weight = meshes.facet_points(scene.mesh, loaded, spec.u_degree if spec else 1)
-        loads["point_tractions"] = [PointTraction("load", x, weight, shear, scale=lambda t: t)]
+        loads["point_tractions"] = [PointTraction("load", x, weight, shear, scale=_ramp_then_hold)]
     else:
         raise ValueError(f"cook_membrane: load must be 'grid' or 'points', got {load!r}")
     sim = Simulation(
