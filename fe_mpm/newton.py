@@ -111,6 +111,8 @@ class NewtonSolver:
         self._loads = fem_petsc.create_vector(u.function_space)  # f_ext of the step
         self._scratch = fem_petsc.create_vector(u.function_space)
         self._diagonal = fem_petsc.create_vector(u.function_space)
+        self._best = fem_petsc.create_vector(u.function_space)  # see resume_from_best
+        self._best_norm = np.inf
         self.timings = timings if timings is not None else {}
         self.snes = PETSc.SNES().create(self.A.comm)  # the mesh's: COMM_SELF runs per rank
         # SNES keeps its callbacks alive, and a bound method keeps this solver
@@ -179,6 +181,17 @@ class NewtonSolver:
 
     def _monitor(self, snes, iteration: int, norm: float) -> None:
         self.norms.append(norm)
+        if norm < self._best_norm:  # the iterate a retry may resume from
+            self._best_norm = norm
+            snes.getSolution().copy(self._best)
+
+    def resume_from_best(self) -> None:
+        """Set ``u`` to the last solve's iterate of smallest ‖R‖, to start the next from.
+
+        A retry of the same step (the same equations) with another line search then
+        begins where the failed solve came closest, not from the step's start.
+        """
+        dolfinx.fem.petsc.assign(self._best, self.u)
 
     def _set_up_iterative(self, V: dolfinx.fem.FunctionSpace, split) -> None:
         """Give AMG the rigid body modes, and a mixed unknown's field split its dofs.
@@ -351,6 +364,7 @@ class NewtonSolver:
         if self._options.get("pc_type") == "redistribute":
             self._fresh_ksp()
         self.norms = []
+        self._best_norm = np.inf
         with self._loads.localForm() as local:
             local.set(0.0)
         if loads is not None:
@@ -379,7 +393,7 @@ class NewtonSolver:
         return NewtonResult(
             converged=converged,
             iterations=self.snes.getIterationNumber(),
-            reason=self.test.verdict if converged else _REASONS.get(reason, str(reason)),
+            reason=self.test.verdict or _REASONS.get(reason, str(reason)),
             residual_norms=list(self.norms),
             force_scale=self.test.scale,
             tolerance=self.test.tolerance,
@@ -396,6 +410,7 @@ class NewtonSolver:
             self._loads,
             self._scratch,
             self._diagonal,
+            self._best,
             *([self._strain_probe] if self._strain_probe is not None else []),
         ):
             obj.destroy()

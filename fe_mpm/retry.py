@@ -22,6 +22,10 @@ method with moving quadrature points would take; it is re-binned at the next ste
 Dynamic runs never hold: their mass projection would weigh held points by negative
 shape function values.
 
+Attempts 2 and 4 start from the step's start, or, with ``resume``
+(``Simulation(fallback_from_best=True)``), from the iterate of smallest ‖R‖ of the
+attempt before them: the same equations, from where Newton came closest.
+
 Attempts 1–2 and 3–4 share their set-up (tracking, packing), so a step's report
 counts the Newton iterations of both attempts of the set-up that converged. When
 all attempts fail the step is halved (:class:`StepLength`), and it grows back by
@@ -63,13 +67,16 @@ class RetryLadder:
     """The attempts at one step length, in order.
 
     Args:
-        fallback_line_search: Line search of the retry from the same start, or None;
+        fallback_line_search: Line search of the retry of the same set-up, or None;
             ``"auto"``: ``"basic"`` when Newton's own is ``"bt"``, else ``"bt"``.
         hold_cells: Whether a static step is retried with the points held.
+        resume: Whether that retry starts from the failed solve's iterate of
+            smallest ‖R‖ (False: from the step's start).
     """
 
     fallback_line_search: str | None = "auto"
     hold_cells: bool = True
+    resume: bool = False
 
     def placements(self, can_hold: bool) -> list[bool]:
         """Re-bin (True), then hold (False) where allowed: each is one set-up of the step.
@@ -108,12 +115,15 @@ class RetryLadder:
                 pass
         return step(placements[-1])
 
-    def solve(self, newton: Callable[[str | None], NewtonResult], configured: str) -> NewtonResult:
+    def solve(
+        self, newton: Callable[[str | None, bool], NewtonResult], configured: str
+    ) -> NewtonResult:
         """Newton with each line search of :meth:`line_searches` until one converges.
 
         Args:
-            newton: Solves the step from its start with the given line search (None:
-                the configured one).
+            newton: ``newton(search, resume)`` solves the step with the given line
+                search (None: the configured one), from the step's start or, with
+                ``resume``, from the last solve's iterate of smallest ‖R‖.
             configured: Newton's configured line search.
 
         Returns:
@@ -122,7 +132,7 @@ class RetryLadder:
         """
         result = None
         for search in self.line_searches(configured):
-            attempt = newton(search)
+            attempt = newton(search, self.resume and result is not None)
             if result is not None:
                 attempt.residual_norms = result.residual_norms + attempt.residual_norms
                 attempt.iterations += result.iterations

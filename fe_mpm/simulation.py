@@ -132,6 +132,10 @@ class Simulation:
             ``"basic"`` after ``"bt"``, else ``"bt"``; see :mod:`fe_mpm.retry`).
         fallback_hold_cells: Whether :meth:`run` retries a failed static step with the
             points held in their last step's cells before it cuts the step.
+        fallback_from_best: Whether the retry with the fallback line search starts
+            from the failed solve's iterate of smallest ‖R‖ (True) or from the
+            step's start (False, default). The same equations, solved from nearer
+            their solution; ``docs/dynamics.md`` says where it pays.
         linear_solver: ``"direct"`` (MUMPS LU, default) or ``"iterative"`` (GMRES and
             algebraic multigrid), see :data:`fe_mpm.newton.LINEAR_SOLVERS`.
         max_step_cells: A static step that moves a point farther than this many sizes
@@ -186,6 +190,7 @@ class Simulation:
         line_search: str = "auto",
         fallback_line_search: str | None = "auto",
         fallback_hold_cells: bool = True,
+        fallback_from_best: bool = False,
         linear_solver: str = "direct",
         max_step_cells: float = 10.0,
         point_domains: bool = False,
@@ -231,7 +236,9 @@ class Simulation:
 
         t0 = time.perf_counter()
         self.markers = Markers(mesh.comm)
-        self.ladder = RetryLadder(fallback_line_search, bool(fallback_hold_cells))
+        self.ladder = RetryLadder(
+            fallback_line_search, bool(fallback_hold_cells), bool(fallback_from_best)
+        )
         # What the grid's objects are built from, again after a repartition.
         self._given = {
             "conditions": (dirichlet, tractions, body_force, body_force_scale, reactions),
@@ -624,8 +631,11 @@ class Simulation:
                 strain_field=self.spec.volume_average,
             )
 
-        def attempt(search: str | None) -> NewtonResult:
-            self._initial_guess()
+        def attempt(search: str | None, resume: bool) -> NewtonResult:
+            if resume:
+                self._newton.resume_from_best()
+            else:
+                self._initial_guess()
             return self._newton.solve(R, J, bcs, **hooks, line_search=search)
 
         return self.ladder.solve(attempt, self._newton.line_search)

@@ -15,7 +15,7 @@ import pytest
 
 import fe_mpm
 from fe_mpm._dolfinx import dolfinx
-from fe_mpm.force_test import DIVERGENCE_FACTOR
+from fe_mpm.force_test import DIVERGENCE_FACTOR, STALL_ITERATIONS
 from fe_mpm.meshes import rectangle_mesh
 from fe_mpm.newton import ForceTest
 
@@ -137,6 +137,33 @@ def test_a_residual_grown_past_the_divergence_factor_stops_the_solve():
     assert test(None, 2, (0.0, 0.0, 1e-14)) == Reason.ITERATING
     assert test(None, 3, (0.0, 0.0, 0.5e-6)) == Reason.ITERATING
     assert test(None, 4, (0.0, 0.0, 2e-6)) == Reason.DIVERGED_DTOL
+
+
+def test_a_residual_that_stays_above_its_smallest_for_stall_iterations_stops_the_solve():
+    """A full-step Newton that cycles between two iterates (Mast's Taylor bar: ‖R‖
+    1.6e2, then 2.0e2 to 2.5e2 from its fifth iterate on) is stopped after STALL_ITERATIONS
+    iterates without a new smallest ‖R‖; one new smallest restarts the count, and so
+    does a residual at the acceptance tolerance (the pressure rows may still be
+    converging there)."""
+    Reason = PETSc.SNES.ConvergedReason
+    test = ForceTest(rtol=1e-10, atol=0.0, max_it=50, length=1.0)
+    test.loads, test.displacement_norm = 1.0, 1.0  # never passes
+    assert test(None, 0, (0.0, 0.0, 1e6)) == Reason.ITERATING
+    assert test(None, 1, (0.0, 0.0, 161.0)) == Reason.ITERATING
+    cycle = [199.0, 206.0, 247.0, 206.0, 239.0]
+    for it, norm in enumerate(cycle[: STALL_ITERATIONS - 1], start=2):
+        assert test(None, it, (0.0, 0.0, norm)) == Reason.ITERATING
+    assert test(None, 7, (0.0, 0.0, 160.0)) == Reason.ITERATING  # a new smallest
+    for it in range(8, 8 + STALL_ITERATIONS - 1):
+        assert test(None, it, (0.0, 0.0, 200.0)) == Reason.ITERATING
+    assert test(None, 8 + STALL_ITERATIONS - 1, (0.0, 0.0, 200.0)) == Reason.DIVERGED_DTOL
+    assert test.verdict.startswith("stalled")
+    # A new solve starts counting afresh; at the tolerance nothing counts as a stall.
+    assert test(None, 0, (0.0, 0.0, 1e6)) == Reason.ITERATING
+    test.volume, test.pressure_norm = 1.0, 1.0  # the pressure rows hold it back
+    test.displacement_norm = 1e-12  # below rtol S = 1e-10
+    for it in range(1, 3 * STALL_ITERATIONS):
+        assert test(None, it, (0.0, 0.0, 1.0)) == Reason.ITERATING
 
 
 def test_the_pressure_rows_are_judged_against_the_nodal_volumes():

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 import fe_mpm
+from fe_mpm import scenes
 from fe_mpm.errors import ConvergenceError
 from fe_mpm.force_test import NewtonResult
 from fe_mpm.meshes import rectangle_mesh
@@ -62,9 +63,9 @@ def _newton(outcomes):
     with ‖R‖ = 10, 1, ... per iteration; it records the line search it was given."""
     calls = []
 
-    def solve(search):
+    def solve(search, resume):
         converged, iterations = outcomes[len(calls)]
-        calls.append(search)
+        calls.append(search if not resume else (search, "resumed"))
         norms = [10.0**-k for k in range(-1, iterations)]
         return NewtonResult(converged, iterations, "stand-in", norms)
 
@@ -83,6 +84,36 @@ def test_solve_tries_the_fallback_line_search_and_counts_both_attempts():
     newton, calls = _newton([(False, 3), (True, 2)])
     result = RetryLadder("bt", True).solve(newton, "bt")
     assert calls == [None] and not result.converged and result.iterations == 3
+
+
+def test_the_fallback_resumes_from_the_best_iterate_only_when_asked():
+    newton, calls = _newton([(False, 3), (True, 2)])
+    RetryLadder("bt", True, resume=True).solve(newton, "basic")
+    assert calls == [None, ("bt", "resumed")]  # the first always starts from rest
+
+
+@pytest.mark.parametrize("from_best", [False, True])
+def test_a_retry_from_the_best_iterate_starts_at_its_residual(from_best):
+    """Cook's membrane (Neo-Hookean, u) at ten times its load in one step, Newton cut
+    to 3 iterations: full steps fail, and backtracking retries. From the step's start
+    its first ‖R‖ is the first attempt's first, and it fails too; with
+    ``fallback_from_best`` it is the smallest of the first attempt's (the same iterate
+    evaluated again: measured equal to the last bit), and the step converges."""
+    sim = scenes.cook_membrane(
+        8, 0.3, traction=10 / 16, margin=2, line_search="basic", fallback_line_search="bt",
+        fallback_from_best=from_best, petsc_options={"snes_max_it": 3},
+    )  # fmt: skip
+    if not from_best:
+        with pytest.raises(ConvergenceError) as info:
+            sim.step(1.0)
+        history = str(info.value).split("‖R‖ history: [")[1].split("]")[0].split(", ")
+        assert len(history) == 8 and history[4] == history[0]
+        return
+    norms = sim.step(1.0).residual_norms
+    first, second = norms[:4], norms[4:]
+    assert min(first) < 1e-2 * first[0]  # the failed attempt made progress
+    assert second[0] == pytest.approx(min(first), rel=1e-12)
+    assert second[-1] < 1e-10 * first[0]
 
 
 def test_cut_after_a_failure_names_the_last_step_length_and_the_floor():
