@@ -171,6 +171,8 @@ def main() -> None:
         "load, after the hold, and the change (2D only)",
     )
     args = p.parse_args()
+    if args.hold and args.dim == 3:
+        p.error("--hold runs the 2D membrane only; leave out --dim 3")
     cases = CASES if args.dim == 2 else CASES_3D
     sizes = args.sizes or ((16, 32) if args.quick else (16, 32, 64))
     margin = {n: n // 2 if args.load <= LOAD else n for n in sizes}  # room to move
