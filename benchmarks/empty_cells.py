@@ -17,7 +17,7 @@ import time
 import numpy as np
 
 import fe_mpm
-from fe_mpm.meshes import rectangle_mesh
+from fe_mpm.meshes import cell_centroids, rectangle_mesh
 
 #: The solvers compared: fe-mpm's default, and MUMPS on the whole system.
 SOLVERS = {
@@ -29,7 +29,7 @@ SOLVERS = {
 def one_step(n: int, factor: int, options: dict | None = None) -> dict:
     """One static step of an n x n block in a grid ``factor`` times as wide."""
     grid = rectangle_mesh((0.0, 0.0), (float(factor), 1.0), (factor * n, n))
-    centroids = grid.geometry.x[grid.geometry.dofmaps[0]][:, :, :2].mean(axis=1)
+    centroids = cell_centroids(grid)
     points = fe_mpm.seed(grid, cells=np.flatnonzero(centroids[:, 0] < 1.0), density=1000.0)
     sim = fe_mpm.Simulation(
         grid,

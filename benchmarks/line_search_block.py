@@ -23,8 +23,7 @@ from fe_mpm import meshes
 def slump(line_search: str) -> dict:
     """One run with ``line_search``: steps, Newton's mean and max, front (m), time (s)."""
     mesh = meshes.rectangle_mesh((0.0, 0.0), (3.0, 1.5), (48, 24))
-    owned = mesh.topology.index_map(2).size_local
-    centre = mesh.geometry.x[mesh.geometry.dofmaps[0][:owned]][:, :, :2].mean(axis=1)
+    centre = meshes.cell_centroids(mesh)
     block = np.flatnonzero((centre[:, 0] < 1.0) & (centre[:, 1] < 1.0))
     points = fe_mpm.seed(mesh, per_cell=3, density=1800.0, cells=block)
     soil = fe_mpm.DruckerPrager(

@@ -27,7 +27,7 @@ import numpy as np
 from step_timing import PHASES, median_steps
 
 import fe_mpm
-from fe_mpm.meshes import rectangle_mesh
+from fe_mpm.meshes import cell_centroids, rectangle_mesh
 
 
 def block(points_wanted: float, formulation: str, solver: str):
@@ -35,7 +35,7 @@ def block(points_wanted: float, formulation: str, solver: str):
     per_cell = 3
     n = max(2, round(math.sqrt(points_wanted / (2 * per_cell))))
     grid = rectangle_mesh((0.0, 0.0), (1.0, 1.2), (n, round(1.2 * n)))
-    centroids = grid.geometry.x[grid.geometry.dofmaps[0]][:, :, :2].mean(axis=1)
+    centroids = cell_centroids(grid)
     points = fe_mpm.seed(
         grid, per_cell, cells=np.flatnonzero(centroids[:, 1] < 1.0), density=1000.0
     )

@@ -28,7 +28,7 @@ import numpy as np
 
 import fe_mpm
 from fe_mpm import scenes
-from fe_mpm.meshes import rectangle_mesh
+from fe_mpm.meshes import cell_centroids, rectangle_mesh
 
 DEMOS = Path(__file__).resolve().parents[1] / "demos"
 
@@ -88,7 +88,7 @@ def cell_crossing() -> None:
     E = 1e4
     for per_cell in (1, 3, 6):
         mesh = rectangle_mesh((0, 0), (3, 3), (60, 60))
-        c = mesh.geometry.x[mesh.geometry.dofmaps[0]][:, :, :2].mean(axis=1)
+        c = cell_centroids(mesh)
         block = np.flatnonzero(
             (c[:, 0] > 0.2) & (c[:, 0] < 1.0) & (c[:, 1] > 0.2) & (c[:, 1] < 1.0)
         )

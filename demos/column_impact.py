@@ -47,6 +47,7 @@ from pathlib import Path
 # ruff: noqa: I001 - fe_mpm first: the PyPI wheel needs its bootstrap before dolfinx and mpi4py.
 import fe_mpm
 from fe_mpm import parallel
+from fe_mpm.meshes import cell_centroids
 from fe_mpm.plotting import pyplot
 from fe_mpm.walls import write_wall_forces
 import dolfinx
@@ -135,13 +136,11 @@ box = dolfinx.mesh.create_box(
 tol = 1e-6 * h
 grid = box
 if not wall:  # the column's cells cut out of the box
-    middle = box.geometry.x[box.geometry.dofmaps[0]].mean(axis=1)
+    middle = cell_centroids(box)
     in_column = (middle[:, 0] > x_face) & (middle[:, 0] < x_face + l_c) & (middle[:, 1] < w_c / 2)
-    owned = box.topology.index_map(3).size_local
-    keep = np.flatnonzero(~in_column[:owned]).astype(np.int32)
+    keep = np.flatnonzero(~in_column).astype(np.int32)
     grid = dolfinx.mesh.create_submesh(box, 3, keep)[0]
-owned = grid.topology.index_map(3).size_local
-centres = grid.geometry.x[grid.geometry.dofmaps[0][:owned]].mean(axis=1)
+centres = cell_centroids(grid)
 block = np.flatnonzero((centres[:, 0] > 2.0) & (centres[:, 0] < 2.0 + L_b) & (centres[:, 2] < H_b))
 points = fe_mpm.seed(grid, 4, density=rho, cells=block)
 points.velocity[:, 0] = v0

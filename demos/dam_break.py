@@ -51,7 +51,7 @@ import numpy as np
 
 import fe_mpm
 from fe_mpm import parallel
-from fe_mpm.meshes import rectangle_mesh
+from fe_mpm.meshes import cell_centroids, rectangle_mesh
 from fe_mpm.plotting import pyplot
 
 #: Martin & Moyce (1952), by n² = h₀/l₀: the surge front Z = x/a at T = t √(n²g/a)
@@ -148,8 +148,7 @@ t_end = args.T_end / time_scale
 nx, ny = 7 * across, math.ceil(h0 / h - 1e-9) + 2
 width = nx * h
 grid = rectangle_mesh((0.0, 0.0), (width, ny * h), (nx, ny))
-owned = grid.topology.index_map(2).size_local  # each rank seeds the cells it owns
-centroids = grid.geometry.x[grid.geometry.dofmaps[0][:owned]][:, :, :2].mean(axis=1)
+centroids = cell_centroids(grid)  # each rank seeds the cells it owns
 column = np.flatnonzero((centroids[:, 0] < l0) & (centroids[:, 1] < h0))
 try:
     points = fe_mpm.seed(grid, args.points_per_cell, density=rho, cells=column)

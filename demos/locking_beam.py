@@ -53,7 +53,7 @@ import numpy as np
 
 import fe_mpm
 from fe_mpm import parallel
-from fe_mpm.meshes import rectangle_mesh
+from fe_mpm.meshes import cell_centroids, rectangle_mesh
 from fe_mpm.plotting import pyplot
 
 #: Mast's Table 6.4: Poisson's ratios at E = 70 GPa held.
@@ -140,8 +140,7 @@ def swing(nu: float, formulation: str) -> dict:
     period, h = 2.0 * math.pi / omega, args.h
     n = (round(LENGTH / h) + 1, round(DEPTH / h) + 2)
     grid = rectangle_mesh((0.0, -0.5 * DEPTH - h), (LENGTH + h, 0.5 * DEPTH + h), n)
-    owned = grid.topology.index_map(2).size_local  # each rank seeds the cells it owns
-    centroids = grid.geometry.x[grid.geometry.dofmaps[0][:owned]][:, :, :2].mean(axis=1)
+    centroids = cell_centroids(grid)  # each rank seeds the cells it owns
     beam = np.flatnonzero((centroids[:, 0] < LENGTH) & (np.abs(centroids[:, 1]) < 0.5 * DEPTH))
     points = fe_mpm.seed(grid, args.points_per_cell, density=DENSITY, cells=beam)
     phi, slope = mode(points.x[:, 0])

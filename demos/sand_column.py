@@ -50,7 +50,7 @@ import numpy as np
 
 import fe_mpm
 from fe_mpm import parallel
-from fe_mpm.meshes import rectangle_mesh
+from fe_mpm.meshes import cell_centroids, rectangle_mesh
 from fe_mpm.plotting import pyplot
 from fe_mpm.walls import plot_wall_forces, write_wall_forces
 
@@ -121,8 +121,7 @@ height_range = [a, a] if a <= 1.0 else [bound(c) for c in HEIGHT_BOUNDS[args.law
 widest = l0 * (1.0 + 1.3 * runout_range[1])
 nx, ny = math.ceil((widest + 4 * h) / h), math.ceil((h0 + 3 * h) / h)
 grid = rectangle_mesh((0.0, 0.0), (nx * h, ny * h), (nx, ny))
-owned = grid.topology.index_map(2).size_local  # each rank seeds the cells it owns
-centroids = grid.geometry.x[grid.geometry.dofmaps[0][:owned]][:, :, :2].mean(axis=1)
+centroids = cell_centroids(grid)  # each rank seeds the cells it owns
 column = np.flatnonzero((centroids[:, 0] < l0) & (centroids[:, 1] < h0))
 points = fe_mpm.seed(grid, args.points_per_cell, density=rho, cells=column)
 if args.law == "dp":

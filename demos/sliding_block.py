@@ -45,7 +45,7 @@ import numpy as np
 
 import fe_mpm
 from fe_mpm import parallel
-from fe_mpm.meshes import rectangle_mesh
+from fe_mpm.meshes import cell_centroids, rectangle_mesh
 from fe_mpm.plotting import pyplot
 from fe_mpm.walls import SLIP_SCALE_FACTOR, plot_wall_forces, write_wall_forces
 
@@ -81,8 +81,7 @@ length = 1.0 + 0.5 * acceleration * args.t_end**2 + 1.0  # room for the slide
 # +
 n = (int(np.ceil(length / args.h)), int(np.ceil(1.0 / args.h)))
 grid = rectangle_mesh((0.0, 0.0), (n[0] * args.h, n[1] * args.h), n)
-owned = grid.topology.index_map(2).size_local  # each rank seeds the cells it owns
-centroids = grid.geometry.x[grid.geometry.dofmaps[0][:owned]][:, :, :2].mean(axis=1)
+centroids = cell_centroids(grid)  # each rank seeds the cells it owns
 block = np.flatnonzero((centroids[:, 0] < 1.0) & (centroids[:, 1] < 0.5))
 points = fe_mpm.seed(grid, per_cell=3, density=7800.0, cells=block)
 on_plane = lambda x: np.isclose(x[1], 0.0)  # noqa: E731

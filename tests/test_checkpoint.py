@@ -17,7 +17,7 @@ from fe_mpm import checkpoint, meshes, scenes
 def falling_block(**options):
     """A Mohr-Coulomb block dropped onto the clamped base: dynamics, plasticity, a marker."""
     mesh = meshes.rectangle_mesh((0, 0), (2, 2), (8, 8))
-    centre = mesh.geometry.x[mesh.geometry.dofmaps[0]][:, :, :2].mean(axis=1)
+    centre = meshes.cell_centroids(mesh)
     block = (abs(centre[:, 0] - 1) < 0.5) & (centre[:, 1] > 0.25) & (centre[:, 1] < 1.0)
     points = fe_mpm.seed(mesh, per_cell=3, cells=np.flatnonzero(block))
     law = fe_mpm.MohrCoulomb(E=options.pop("E", 1e6), nu=0.3, cohesion=2e3, friction_angle=30.0)

@@ -11,14 +11,14 @@ import pytest
 
 import fe_mpm
 from fe_mpm import meshes, scenes
-from fe_mpm.meshes import rectangle_mesh
+from fe_mpm.meshes import cell_centroids, rectangle_mesh
 
 G = 9.81
 
 
 def sliding_block(dt, T=0.5, theta=np.radians(30)):
     mesh = rectangle_mesh((0, 0), (4, 1), (40, 10))
-    centroids = mesh.geometry.x[mesh.geometry.dofmaps[0]][:, :, :2].mean(axis=1)
+    centroids = cell_centroids(mesh)
     block = np.flatnonzero((centroids[:, 0] < 1.0) & (centroids[:, 1] < 0.5))
     points = fe_mpm.seed(mesh, per_cell=3, density=7800.0, cells=block)
     slip = fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0), component=1)  # normal only
@@ -82,7 +82,7 @@ def test_free_flight_through_several_cells_in_one_step():
     """No forces, v0 = 2.5 cells per step: Newmark gives Δu = v0 Δt exactly, and the
     tracker must find every point 2.5 cells further on."""
     mesh = rectangle_mesh((0, 0), (4, 1), (40, 10))
-    centroids = mesh.geometry.x[mesh.geometry.dofmaps[0]][:, :, :2].mean(axis=1)
+    centroids = cell_centroids(mesh)
     x, y = centroids.T
     cells = np.flatnonzero((x < 0.6) & (y > 0.2) & (y < 0.8))
     points = fe_mpm.seed(mesh, per_cell=3, cells=cells)
@@ -100,7 +100,7 @@ def test_a_block_of_a_law_with_history_falls_freely():
     integrates a constant acceleration exactly, so a = g, v = g t and x − x0 = ½ g t²;
     the history keeps its shapes and its virgin values."""
     mesh = rectangle_mesh((0, 0), (1, 2), (10, 20))
-    centroids = mesh.geometry.x[mesh.geometry.dofmaps[0]][:, :, :2].mean(axis=1)
+    centroids = cell_centroids(mesh)
     cells = np.flatnonzero(
         (centroids[:, 1] > 1.2)
         & (centroids[:, 1] < 1.8)
@@ -296,7 +296,7 @@ def test_damped_free_flight_follows_the_time_rule_exactly(mass, bossak_alpha):
     the trapezoidal rule (v_{n+1} = v_n (1 − αΔt/2)/(1 + αΔt/2)) or of Bossak's, with
     a consistent start a0 = −α v0, to round-off."""
     mesh = rectangle_mesh((0, 0), (4, 1), (40, 10))
-    centroids = mesh.geometry.x[mesh.geometry.dofmaps[0]][:, :, :2].mean(axis=1)
+    centroids = cell_centroids(mesh)
     x, y = centroids.T
     points = fe_mpm.seed(mesh, per_cell=3, cells=np.flatnonzero((x < 0.6) & (y > 0.2) & (y < 0.8)))
     v0, alpha, dt, n = np.array([2.0, 0.1]), 1.5, 0.05, 20
@@ -340,7 +340,7 @@ def bed_force_history(bossak_alpha: float, steps: int = 60, dt: float = 0.01) ->
     gravity, over the block's weight, after each step. The block's first mode has a
     period of about 1.5 Δt, which the step cannot resolve."""
     mesh = rectangle_mesh((0, 0), (2, 1), (40, 20))
-    centroids = mesh.geometry.x[mesh.geometry.dofmaps[0]][:, :, :2].mean(axis=1)
+    centroids = cell_centroids(mesh)
     block = np.flatnonzero((centroids[:, 0] < 1.0) & (centroids[:, 1] < 0.5))
     points = fe_mpm.seed(mesh, per_cell=3, density=2200.0, cells=block)
     sim = fe_mpm.Simulation(
@@ -444,7 +444,7 @@ def test_self_weight_column_converges_to_the_closed_forms():
 
 def _stretched_block(max_it, n_steps):
     mesh = rectangle_mesh((0.0, 0.0), (2.0, 1.0), (8, 4))
-    centroids = mesh.geometry.x[mesh.geometry.dofmaps[0]][:, :, :2].mean(axis=1)
+    centroids = cell_centroids(mesh)
     points = fe_mpm.seed(mesh, cells=np.flatnonzero(centroids[:, 0] < 1.0))
     sim = fe_mpm.Simulation(
         mesh,

@@ -8,12 +8,12 @@ import numpy as np
 
 import fe_mpm
 from fe_mpm.errors import ConvergenceError
-from fe_mpm.meshes import rectangle_mesh
+from fe_mpm.meshes import cell_centroids, rectangle_mesh
 
 
 def _block_sim(**options):
     mesh = rectangle_mesh((0, 0), (3, 3), (30, 30))
-    c = mesh.geometry.x[mesh.geometry.dofmaps[0]][:, :, :2].mean(axis=1)
+    c = cell_centroids(mesh)
     block = np.flatnonzero((c[:, 0] > 0.2) & (c[:, 0] < 0.8) & (c[:, 1] > 0.2) & (c[:, 1] < 0.8))
     points = fe_mpm.seed(mesh, per_cell=3, cells=block)
     return fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1e4, 0.3), **options)

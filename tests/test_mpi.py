@@ -103,8 +103,7 @@ def ghost_facets(sim):
 def ghost_block(steps):
     # A 3D block falling onto a rigid floor in a box of tetrahedra, the ghost penalty on.
     mesh = meshes.rectangle_mesh((0, 0, 0), (1, 1, 1), (6, 6, 6))
-    owned = mesh.topology.index_map(3).size_local
-    centre = mesh.geometry.x[mesh.geometry.dofmaps[0][:owned]].mean(axis=1)
+    centre = meshes.cell_centroids(mesh)
     block = (centre[:, 2] > 0.3) & (centre[:, 2] < 0.7) & (centre[:, 0] < 0.7)
     points = fe_mpm.seed(mesh, per_cell=4, density=1000.0, cells=np.flatnonzero(block))
     floor = fe_mpm.RigidWall("floor", lambda x: np.isclose(x[2], 0.0))
@@ -125,8 +124,7 @@ def ghost_block(steps):
 def corner_block(steps, **options):
     # A Mohr-Coulomb block in the left corner of a long grid, its base held by a facet tag.
     mesh = meshes.rectangle_mesh((0, 0), (4, 1), (32, 8))
-    owned = mesh.topology.index_map(2).size_local
-    centre = mesh.geometry.x[mesh.geometry.dofmaps[0][:owned]][:, :, :2].mean(axis=1)
+    centre = meshes.cell_centroids(mesh)
     points = fe_mpm.seed(mesh, per_cell=3, density=2000.0,
                          cells=np.flatnonzero((centre[:, 0] < 1) & (centre[:, 1] < 0.75)))
     seeded = len(points)
@@ -152,8 +150,7 @@ def corner_block(steps, **options):
 def falling_block(mass, steps, restore=None, supported=True, **options):
     # A Mohr-Coulomb block dropped onto the grid's clamped base (dynamic, gravity).
     mesh = meshes.rectangle_mesh((0, 0), (2, 2), (8, 8))
-    owned = mesh.topology.index_map(2).size_local
-    centre = mesh.geometry.x[mesh.geometry.dofmaps[0][:owned]][:, :, :2].mean(axis=1)
+    centre = meshes.cell_centroids(mesh)
     block = (abs(centre[:, 0] - 1) < 0.5) & (centre[:, 1] > 0.25) & (centre[:, 1] < 1.0)
     points = fe_mpm.seed(mesh, per_cell=3, cells=np.flatnonzero(block))
     seeded = len(points)
@@ -180,8 +177,7 @@ def falling_block(mass, steps, restore=None, supported=True, **options):
 def wall_block(steps, repartition=False):
     # An elastic block sliding on a frictional rigid wall down a 30-degree slope.
     mesh = meshes.rectangle_mesh((0, 0), (3, 1), (30, 10))
-    owned = mesh.topology.index_map(2).size_local
-    centre = mesh.geometry.x[mesh.geometry.dofmaps[0][:owned]][:, :, :2].mean(axis=1)
+    centre = meshes.cell_centroids(mesh)
     block = (abs(centre[:, 0] - 1.5) < 0.5) & (centre[:, 1] < 0.5)  # across the ranks
     points = fe_mpm.seed(mesh, per_cell=3, density=7800.0, cells=np.flatnonzero(block))
     wall = fe_mpm.RigidWall("base", lambda x: np.isclose(x[1], 0.0), friction=0.1)

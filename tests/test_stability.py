@@ -12,7 +12,7 @@ from newton_rates import accelerating, quadratic
 
 import fe_mpm
 from fe_mpm import scenes
-from fe_mpm.meshes import rectangle_mesh
+from fe_mpm.meshes import cell_centroids, rectangle_mesh
 from fe_mpm.particles import MaterialPoints
 
 
@@ -120,7 +120,7 @@ def test_rigid_translation_across_cells_keeps_zero_stress(per_cell):
     cell, 1.4e-15 with three; the grid-crossing noise of explicit single-point MPM does
     not arise in this implicit scheme without stress."""
     mesh = rectangle_mesh((0, 0), (3, 3), (30, 30))
-    c = mesh.geometry.x[mesh.geometry.dofmaps[0]][:, :, :2].mean(axis=1)
+    c = cell_centroids(mesh)
     block = np.flatnonzero((c[:, 0] > 0.2) & (c[:, 0] < 0.8) & (c[:, 1] > 0.2) & (c[:, 1] < 0.8))
     points = fe_mpm.seed(mesh, per_cell=per_cell, cells=block)
     velocity = np.array([0.37, 0.23])
@@ -144,7 +144,7 @@ def pathological_column(formulation, nu):
     beside a cell of 1, a row of nearly empty cells (one point of 1/2000 of a cell)
     on the free surface, and a point exactly on a grid vertex."""
     mesh = rectangle_mesh((0, 0), (1, 1), (10, 10))
-    c = mesh.geometry.x[mesh.geometry.dofmaps[0]][:, :, :2].mean(axis=1)
+    c = cell_centroids(mesh)
     counts = np.where(c[:, 1] < DEPTH, 3, 0)
     crowded = np.argmin(np.linalg.norm(c - (0.43, 0.27), axis=1))
     distance = np.linalg.norm(c - c[crowded], axis=1)

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import fe_mpm
-from fe_mpm.meshes import rectangle_mesh
+from fe_mpm.meshes import cell_centroids, rectangle_mesh
 from fe_mpm.verification import rates, taylor_remainders
 from fe_mpm.walls import PENALTY_FACTOR, SLIP_SCALE_FACTOR
 
@@ -25,7 +25,7 @@ on_base = lambda x: np.isclose(x[1], 0.0)  # noqa: E731
 def _block(theta_deg: float, friction: float, dynamic: bool = True, **options):
     """A 1 m x 0.5 m block on the base wall of a 3 m x 1 m grid, gravity tilted by θ."""
     grid = rectangle_mesh((0.0, 0.0), (3.0, 1.0), (30, 10))
-    centroids = grid.geometry.x[grid.geometry.dofmaps[0]][:, :, :2].mean(axis=1)
+    centroids = cell_centroids(grid)
     cells = np.flatnonzero((centroids[:, 0] < 1.0) & (centroids[:, 1] < 0.5))
     points = fe_mpm.seed(grid, per_cell=3, density=RHO, cells=cells)
     theta = math.radians(theta_deg)
@@ -234,7 +234,7 @@ def test_an_elastic_bar_hitting_a_wall_feels_rho_c_v_and_rebounds():
     L, H, rho, E, v0, dt = 1.0, 0.1, 1000.0, 1e7, 0.1, 2e-4
     c = math.sqrt(E / rho)
     grid = rectangle_mesh((0.0, 0.0), (1.5, H), (60, 4))
-    centroids = grid.geometry.x[grid.geometry.dofmaps[0]][:, :, :2].mean(axis=1)
+    centroids = cell_centroids(grid)
     points = fe_mpm.seed(grid, per_cell=3, density=rho, cells=np.flatnonzero(centroids[:, 0] < L))
     points.velocity[:, 0] = -v0
     wall = fe_mpm.RigidWall("wall", lambda x: np.isclose(x[0], 0.0))
@@ -268,7 +268,7 @@ def test_a_block_slides_on_a_frictional_floor_in_3d():
     symmetric), bounded by 1e-4 of the slide."""
     theta, mu = math.radians(30.0), 0.1
     grid = rectangle_mesh((0.0, 0.0, 0.0), (2.0, 0.6, 0.6), (10, 3, 3))
-    centroids = grid.geometry.x[grid.geometry.dofmaps[0]].mean(axis=1)
+    centroids = cell_centroids(grid)
     cells = np.flatnonzero((centroids[:, 0] < 0.8) & (centroids[:, 2] < 0.2))
     points = fe_mpm.seed(grid, per_cell=4, density=RHO, cells=cells)
     floor = fe_mpm.RigidWall("floor", lambda x: np.isclose(x[2], 0.0), friction=mu)

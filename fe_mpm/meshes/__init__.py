@@ -4,6 +4,7 @@ Each builder returns :class:`dolfinx.io.gmsh.MeshData` with ``.mesh``,
 ``.cell_tags`` and ``.facet_tags`` (the gmsh physical groups).
 """
 
+from fe_mpm.meshes.centroids import cell_centroids
 from fe_mpm.meshes.collapse import (
     COLLAPSE_BASE,
     COLLAPSE_CHANNEL,
@@ -59,6 +60,7 @@ __all__ = [
     "COLLAPSE_COLUMN",
     "COLLAPSE_WALL",
     "granular_column",
+    "cell_centroids",
     "cylinder",
     "disk",
     "facet_points",
