@@ -112,7 +112,7 @@ class NewtonSolver:
         self._scratch = fem_petsc.create_vector(u.function_space)
         self._diagonal = fem_petsc.create_vector(u.function_space)
         self._best = fem_petsc.create_vector(u.function_space)  # see resume_from_best
-        self._best_norm = np.inf
+        self._best_norm = -np.inf  # ‖R‖ of the kept iterate; −inf: none kept
         self.timings = timings if timings is not None else {}
         self.snes = PETSc.SNES().create(self.A.comm)  # the mesh's: COMM_SELF runs per rank
         # SNES keeps its callbacks alive, and a bound method keeps this solver
@@ -181,7 +181,7 @@ class NewtonSolver:
 
     def _monitor(self, snes, iteration: int, norm: float) -> None:
         self.norms.append(norm)
-        if norm < self._best_norm:  # the iterate a retry may resume from
+        if norm < self._best_norm:  # the iterate a retry may resume from (keep_best)
             self._best_norm = norm
             snes.getSolution().copy(self._best)
 
@@ -190,7 +190,12 @@ class NewtonSolver:
 
         A retry of the same step (the same equations) with another line search then
         begins where the failed solve came closest, not from the step's start.
+
+        Raises:
+            RuntimeError: The last solve kept no iterate (``keep_best=False``).
         """
+        if not np.isfinite(self._best_norm):
+            raise RuntimeError("resume_from_best: the last solve kept no iterate (keep_best)")
         dolfinx.fem.petsc.assign(self._best, self.u)
 
     def _set_up_iterative(self, V: dolfinx.fem.FunctionSpace, split) -> None:
@@ -342,6 +347,7 @@ class NewtonSolver:
         loads: BoundForm | None = None,
         pressure_volume: float = 0.0,
         ghost=None,
+        keep_best: bool = False,
     ) -> NewtonResult:
         """Solve from the current value of ``u``; on return ``u`` holds the last iterate.
 
@@ -352,7 +358,8 @@ class NewtonSolver:
         force form f_ext and ``pressure_volume`` the norm of the pressure nodes'
         volumes ‖V‖ (m³; m² in 2D), both for :class:`ForceTest`. ``ghost`` (a
         :class:`~fe_mpm.ghost.GhostStabilisation`, assembled for the step) adds its
-        penalty to the residual and the tangent.
+        penalty to the residual and the tangent. ``keep_best`` keeps a copy of the
+        iterate of smallest ‖R‖ for :meth:`resume_from_best`.
 
         With ``pc_type redistribute`` every solve gets a fresh linear solver: the
         constrained dofs it removes change from step to step, but the matrix
@@ -364,7 +371,8 @@ class NewtonSolver:
         if self._options.get("pc_type") == "redistribute":
             self._fresh_ksp()
         self.norms = []
-        self._best_norm = np.inf
+        # A copy of every new best iterate, only when a retry may resume from it.
+        self._best_norm = np.inf if keep_best else -np.inf
         with self._loads.localForm() as local:
             local.set(0.0)
         if loads is not None:

@@ -636,7 +636,9 @@ class Simulation:
                 self._newton.resume_from_best()
             else:
                 self._initial_guess()
-            return self._newton.solve(R, J, bcs, **hooks, line_search=search)
+            return self._newton.solve(
+                R, J, bcs, **hooks, line_search=search, keep_best=self.ladder.resume
+            )
 
         return self.ladder.solve(attempt, self._newton.line_search)
 
