@@ -32,6 +32,7 @@ def migrate(
     tracker: Tracker,
     cells: np.ndarray,
     carried: np.ndarray | None = None,
+    ties: np.ndarray | None = None,
 ) -> tuple[np.ndarray, int, np.ndarray | None]:
     """Send the points this rank did not find (``cells < 0``) to the ranks that own them.
 
@@ -44,6 +45,10 @@ def migrate(
         tracker: This rank's point locator (it finds the received points' cells).
         cells: Each point's cell on this rank, or −1 (n,).
         carried: Rows of more per-point data that travel with the points (n, k).
+        ties: The points found here whose first nudged position is not
+            (:meth:`~fe_mpm.tracker.Tracker.locate_with_ties`): each goes to the lowest
+            rank whose cell holds the first of its nudged positions that any rank's
+            cell holds, and stays where none does.
 
     Returns:
         The cells of this rank's points after the exchange (−1: in no rank's cell),
@@ -52,16 +57,56 @@ def migrate(
     """
     comm = tracker.mesh.comm
     lost = np.flatnonzero(cells < 0)
-    if comm.size == 1 or not parallel.any_rank(comm, lost.size > 0):
+    ties = np.empty(0, dtype=np.int64) if ties is None else np.asarray(ties)
+    if comm.size == 1:
         return cells, 0, carried
-    g = points.gdim
-    x3 = np.zeros((lost.size, 3))
-    x3[:, :g] = points.x[lost]
-    padding = PADDING * parallel.largest(comm, float(tracker.sizes.max()))
-    owner = dolfinx.geometry.determine_point_ownership(tracker.mesh, x3, padding).src_owner
-    # A point owned here after all (on a facet the walk missed) is not sent.
-    leaving = (owner >= 0) & (owner != comm.rank)
-    return send(points, markers, tracker, cells, lost[leaving], owner[leaving], carried)
+    moved = 0
+    if parallel.any_rank(comm, lost.size > 0):
+        g = points.gdim
+        x3 = np.zeros((lost.size, 3))
+        x3[:, :g] = points.x[lost]
+        padding = PADDING * parallel.largest(comm, float(tracker.sizes.max(initial=0.0)))
+        owner = dolfinx.geometry.determine_point_ownership(tracker.mesh, x3, padding).src_owner
+        # A point owned here after all (on a facet the walk missed) is not sent.
+        leaving = (owner >= 0) & (owner != comm.rank)
+        sent = lost[leaving]
+        kept = len(points) - sent.size
+        cells, moved, carried = send(points, markers, tracker, cells, sent, owner[leaving], carried)
+        # The points kept are renumbered (a tie is never sent: it has a cell here), and
+        # those received took a cell of this rank, which may be a tie too.
+        received = np.arange(kept, len(points))
+        _, received_ties = tracker.locate_with_ties(points.x[received], cells[received])
+        ties = np.concatenate([ties - np.searchsorted(sent, ties), received[received_ties]])
+    if parallel.any_rank(comm, ties.size > 0):
+        taker = _holders(tracker, points.x[ties])
+        leaving = (taker >= 0) & (taker != comm.rank)
+        cells, more, carried = send(
+            points, markers, tracker, cells, ties[leaving], taker[leaving], carried
+        )
+        moved += more
+    return cells, moved, carried
+
+
+def _holders(tracker: Tracker, x: np.ndarray) -> np.ndarray:
+    """For each of this rank's points ``x`` (n, g) on a facet, the rank its tie gives it to.
+
+    The first of :attr:`~fe_mpm.tracker.Tracker.nudges` that moves the point into some
+    rank's cell decides, and the lowest rank whose cell holds the point so moved takes
+    it: what one rank's :meth:`~fe_mpm.tracker.Tracker.locate` gives. −1 where no nudge
+    moves it into a cell. Collective; every rank's points go to every rank (they are the
+    few that lie on a facet between ranks or on the grid's edge).
+    """
+    comm = tracker.mesh.comm
+    counts = comm.allgather(x.shape[0])
+    everyone = np.concatenate(comm.allgather(x)).reshape(-1, x.shape[1])
+    nudged = everyone[:, None, :] + tracker.nudges[None, :, :]  # (N, k, g)
+    here = tracker.holding(nudged.reshape(-1, x.shape[1]), tol=0.0).reshape(nudged.shape[:2]) >= 0
+    lowest = parallel.smallest(comm, np.where(here, comm.rank, comm.size).astype(np.int64))
+    held = lowest < comm.size
+    first = np.argmax(held, axis=1)  # the first nudge some rank holds
+    taker = np.where(held.any(axis=1), lowest[np.arange(len(everyone)), first], -1)
+    start = int(np.sum(counts[: comm.rank]))
+    return taker[start : start + x.shape[0]]
 
 
 def send(

@@ -6,10 +6,22 @@ point in the cell it was in before and walks across the facet with the most
 negative barycentric coordinate until all coordinates are non-negative. Points
 the walk does not settle (it left the grid, or took too many steps) go to a
 bounding-box tree search. Everything is numpy over all points at once.
+
+A point on a facet, an edge or a vertex lies in every cell that touches it, and which
+one a walk or a search ends in depends on where it started and on how the cells are
+numbered, which differs between a serial run and one on several ranks. So a point
+within :data:`TIE` of a facet of its cell takes the cell that holds it moved by a
+tiny fixed vector (:data:`NUDGE` of the smallest cell's size along
+:data:`DIRECTION`, a direction along no facet of a structured grid): the same cell
+whatever the partition. Where that moved point leaves the grid (a point on the
+grid's edge), the directions with the signs of their components flipped are tried
+in a fixed order (:attr:`Tracker.nudges`), and where every one leaves it, the
+point keeps a cell that holds it.
 """
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -22,6 +34,14 @@ from fe_mpm._dolfinx import dolfinx
 BARY_TOL = 1e-12
 #: How far outside a cell (in barycentric units) a point on its facet may lie.
 ON_FACET = 1e-6
+#: A point whose smallest barycentric coordinate in its cell is below this may lie
+#: on a facet, and takes the cell of its nudged position (module docstring).
+TIE = 1e-8
+#: Length of the nudge that breaks ties, as a fraction of the grid's smallest cell
+#: size (longest edge): far below TIE, so only a point on a facet changes cell.
+NUDGE = 1e-9
+#: Direction of the nudge (unit vector; its first g components, normalised, in 2D).
+DIRECTION = np.array([1.0, np.sqrt(2.0) - 1.0, (np.sqrt(5.0) - 2.0)])
 
 
 class Tracker:
@@ -60,6 +80,13 @@ class Tracker:
         self._vertex_neighbours = None  # built on first need
         #: Vertices of every cell, shape (nc, t+1, g) in m.
         self.cell_vertices = nodes
+        # The same nudge on every rank: the smallest cell of the whole grid.
+        smallest = parallel.smallest(mesh.comm, float(self.sizes.min(initial=np.inf)))
+        direction = DIRECTION[:gdim] / np.linalg.norm(DIRECTION[:gdim])
+        signs = 1.0 - 2.0 * np.array(list(itertools.product((0, 1), repeat=gdim)))
+        #: The vectors (2^g, g) in m that break a tie between the cells touching a
+        #: point, in the order they are tried: the first along DIRECTION.
+        self.nudges = NUDGE * smallest * signs * direction
 
     def barycentric(self, x: np.ndarray, cells: np.ndarray) -> np.ndarray:
         """Barycentric coordinates of points ``x`` (n, g) in ``cells`` (n,), shape (n, t+1).
@@ -80,6 +107,20 @@ class Tracker:
                 seeded in a mesh of their own (a disk, a rod) arrive with cells of that
                 mesh, which may number more than this grid's.
         """
+        return self.locate_with_ties(x, guess)[0]
+
+    def locate_with_ties(
+        self, x: np.ndarray, guess: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`locate`, and the points whose first nudge leaves this rank's cells.
+
+        Returns:
+            The cells (n,), −1 outside this rank's cells, and the indices of the
+            points found here whose position nudged along the first of
+            :attr:`nudges` is not: on the grid's edge, or on a facet this rank
+            shares with another, whose cell may hold it
+            (:func:`fe_mpm.migration.migrate` asks every rank).
+        """
         n = x.shape[0]
         cells = np.full(n, -1, dtype=np.int32)
         if guess is None:
@@ -93,7 +134,22 @@ class Tracker:
             todo = np.concatenate([np.flatnonzero(~usable), lost])
         if todo.size:
             cells[todo] = self._tree_search(x[todo])
-        return cells
+        found = np.flatnonzero(cells >= 0)
+        pending = found[self.barycentric(x[found], cells[found]).min(axis=1) < TIE]
+        ties = None
+        for nudge in self.nudges:
+            if pending.size == 0:
+                break
+            nudged = x[pending] + nudge
+            moved = cells[pending]
+            lost = self._walk(nudged, moved, np.arange(pending.size), tol=0.0)
+            if lost.size:
+                moved[lost] = self.holding(nudged[lost], tol=0.0)
+            cells[pending[moved >= 0]] = moved[moved >= 0]
+            pending = pending[moved < 0]
+            if ties is None:
+                ties = pending
+        return cells, np.empty(0, dtype=np.int64) if ties is None else ties
 
     def snap_to(
         self,
@@ -169,16 +225,19 @@ class Tracker:
             none) takes it; ``found``: whether some rank's cell holds the point (n,).
         """
         comm = self.mesh.comm
-        cells = self.locate(x)
+        cells, ties = self.locate_with_ties(x)
         if comm.size == 1:
             return self.snap_to(x, cells, allowed, tol), cells >= 0
         n, rank = x.shape[0], comm.rank
         here = cells >= 0
         inside = here & allowed[np.maximum(cells, 0)]
         # The lowest rank whose cell holds the point is its host; one holding it in an
-        # allowed cell takes it outright.
-        host = _lowest_rank(comm, here)
-        taker = _lowest_rank(comm, inside)
+        # allowed cell takes it outright. A point on a facet between ranks goes to the
+        # rank that holds its nudged position, as on one rank.
+        settled = here.copy()
+        settled[ties] = False
+        host = _lowest_rank_of(comm, settled, here)
+        taker = _lowest_rank_of(comm, settled & inside, inside)
         found, taken = host < comm.size, taker < comm.size
         out = np.where(taker == rank, cells, -1).astype(np.int32)
         # The host's cell's nodes, by global index, for every rank to find its cells there.
@@ -249,15 +308,20 @@ class Tracker:
             self._node_cells = (order // self._nodes_of.shape[1], starts)
         return self._node_cells
 
-    def _walk(self, x: np.ndarray, cells: np.ndarray, active: np.ndarray) -> np.ndarray:
-        """Walk the points ``active`` from ``cells`` in place; return those not settled."""
+    def _walk(
+        self, x: np.ndarray, cells: np.ndarray, active: np.ndarray, tol: float = BARY_TOL
+    ) -> np.ndarray:
+        """Walk the points ``active`` from ``cells`` in place; return those not settled.
+
+        A point counts as inside a cell down to barycentric coordinates of ``-tol``.
+        """
         lost = []
         for _ in range(self.max_walk):
             if active.size == 0:
                 break
             lam = self.barycentric(x[active], cells[active])
             worst = np.argmin(lam, axis=1)
-            outside = lam[np.arange(active.size), worst] < -BARY_TOL
+            outside = lam[np.arange(active.size), worst] < -tol
             active, worst = active[outside], worst[outside]
             nxt = self.neighbours[cells[active], worst]
             # Across a boundary facet the point may still be inside a concave
@@ -269,6 +333,18 @@ class Tracker:
         lost = np.concatenate(lost)
         cells[lost] = -1
         return lost
+
+    def holding(self, x: np.ndarray, tol: float = BARY_TOL) -> np.ndarray:
+        """The cell of this rank that holds each point of ``x`` (n, g) as it is, or −1.
+
+        No tie is broken: a point on a facet gets either cell. Confirmed with
+        barycentric coordinates (down to ``-tol``), not only by the bounding-box search.
+        """
+        cells = self._tree_search(x)
+        found = np.flatnonzero(cells >= 0)
+        inside = self.barycentric(x[found], cells[found]).min(axis=1) >= -tol
+        cells[found[~inside]] = -1
+        return cells
 
     def _tree_search(self, x: np.ndarray) -> np.ndarray:
         if self._tree is None:
@@ -290,6 +366,12 @@ class Tracker:
 def _lowest_rank(comm, flag: np.ndarray) -> np.ndarray:
     """Per point, the lowest rank where ``flag`` is set; ``comm.size`` where none (n,)."""
     return parallel.smallest(comm, np.where(flag, comm.rank, comm.size).astype(np.int64))
+
+
+def _lowest_rank_of(comm, first: np.ndarray, then: np.ndarray) -> np.ndarray:
+    """Per point, the lowest rank where ``first`` is set, else where ``then`` is (n,)."""
+    lowest = _lowest_rank(comm, first)
+    return np.where(lowest < comm.size, lowest, _lowest_rank(comm, then))
 
 
 def _facet_neighbours(nodes_of: np.ndarray) -> np.ndarray:

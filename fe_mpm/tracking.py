@@ -81,13 +81,16 @@ class PointTracking:
                 (:meth:`remember`) if it lies within :data:`HOLD_REACH` of it.
         """
         comm = self.tracker.mesh.comm
-        cells = self.tracker.locate(points.x, points.cell)
+        cells, ties = self.tracker.locate_with_ties(points.x, points.cell)
         self.held_points, self.migrated = 0, 0
         # On one rank a retry holds the points only if every point is in the grid.
         if hold and self._home is not None and (comm.size > 1 or np.all(cells >= 0)):
             cells = self._hold(points, markers, cells)
+            ties = None  # a held point stays in its cell, and the points were renumbered
         # The others in another rank's cells go there.
-        cells, migrated, self._home = migrate(points, markers, self.tracker, cells, self._home)
+        cells, migrated, self._home = migrate(
+            points, markers, self.tracker, cells, self._home, ties
+        )
         self.migrated += migrated
         outside = np.flatnonzero(cells < 0)
         where = f"step {step} (t = {t:g})" if step else "set-up"

@@ -174,6 +174,36 @@ def falling_block(mass, steps, restore=None, supported=True, **options):
         "remaining": int(parallel.total(MPI.COMM_WORLD, len(points))),
     }
 
+def facet_block(steps):
+    # A block whose points all lie on facets: every edge's midpoint and the diagonals'.
+    h, xs = 0.25, []
+    for i in range(1, 7):
+        xs += [((i + 0.5) * h, j * h) for j in range(7)]  # horizontal facets
+        xs += [((i + 0.5) * h, (j + 0.5) * h) for j in range(6)]  # diagonal facets
+    xs += [(i * h, (j + 0.5) * h) for i in range(1, 8) for j in range(6)]  # vertical
+    mesh = meshes.rectangle_mesh((0, 0), (2, 2), (8, 8))
+    x = np.array(xs) if rank == 0 else np.zeros((0, 2))  # migration spreads them
+    volume = np.full(len(x), 1.0 / len(xs))
+    points = fe_mpm.MaterialPoints(x, volume, 2000.0 * volume)
+    sim = fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1e6, 0.3, 2000.0),
+                            body_force=(0, -9.81),
+                            dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))])
+    # Each point and the centroid of the cell its tie gave it, from every rank, sorted.
+    pairs = np.c_[points.x, meshes.cell_centroids(mesh)[points.cell]]
+    pairs = np.concatenate(MPI.COMM_WORLD.allgather(pairs))
+    pairs = pairs[np.lexsort(pairs.T[::-1])]
+    reports = sim.run(1.0, steps, progress=False)
+    total = lambda a: float(parallel.total(MPI.COMM_WORLD, float(np.sum(a))))
+    return {
+        "iterations": [r.newton_iterations for r in reports],
+        "cells": pairs.tolist(),
+        "local points": len(points),
+        "height": total(points.x[:, 1] * points.mass),
+        "spread": total(points.x[:, 0] ** 2 * points.mass),
+        "stress": total(points.stress[:, 1, 1] * points.volume),
+        "shear": total(points.stress[:, 0, 1] ** 2 * points.volume),
+    }
+
 def wall_block(steps, repartition=False):
     # An elastic block sliding on a frictional rigid wall down a 30-degree slope.
     mesh = meshes.rectangle_mesh((0, 0), (3, 1), (30, 10))
@@ -221,6 +251,8 @@ try:
                       restore=folder / "cook_ck" / "step_000006")
     elif case == "corner":
         result = {"balanced": corner_block(4, rebalance_above=1.25), "as cut": corner_block(1)}
+    elif case == "on facets":
+        result = facet_block(2)
     elif case == "wall":
         result = {"plain": wall_block(12), "repartitioned": wall_block(12, repartition=True)}
     elif case == "falling":
@@ -393,6 +425,27 @@ def _check_held(got: dict, want: dict, case: str) -> None:
     assert got["iterations"] == want["iterations"], case
     for a, b in zip(got["tip"], want["tip"], strict=True):
         assert a == pytest.approx(b, rel=1e-10, abs=1e-12), case
+
+
+def test_points_on_facets_take_the_serial_cells_on_every_rank_count(tmp_path):
+    """A block whose 120 points all lie on facets of the grid (every edge's midpoint and the
+    diagonals'), under its own weight on a clamped base, seeded on rank 0 and spread by
+    migration: each point lies in two cells, and the tie (Tracker.nudges) must give it the
+    serial one on 2 and 3 ranks, where the facet may lie between two ranks. Before the tie
+    the cell depended on where the search started (Mast's Taylor bar: 6e-4 apart in the
+    wall's impulse after one step). The same cells, Newton iterations, and sums over the
+    points as serial to 1e-10 (round-off of the summation order)."""
+    (serial,) = _run(tmp_path, "on facets", 1)
+    assert len(serial["cells"]) == 120
+    for ranks in (2, 3):
+        results = _run(tmp_path, "on facets", ranks)
+        assert sum(r["local points"] for r in results) == 120
+        assert min(r["local points"] for r in results) > 0  # it would test nothing otherwise
+        for got in results:
+            assert got["cells"] == serial["cells"], ranks
+            assert got["iterations"] == serial["iterations"], ranks
+            for key in ("height", "spread", "stress", "shear"):
+                assert got[key] == pytest.approx(serial[key], rel=1e-10), (ranks, key)
 
 
 def test_a_block_sliding_on_a_frictional_wall_gives_the_serial_answer_on_two_ranks(tmp_path):

@@ -248,3 +248,31 @@ def test_snap_to_agrees_with_a_search_by_hand_over_a_whole_grid(first_two):
         assert sum(len(right) > 1 for right in expected) < 5  # ties are rare
     # the points were spread over every node's cells, the highest-numbered one included
     assert np.isin(nodes.max(), nodes[~allowed])
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_a_point_on_a_facet_or_vertex_takes_one_cell_wherever_the_search_starts(dim):
+    """A point on a facet, an edge or a vertex lies in every cell that touches it; which one a
+    walk ends in depended on where it started, and so differed between 1 and 2 ranks
+    (docs/limitations.md). Every vertex of the grid and the midpoint of every facet, searched
+    from each cell that touches it and by the tree search alone: one cell, the one that holds
+    the point nudged by the first of Tracker.nudges that keeps it in the grid (strictly, with
+    no tolerance); on the grid's corners too, where the first nudge leaves the grid."""
+    mesh = rectangle_mesh(np.zeros(dim), np.ones(dim), (4,) * dim)
+    tracker = Tracker(mesh)
+    vertices = tracker.cell_vertices  # (nc, d + 1, d)
+    nv = dim + 1
+    facets = [np.delete(vertices, i, axis=1).mean(axis=1) for i in range(nv)]
+    x = np.unique(np.round(np.concatenate([vertices.reshape(-1, dim), *facets]), 12), axis=0)
+    lam = np.stack([tracker.barycentric(x, np.full(len(x), c)) for c in range(tracker.num_cells)])
+    touching = lam.min(axis=2) >= -1e-12  # (cells, points)
+    assert np.all(touching.sum(axis=0) >= 1) and np.any(touching.sum(axis=0) >= 2)
+    cells = tracker.locate(x)
+    for c, p in zip(*np.nonzero(touching), strict=True):
+        assert tracker.locate(x[p : p + 1], np.array([c]))[0] == cells[p], (c, x[p])
+    nudged = x[:, None, :] + tracker.nudges[None]  # (n, 2^d, d)
+    in_grid = np.all((nudged > 0.0) & (nudged < 1.0), axis=2)
+    first = nudged[np.arange(len(x)), np.argmax(in_grid, axis=1)]
+    assert np.all(in_grid.any(axis=1))
+    assert np.all(_inside(mesh, first, cells, tol=0.0))
+    assert np.all(_inside(mesh, x, cells))
