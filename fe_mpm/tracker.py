@@ -123,6 +123,7 @@ class Tracker:
         """
         n = x.shape[0]
         cells = np.full(n, -1, dtype=np.int32)
+        smallest = np.full(n, -np.inf)  # each point's smallest coordinate in its cell
         if guess is None:
             todo = np.arange(n)
         else:
@@ -130,12 +131,13 @@ class Tracker:
             usable = (guess >= 0) & (guess < self.num_cells)
             walking = np.flatnonzero(usable)
             cells[walking] = guess[walking]
-            lost = self._walk(x, cells, walking)
+            lost = self._walk(x, cells, walking, smallest=smallest)
             todo = np.concatenate([np.flatnonzero(~usable), lost])
         if todo.size:
-            cells[todo] = self._tree_search(x[todo])
-        found = np.flatnonzero(cells >= 0)
-        pending = found[self.barycentric(x[found], cells[found]).min(axis=1) < TIE]
+            cells[todo] = searched = self._tree_search(x[todo])
+            todo = todo[searched >= 0]
+            smallest[todo] = self.barycentric(x[todo], cells[todo]).min(axis=1)
+        pending = np.flatnonzero((cells >= 0) & (smallest < TIE))
         ties = None
         for nudge in self.nudges:
             if pending.size == 0:
@@ -309,11 +311,17 @@ class Tracker:
         return self._node_cells
 
     def _walk(
-        self, x: np.ndarray, cells: np.ndarray, active: np.ndarray, tol: float = BARY_TOL
+        self,
+        x: np.ndarray,
+        cells: np.ndarray,
+        active: np.ndarray,
+        tol: float = BARY_TOL,
+        smallest: np.ndarray | None = None,
     ) -> np.ndarray:
         """Walk the points ``active`` from ``cells`` in place; return those not settled.
 
         A point counts as inside a cell down to barycentric coordinates of ``-tol``.
+        ``smallest`` (n,), if given, gets each settled point's smallest coordinate.
         """
         lost = []
         for _ in range(self.max_walk):
@@ -321,7 +329,10 @@ class Tracker:
                 break
             lam = self.barycentric(x[active], cells[active])
             worst = np.argmin(lam, axis=1)
-            outside = lam[np.arange(active.size), worst] < -tol
+            least = lam[np.arange(active.size), worst]
+            outside = least < -tol
+            if smallest is not None:
+                smallest[active[~outside]] = least[~outside]
             active, worst = active[outside], worst[outside]
             nxt = self.neighbours[cells[active], worst]
             # Across a boundary facet the point may still be inside a concave
