@@ -124,15 +124,25 @@ class PointDomains:
             at its centroid, 2 with three that integrate quadratics exactly
             (:func:`~fe_mpm.clipping.piece_rule`), so that every P2 cell a domain
             covers sees a full-rank stiffness.
+        volume_average: Whether the pieces take a node-averaged volume change
+            (``u-nbva``): the point then keeps its corners' isochoric deformation and
+            its pieces' mean averaged volume change.
 
     Attributes:
         corners: The domains' vertices (n, d + 1, d) in m.
         active: True while the pieces take a step in the points' place.
     """
 
-    def __init__(self, points: MaterialPoints, tracker: Tracker, degree: int = 1):
+    def __init__(
+        self,
+        points: MaterialPoints,
+        tracker: Tracker,
+        degree: int = 1,
+        volume_average: bool = False,
+    ):
         self.corners = initial_domains(points, tracker.cell_vertices)
         self.degree = degree
+        self.volume_average = volume_average
         self.active = False
         self._pieces: Pieces | None = None  # those of the step being taken
         self._moved = self.corners  # the corners after that step, once it converged
@@ -401,10 +411,17 @@ class PointDomains:
         corners = self._moved
         edges = corners[:, 1:] - corners[:, :1]
         old_edges = self.corners[:, 1:] - self.corners[:, :1]
+        # The affine map of the corners: (new edges) = ΔF (old edges).
+        dF = np.swapaxes(edges, 1, 2) @ np.linalg.inv(np.swapaxes(old_edges, 1, 2))
+        if self.volume_average:
+            # The pieces took the averaged volume change J̄ at their places: the point
+            # keeps the corners' isochoric part and its pieces' mean J̄ (NB-VA).
+            g = dF.shape[1]
+            averaged = mean(np.linalg.det(sub.F)) / np.linalg.det(points.F)
+            dF *= (averaged / np.linalg.det(dF))[:, None, None] ** (1.0 / g)
         new = PointUpdate(
             du=corners.mean(axis=1) - self.corners.mean(axis=1),  # a point is its centroid
-            # The affine map of the corners: (new edges) = ΔF (old edges).
-            dF=np.swapaxes(edges, 1, 2) @ np.linalg.inv(np.swapaxes(old_edges, 1, 2)),
+            dF=dF,
             stress=mean(sub.stress),
             acceleration=None,
             history={name: mean(values) for name, values in sub.history.items()},

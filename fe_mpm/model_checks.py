@@ -124,7 +124,7 @@ def check_domains(
     points_leaving: str,
     spec: FormulationSpec,
 ) -> None:
-    """Point domains: on or off, P2 in 2D only, not with NB-VA, with every point kept.
+    """Point domains: on or off, P2 in 2D only, with every point kept.
 
     Ghost penalty: γ ≥ 0.
     """
@@ -132,12 +132,6 @@ def check_domains(
         check_range("Simulation", "ghost_penalty", ghost_penalty, lo=0.0)
     if not isinstance(point_domains, bool | np.bool_):
         raise TypeError(f"Simulation: point_domains must be True or False, got {point_domains!r}")
-    if point_domains and spec.volume_average:
-        raise NotImplementedError(
-            f"Simulation: point_domains with formulation {spec.name!r}: the volume "
-            "average is not yet defined over the sub-points of the domains; use "
-            "'up' (or 'u') with point domains"
-        )
     if point_domains and points.gdim == 3 and spec.u_degree != 1:
         raise NotImplementedError(
             "Simulation: point_domains on tetrahedra works with P1 displacements "

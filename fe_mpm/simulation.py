@@ -260,7 +260,9 @@ class Simulation:
         self._track()  # once now, so a bad initial layout fails at set-up
         self.domains = None
         if point_domains:
-            self.domains = PointDomains(points, self.tracker, self.spec.u_degree)
+            self.domains = PointDomains(
+                points, self.tracker, self.spec.u_degree, self.spec.volume_average
+            )
         self._ghost_factor = model_checks.ghost_factor(
             ghost_penalty, point_domains, self.spec.u_degree
         )
