@@ -127,6 +127,8 @@ class PointDomains:
         volume_average: Whether the pieces take a node-averaged volume change
             (``u-nbva``): the point then keeps its corners' isochoric deformation and
             its pieces' mean averaged volume change.
+        shared: Whether the pieces share their point's increment
+            (:mod:`fe_mpm.shared_increment`): the point then keeps it.
 
     Attributes:
         corners: The domains' vertices (n, d + 1, d) in m.
@@ -139,10 +141,12 @@ class PointDomains:
         tracker: Tracker,
         degree: int = 1,
         volume_average: bool = False,
+        shared: bool = False,
     ):
         self.corners = initial_domains(points, tracker.cell_vertices)
         self.degree = degree
         self.volume_average = volume_average
+        self.shared = shared
         self.active = False
         self._pieces: Pieces | None = None  # those of the step being taken
         self._moved = self.corners  # the corners after that step, once it converged
@@ -299,6 +303,11 @@ class PointDomains:
         area *= math.factorial(g) * tracker.volumes[cell]  # reference → physical
         return area, rule
 
+    @property
+    def current(self) -> Pieces:
+        """The pieces of the step being taken."""
+        return self._pieces
+
     def sample(self, points: MaterialPoints, tracker: Tracker) -> MaterialPoints:
         """A sub-point for every piece of every domain, with its share of the point's state."""
         self._reset_distorted(points, tracker)
@@ -413,7 +422,9 @@ class PointDomains:
         old_edges = self.corners[:, 1:] - self.corners[:, :1]
         # The affine map of the corners: (new edges) = ΔF (old edges).
         dF = np.swapaxes(edges, 1, 2) @ np.linalg.inv(np.swapaxes(old_edges, 1, 2))
-        if self.volume_average:
+        if self.shared:  # the pieces took the point's own increment
+            dF = mean(sub.F) @ np.linalg.inv(points.F)
+        elif self.volume_average:
             # The pieces took the averaged volume change J̄ at their places: the point
             # keeps the corners' isochoric part and its pieces' mean J̄ (NB-VA).
             g = dF.shape[1]

@@ -119,6 +119,22 @@ class GridFields:
             zero = dolfinx.fem.Constant(mesh, 0.0)
             self._pinnable.append((sub, collapsed, to_parent, zero))
 
+    def displacement_dofs_of(self, cells: np.ndarray) -> np.ndarray:
+        """The entries of Δu in ``w.x.array`` on ``cells`` (k,): (k, nodes, g)."""
+        g = self.W.mesh.geometry.dim
+        return np.stack(
+            [
+                to_parent[collapsed.dofmap.list[cells]]
+                for _, collapsed, to_parent, _ in self._pinnable[:g]
+            ],
+            axis=2,
+        )
+
+    def scalar_dofs_of(self, cells: np.ndarray) -> np.ndarray:
+        """The entries of the scalar field (p or θ) in ``w.x.array`` on ``cells`` (k,)."""
+        _, collapsed, to_parent, _ = self._pinnable[-1]
+        return to_parent[collapsed.dofmap.list[cells]]
+
     def pin_unsupported(self, occupied: np.ndarray) -> list[dolfinx.fem.DirichletBC]:
         """Zero conditions on every dof outside the occupied cells (they have no equation)."""
         bcs = []

@@ -144,6 +144,24 @@ def check_domains(
         )
 
 
+def check_shared_increment(shared: bool, point_domains: bool, spec: FormulationSpec) -> None:
+    """A shared increment: a bool, with point domains, P1 displacements, not NB-VA."""
+    if not isinstance(shared, bool | np.bool_):
+        raise TypeError(f"Simulation: shared_increment must be True or False, got {shared!r}")
+    if not shared:
+        return
+    if not point_domains:
+        raise ValueError(
+            "Simulation: shared_increment=True shares a point's increment among the pieces "
+            "of its domain: it needs point_domains=True"
+        )
+    if spec.u_degree != 1 or spec.volume_average:
+        raise NotImplementedError(
+            f"Simulation: shared_increment with formulation {spec.name!r}: P1 "
+            "displacements without volume averaging only ('u' or 'up')"
+        )
+
+
 def ghost_factor(ghost_penalty: float | None, point_domains: bool, degree: int) -> float:
     """γ of the ghost penalty: as given, else :data:`~fe_mpm.ghost.WITH_DOMAINS` with domains."""
     if ghost_penalty is None:

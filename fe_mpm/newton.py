@@ -158,6 +158,7 @@ class NewtonSolver:
         self._bcs: Sequence = ()
         self._ghost = None
         self._before_residual: Callable[[], None] | None = None
+        self._after_jacobian: Callable[[PETSc.Mat], None] | None = None
         self._before_jacobian: Callable[[], None] | None = None
 
     def _owned_rows(self, split) -> tuple[np.ndarray, np.ndarray]:
@@ -315,6 +316,8 @@ class NewtonSolver:
             self._before_jacobian()
         t0 = time.perf_counter()
         self._J.assemble_matrix(A, self._bcs)
+        if self._after_jacobian is not None:
+            self._after_jacobian(A)
         if self._ghost is not None:
             A.axpy(1.0, self._ghost.constrained, PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
         self.test.round_off = self._round_off(A)
@@ -348,6 +351,7 @@ class NewtonSolver:
         pressure_volume: float = 0.0,
         ghost=None,
         keep_best: bool = False,
+        after_jacobian: Callable[[PETSc.Mat], None] | None = None,
     ) -> NewtonResult:
         """Solve from the current value of ``u``; on return ``u`` holds the last iterate.
 
@@ -359,7 +363,9 @@ class NewtonSolver:
         volumes ‖V‖ (m³; m² in 2D), both for :class:`ForceTest`. ``ghost`` (a
         :class:`~fe_mpm.ghost.GhostStabilisation`, assembled for the step) adds its
         penalty to the residual and the tangent. ``keep_best`` keeps a copy of the
-        iterate of smallest ‖R‖ for :meth:`resume_from_best`.
+        iterate of smallest ‖R‖ for :meth:`resume_from_best`. ``after_jacobian(A)``
+        adds what the forms cannot assemble to each Jacobian (couplings across cells,
+        :mod:`fe_mpm.shared_increment`), the conditions' rows and columns left alone.
 
         With ``pc_type redistribute`` every solve gets a fresh linear solver: the
         constrained dofs it removes change from step to step, but the matrix
@@ -368,6 +374,7 @@ class NewtonSolver:
         self._F, self._J, self._bcs, self._ghost = F, J, bcs, ghost
         self._before_residual = before_residual
         self._before_jacobian = before_jacobian
+        self._after_jacobian = after_jacobian
         if self._options.get("pc_type") == "redistribute":
             self._fresh_ksp()
         self.norms = []

@@ -44,6 +44,7 @@ from fe_mpm.point_update import apply_update, checked_update
 from fe_mpm.quadrature import SlotLayout
 from fe_mpm.report import ProgressBar, StepReport, imbalance, newton_failure
 from fe_mpm.retry import RetryLadder, StepLength
+from fe_mpm.shared_increment import SharedIncrement
 from fe_mpm.step_forms import (
     FormsBySlotCount,
     ReturnMapAtIterate,
@@ -144,6 +145,10 @@ class Simulation:
         point_domains: True: each point's volume is spread over the cells its
             convected domain covers (:mod:`fe_mpm.domains`; P2 in 2D only), against the
             cell-crossing error; False (default): standard MPM.
+        shared_increment: With point domains, whether every piece of a domain takes
+            its point's increment, the mean of the grid's over the pieces, with the
+            exact Jacobian (:mod:`fe_mpm.shared_increment`; P1 only); False
+            (default): each piece takes its own cell's.
         ghost_penalty: γ ≥ 0 of the ghost penalty on the facets of poorly filled
             cells (:mod:`fe_mpm.ghost`); 0: none. Default:
             :data:`fe_mpm.ghost.WITH_DOMAINS` with point domains (0.1 for P1, 0.01
@@ -194,6 +199,7 @@ class Simulation:
         linear_solver: str = "direct",
         max_step_cells: float = 10.0,
         point_domains: bool = False,
+        shared_increment: bool = False,
         ghost_penalty: float | None = None,
         checkpoint_dir: str | Path | None = None,
         checkpoint_every: int = 10,
@@ -208,6 +214,7 @@ class Simulation:
         model_checks.check_dynamics(dynamic, formulation, damping, mass, bossak_alpha)
         self.spec = FORMULATIONS[formulation]
         model_checks.check_domains(point_domains, ghost_penalty, points, points_leaving, self.spec)
+        model_checks.check_shared_increment(shared_increment, point_domains, self.spec)
         model_checks.check_serial_only(
             mesh.comm,
             {"point_domains=True": bool(point_domains)},
@@ -255,13 +262,19 @@ class Simulation:
         self._iterations_of_old_grids = 0  # Newton iterations on grids since repartitioned
         self.output = None
         self._wall_rows = 0  # steps whose wall forces are in the output's walls.csv
+        self._shared = bool(shared_increment)
+        self._shift: SharedIncrement | None = None
         self._set_grid(mesh, facet_tags)
         self._add_time("setup", t0)
         self._track()  # once now, so a bad initial layout fails at set-up
         self.domains = None
         if point_domains:
             self.domains = PointDomains(
-                points, self.tracker, self.spec.u_degree, self.spec.volume_average
+                points,
+                self.tracker,
+                self.spec.u_degree,
+                self.spec.volume_average,
+                self._shared,
             )
         self._ghost_factor = model_checks.ghost_factor(
             ghost_penalty, point_domains, self.spec.u_degree
@@ -323,6 +336,7 @@ class Simulation:
             self.dynamics,
             self._given["mass"],
             self.walls,
+            shared_increment=self._shared,
         )
         self._current: StepInProgress | None = None
         self._newton: NewtonSolver | None = None
@@ -581,6 +595,20 @@ class Simulation:
             )
         self._add_time("packing", t0)
         return_map = ReturnMapAtIterate(forms, layout, pts, self.w) if forms.pointwise else None
+        self._shift = None
+        if forms.dF_shift is not None:
+            pieces = self.domains.current
+            self._shift = SharedIncrement(
+                forms,
+                layout,
+                pieces.owner,
+                pieces.share,
+                pts.volume,
+                layout.cell,
+                bary,
+                self.fields,
+                self.tracker.p1_gradients,
+            )
         self._current = StepInProgress(forms, layout, bary, return_map, loads, t_new - self.t)
         return forms, layout, R, J, bcs
 
@@ -592,6 +620,8 @@ class Simulation:
         changing :attr:`w` by hand (e.g. in a Taylor test). Returns the return map's
         result, or None for laws written in UFL.
         """
+        if self._shift is not None:
+            self._shift.refresh()
         if self._current.return_map is None:
             return None
         t0 = time.perf_counter()
@@ -612,11 +642,14 @@ class Simulation:
         current, pts = self._current, self.points
         volume = self.fields.pressure_volume(current.layout.cell, current.bary, pts.volume)
         hooks = {"loads": current.loads, "pressure_volume": volume}
-        if forms.pointwise:
+        if forms.pointwise or self._shift is not None:
             hooks["before_residual"] = lambda: self.refresh_material(tangent=False)
             hooks["before_jacobian"] = self.refresh_material
         if self.ghost is not None:
             hooks["ghost"] = self.ghost
+        if self._shift is not None:
+            self._shift.hold(bcs)
+            hooks["after_jacobian"] = self._shift.correct
         if self._newton is None:  # its matrix has the pattern of every cell of the grid
             prefix = f"fe_mpm_{self.formulation.replace('-', '_')}_"
             pattern = forms.jacobian.bind_cells(np.arange(self.tracker.num_cells, dtype=np.int32))

@@ -132,6 +132,7 @@ class StepForms:
         lumped: bool = False,
         walls: RigidWalls | None = None,
         step_length: ufl.Constant | None = None,
+        shared_increment: bool = False,
     ):
         mesh, g = fields.W.mesh, fields.W.mesh.geometry.dim
         self.mesh, self.spec, self.material, self.newmark = mesh, spec, material, newmark
@@ -147,6 +148,13 @@ class StepForms:
         # ΔF of the grid's motion, and the ΔF the law sees (ΔF̄ with NB-VA).
         self.dF_grid = ufl.Identity(g) + q.grad_at_points(fields.du, spec.u_degree)
         self.dF = self.dF_grid
+        # Point domains whose pieces share their point's increment: each piece's ΔF is
+        # shifted to the share-weighted mean of its point's pieces (set per iterate).
+        self.dF_shift = None
+        if shared_increment:
+            self.dF_shift = q.function((g, g), "dF_shift")
+            self.dF_at_points = PointExpression(self.dF_grid, q)
+            self.dF = self.dF_grid + self.dF_shift
         if spec.volume_average:
             theta = q.at_points(fields.volume_change)
             self.dF = volume_average.averaged_increment(self.dF_grid, theta)
@@ -168,7 +176,12 @@ class StepForms:
             lin = self.linearisation = kind.on(q, g)
             dynamic = set(lin.slot_fields)  # they change during Newton
             self.values_at_points = PointExpression(lin.point_values(self.dF, mean_stress), q)
+        if self.dF_shift is not None:
+            dynamic = set(dynamic) | {self.dF_shift}
         self.state = PointState(self.dF, self.history, self.linearisation, mean_stress, step_length)
+        self.increment_tangent = None
+        if shared_increment:
+            self.increment_tangent = self._increment_tangent(fields, step_length)
         w = ufl.TestFunctions(fields.W)[0] if spec.mixed else ufl.TestFunction(fields.W)
         R = self._residual(fields, conditions, ppp)
         self.q_boundary = None
@@ -222,6 +235,8 @@ class StepForms:
         if self.ppp is not None:
             volume = np.bincount(layout.cell, weights=points.volume, minlength=tracker.num_cells)
             q.pack_cell_field(self.ppp.fill, layout, volume / tracker.volumes)
+        if self.dF_shift is not None:  # until the first iterate's (SharedIncrement)
+            q.pack(self.dF_shift, layout, np.zeros((len(points), g, g)))
 
     def _residual(
         self, fields: GridFields, conditions: GridConditions, ppp: mixed_up.PPPData | None
@@ -244,6 +259,7 @@ class StepForms:
                 conditions.traction_terms,
                 u_degree=deg,
                 state=state,
+                increment=None if self.dF_shift is None else self.dF,
             )
         averaged = self.spec.volume_average
         if averaged:
@@ -260,12 +276,42 @@ class StepForms:
             conditions.body_force,
             conditions.traction_terms,
             material_increment=self.dF if averaged else None,
+            increment=None if self.dF_shift is None else self.dF,
         )
         if averaged:
             R += volume_average.projection_residual(
                 q, self.dF_grid, fields.volume_change, w_theta, self.second_moment
             )
         return R
+
+    def _increment_tangent(self, fields: GridFields, step_length) -> PointExpression:
+        """∂/∂ΔF of what each point puts against ∇w (and q), at every slot.
+
+        The derivatives (g⁴ entries, then g² for u-p's volumetric row) of
+        :func:`~fe_mpm.forms.displacement.grid_stress` (or
+        :func:`~fe_mpm.forms.mixed_up.point_terms`) with respect to the point's
+        increment: what :mod:`fe_mpm.shared_increment` needs for the Jacobian's
+        couplings across the cells of a domain.
+        """
+        q, g = self.q, fields.W.mesh.geometry.dim
+        dF = ufl.variable(self.dF)
+        mean_stress = None
+        if self.at_pressure:
+            mean_stress = -ufl.det(embed_3d(dF * self.F_n)) * q.at_points(fields.p)
+        state = PointState(dF, self.history, self.linearisation, mean_stress, step_length)
+        law = self.law_in_forms
+        if self.spec.pressure:
+            p = q.at_points(fields.p)
+            stress, volume = mixed_up.point_terms(law, dF, self.F_n, p, state)
+        else:
+            stress = displacement.grid_stress(lambda F: law.kirchhoff(F, state), dF, self.F_n)
+            volume = None
+        A = ufl.diff(stress, dF)
+        values = [A[idx] for idx in np.ndindex(g, g, g, g)]
+        if volume is not None:
+            a = ufl.diff(volume, dF)
+            values += [a[idx] for idx in np.ndindex(g, g)]
+        return PointExpression(ufl.as_vector(values), q)
 
     def _boundary_points(self, fields: GridFields, w, nslot: int) -> ufl.Form:
         """The penalty and point loads of the boundary points, on their own rule."""
@@ -337,11 +383,13 @@ class FormsBySlotCount:
         dynamics,
         mass: str,
         walls: RigidWalls | None = None,
+        shared_increment: bool = False,
     ):
         self.fields, self.spec, self.material = fields, spec, material
         #: The step's length Δt (s), set before each step (:meth:`set_step_length`).
         self.step_length = dolfinx.fem.Constant(fields.W.mesh, 1.0)
         self.options = dict(
+            shared_increment=shared_increment,
             walls=walls,
             conditions=conditions,
             ppp=ppp,

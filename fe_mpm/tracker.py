@@ -88,6 +88,15 @@ class Tracker:
         #: point, in the order they are tried: the first along DIRECTION.
         self.nudges = NUDGE * smallest * signs * direction
 
+    @property
+    def p1_gradients(self) -> np.ndarray:
+        """The gradients of every cell's P1 basis functions (nc, t+1, g), in 1/m.
+
+        Row ``a`` of a cell is that of local vertex ``a`` (the P1 dof order).
+        """
+        grads = np.swapaxes(self._jac_inv, 1, 2)  # row j: ∇ξ_j, ξ_j = (x − x0)·J⁻¹[:, j]
+        return np.concatenate([-grads.sum(axis=1, keepdims=True), grads], axis=1)
+
     def barycentric(self, x: np.ndarray, cells: np.ndarray) -> np.ndarray:
         """Barycentric coordinates of points ``x`` (n, g) in ``cells`` (n,), shape (n, t+1).
 

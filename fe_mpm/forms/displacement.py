@@ -42,6 +42,15 @@ def deformation_increment(q: MaterialPointQuadrature, du: ufl.Coefficient) -> uf
     return ufl.Identity(g) + q.grad_at_points(du)
 
 
+def grid_stress(kirchhoff, dF, F_n, material_increment=None) -> ufl.core.expr.Expr:
+    """τ ΔF⁻ᵀ / det F_n (Pa): what a point puts against ∇w in :func:`residual`.
+
+    τ is the law's at ``material_increment`` (if given, else ``dF``) times F_n.
+    """
+    F = (dF if material_increment is None else material_increment) * F_n
+    return kirchhoff(F) * ufl.inv(dF).T / ufl.det(F_n)
+
+
 def residual(
     du: ufl.Coefficient,
     w: ufl.Argument,
@@ -52,6 +61,7 @@ def residual(
     body_force: ufl.core.expr.Expr | None = None,
     tractions: Sequence[tuple[ufl.core.expr.Expr, ufl.Measure]] = (),
     material_increment: ufl.core.expr.Expr | None = None,
+    increment: ufl.core.expr.Expr | None = None,
 ) -> ufl.Form:
     """Residual R(Δu; w) of one static step.
 
@@ -66,11 +76,11 @@ def residual(
         tractions: Pairs (t̄, ds) of traction vector (Pa) and facet measure.
         material_increment: The increment the law sees, if not ΔF (the averaged
             ΔF̄ of :mod:`fe_mpm.forms.volume_average`); ΔF still maps ∇w.
+        increment: The point's ΔF, if not the grid's at the point (the shared
+            increment of a point domain's pieces, :mod:`fe_mpm.domains`).
     """
-    dF = deformation_increment(q, du)
-    F = (dF if material_increment is None else material_increment) * F_n
-    tau = kirchhoff(F)
-    R = q.sum(ufl.inner(tau * ufl.inv(dF).T / ufl.det(F_n), q.grad_at_points(w)))
+    dF = deformation_increment(q, du) if increment is None else increment
+    R = q.sum(ufl.inner(grid_stress(kirchhoff, dF, F_n, material_increment), q.grad_at_points(w)))
     loads = external_work(w, q, density, body_force, tractions)
     return R if loads is None else R - loads
 

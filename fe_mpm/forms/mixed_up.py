@@ -106,6 +106,21 @@ def stress_parts(material, F: ufl.core.expr.Expr, p: ufl.core.expr.Expr, state=N
     return -J * p * ufl.Identity(g) + material.kirchhoff_deviatoric(F, state), J
 
 
+def point_terms(material, dF, F_n, p_p, state=None):
+    """What a point puts against ∇w and against q in :func:`residual`.
+
+    ``(τ ΔF⁻ᵀ / det F_n, det ΔF · e)`` at the point's increment ``dF`` (g x g), with e
+    the volumetric equation in strain units, (J − 1) + p/K or a pressure-dependent
+    law's own (with its plastic volume change, :mod:`fe_mpm.materials.mixed_return`).
+    """
+    F = dF * F_n
+    tau, J = stress_parts(material, F, p_p, state)
+    volumetric = getattr(material, "volumetric_equation", lambda state: None)(state)
+    if volumetric is None:
+        volumetric = (J - 1.0) + p_p / material.bulk_modulus
+    return tau * ufl.inv(dF).T / ufl.det(F_n), ufl.det(dF) * volumetric
+
+
 def residual(
     du: ufl.core.expr.Expr,
     p: ufl.core.expr.Expr,
@@ -120,6 +135,7 @@ def residual(
     tractions: Sequence[tuple[ufl.core.expr.Expr, ufl.Measure]] = (),
     u_degree: int = 1,
     state=None,
+    increment: ufl.core.expr.Expr | None = None,
 ) -> ufl.Form:
     """Residual of one static u-p step.
 
@@ -138,20 +154,15 @@ def residual(
         u_degree: Polynomial degree of the displacement (1, or 2 for Taylor–Hood).
         state: The points' :class:`~fe_mpm.materials.PointState` (ΔF and history),
             for laws with internal variables.
+        increment: The point's ΔF, if not the grid's at the point (the shared
+            increment of a point domain's pieces, :mod:`fe_mpm.domains`).
     """
     g = ufl.shape(du)[0]
-    dF = ufl.Identity(g) + mpq.grad_at_points(du, u_degree)
-    F = dF * F_n
+    dF = ufl.Identity(g) + mpq.grad_at_points(du, u_degree) if increment is None else increment
     p_p = mpq.at_points(p)
-    tau, J = stress_parts(material, F, p_p, state)
-    K = material.bulk_modulus
-    R = mpq.sum(ufl.inner(tau * ufl.inv(dF).T / ufl.det(F_n), mpq.grad_at_points(w, u_degree)))
-    # A pressure-dependent law returns at the field's pressure and gives its own
-    # volumetric equation, with the plastic volume change (fe_mpm.materials.mixed_return).
-    volumetric = getattr(material, "volumetric_equation", lambda state: None)(state)
-    if volumetric is None:
-        volumetric = (J - 1.0) + p_p / K
-    R -= mpq.sum(ufl.det(dF) * mpq.at_points(q_test) * volumetric)
+    stress, volume = point_terms(material, dF, F_n, p_p, state)
+    R = mpq.sum(ufl.inner(stress, mpq.grad_at_points(w, u_degree)))
+    R -= mpq.sum(volume * mpq.at_points(q_test))
     if ppp is not None:
         x = ufl.SpatialCoordinate(mpq.mesh)
         r = x - ppp.centroid
