@@ -11,7 +11,8 @@ ghost penalty by default (γ = 0.1 for P1, 0.01 for P2, :mod:`fe_mpm.ghost`; the
 γ = 0 rows leave it out).
 
 Usage: ``./run python benchmarks/cell_crossing.py [--quick] [--nu 0.499 0.33]
-[--formulations up up-p2p1] [--load 5] [--sizes 16 32 64] [--steps 20] [--hold K]``; above 5 N
+[--formulations up up-p2p1] [--load 5] [--sizes 16 32 64] [--steps 20] [--hold K]
+[--shared]``; above 5 N
 the grid's margins are n rows instead of n / 2. P2/P1 rows: standard MPM needs three
 points in every cell; the ghost penalty ties cells left with fewer
 (:mod:`fe_mpm.ghost`); with domains each piece has three sub-points, so one point per
@@ -23,6 +24,9 @@ the same 2D limit.
 ``--hold K`` then takes K more steps at the full load: at equilibrium such a step
 has nothing to do, so whatever the tip moves is what the update of a step adds (with
 point domains it moves; see ``docs/cell_crossing.md``).
+``--shared`` runs point domains with the pieces' own increments against their
+point's shared one (``shared_increment=True``, :mod:`fe_mpm.shared_increment`), with
+and without PPP; ``--formulations u up`` adds the u form's rows.
 Prints the tip displacement, its error against the converged answer and the wall time
 of every case. Not a test.
 """
@@ -51,6 +55,19 @@ CASES = [
     ("P2 domains γ=0, 1 point", "up-p2p1", 1, {"point_domains": True, "ghost_penalty": 0.0}),
     ("P2 domains, 1 point", "up-p2p1", 1, {"point_domains": True}),
     ("P2 domains, 3 points", "up-p2p1", 3, {"point_domains": True}),
+]
+_DOMAINS = {"point_domains": True}
+_SHARED = {"point_domains": True, "shared_increment": True}
+#: ``--shared``: the pieces' own increments against their point's shared one.
+CASES_SHARED = [
+    ("u domains, 3 points", "u", 3, _DOMAINS),
+    ("u shared, 3 points", "u", 3, _SHARED),
+    ("domains, 1 point", "up", 1, _DOMAINS),
+    ("shared, 1 point", "up", 1, _SHARED),
+    ("domains, 3 points", "up", 3, _DOMAINS),
+    ("shared, 3 points", "up", 3, _SHARED),
+    ("domains, 3 pts, no PPP", "up", 3, {**_DOMAINS, "ppp_alpha": 0.0}),
+    ("shared, 3 pts, no PPP", "up", 3, {**_SHARED, "ppp_alpha": 0.0}),
 ]
 #: The same on tetrahedra (``--dim 3``): 4 points per cell is seed's degree-2 rule.
 CASES_3D = [
@@ -170,10 +187,18 @@ def main() -> None:
         help="then this many steps at the full load: each cell gives the tip after the "
         "load, after the hold, and the change (2D only)",
     )
+    p.add_argument(
+        "--shared",
+        action="store_true",
+        help="the cases of point domains with and without shared_increment (2D; give "
+        "--formulations u up for the u rows)",
+    )
     args = p.parse_args()
     if args.hold and args.dim == 3:
         p.error("--hold runs the 2D membrane only; leave out --dim 3")
-    cases = CASES if args.dim == 2 else CASES_3D
+    if args.shared and args.dim == 3:
+        p.error("--shared runs the 2D membrane only; leave out --dim 3")
+    cases = CASES_SHARED if args.shared else CASES if args.dim == 2 else CASES_3D
     sizes = args.sizes or ((16, 32) if args.quick else (16, 32, 64))
     margin = {n: n // 2 if args.load <= LOAD else n for n in sizes}  # room to move
     for nu in args.nu:
