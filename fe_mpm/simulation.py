@@ -754,3 +754,5 @@ class Simulation:
             self._newton = None
         if self.ghost is not None:
             self.ghost.destroy()
+        if self._shift is not None:
+            self._shift.destroy()
