@@ -99,6 +99,19 @@ class Pieces:
     corner_bary: np.ndarray
 
 
+def share_weighted_mean(
+    values: np.ndarray, owner: np.ndarray, share: np.ndarray, n: int
+) -> np.ndarray:
+    """Each of ``n`` points' mean of its pieces' ``values`` (k, ...), weighted by ``share`` (k,).
+
+    ``owner`` (k,) is each piece's point; a point's shares add up to 1.
+    """
+    weighted = values * share.reshape(-1, *([1] * (values.ndim - 1)))
+    out = np.zeros((n, *values.shape[1:]))
+    np.add.at(out, owner, weighted)
+    return out
+
+
 def shape_quality(corners: np.ndarray) -> np.ndarray:
     """The mean-ratio quality of simplices (n, d + 1, d): 1 if regular, 0 if flat.
 
@@ -412,10 +425,7 @@ class PointDomains:
         n, p = len(points), self._pieces
 
         def mean(values: np.ndarray) -> np.ndarray:
-            weighted = values * p.share.reshape(-1, *([1] * (values.ndim - 1)))
-            out = np.zeros((n, *values.shape[1:]))
-            np.add.at(out, p.owner, weighted)
-            return out
+            return share_weighted_mean(values, p.owner, p.share, n)
 
         corners = self._moved
         edges = corners[:, 1:] - corners[:, :1]

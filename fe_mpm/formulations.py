@@ -149,18 +149,12 @@ class GridFields:
 
         P1 or P2; coordinates outside [0, 1] extrapolate the cell's polynomial.
         """
-        g = bary.shape[1] - 1
         if self.spec.u_degree == 1:
             basis = bary  # the P1 shape functions are the barycentric coordinates
         else:
             basis = self._scalar_element.tabulate(0, np.ascontiguousarray(bary[:, 1:]))[0]
-        values = self.w.x.array
-        return np.column_stack(
-            [
-                np.einsum("nv,nv->n", basis, values[to_parent[collapsed.dofmap.list[cells]]])
-                for _, collapsed, to_parent, _ in self._pinnable[:g]
-            ]
-        )
+        nodal = self.w.x.array[self.displacement_dofs_of(cells)]  # (n, nodes, g)
+        return np.einsum("nv,nvc->nc", basis, nodal)
 
     def start_from_rest(
         self, cells: np.ndarray, bary: np.ndarray, mass: np.ndarray, stress: np.ndarray

@@ -36,6 +36,8 @@ from petsc4py import PETSc
 
 import numpy as np
 
+from fe_mpm.domains import share_weighted_mean
+
 
 class SharedIncrement:
     """The shift to each point's mean increment, and the Jacobian's couplings it brings.
@@ -81,8 +83,7 @@ class SharedIncrement:
             return
         forms, g = self.forms, self.g
         local = forms.dF_at_points.evaluate(self.layout)  # (k, g * g)
-        mean = np.zeros((self.n_points, local.shape[1]))
-        np.add.at(mean, self.owner, local * self.share[:, None])
+        mean = share_weighted_mean(local, self.owner, self.share, self.n_points)
         shift = (mean[self.owner] - local).reshape(-1, g, g)
         forms.q.pack(forms.dF_shift, self.layout, shift)
         self._at = self.w.x.array.copy()
@@ -125,12 +126,10 @@ class SharedIncrement:
         col = np.broadcast_to(
             (np.arange(n_sub)[:, None] * q + np.arange(q))[:, None, :], (*rows.shape, q)
         ).ravel()
-        keep = ~self.held[row]
-        order = np.lexsort((col[keep], row[keep]))
-        self._G_take = np.flatnonzero(keep)[order]
-        row, col = row[keep][order], col[keep][order]
-        indptr = np.concatenate([[0], np.cumsum(np.bincount(row, minlength=self.size))])
-        self._G_csr = (indptr.astype(PETSc.IntType), col.astype(PETSc.IntType))
+        keep = np.flatnonzero(~self.held[row])
+        order, indptr = _compressed_rows(row[keep], col[keep], self.size)
+        self._G_take = keep[order]
+        self._G_csr = (indptr, col[self._G_take])
 
     def correct(self, A: PETSc.Mat) -> None:
         """Add Σ_k G_k (B̄_p − B_k) to the assembled Jacobian ``A`` at the current iterate."""
@@ -180,9 +179,15 @@ def _aij(nrows: int, ncols: int, cols: np.ndarray, vals: np.ndarray) -> PETSc.Ma
 
 def _aij_coo(nrows: int, ncols: int, row: np.ndarray, col: np.ndarray, val: np.ndarray):
     """A serial AIJ matrix of (row, col, value) triplets, each (row, col) once."""
+    order, indptr = _compressed_rows(row, col, nrows)
+    return _csr_matrix((nrows, ncols), indptr, col[order], val[order])
+
+
+def _compressed_rows(row: np.ndarray, col: np.ndarray, nrows: int):
+    """The order that sorts (row, col) triplets by row then column, and the row pointer."""
     order = np.lexsort((col, row))
     indptr = np.concatenate([[0], np.cumsum(np.bincount(row, minlength=nrows))])
-    return _csr_matrix((nrows, ncols), indptr, col[order], val[order])
+    return order, indptr
 
 
 def _csr_matrix(shape, indptr, indices, values) -> PETSc.Mat:
