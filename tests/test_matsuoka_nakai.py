@@ -206,6 +206,31 @@ def test_a_cone_of_no_width_keeps_a_compressed_point_on_its_axis():
     assert np.abs(result.tau - mean[:, None, None] * np.eye(3)).max() < 1e-9 * abs(mean[0])
 
 
+@pytest.mark.parametrize("cls", [fe_mpm.MatsuokaNakai, fe_mpm.ModifiedDruckerPrager])
+def test_the_constant_friction_law_reaches_mohr_coulombs_compression_corner_with_cohesion(cls):
+    """``constant(E, ν, φ, c)``: φ_F = φ_cs = φ and ψ_G = 0 at any state, and the apex at
+    c cot φ, so triaxial compression ends at Mohr-Coulomb's τ_major = −(k p₀ + 2c√k)
+    (both cones pass through the compression corners)."""
+    phi, c = 30.0, 0.2 * P0
+    law = cls.constant(1.0e4, 0.3, phi, cohesion=c)
+    assert law.apex_stress == pytest.approx(c / math.tan(math.radians(phi)), rel=1e-15)
+    phi_F, phi_cs, psi = law.angles(np.array([-10 * P0, 0.0, law.apex_stress]), np.r_[0, 0.1, 1])
+    assert np.all(phi_F == phi) and np.all(phi_cs == phi) and np.all(psi == 0.0)
+    regions, taus, _ = confined_compression(law, 3, held=[0, 1], compressed=[2])
+    k = k_of(phi)
+    limit = -(k * P0 + 2 * c * math.sqrt(k))
+    assert regions[0] == ELASTIC and regions[-1] == CONE
+    assert abs(taus[-1][2, 2] - limit) < 1e-9 * abs(limit)
+
+
+@pytest.mark.parametrize("angle", [0.0, 90.0, -5.0])
+def test_the_constant_friction_law_names_a_bad_angle_or_cohesion(angle):
+    with pytest.raises(ValueError, match=r"MatsuokaNakai.constant: friction_angle must be in"):
+        fe_mpm.MatsuokaNakai.constant(1e4, 0.3, angle)
+    with pytest.raises(ValueError, match=r"ModifiedDruckerPrager.constant: cohesion must be"):
+        fe_mpm.ModifiedDruckerPrager.constant(1e4, 0.3, 30.0, cohesion=-1.0)
+
+
 def test_an_unknown_potential_is_named():
     with pytest.raises(ValueError, match="MatsuokaNakai: potential must be one of"):
         law("mohr-coulomb")

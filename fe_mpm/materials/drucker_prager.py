@@ -407,6 +407,42 @@ class ModifiedDruckerPrager(_ConeLaw):
                 f"stay below 90°; the constants give φ_F up to {peak:.4g}°"
             )
 
+    @classmethod
+    def constant(
+        cls,
+        E: float,
+        nu: float,
+        friction_angle: float,
+        cohesion: float = 0.0,
+        density: float | None = None,
+        **options,
+    ):
+        """The law with a fixed friction angle and no dilatancy.
+
+        With a₁ = a₂ = a₃ = a₄ = a₅ = 0 and a₀ = φ, Mast's angles stay φ_F = φ_cs = φ,
+        so ψ_G = 0 at every state: a frictional law without Mast's evolving angles,
+        for a first scene. The cone's apex is where its Mohr-Coulomb envelope of
+        cohesion c meets the hydrostatic axis, c_F = c cot φ.
+
+        Args:
+            E: Young's modulus (Pa), > 0.
+            nu: Poisson's ratio, in (-1, 0.5).
+            friction_angle: φ (degrees), in (0, 90).
+            cohesion: c (Pa), ≥ 0.
+            density: Reference mass density ρ₀ (kg/m³), > 0, or None.
+            options: Further fields of the law (``potential`` of
+                :class:`~fe_mpm.materials.MatsuokaNakai`).
+        """
+        name = cls.__name__
+        if not 0.0 < friction_angle < 90.0:
+            raise ValueError(
+                f"{name}.constant: friction_angle must be in (0, 90) degrees, got {friction_angle}"
+            )
+        if not cohesion >= 0.0:
+            raise ValueError(f"{name}.constant: cohesion must be >= 0 Pa, got {cohesion}")
+        apex = cohesion / math.tan(math.radians(friction_angle))
+        return cls(E, nu, friction_angle, 0.0, 0.0, 0.0, 0.0, 0.0, apex, density, **options)
+
     def _largest_rise(self) -> float:
         """The largest (a1 λ − a4) e^{−a3 λ} over λ ≥ 0 (degrees)."""
         if self.a1 == 0.0:
