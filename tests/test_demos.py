@@ -144,7 +144,7 @@ def test_the_cantilever_near_incompressibility_swings_with_averaging_and_locks_w
 
 def test_the_taylor_bar_hits_its_wall_with_the_momentum_it_loses(tmp_path):
     """The first 10 µs of the copper rod's impact on a coarse grid (h = 1.6 mm, 20
-    steps; 3D, J2, volumetric averaging, a frictionless rigid wall). The wall's
+    steps; 3D, J2, u-p, a frictionless rigid wall). The wall's
     reported push, summed by Newmark's trapezoidal rule, is the momentum the rod lost
     (measured: equal to 1e-14; 15 % of its momentum is gone by then); the demo's
     check is not made before 80 µs and says so."""
