@@ -277,8 +277,9 @@ print(
 # its check line says `not checked`. On his 1 cm grid (`--case mast`: 13 798 points,
 # 200 steps of 5 µs) u-p runs to 1 ms in 8.3 minutes (one step cut, Newton's mean
 # 10.6 a step, most 39): H/H₀ = 0.671, the footprint's outer R/R₀ = 2.18 (by Mast's
-# centroid 1.78), the wall's impulse the momentum lost to 1e-15. With node-based
-# averaging the same run cut its steps from 0.37 ms on and stopped near 0.52 ms.
+# centroid 1.78), the wall's impulse the momentum lost to 1e-15; on a 2 cm grid
+# (`--h 0.02`, 27 s) 0.690 and 2.27 (centroid 2.06). With node-based averaging the
+# 1 cm run cut its steps from 0.37 ms on and stopped near 0.52 ms.
 
 # +
 #: Published range of the footprint's outer radius (m), and the final length (m).
