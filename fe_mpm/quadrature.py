@@ -25,8 +25,7 @@ coefficient arrays by :mod:`fe_mpm.packing`.
 from __future__ import annotations
 
 import weakref
-from dataclasses import dataclass
-from functools import cached_property
+from dataclasses import dataclass, field
 
 from mpi4py import MPI
 
@@ -133,6 +132,7 @@ class SlotLayout:
     occupied: np.ndarray
     max_count: int
     nslot: int
+    _slot_rows: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     @classmethod
     def from_cells(cls, cells: np.ndarray, nslot: int | None = None) -> SlotLayout:
@@ -174,17 +174,20 @@ class SlotLayout:
         """Number of entities E."""
         return self.entities.size
 
-    @cached_property
-    def flat_slot(self) -> np.ndarray:
-        """Each point's row among the E · nslot slots, ``entity · nslot + slot``, shape ``(n,)``."""
-        return self.entity * self.nslot + self.slot
+    def slot_rows(self, nslot: int) -> tuple[np.ndarray, np.ndarray]:
+        """Rows of the points and of the vacant slots among E · ``nslot`` slot rows.
 
-    @cached_property
-    def vacant_slots(self) -> np.ndarray:
-        """The rows among the E · nslot slots that hold no point, sorted."""
-        taken = np.zeros(self.num_entities * self.nslot, dtype=bool)
-        taken[self.flat_slot] = True
-        return np.flatnonzero(~taken)
+        A point's row is ``entity · nslot + slot``, shape ``(n,)``; the vacant rows are
+        the rest, sorted. Kept per ``nslot`` (a rule may have more slots than the
+        layout fills).
+        """
+        rows = self._slot_rows.get(nslot)
+        if rows is None:
+            taken = np.zeros(self.num_entities * nslot, dtype=bool)
+            points = self.entity * nslot + self.slot
+            taken[points] = True
+            rows = self._slot_rows[nslot] = (points, np.flatnonzero(~taken))
+        return rows
 
 
 class MaterialPointQuadrature:
@@ -294,9 +297,10 @@ class MaterialPointQuadrature:
         size = f.function_space.dofmap.bs
         # One flat row per slot: a single index array scatters the points (twice as
         # fast as indexing by entity and slot), and only the vacant slots get ``empty``.
+        points, vacant = layout.slot_rows(self.nslot)
         data = np.empty((layout.num_entities * self.nslot, size))
-        data[layout.flat_slot] = values.reshape(values.shape[0], size)
-        data[layout.vacant_slots] = np.reshape(empty, (-1,))
+        data[points] = values.reshape(values.shape[0], size)
+        data[vacant] = np.reshape(empty, (-1,))
         self.values[f] = data.reshape(layout.num_entities, self.nslot * size)
 
     def pack_cell_field(
