@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Self
 
 import numpy as np
 
@@ -416,7 +417,7 @@ class ModifiedDruckerPrager(_ConeLaw):
         cohesion: float = 0.0,
         density: float | None = None,
         **options,
-    ):
+    ) -> Self:
         """The law with a fixed friction angle and no dilatancy.
 
         With a₁ = a₂ = a₃ = a₄ = a₅ = 0 and a₀ = φ, Mast's angles stay φ_F = φ_cs = φ,
