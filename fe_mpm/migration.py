@@ -98,10 +98,10 @@ def _holders(tracker: Tracker, x: np.ndarray) -> np.ndarray:
     """
     comm = tracker.mesh.comm
     counts = comm.allgather(x.shape[0])
-    everyone = np.concatenate(comm.allgather(x)).reshape(-1, x.shape[1])
+    everyone = parallel.gathered(comm, x).reshape(-1, x.shape[1])
     nudged = everyone[:, None, :] + tracker.nudges[None, :, :]  # (N, k, g)
     here = tracker.holding(nudged.reshape(-1, x.shape[1]), tol=0.0).reshape(nudged.shape[:2]) >= 0
-    lowest = parallel.smallest(comm, np.where(here, comm.rank, comm.size).astype(np.int64))
+    lowest = parallel.lowest_rank(comm, here)
     held = lowest < comm.size
     first = np.argmax(held, axis=1)  # the first nudge some rank holds
     taker = np.where(held.any(axis=1), lowest[np.arange(len(everyone)), first], -1)

@@ -43,6 +43,11 @@ def largest(comm: MPI.Comm, value):
     return _reduced(comm, value, MPI.MAX)
 
 
+def lowest_rank(comm: MPI.Comm, flag: np.ndarray) -> np.ndarray:
+    """Elementwise, the lowest rank where ``flag`` is set; ``comm.size`` where none."""
+    return smallest(comm, np.where(flag, comm.rank, comm.size).astype(np.int64))
+
+
 def _reduced(comm: MPI.Comm, value, op: MPI.Op):
     """``value`` (a number, or an array elementwise) reduced with ``op`` over the ranks."""
     if comm.size == 1:

@@ -168,10 +168,9 @@ class StepForms:
         self.at_pressure = (
             self.pointwise and spec.pressure and getattr(material, "pressure_dependent", False)
         )
-        self.linearisation, dynamic, mean_stress = None, set(), None
+        self.linearisation, dynamic = None, set()
+        mean_stress = self._field_mean_stress(self.dF, fields)
         if self.pointwise:
-            if self.at_pressure:
-                mean_stress = -ufl.det(embed_3d(self.dF * self.F_n)) * q.at_points(fields.p)
             kind = MixedLinearisation if self.at_pressure else Linearisation
             lin = self.linearisation = kind.on(q, g)
             dynamic = set(lin.slot_fields)  # they change during Newton
@@ -284,6 +283,15 @@ class StepForms:
             )
         return R
 
+    def _field_mean_stress(self, dF, fields: GridFields) -> ufl.core.expr.Expr | None:
+        """The Kirchhoff mean stress −det(ΔF F_n) p (Pa) of a return at the field's pressure.
+
+        None where the law returns on its own (not a pressure-dependent law in u-p).
+        """
+        if not self.at_pressure:
+            return None
+        return -ufl.det(embed_3d(dF * self.F_n)) * self.q.at_points(fields.p)
+
     def _increment_tangent(self, fields: GridFields, step_length) -> PointExpression:
         """∂/∂ΔF of what each point puts against ∇w (and q), at every slot.
 
@@ -295,9 +303,7 @@ class StepForms:
         """
         q, g = self.q, fields.W.mesh.geometry.dim
         dF = ufl.variable(self.dF)
-        mean_stress = None
-        if self.at_pressure:
-            mean_stress = -ufl.det(embed_3d(dF * self.F_n)) * q.at_points(fields.p)
+        mean_stress = self._field_mean_stress(dF, fields)
         state = PointState(dF, self.history, self.linearisation, mean_stress, step_length)
         law = self.law_in_forms
         if self.spec.pressure:

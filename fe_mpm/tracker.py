@@ -383,15 +383,10 @@ class Tracker:
         return cells
 
 
-def _lowest_rank(comm, flag: np.ndarray) -> np.ndarray:
-    """Per point, the lowest rank where ``flag`` is set; ``comm.size`` where none (n,)."""
-    return parallel.smallest(comm, np.where(flag, comm.rank, comm.size).astype(np.int64))
-
-
 def _lowest_rank_of(comm, first: np.ndarray, then: np.ndarray) -> np.ndarray:
     """Per point, the lowest rank where ``first`` is set, else where ``then`` is (n,)."""
-    lowest = _lowest_rank(comm, first)
-    return np.where(lowest < comm.size, lowest, _lowest_rank(comm, then))
+    lowest = parallel.lowest_rank(comm, first)
+    return np.where(lowest < comm.size, lowest, parallel.lowest_rank(comm, then))
 
 
 def _facet_neighbours(nodes_of: np.ndarray) -> np.ndarray:
