@@ -365,7 +365,9 @@ if args.json:
                 "newton_iterations": iterations,
                 "times": [r.t for r in reports],
                 "dropped_points": sim.dropped,
-                "point_domain_resets": None if sim.domains is None else sim.domains.resets,
+                "point_domain_resets": None
+                if sim.domains is None
+                else int(parallel.total(scene.mesh.comm, sim.domains.resets)),
                 "timings": sim.timings,
                 "point_imbalance": reports[-1].point_imbalance,
                 "point_imbalance_max": max(r.point_imbalance for r in reports),

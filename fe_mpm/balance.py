@@ -87,11 +87,14 @@ def cell_weights(num_cells: int, cells: np.ndarray) -> np.ndarray:
     Returns:
         Integer weights, shape (num_cells,).
     """
-    cells = cells[cells >= 0]  # a point not looked for since a repartition counts nowhere
+    # A point not looked for since a repartition counts nowhere.
+    cells = cells[(cells >= 0) & (cells < num_cells)]
     return 1 + POINT_WEIGHT * np.bincount(cells, minlength=num_cells).astype(np.int64)
 
 
-def repartitioned(mesh: dolfinx.mesh.Mesh, weights: np.ndarray) -> dolfinx.mesh.Mesh:
+def repartitioned(
+    mesh: dolfinx.mesh.Mesh, weights: np.ndarray, vertex_layers: int = 0
+) -> dolfinx.mesh.Mesh:
     """The grid of ``mesh`` partitioned so that the ranks' weights are about equal.
 
     Collective. On one rank ``mesh`` itself is returned.
@@ -99,6 +102,9 @@ def repartitioned(mesh: dolfinx.mesh.Mesh, weights: np.ndarray) -> dolfinx.mesh.
     Args:
         mesh: An affine simplex grid, distributed over its communicator's ranks.
         weights: The weight of each owned cell, shape (owned cells,), integers ≥ 1.
+        vertex_layers: 0: ghost cells as ``mesh`` has them (shared-facet or none);
+            k > 0: every cell within k layers of cells sharing a vertex with a
+            rank's own (:func:`with_vertex_layers`), which the point domains need.
 
     Returns:
         A new mesh of the same cells and nodes, each cell owned by the rank METIS
@@ -138,7 +144,10 @@ def repartitioned(mesh: dolfinx.mesh.Mesh, weights: np.ndarray) -> dolfinx.mesh.
         except (ValueError, RuntimeError, MemoryError) as err:  # METIS's own included
             error = err
     parallel.raise_together(comm, error)  # rank 0 alone may fail; the others would wait
-    if ghosted:
+    if vertex_layers > 0:
+        layers = with_vertex_layers(all_cells, parts, comm.size, vertex_layers)
+        destinations = dolfinx.graph.adjacencylist(*layers)
+    elif ghosted:
         destinations = dolfinx.graph.adjacencylist(*with_facet_neighbours(graph, parts))
     else:
         destinations = dolfinx.graph.adjacencylist(parts)
@@ -209,6 +218,42 @@ def with_facet_neighbours(
     other = parts[adjncy]
     pairs = np.unique(np.column_stack([cell, other])[other != parts[cell]], axis=0)
     pairs = np.concatenate([np.column_stack([np.arange(n), parts]), pairs])
+    pairs = pairs[np.argsort(pairs[:, 0], kind="stable")]  # the owner stays first
+    offsets = np.zeros(n + 1, dtype=np.int32)
+    np.cumsum(np.bincount(pairs[:, 0], minlength=n), out=offsets[1:])
+    return pairs[:, 1].astype(np.int32), offsets
+
+
+def with_vertex_layers(
+    cells: np.ndarray, parts: np.ndarray, size: int, layers: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """Each cell's ranks: its owner first, then every rank that holds it as a ghost.
+
+    A rank holds as ghosts the cells within ``layers`` layers of its own, a layer
+    being the cells that share a vertex with the last: a point domain near a rank's
+    edge covers cells past it (:mod:`fe_mpm.domains`), often across a vertex only.
+
+    Args:
+        cells: The nodes of every cell (n, t + 1), on the rank that holds them all.
+        parts: The owning rank of each cell (n,).
+        size: The number of ranks.
+        layers: How many vertex layers, ≥ 1.
+
+    Returns:
+        ``(data, offsets)`` of an adjacency list (int32).
+    """
+    n = len(parts)
+    if n == 0:  # a rank other than the one that holds the whole grid
+        return np.zeros(0, dtype=np.int32), np.zeros(1, dtype=np.int32)
+    held = np.zeros((n, size), dtype=bool)
+    held[np.arange(n), parts] = True
+    k = cells.shape[1]
+    for _ in range(layers):  # a rank reaches a node through its cells, then its cells
+        at_node = np.zeros((int(cells.max()) + 1, size), dtype=np.uint8)
+        np.maximum.at(at_node, cells.ravel(), np.repeat(held, k, axis=0).astype(np.uint8))
+        held = at_node[cells].max(axis=1).astype(bool)
+    cell, rank = np.nonzero(held & (np.arange(size)[None, :] != parts[:, None]))
+    pairs = np.concatenate([np.column_stack([np.arange(n), parts]), np.column_stack([cell, rank])])
     pairs = pairs[np.argsort(pairs[:, 0], kind="stable")]  # the owner stays first
     offsets = np.zeros(n + 1, dtype=np.int32)
     np.cumsum(np.bincount(pairs[:, 0], minlength=n), out=offsets[1:])

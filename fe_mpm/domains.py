@@ -34,6 +34,15 @@ in part. With P2 displacements each piece has three sub-points that integrate
 quadratics exactly (:func:`~fe_mpm.clipping.piece_rule`; triangles only). Not yet:
 P2 on tetrahedra, and splitting a distorted domain into smaller ones. The
 measurements: ``docs/cell_crossing.md``.
+
+Under MPI a point and its domain live on the rank that owns the cell the point lies
+in (:meth:`PointDomains.migrate`, after every step). The rank cuts the domain by its
+own cells and its ghosts, and assembles each piece in the cell it lies in, a ghost
+cell too: DOLFINx adds what a rank assembles at another rank's nodes to theirs, and
+the per-cell sums that read the pieces (the ghost penalty's fill, the occupied
+cells of the boundary points) add the ranks' shares. A piece reaches cells across a
+vertex of the rank's own, so :class:`~fe_mpm.simulation.Simulation` gives the grid
+:data:`DOMAIN_GHOST_LAYERS` layers of them.
 """
 
 from __future__ import annotations
@@ -44,9 +53,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from fe_mpm import parallel
+from fe_mpm._dolfinx import dolfinx
 from fe_mpm.clipping import piece_rule, simplex_volumes
 from fe_mpm.errors import ConvergenceError, PointsOutsideError
 from fe_mpm.markers import Markers
+from fe_mpm.migration import migrate
 from fe_mpm.particles import MaterialPoints
 from fe_mpm.point_update import apply_update
 from fe_mpm.step_forms import PointUpdate
@@ -70,6 +82,14 @@ MIN_SHARE = 1e-9
 #: with 0.2 alone both runs finish; with a quarter of the first quality alone the
 #: run without the ghost penalty stops at s/B = 0.98.
 RESET_QUALITY = 0.2
+#: Under MPI each rank cuts its points' domains by its own cells and its ghosts: the
+#: cells within this many layers of cells sharing a vertex with its own
+#: (:func:`fe_mpm.balance.with_vertex_layers`). A domain's corners lie about a cell
+#: from its point; two layers leave room for a domain stretched to twice that.
+DOMAIN_GHOST_LAYERS = 2
+#: A corner past the grid's edge moves with the cell of its domain's pieces that it is
+#: least outside of, compared to this many decimals of the barycentric coordinates.
+CORNER_TIE_DIGITS = 9
 
 
 @dataclass
@@ -165,11 +185,45 @@ class PointDomains:
         self._moved = self.corners  # the corners after that step, once it converged
         self._next: Pieces | None = None  # the pieces of the moved corners
         self._ready: tuple | None = None  # (corners, their pieces), cut ahead
-        #: Domains redrawn so far because they had distorted (:data:`RESET_QUALITY`).
+        #: Domains redrawn so far because they had distorted (:data:`RESET_QUALITY`),
+        #: on this rank (:func:`fe_mpm.parallel.total` sums the ranks').
         self.resets = 0
         self._drawn_quality = shape_quality(self.corners)
+        self._outside = np.zeros((0, self.corners.shape[2]))  # corners the last cut missed
+        self.regrid(tracker)
+
+    def regrid(self, tracker: Tracker) -> None:
+        """Cut by the cells of ``tracker``'s grid from now on (after a repartition)."""
         # The cells' bounding boxes (lower and upper corners, each (nc, d)).
         self._boxes = (tracker.cell_vertices.min(axis=1), tracker.cell_vertices.max(axis=1))
+        self._ready = None  # pieces numbered by the old grid's cells
+
+    def migrate(self, points: MaterialPoints, markers: Markers, tracker: Tracker) -> int:
+        """Send each point, with its domain, to the rank that owns the cell it lies in.
+
+        Collective. After :meth:`gather` a point's cell is its domain's heaviest
+        piece's, which may be this rank's ghost; here it becomes the cell the point
+        lies in (on one rank too: a domain redrawn at the next step is centred in it),
+        looked for in the owned cells of ``tracker``, and the point is sent with its
+        domain's corners to the rank that owns it. A point that lies in no rank's cell
+        (its domain reaching past the grid's edge) stays, in its heaviest piece's
+        cell. Returns how many points moved between ranks (all ranks together).
+        """
+        cells, ties = tracker.locate_with_ties(points.x, points.cell)
+        if tracker.mesh.comm.size == 1:
+            points.cell = np.where(cells >= 0, cells, points.cell).astype(np.int32)
+            return 0
+        n, v, g = self.corners.shape
+        # The corners, the quality they were drawn with, and the cell each point is in.
+        carried = np.column_stack(
+            [self.corners.reshape(n, -1), self._drawn_quality, points.cell.astype(float)]
+        )
+        cells, moved, carried = migrate(points, markers, tracker, cells, carried, ties)
+        self.corners = np.ascontiguousarray(carried[:, : v * g]).reshape(-1, v, g)
+        self._drawn_quality = carried[:, v * g].copy()
+        points.cell = np.where(cells >= 0, cells, carried[:, -1].astype(np.int32)).astype(np.int32)
+        self._moved = self.corners
+        return moved
 
     def pieces(self, tracker: Tracker, guess: np.ndarray) -> Pieces:
         """Each domain cut by the cells it covers (see :meth:`_cut`)."""
@@ -199,6 +253,7 @@ class PointDomains:
         n, v, g = corners.shape
         corner_cells = tracker.locate(corners.reshape(-1, g), np.repeat(guess, v))
         outside = corner_cells < 0
+        self._outside = corners.reshape(-1, g)[outside]  # for _beyond_ghosts
         # A corner that has left the grid (a body bulging past the grid's edge) is
         # searched around the domain's last cell; its part outside the grid is lost.
         corner_cells = np.where(outside, np.repeat(guess, v), corner_cells)
@@ -325,10 +380,15 @@ class PointDomains:
         """A sub-point for every piece of every domain, with its share of the point's state."""
         self._reset_distorted(points, tracker)
         ready, self._ready = self._ready, None
-        if ready is not None and np.array_equal(ready[0], self.corners):
-            p = ready[1]
-        else:  # none yet, or cut for corners that have changed since (a reset)
-            p = self.pieces(tracker, points.cell)
+        self._outside, error = np.zeros((0, points.gdim)), None
+        try:
+            if ready is not None and np.array_equal(ready[0], self.corners):
+                p = ready[1]
+            else:  # none yet, or cut for corners that have changed since (a reset, migration)
+                p = self.pieces(tracker, points.cell)
+        except (PointsOutsideError, ConvergenceError) as err:
+            error = err
+        parallel.raise_together(tracker.mesh.comm, self._beyond_ghosts(tracker) or error)
         self._pieces = p
         sub = MaterialPoints(
             p.x,
@@ -363,6 +423,9 @@ class PointDomains:
         inside = tracker.locate(redrawn.reshape(-1, g), np.repeat(points.cell[bad], g + 1)) >= 0
         inside = np.all(inside.reshape(-1, g + 1), axis=1)
         bad, redrawn = bad[inside], redrawn[inside]
+        # A new array: the pieces cut ahead (:meth:`sample`) hold the old one, and are
+        # those of the old corners.
+        self.corners = self.corners.copy()
         self.corners[bad] = redrawn
         self._drawn_quality[bad] = shape_quality(redrawn)
         self.resets += bad.size
@@ -394,25 +457,48 @@ class PointDomains:
         moved = self.corners + grid_displacement(p.corner_cell, p.corner_bary).reshape(n, g + 1, g)
         before = np.linalg.det(self.corners[:, 1:] - self.corners[:, :1])
         after = np.linalg.det(moved[:, 1:] - moved[:, :1])
+        self._outside, error = np.zeros((0, g)), None
         if np.any(after / before <= 0):
             bad = int(np.flatnonzero(after / before <= 0)[0])
-            raise ConvergenceError(
+            error = ConvergenceError(
                 f"the domain of point {bad} (corners {self.corners[bad].tolist()}) would turn "
                 f"inside out in step {step} (t = {t:g}): take smaller steps, or the grid there "
                 "distorts it too far. Nothing was updated."
             )
-        self._moved = moved
-        # The next step's pieces, now: a domain that degenerates or leaves the grid
-        # then fails this step, which a shorter step may avoid.
-        try:
-            guess = self._pieces.cell[_heaviest(self._pieces, n)]
-            self._next = self._cut(moved, tracker, guess)
-        except PointsOutsideError as err:
-            raise PointsOutsideError(f"{err} (step {step}, t = {t:g})") from None
-        except ConvergenceError as err:
-            raise ConvergenceError(
-                f"{err} in step {step} (t = {t:g}). Nothing was updated."
-            ) from None
+        else:
+            self._moved = moved
+            # The next step's pieces, now: a domain that degenerates or leaves the grid
+            # then fails this step, which a shorter step may avoid.
+            try:
+                guess = self._pieces.cell[_heaviest(self._pieces, n)]
+                self._next = self._cut(moved, tracker, guess)
+            except PointsOutsideError as err:
+                error = PointsOutsideError(f"{err} (step {step}, t = {t:g})")
+            except ConvergenceError as err:
+                error = ConvergenceError(f"{err} in step {step} (t = {t:g}). Nothing was updated.")
+        parallel.raise_together(tracker.mesh.comm, self._beyond_ghosts(tracker) or error)
+
+    def _beyond_ghosts(self, tracker: Tracker) -> ConvergenceError | None:
+        """The error of a domain corner past this rank's cells but in another rank's.
+
+        Collective. On one rank a corner in none of the tracker's cells is outside the
+        grid; under MPI it may lie past this rank's ghost layer
+        (:data:`DOMAIN_GHOST_LAYERS`), where the cut would lose the domain's pieces.
+        """
+        comm = tracker.mesh.comm
+        if comm.size == 1 or not parallel.any_rank(comm, len(self._outside) > 0):
+            return None
+        x3 = np.zeros((len(self._outside), 3))
+        x3[:, : self._outside.shape[1]] = self._outside
+        owner = dolfinx.geometry.determine_point_ownership(tracker.mesh, x3, 0.0).src_owner
+        if not np.any(owner >= 0):
+            return None
+        first = self._outside[np.flatnonzero(owner >= 0)[0]]
+        return ConvergenceError(
+            f"a point domain's corner at x = {first.tolist()} lies past the cells this MPI "
+            f"rank holds ({DOMAIN_GHOST_LAYERS} layers of ghost cells): the domain has "
+            "stretched over more cells than that. Take smaller steps, or run on fewer ranks."
+        )
 
     def gather(self, points: MaterialPoints, sub: MaterialPoints, markers: Markers) -> None:
         """Give each point its domain's step (after :meth:`move_corners`).
@@ -464,15 +550,28 @@ def step_with_domains(sim, t_new: float, rebin: bool):
     and the step's report and output are the points'. A failed step leaves the
     points as they were. ``rebin`` is ignored: the sub-points are new every attempt,
     so none can be held in a cell of the last step.
+
+    Under MPI the points first go to the ranks that own their cells
+    (:meth:`PointDomains.migrate`); each rank then cuts its points' domains by its
+    cells and its ghosts (``sim.domain_tracker``), and assembles the pieces where
+    they lie, ghost cells included: DOLFINx adds what a rank assembles at another
+    rank's nodes to theirs.
     """
     domains, points, markers, output = sim.domains, sim.points, sim.markers, sim.output
-    sub = domains.sample(points, sim.tracker)
+    tracker = sim.tracker
+    sim.tracking.migrated = domains.migrate(points, markers, tracker)
+    sub = domains.sample(points, sim.domain_tracker)
     sim.points, sim.markers, sim.output, domains.active = sub, Markers(), None, True
+    sim.tracker = sim.domain_tracker  # the pieces' cells include this rank's ghosts
     try:
         report = sim.step(t_new, True)  # never held: the pieces differ per attempt
     finally:
         sim.points, sim.markers, sim.output, domains.active = points, markers, output, False
+        sim.tracker = tracker
     domains.gather(points, sub, markers)
+    sim.tracking.forget()  # it remembers the pieces' cells, not the points'
+    # Now, so that between steps the points lie in owned cells, as without domains.
+    report.migrated_points += domains.migrate(points, markers, tracker)
     report.markers = markers.positions()
     sim._write_output()
     return report
@@ -485,9 +584,14 @@ def _corner_cells(
     n, v, g = corners.shape
     lam = tracker.barycentric(corners[owner].reshape(-1, g), np.repeat(cell, v))
     inside = lam.reshape(-1, v, v).min(axis=2)  # (pieces, corner)
+    # Equally good cells (a corner past the grid's edge above a facet between two)
+    # extrapolate differently: take the one first by its centroid, not by its local
+    # number, which differs with the number of ranks.
+    inside = np.round(inside, CORNER_TIE_DIGITS)
+    centroids = tuple(tracker.centroids[cell].T[::-1])
     corner_cell = np.empty((n, v), dtype=np.int32)
     for j in range(v):
-        order = np.lexsort((-inside[:, j], owner))  # by domain, the best piece first
+        order = np.lexsort((*centroids, -inside[:, j], owner))  # by domain, the best first
         corner_cell[:, j] = cell[order[np.searchsorted(owner[order], np.arange(n))]]
     return corner_cell.reshape(-1)
 

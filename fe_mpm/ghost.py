@@ -25,6 +25,7 @@ from fe_mpm import parallel
 from fe_mpm._dolfinx import FormFactory, dolfinx
 from fe_mpm.forms.ghost import GHOST_FACETS, ghost_penalty
 from fe_mpm.formulations import GridFields
+from fe_mpm.transfer import summed_over_ranks
 
 #: A cell filled less than this (points' volume / cell volume) is poorly filled.
 POORLY_FILLED = 0.5
@@ -87,6 +88,7 @@ class GhostStabilisation:
         cell_map = mesh.topology.index_map(tdim)
         self._owned_cells = cell_map.size_local
         self._num_cells = cell_map.size_local + cell_map.num_ghosts
+        self._cell_map = cell_map
         self._cell_values = dolfinx.la.vector(cell_map, bs=2)  # fill, count
         self._force = dolfinx.fem.Function(W)
         self.pattern = self._bind(self._interior)
@@ -116,17 +118,20 @@ class GhostStabilisation:
         """Pick the step's ghost facets and assemble G there.
 
         Args:
-            cells: The (owned) cell of each of this rank's points (n,).
+            cells: The cell of each of this rank's points (n,): owned, or with point
+                domains a ghost too (another rank's, whose pieces lie there).
             volume: The points' volumes (n,).
-            cell_volume: The volume of every owned cell (nc,).
+            cell_volume: The volume of every cell ``cells`` may name (nc,), the owned
+                ones first.
             bcs: The step's Dirichlet conditions.
             min_points: A cell with fewer points than this is poorly filled too
                 (3 for P2: fewer leave some of its strain modes unseen).
         """
-        owned = self._owned_cells
-        fill = np.bincount(cells, weights=volume, minlength=owned)[:owned] / cell_volume[:owned]
-        count = np.bincount(cells, minlength=owned)[:owned]
-        fill, count = self._with_ghosts(np.column_stack([fill, count])).T
+        local = len(cell_volume)
+        values = np.zeros((self._num_cells, 2))
+        values[:local, 0] = np.bincount(cells, weights=volume, minlength=local) / cell_volume
+        values[:local, 1] = np.bincount(cells, minlength=local)
+        fill, count = summed_over_ranks(self._cell_map, values).T
         poor = (fill < POORLY_FILLED * (1.0 - FILL_MARGIN)) | (count < min_points)
         a, b = self._cells[:, 0], self._cells[:, 1]
         ghost = (count[a] > 0) & (count[b] > 0) & (poor[a] | poor[b])

@@ -27,7 +27,7 @@ from fe_mpm._dolfinx import dolfinx
 from fe_mpm.boundary import Dirichlet, PointDirichlet, PointTraction, RigidWall, Traction
 from fe_mpm.boundary_points import BoundaryPointStep
 from fe_mpm.checks import check_finite, check_int, check_range
-from fe_mpm.domains import PointDomains, step_with_domains
+from fe_mpm.domains import DOMAIN_GHOST_LAYERS, PointDomains, step_with_domains
 from fe_mpm.dynamics import NewmarkDynamics
 from fe_mpm.errors import ConvergenceError, PointsOutsideError, warn
 from fe_mpm.forms.mixed_up import PPPData
@@ -52,7 +52,7 @@ from fe_mpm.step_forms import (
     StepInProgress,
 )
 from fe_mpm.tracker import Tracker
-from fe_mpm.tracking import PointTracking, check_points_per_cell
+from fe_mpm.tracking import PointTracking, check_points_per_cell, occupied_cells_anywhere
 from fe_mpm.walls import RigidWalls, write_wall_forces
 
 #: A run ends when less than this fraction of its nominal step is left to ``t_end``.
@@ -144,7 +144,9 @@ class Simulation:
             a nearly unsupported node (:func:`fe_mpm.point_update.checked_update`).
         point_domains: True: each point's volume is spread over the cells its
             convected domain covers (:mod:`fe_mpm.domains`; P2 in 2D only), against the
-            cell-crossing error; False (default): standard MPM.
+            cell-crossing error; False (default): standard MPM. Under MPI the grid is
+            then rebuilt at set-up with the ghost cells the domains need
+            (:data:`fe_mpm.domains.DOMAIN_GHOST_LAYERS`).
         shared_increment: With point domains, whether every piece of a domain takes
             its point's increment, the mean of the grid's over the pieces, with the
             exact Jacobian (:mod:`fe_mpm.shared_increment`; P1 only); False
@@ -217,7 +219,7 @@ class Simulation:
         model_checks.check_shared_increment(shared_increment, point_domains, self.spec)
         model_checks.check_serial_only(
             mesh.comm,
-            {"point_domains=True": bool(point_domains)},
+            {"shared_increment=True": bool(shared_increment)},
         )
         model_checks.check_law(material, self.spec, formulation)
         model_checks.take_density(material, points)
@@ -264,25 +266,30 @@ class Simulation:
         self._wall_rows = 0  # steps whose wall forces are in the output's walls.csv
         self._shared = bool(shared_increment)
         self._shift: SharedIncrement | None = None
+        # Under MPI a point's domain covers cells past its rank's, across a vertex too.
+        self._ghost_layers = DOMAIN_GHOST_LAYERS if point_domains and mesh.comm.size > 1 else 0
+        self.domains = None
         self._set_grid(mesh, facet_tags)
         self._add_time("setup", t0)
         self._track()  # once now, so a bad initial layout fails at set-up
-        self.domains = None
-        if point_domains:
-            self.domains = PointDomains(
-                points,
-                self.tracker,
-                self.spec.u_degree,
-                self.spec.volume_average,
-                self._shared,
-            )
         self._ghost_factor = model_checks.ghost_factor(
             ghost_penalty, point_domains, self.spec.u_degree
         )
         self.ghost = None
-        self._set_ghost_penalty()
         #: Grid repartitions so far (:meth:`rebalance`).
         self.repartitions = 0
+        if self._ghost_layers:  # the grid again, with the ghost cells the domains need
+            self.rebalance()
+            self._track()
+        if point_domains:
+            self.domains = PointDomains(
+                points,
+                self.domain_tracker,
+                self.spec.u_degree,
+                self.spec.volume_average,
+                self._shared,
+            )
+        self._set_ghost_penalty()
         self.rebalancing = balance.RebalanceRule(model_checks.check_rebalance(rebalance_above))
         if self._rebalance_if_due(imbalance(mesh.comm, len(points))):
             self._track()
@@ -304,6 +311,10 @@ class Simulation:
         """
         self.mesh, self.facet_tags = mesh, facet_tags
         self.tracker = Tracker(mesh)
+        #: The tracker that cuts the point domains: with this rank's ghost cells under MPI.
+        self.domain_tracker = Tracker(mesh, ghosts=True) if self._ghost_layers else self.tracker
+        if self.domains is not None:
+            self.domains.regrid(self.domain_tracker)
         if self.tracking is None:
             self.tracking = PointTracking(self.tracker, self._given["points_leaving"])
         else:
@@ -400,7 +411,7 @@ class Simulation:
         t0 = time.perf_counter()
         old, home = self.mesh, self.tracking._home
         weights = balance.cell_weights(self.tracker.num_cells, self.points.cell)
-        mesh = balance.repartitioned(old, weights)
+        mesh = balance.repartitioned(old, weights, self._ghost_layers)
         tags = self.facet_tags
         if tags is not None:
             tags = balance.carried_facet_tags(tags, old, mesh)
@@ -576,7 +587,11 @@ class Simulation:
         )
 
         t0 = time.perf_counter()
-        boundary = None if self._boundary is None else self._boundary.locate(layout.occupied, t_new)
+        boundary = None
+        if self._boundary is not None:  # in the owned cells that hold material on any rank
+            owned = self._boundary.tracker.num_cells
+            occupied = occupied_cells_anywhere(self.mesh, layout.occupied, owned)
+            boundary = self._boundary.locate(occupied, t_new)
         nslot_b = 0 if boundary is None else boundary.nslot
         forms = self._forms.get(layout.nslot, nslot_b)
         self._forms.set_step_length(t_new - self.t)
@@ -633,7 +648,10 @@ class Simulation:
 
     def _track(self, step: int = 0, t: float = 0.0, hold: bool = False) -> SlotLayout:
         t0 = time.perf_counter()
-        layout = self.tracking.track(self.points, self.markers, step, t, hold)
+        if self.domains is not None and self.domains.active:  # pieces know their cells
+            layout = self.tracking.lay_out(self.points.cell, step, t)
+        else:
+            layout = self.tracking.track(self.points, self.markers, step, t, hold)
         self._add_time("tracking", t0)
         return layout
 

@@ -50,14 +50,20 @@ class Tracker:
     Args:
         mesh: Triangle or tetrahedron mesh with affine geometry.
         max_walk: Walk steps before a point is handed to the tree search.
+        ghosts: Whether this rank's ghost cells count too (after the owned ones, in
+            DOLFINx's local order). A point belongs to the rank that owns its cell,
+            so the points are tracked in the owned cells only; the point domains'
+            pieces (:mod:`fe_mpm.domains`) are cut from ghost cells as well.
     """
 
-    def __init__(self, mesh: dolfinx.mesh.Mesh, max_walk: int = 32):
+    def __init__(self, mesh: dolfinx.mesh.Mesh, max_walk: int = 32, ghosts: bool = False):
         self.mesh = mesh
         self.max_walk = max_walk
         tdim = mesh.topology.dim
         gdim = mesh.geometry.dim
-        self.num_cells = mesh.topology.index_map(tdim).size_local
+        cell_map = mesh.topology.index_map(tdim)
+        #: Cells this tracker searches: the owned ones, and with ``ghosts`` the ghosts.
+        self.num_cells = cell_map.size_local + (cell_map.num_ghosts if ghosts else 0)
         nodes_of = mesh.geometry.dofmaps[0][: self.num_cells]
         X = mesh.geometry.x[:, :gdim]
         nodes = X[nodes_of]  # (nc, t+1, g)
@@ -368,10 +374,12 @@ class Tracker:
 
     def _tree_search(self, x: np.ndarray) -> np.ndarray:
         if self._tree is None:
-            # Owned cells only: a point on a facet between an owned cell and a ghost
-            # must not be reported in the ghost, which belongs to another rank.
-            owned = np.arange(self.num_cells, dtype=np.int32)
-            self._tree = dolfinx.geometry.bb_tree(self.mesh, self.mesh.topology.dim, entities=owned)
+            # Without ``ghosts``, owned cells only: a point on a facet between an owned
+            # cell and a ghost must not be reported in the ghost, another rank's.
+            searched = np.arange(self.num_cells, dtype=np.int32)
+            self._tree = dolfinx.geometry.bb_tree(
+                self.mesh, self.mesh.topology.dim, entities=searched
+            )
         pts = np.zeros((x.shape[0], 3))
         pts[:, : x.shape[1]] = x
         candidates = dolfinx.geometry.compute_collisions_points(self._tree, pts)

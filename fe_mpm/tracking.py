@@ -20,6 +20,7 @@ from fe_mpm.migration import migrate, send
 from fe_mpm.particles import MaterialPoints
 from fe_mpm.quadrature import SlotLayout, slot_count
 from fe_mpm.tracker import Tracker
+from fe_mpm.transfer import summed_over_ranks
 
 #: A held point may lie this far outside its old cell (the least barycentric coordinate).
 HOLD_REACH = 0.5
@@ -97,9 +98,17 @@ class PointTracking:
         if parallel.any_rank(comm, outside.size > 0):
             cells = self._drop(points, markers, cells, outside, where)
         points.cell = cells
+        return self.lay_out(cells, step, t)
+
+    def lay_out(self, cells: np.ndarray, step: int = 0, t: float = 0.0) -> SlotLayout:
+        """The slot layout of points in ``cells`` (n,), found already (the domains' pieces).
+
+        Collective: the slot count is the same on every rank.
+        """
         try:
-            self._nslot = slot_count(np.bincount(cells), self._nslot, comm)
+            self._nslot = slot_count(np.bincount(cells), self._nslot, self.tracker.mesh.comm)
         except ValueError as err:  # the points piled up: say where and when
+            where = f"step {step} (t = {t:g})" if step else "set-up"
             raise ValueError(f"{where}: {err}") from None
         return SlotLayout.from_cells(cells, self._nslot)
 
@@ -167,6 +176,24 @@ def _outside_message(points: MaterialPoints, outside: np.ndarray, where: str, co
         f"{count} material point(s) left the grid at {where}; first: "
         f"point {first} at x = {points.x[first]}"
     )
+
+
+def occupied_cells_anywhere(
+    mesh: dolfinx.mesh.Mesh, occupied: np.ndarray, owned: int
+) -> np.ndarray:
+    """This rank's owned cells (sorted) that hold material here or on another rank.
+
+    ``occupied`` (sorted) are the cells this rank's points lie in, ghost cells
+    included (point domains put pieces there); ``owned``: this rank's owned cells.
+    Collective under MPI.
+    """
+    if mesh.comm.size == 1:
+        return occupied
+    cell_map = mesh.topology.index_map(mesh.topology.dim)
+    held = np.zeros(cell_map.size_local + cell_map.num_ghosts)
+    held[occupied] = 1.0
+    held = summed_over_ranks(cell_map, held)
+    return np.flatnonzero(held[:owned] > 0).astype(occupied.dtype)
 
 
 def check_points_per_cell(

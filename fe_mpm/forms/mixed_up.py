@@ -89,9 +89,11 @@ class PPPData:
         centroid = dolfinx.fem.Function(dg0_vec, name="centroid")
         cells = np.arange(centroids.shape[0])
         centroid.x.array.reshape(-1, g)[dg0_vec.dofmap.list[cells, 0]] = centroids
+        centroid.x.scatter_forward()  # given for owned cells; the ghosts' too are integrated
         fill = dolfinx.fem.Function(dg0, name="fill")
         # In the material-point subdomain, so one kernel does both; the fill
-        # is packed per entity (zero on a cell's copies), so each cell counts once.
+        # is packed per entity (zero on a cell's copies), so each cell counts once;
+        # under MPI each rank packs its own points' share of a cell's fill.
         dx2 = ufl.Measure(
             "dx", domain=mesh, subdomain_id=OCCUPIED, metadata={"quadrature_degree": 2}
         )
