@@ -628,11 +628,11 @@ def test_point_domains_give_the_serial_answer_on_two_and_three_ranks(tmp_path):
     repartitioned as it goes, and the rough strip footing on h = 0.2 B (7 steps to
     s/B = 0.35; from the sixth some domains have distorted and are redrawn).
     Measured against serial: the same iterations, the tip, the mass centre and q to
-    5e-12 relative (the bound is 1e-9), and points move between ranks. The footing's redrawn domains used the
-    pieces of their old shapes for a step in serial, which 2 ranks did not (q moved
-    by 3 %); and a corner past the grid's edge took the cell of the lower local
-    number among equally good ones, which differs between partitions (the block's
-    mass centre moved by 7e-7)."""
+    5e-12 relative (the bound is 1e-9), and points move between ranks. Two defects
+    this caught: the footing's redrawn domains used the pieces of their old shapes
+    for a step in serial, which 2 ranks did not (q moved by 3 %); and a corner past
+    the grid's edge took the cell of the lower local number among equally good ones,
+    which differs between partitions (the block's mass centre moved by 7e-7)."""
     (serial,) = _run(tmp_path, "domains", 1)
     assert max(serial["footing"]["resets"]) > 0
     for ranks in (2, 3):
