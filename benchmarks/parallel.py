@@ -23,6 +23,8 @@ Scenes (``--scenes``):
   ``collapse-balanced`` is the same with the grid partitioned by its points
   (``--rebalance-above 1.25``). The answer is the run-out so far; the collapse is
   chaotic at round-off (docs/limitations.md), so it moves with the partition.
+  ``collapse-domains`` runs it with point domains (``--point-domains``), whose grid
+  is partitioned by its points at set-up, with two vertex layers of ghost cells.
 
 On a machine with 2 cores, 2 ranks is the most that measures speed.
 
@@ -64,6 +66,11 @@ SCENES = {
     "collapse": (COLLAPSE, lambda out: out["runout"], "d_inf"),
     "collapse-balanced": (
         [*COLLAPSE, "--rebalance-above", "1.25"],
+        lambda out: out["runout"],
+        "d_inf",
+    ),
+    "collapse-domains": (
+        [*COLLAPSE, "--point-domains"],
         lambda out: out["runout"],
         "d_inf",
     ),
