@@ -310,6 +310,11 @@ try:
                         "tip": [scenes.footing_pressure(r) for r in steps],
                         "migrated": sum(r.migrated_points for r in steps), "resets": resets},
         }
+    elif case == "domains past the ghosts":
+        import fe_mpm.simulation
+        fe_mpm.simulation.DOMAIN_GHOST_LAYERS = 0  # no ghost cells to cut the domains by
+        cook("up", 16, 4, load=5 / 16, margin=4, point_domains=True, min_step=0.5)
+        result = "finished"
     elif case == "no ghost layer":
         mesh = dolfinx.mesh.create_rectangle(MPI.COMM_WORLD, [(0, 0), (1, 1)], (8, 8),
                                              ghost_mode=dolfinx.mesh.GhostMode.none)
@@ -644,6 +649,14 @@ def test_point_domains_give_the_serial_answer_on_two_and_three_ranks(tmp_path):
                 assert got["migrated"] > 0, case
             assert result["footing"]["resets"] == serial["footing"]["resets"]
             assert result["3D block"]["repartitions"] > 1
+
+
+def test_a_domain_past_a_ranks_ghost_cells_stops_every_rank_with_one_message(tmp_path):
+    """Without ghost cells to cut by, a domain reaching into another rank's cells would
+    lose its pieces there: every rank stops, naming the corner."""
+    lines = _run(tmp_path, "domains past the ghosts", 2)
+    assert all(line["error"] == "ConvergenceError" for line in lines), lines
+    assert all("lies past the cells this MPI rank holds" in x["message"] for x in lines)
 
 
 def test_the_ghost_penalty_on_a_grid_without_ghost_cells_is_refused_on_every_rank(tmp_path):
