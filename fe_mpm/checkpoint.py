@@ -3,8 +3,9 @@
 A checkpoint is a folder ``step_NNNNNN`` holding
 
 - ``points_rNNNN.npz``, one piece per rank that wrote it: every per-point field of
-  :class:`~fe_mpm.particles.MaterialPoints` and the law's history, and the markers
-  these points host;
+  :class:`~fe_mpm.particles.MaterialPoints` and the law's history, the markers
+  these points host, and with point domains each point's domain (its corners and
+  the shape quality it was drawn with, :mod:`fe_mpm.domains`);
 - ``shared.npz``: the boundary points' positions, the markers' positions and the
   rigid walls' springs (their extension at each node, by the node's grid input index);
 - ``state.json``: what the run is (fe-mpm version, formulation, law and its
@@ -42,7 +43,7 @@ from fe_mpm import balance, parallel
 from fe_mpm.particles import PER_POINT_FIELDS, MaterialPoints
 
 #: Version of the checkpoint layout; a reader refuses any other.
-FORMAT = 2
+FORMAT = 3
 #: The per-point fields a checkpoint keeps (the cell is found again on restart).
 SAVED_FIELDS = tuple(name for name in PER_POINT_FIELDS if name != "cell")
 #: What ``state.json`` must hold, and each entry of its ``pieces``.
@@ -88,11 +89,6 @@ def write(sim, directory: str | Path) -> Path:
     Returns:
         The checkpoint folder.
     """
-    if sim.domains is not None:
-        raise NotImplementedError(
-            "Simulation.checkpoint: point domains are not checkpointed yet "
-            "(point_domains=True); run without them to checkpoint"
-        )
     comm = sim.mesh.comm
     final = folder_for(directory, sim.step_number)
     partial = final.with_name(final.name + ".partial")
@@ -108,6 +104,8 @@ def write(sim, directory: str | Path) -> Path:
     arrays = {name: getattr(sim.points, name) for name in SAVED_FIELDS}
     arrays.update({f"history.{k}": v for k, v in sim.points.history.items()})
     arrays.update({f"marker.{k}": np.array(h) for k, h in sim.markers.hosts().items()})
+    if sim.domains is not None:
+        arrays["domain_corners"], arrays["domain_quality"] = sim.domains.saved_state()
     home = sim.tracking._home  # the accepted step's cells, where a retry may hold the points
     if parallel.all_ranks(comm, home is not None):  # by original index: any partition reads it
         arrays["home_cell"] = balance.original_indices(sim.mesh, home)
@@ -119,6 +117,7 @@ def write(sim, directory: str | Path) -> Path:
     parallel.raise_together(comm, error)
     pieces = comm.gather({"file": piece, "points": len(sim.points), "sha256": digest})
     fingerprint, dropped = scene(sim), sim.dropped  # collective: before rank 0 goes alone
+    resets = 0 if sim.domains is None else int(parallel.total(comm, sim.domains.resets))
     springs = sim.walls.springs()
     if comm.rank == 0:
         try:
@@ -134,6 +133,7 @@ def write(sim, directory: str | Path) -> Path:
                 "t": sim.t,
                 "step": sim.step_number,
                 "dropped": dropped,
+                "domain_resets": resets,
                 "slots": sim.tracking._nslot,
                 "boundary_slots": None if sim._boundary is None else sim._boundary._nslot,
                 "ranks": comm.size,
@@ -166,8 +166,6 @@ def read(sim, path: str | Path) -> None:
             scene, or a file is missing or does not match its checksum; ``sim``
             is left as it was.
     """
-    if sim.domains is not None:
-        raise NotImplementedError("Simulation.restore: point domains are not checkpointed yet")
     comm = sim.mesh.comm
     path = Path(path)
     if not (path / "state.json").is_file() and path.is_dir():
@@ -187,6 +185,7 @@ def read(sim, path: str | Path) -> None:
         loaded = [_load(path / p["file"], p["sha256"], p["points"]) for p in mine]
         shared = _load(path / "shared.npz", state["shared_sha256"], None)
         points = _joined(loaded, sim)
+        domains = _joined_domains(loaded, sim, path)
     except CheckpointError as err:
         error = err
     parallel.raise_together(comm, error)
@@ -224,6 +223,9 @@ def read(sim, path: str | Path) -> None:
     sim.t, sim.step_number = float(state["t"]), int(state["step"])
     sim.tracking._nslot = state["slots"]
     sim.tracking.dropped = int(state["dropped"]) if comm.rank == 0 else 0
+    if sim.domains is not None:
+        resets = int(state.get("domain_resets", 0)) if comm.rank == 0 else 0
+        sim.domains.restore_state(*domains, resets, sim.domain_tracker)
     # Where a retry of the next step may hold the points: the cells of the last step.
     sim.tracking.forget()
     # Not kept before the first step; a rank that read no piece has no points to hold.
@@ -232,7 +234,10 @@ def read(sim, path: str | Path) -> None:
         original = np.concatenate(original) if original else np.zeros(0, dtype=np.int64)
         sim.tracking._home = balance.owners_of_original_cells(sim.mesh, original)
     sim._current = None
-    sim._track(sim.step_number, sim.t)  # each point to the rank that owns its cell
+    if sim.domains is None:
+        sim._track(sim.step_number, sim.t)  # each point to the rank that owns its cell
+    else:  # each point, with its domain, to the rank that owns its cell
+        sim.tracking.migrated = sim.domains.migrate(pts, markers, sim.tracker)
 
 
 def scene(sim) -> dict:
@@ -254,6 +259,7 @@ def scene(sim) -> dict:
         "cells": int(mesh.topology.index_map(tdim).size_global),
         "extent": [np.asarray(low).tolist(), np.asarray(high).tolist()],
         "boundary_points": 0 if sim._boundary is None else len(sim._boundary.points),
+        "point_domains": sim.domains is not None,
     }
 
 
@@ -340,6 +346,28 @@ def _load(file: Path, sha256: str, count: int | None) -> dict:
         if missing or len(arrays["x"]) != count:
             raise CheckpointError(f"checkpoint file {file} lacks {missing or 'points'}")
     return arrays
+
+
+def _joined_domains(pieces: list[dict], sim, path: Path) -> tuple[np.ndarray, np.ndarray]:
+    """This rank's pieces' domains: corners (n, d + 1, d) and drawn quality (n,).
+
+    Empty without point domains.
+    """
+    if sim.domains is None:
+        return np.zeros((0, sim.gdim + 1, sim.gdim)), np.zeros(0)
+    if any("domain_corners" not in p or "domain_quality" not in p for p in pieces):
+        raise CheckpointError(f"checkpoint {path}: a piece lacks its points' domains")
+    shape = (-1, sim.gdim + 1, sim.gdim)
+    corners = [np.reshape(p["domain_corners"], shape) for p in pieces]
+    if any(
+        len(c) != len(p["x"]) or len(p["domain_quality"]) != len(p["x"])
+        for c, p in zip(corners, pieces, strict=True)
+    ):
+        raise CheckpointError(f"checkpoint {path}: a piece has a domain count unlike its points'")
+    quality = [p["domain_quality"] for p in pieces]
+    if not corners:
+        return np.zeros((0, sim.gdim + 1, sim.gdim)), np.zeros(0)
+    return np.concatenate(corners), np.concatenate(quality)
 
 
 def _joined(pieces: list[dict], sim) -> MaterialPoints:

@@ -198,6 +198,19 @@ class PointDomains:
         self._boxes = (tracker.cell_vertices.min(axis=1), tracker.cell_vertices.max(axis=1))
         self._ready = None  # pieces numbered by the old grid's cells
 
+    def saved_state(self) -> tuple[np.ndarray, np.ndarray]:
+        """What a checkpoint keeps: the corners (n, d + 1, d) and the drawn quality (n,)."""
+        return self.corners, self._drawn_quality
+
+    def restore_state(
+        self, corners: np.ndarray, quality: np.ndarray, resets: int, tracker: Tracker
+    ) -> None:
+        """Take a checkpoint's domains (:meth:`saved_state`), of the points read with them."""
+        self.corners, self._moved = corners, corners
+        self._drawn_quality, self.resets = quality, resets
+        self._pieces = None
+        self.regrid(tracker)
+
     def migrate(self, points: MaterialPoints, markers: Markers, tracker: Tracker) -> int:
         """Send each point, with its domain, to the rank that owns the cell it lies in.
 
@@ -216,7 +229,7 @@ class PointDomains:
         n, v, g = self.corners.shape
         # The corners, the quality they were drawn with, and the cell each point is in.
         carried = np.column_stack(
-            [self.corners.reshape(n, -1), self._drawn_quality, points.cell.astype(float)]
+            [self.corners.reshape(n, v * g), self._drawn_quality, points.cell.astype(float)]
         )
         cells, moved, carried = migrate(points, markers, tracker, cells, carried, ties)
         self.corners = np.ascontiguousarray(carried[:, : v * g]).reshape(-1, v, g)
@@ -251,6 +264,10 @@ class PointDomains:
             ConvergenceError: A domain's pieces do not add up to it (a degenerate one).
         """
         n, v, g = corners.shape
+        if n == 0:  # a rank without points, under MPI
+            self._outside = np.zeros((0, g))
+            none, cells = np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int32)
+            return Pieces(none, cells, np.zeros(0), np.zeros((0, g)), cells, np.zeros((0, v)))
         corner_cells = tracker.locate(corners.reshape(-1, g), np.repeat(guess, v))
         outside = corner_cells < 0
         self._outside = corners.reshape(-1, g)[outside]  # for _beyond_ghosts

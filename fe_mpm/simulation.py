@@ -232,11 +232,6 @@ class Simulation:
         self.petsc_options = {"snes_linesearch_type": line_search, **(petsc_options or {})}
         self.linear_solver = linear_solver
         self.max_step_cells, self.min_step = max_step_cells, min_step
-        if checkpoint_dir is not None and point_domains:
-            raise NotImplementedError(
-                "Simulation: checkpoint_dir with point_domains=True: point domains are not "
-                "checkpointed yet; run without one of them"
-            )
         self.checkpoint_dir = checkpoint_dir
         self.checkpoint_every = check_int("Simulation", "checkpoint_every", checkpoint_every, lo=1)
         self.timings: dict[str, float] = {}
