@@ -32,6 +32,27 @@ def test_the_dual_graph_joins_exactly_the_cells_that_share_a_facet(tdim):
         assert found == want, i
 
 
+@pytest.mark.parametrize("layers", [1, 2])
+def test_vertex_layers_give_each_rank_the_cells_within_that_many_vertex_hops(layers):
+    """The point domains' ghost layer (balance.with_vertex_layers): each cell lists its
+    owner first, then every other rank with a cell within ``layers`` hops across a
+    shared vertex, and no other: against a brute-force walk over vertex neighbours."""
+    mesh = meshes.rectangle_mesh((0, 0), (3, 1), (9, 3))
+    cells = _cells(mesh)
+    parts = balance.partition(cells, np.ones(len(cells), dtype=np.int64), 3)
+    data, offsets = balance.with_vertex_layers(cells, parts, 3, layers)
+    nodes = [set(c) for c in cells]
+    near = [{j for j in range(len(cells)) if nodes[i] & nodes[j]} for i in range(len(cells))]
+    for i in range(len(cells)):
+        reach = {i}
+        for _ in range(layers):
+            reach |= set().union(*(near[j] for j in reach))
+        ranks = data[offsets[i] : offsets[i + 1]].tolist()
+        assert ranks[0] == parts[i], i
+        assert sorted(ranks[1:]) == sorted({int(parts[j]) for j in reach} - {int(parts[i])}), i
+    assert offsets[-1] > len(cells)  # some cells are ghosts somewhere
+
+
 def test_a_partition_balances_the_weights_not_the_cells():
     """A 32 x 8 grid whose left quarter weighs 31 per cell (three points, weight 10
     each, plus one) and the rest 1: three parts of equal weight within METIS's 3 %
