@@ -216,8 +216,18 @@ def with_facet_neighbours(
     xadj, adjncy = graph
     cell = np.repeat(np.arange(n), np.diff(xadj))
     other = parts[adjncy]
-    pairs = np.unique(np.column_stack([cell, other])[other != parts[cell]], axis=0)
-    pairs = np.concatenate([np.column_stack([np.arange(n), parts]), pairs])
+    ghosts = np.unique(np.column_stack([cell, other])[other != parts[cell]], axis=0)
+    return _owner_first(parts, ghosts)
+
+
+def _owner_first(parts: np.ndarray, ghosts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The adjacency list (data, offsets) of each cell's owner, then its ghosts' ranks.
+
+    ``parts``: the owner of each cell (n,); ``ghosts``: (cell, rank) pairs (k, 2),
+    sorted by cell, of the ranks that hold a cell as a ghost.
+    """
+    n = len(parts)
+    pairs = np.concatenate([np.column_stack([np.arange(n), parts]), ghosts])
     pairs = pairs[np.argsort(pairs[:, 0], kind="stable")]  # the owner stays first
     offsets = np.zeros(n + 1, dtype=np.int32)
     np.cumsum(np.bincount(pairs[:, 0], minlength=n), out=offsets[1:])
@@ -253,11 +263,7 @@ def with_vertex_layers(
         np.maximum.at(at_node, cells.ravel(), np.repeat(held, k, axis=0).astype(np.uint8))
         held = at_node[cells].max(axis=1).astype(bool)
     cell, rank = np.nonzero(held & (np.arange(size)[None, :] != parts[:, None]))
-    pairs = np.concatenate([np.column_stack([np.arange(n), parts]), np.column_stack([cell, rank])])
-    pairs = pairs[np.argsort(pairs[:, 0], kind="stable")]  # the owner stays first
-    offsets = np.zeros(n + 1, dtype=np.int32)
-    np.cumsum(np.bincount(pairs[:, 0], minlength=n), out=offsets[1:])
-    return pairs[:, 1].astype(np.int32), offsets
+    return _owner_first(parts, np.column_stack([cell, rank]))
 
 
 def partition(
