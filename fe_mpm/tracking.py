@@ -94,7 +94,7 @@ class PointTracking:
         )
         self.migrated += migrated
         outside = np.flatnonzero(cells < 0)
-        where = f"step {step} (t = {t:g})" if step else "set-up"
+        where = _when(step, t)
         if parallel.any_rank(comm, outside.size > 0):
             cells = self._drop(points, markers, cells, outside, where)
         points.cell = cells
@@ -108,8 +108,7 @@ class PointTracking:
         try:
             self._nslot = slot_count(np.bincount(cells), self._nslot, self.tracker.mesh.comm)
         except ValueError as err:  # the points piled up: say where and when
-            where = f"step {step} (t = {t:g})" if step else "set-up"
-            raise ValueError(f"{where}: {err}") from None
+            raise ValueError(f"{_when(step, t)}: {err}") from None
         return SlotLayout.from_cells(cells, self._nslot)
 
     def _hold(self, points: MaterialPoints, markers: Markers, cells: np.ndarray) -> np.ndarray:
@@ -176,6 +175,11 @@ def _outside_message(points: MaterialPoints, outside: np.ndarray, where: str, co
         f"{count} material point(s) left the grid at {where}; first: "
         f"point {first} at x = {points.x[first]}"
     )
+
+
+def _when(step: int, t: float) -> str:
+    """Where a message puts a tracking: the step and its end time, or set-up (step 0)."""
+    return f"step {step} (t = {t:g})" if step else "set-up"
 
 
 def occupied_cells_anywhere(
