@@ -206,8 +206,7 @@ class PointDomains:
         self, corners: np.ndarray, quality: np.ndarray, resets: int, tracker: Tracker
     ) -> None:
         """Take a checkpoint's domains (:meth:`saved_state`), of the points read with them."""
-        self.corners, self._moved = corners, corners
-        self._drawn_quality, self.resets = quality, resets
+        self.corners, self._drawn_quality, self.resets = corners, quality, resets
         self._pieces = None
         self.regrid(tracker)
 
@@ -235,7 +234,6 @@ class PointDomains:
         self.corners = np.ascontiguousarray(carried[:, : v * g]).reshape(-1, v, g)
         self._drawn_quality = carried[:, v * g].copy()
         points.cell = np.where(cells >= 0, cells, carried[:, -1].astype(np.int32)).astype(np.int32)
-        self._moved = self.corners
         return moved
 
     def pieces(self, tracker: Tracker, guess: np.ndarray) -> Pieces:
@@ -568,15 +566,20 @@ def step_with_domains(sim, t_new: float, rebin: bool):
     points as they were. ``rebin`` is ignored: the sub-points are new every attempt,
     so none can be held in a cell of the last step.
 
-    Under MPI the points first go to the ranks that own their cells
-    (:meth:`PointDomains.migrate`); each rank then cuts its points' domains by its
-    cells and its ghosts (``sim.domain_tracker``), and assembles the pieces where
-    they lie, ghost cells included: DOLFINx adds what a rank assembles at another
-    rank's nodes to theirs.
+    Under MPI each rank cuts its points' domains by its cells and its ghosts
+    (``sim.domain_tracker``), and assembles the pieces where they lie, ghost cells
+    included: DOLFINx adds what a rank assembles at another rank's nodes to theirs;
+    after the step the points go to the ranks that own their cells
+    (:meth:`PointDomains.migrate`).
     """
     domains, points, markers, output = sim.domains, sim.points, sim.markers, sim.output
     tracker = sim.tracker
-    sim.tracking.migrated = domains.migrate(points, markers, tracker)
+    # Between steps the points lie in owned cells (below), but for those a repartition
+    # (Simulation.rebalance) left without one: they go to their new ranks first.
+    moved = 0
+    if parallel.any_rank(tracker.mesh.comm, bool(np.any(points.cell < 0))):
+        moved = domains.migrate(points, markers, tracker)
+    sim.tracking.migrated = moved
     sub = domains.sample(points, sim.domain_tracker)
     sim.points, sim.markers, sim.output, domains.active = sub, Markers(), None, True
     sim.tracker = sim.domain_tracker  # the pieces' cells include this rank's ghosts
