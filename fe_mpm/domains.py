@@ -190,6 +190,7 @@ class PointDomains:
         self.resets = 0
         self._drawn_quality = shape_quality(self.corners)
         self._outside = np.zeros((0, self.corners.shape[2]))  # corners the last cut missed
+        self._short = _no_short(self.corners.shape)  # domains the last cut found short
         self.regrid(tracker)
 
     def regrid(self, tracker: Tracker) -> None:
@@ -263,7 +264,7 @@ class PointDomains:
         """
         n, v, g = corners.shape
         if n == 0:  # a rank without points, under MPI
-            self._outside = np.zeros((0, g))
+            self._outside, self._short = np.zeros((0, g)), _no_short(corners.shape)
             none, cells = np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int32)
             return Pieces(none, cells, np.zeros(0), np.zeros((0, g)), cells, np.zeros((0, v)))
         corner_cells = tracker.locate(corners.reshape(-1, g), np.repeat(guess, v))
@@ -298,6 +299,10 @@ class PointDomains:
                 short, (owner, cell, area, rule), (more_owner, more_cell, *more)
             )
             covered = np.bincount(owner, weights=area, minlength=n) / domain_area
+        # For _beyond_ghosts: under MPI a domain short of its area may reach into
+        # another rank's cells past this rank's ghosts, between corners that are not.
+        short = covered < 1.0 - COVERAGE_TOL
+        self._short = corners[short], covered[short] * domain_area[short]
         if np.any(covered < MIN_INSIDE):
             p = int(np.argmin(covered))
             raise PointsOutsideError(
@@ -396,6 +401,7 @@ class PointDomains:
         self._reset_distorted(points, tracker)
         ready, self._ready = self._ready, None
         self._outside, error = np.zeros((0, points.gdim)), None
+        self._short = _no_short(self.corners.shape)
         try:
             if ready is not None and np.array_equal(ready[0], self.corners):
                 p = ready[1]
@@ -473,6 +479,7 @@ class PointDomains:
         before = np.linalg.det(self.corners[:, 1:] - self.corners[:, :1])
         after = np.linalg.det(moved[:, 1:] - moved[:, :1])
         self._outside, error = np.zeros((0, g)), None
+        self._short = _no_short(self.corners.shape)
         if np.any(after / before <= 0):
             bad = int(np.flatnonzero(after / before <= 0)[0])
             error = ConvergenceError(
@@ -494,26 +501,57 @@ class PointDomains:
         parallel.raise_together(tracker.mesh.comm, self._beyond_ghosts(tracker) or error)
 
     def _beyond_ghosts(self, tracker: Tracker) -> ConvergenceError | None:
-        """The error of a domain corner past this rank's cells but in another rank's.
+        """The error of a domain that reaches past this rank's cells into another rank's.
 
-        Collective. On one rank a corner in none of the tracker's cells is outside the
-        grid; under MPI it may lie past this rank's ghost layer
-        (:data:`DOMAIN_GHOST_LAYERS`), where the cut would lose the domain's pieces.
+        Collective. On one rank a domain that leaves the tracker's cells leaves the
+        grid; under MPI it may reach past this rank's ghost layer
+        (:data:`DOMAIN_GHOST_LAYERS`) instead, where the cut would lose its pieces:
+        with a corner there (in a cell DOLFINx's point ownership finds on another
+        rank), or between corners that are not (the domains the last cut found short
+        of their area, whose area in every rank's owned cells adds up to more).
         """
         comm = tracker.mesh.comm
-        if comm.size == 1 or not parallel.any_rank(comm, len(self._outside) > 0):
+        if comm.size == 1:
             return None
-        x3 = np.zeros((len(self._outside), 3))
-        x3[:, : self._outside.shape[1]] = self._outside
-        owner = dolfinx.geometry.determine_point_ownership(tracker.mesh, x3, 0.0).src_owner
-        if not np.any(owner >= 0):
+        corners, inside = self._short
+        missed = np.array([len(self._outside) > 0, len(corners) > 0], dtype=np.int8)
+        missed = parallel.largest(comm, missed)
+        where = None
+        if missed[0]:
+            x3 = np.zeros((len(self._outside), 3))
+            x3[:, : self._outside.shape[1]] = self._outside
+            owner = dolfinx.geometry.determine_point_ownership(tracker.mesh, x3, 0.0).src_owner
+            if np.any(owner >= 0):
+                where = f"its corner at x = {self._outside[np.flatnonzero(owner >= 0)[0]].tolist()}"
+        if missed[1]:
+            lost = inside < self._area_in_owned_cells(corners, tracker) * (1.0 - COVERAGE_TOL)
+            if where is None and np.any(lost):
+                where = f"its corners {corners[np.flatnonzero(lost)[0]].tolist()}"
+        if where is None:
             return None
-        first = self._outside[np.flatnonzero(owner >= 0)[0]]
         return ConvergenceError(
-            f"a point domain's corner at x = {first.tolist()} lies past the cells this MPI "
-            f"rank holds ({DOMAIN_GHOST_LAYERS} layers of ghost cells): the domain has "
-            "stretched over more cells than that. Take smaller steps, or run on fewer ranks."
+            f"a point domain ({where}) reaches past the cells this MPI rank holds "
+            f"({DOMAIN_GHOST_LAYERS} layers of ghost cells): it has stretched over more "
+            "cells than that. Take smaller steps, or run on fewer ranks."
         )
+
+    def _area_in_owned_cells(self, corners: np.ndarray, tracker: Tracker) -> np.ndarray:
+        """The area of each domain (n, d + 1, d) in the cells every rank owns, (n,).
+
+        Collective: every rank cuts every rank's domains by its owned cells, and the
+        ranks' areas add up, each cell being owned once.
+        """
+        comm, (n, v, g) = tracker.mesh.comm, corners.shape
+        counts = comm.allgather(n)
+        everyone = parallel.gathered(comm, corners.reshape(n, v * g)).reshape(-1, v, g)
+        bounds = everyone.min(axis=1), everyone.max(axis=1)
+        owner, cell = self._cells_meeting(bounds, np.ones(len(everyone), dtype=bool))
+        owned = cell < tracker.mesh.topology.index_map(tracker.mesh.topology.dim).size_local
+        owner, cell = owner[owned], cell[owned]
+        area, _ = self._overlaps(everyone, bounds, tracker, owner, cell)
+        total = parallel.total(comm, np.bincount(owner, weights=area, minlength=len(everyone)))
+        first = sum(counts[: comm.rank])
+        return total[first : first + n]
 
     def gather(self, points: MaterialPoints, sub: MaterialPoints, markers: Markers) -> None:
         """Give each point its domain's step (after :meth:`move_corners`).
@@ -595,6 +633,11 @@ def step_with_domains(sim, t_new: float, rebin: bool):
     report.markers = markers.positions()
     sim._write_output()
     return report
+
+
+def _no_short(shape: tuple) -> tuple[np.ndarray, np.ndarray]:
+    """No domain found short of its area: corners (0, d + 1, d) and areas (0,)."""
+    return np.zeros((0, *shape[1:])), np.zeros(0)
 
 
 def _corner_cells(

@@ -345,6 +345,44 @@ try:
         fe_mpm.simulation.DOMAIN_GHOST_LAYERS = 0  # no ghost cells to cut the domains by
         cook("up", 16, 4, load=5 / 16, margin=4, point_domains=True, min_step=0.5)
         result = "finished"
+    elif case == "domain across a rank":
+        # A strip of 8 × 1 cells (16 triangles); on 2 ranks, rank 1 owns those with
+        # 3 < x < 5 and rank 0 the rest, without ghosts. A domain with its corners at
+        # x = 1 and 7 covers rank 1's cells between them, which rank 0 does not hold.
+        import basix.ufl
+        import ufl
+        from fe_mpm.domains import PointDomains
+        from fe_mpm.tracker import Tracker
+        comm = MPI.COMM_WORLD
+        i = np.arange(8)
+        cells = np.vstack([np.column_stack([i, i + 1, i + 10]),
+                           np.column_stack([i, i + 10, i + 9])])
+        x = np.vstack([np.column_stack([np.arange(9.0), np.zeros(9)]),
+                       np.column_stack([np.arange(9.0), np.ones(9)])])
+        middle = np.abs(x[cells].mean(axis=1)[:, 0] - 4.0) < 1.0
+        parts = np.where(middle & (comm.size > 1), 1, 0).astype(np.int32)
+        if rank > 0:
+            cells, x, parts = cells[:0], x[:0], parts[:0]
+        destinations = dolfinx.graph.adjacencylist(parts)
+        element = ufl.Mesh(basix.ufl.element("Lagrange", "triangle", 1, shape=(2,)))
+        mesh = dolfinx.mesh.create_mesh(
+            comm, cells.astype(np.int64), element, x,
+            partitioner=lambda *args: destinations._cpp_object)
+        tracker = Tracker(mesh, ghosts=True)
+        corners = np.array([[[1.0, 0.2], [1.0, 0.8], [7.0, 0.5]]])[: 1 if rank == 0 else 0]
+        at = corners.mean(axis=1)
+        points = fe_mpm.MaterialPoints(at, np.ones(len(at)), np.ones(len(at)))
+        points.cell = tracker.locate(at, np.zeros(len(at), dtype=np.int32))
+        domains = PointDomains(points, tracker)
+        domains.corners = corners
+        error = None
+        try:
+            pieces = domains.pieces(tracker, points.cell)
+        except Exception as err:
+            error = err
+        parallel.raise_together(comm, domains._beyond_ghosts(tracker) or error)
+        area = parallel.total(comm, float(np.sum(pieces.share)))
+        result = {"shares": area, "cells": sorted(set(pieces.cell.tolist()))}
     elif case == "no ghost layer":
         mesh = dolfinx.mesh.create_rectangle(MPI.COMM_WORLD, [(0, 0), (1, 1)], (8, 8),
                                              ghost_mode=dolfinx.mesh.GhostMode.none)
@@ -697,7 +735,21 @@ def test_a_domain_past_a_ranks_ghost_cells_stops_every_rank_with_one_message(tmp
     lose its pieces there: every rank stops, naming the corner."""
     lines = _run(tmp_path, "domains past the ghosts", 2)
     assert all(line["error"] == "ConvergenceError" for line in lines), lines
-    assert all("lies past the cells this MPI rank holds" in x["message"] for x in lines)
+    assert all("reaches past the cells this MPI rank holds" in x["message"] for x in lines)
+
+
+def test_a_domain_across_another_ranks_cells_between_its_corners_stops_every_rank(tmp_path):
+    """Its corners in cells this rank owns, a domain crosses cells of another rank
+    that this rank does not hold: in serial it is cut whole, on 2 ranks every rank
+    stops, naming the domain, where the cut would have dropped the middle part and
+    spread the point's volume over the rest unnoticed."""
+    (serial,) = _run(tmp_path, "domain across a rank", 1)
+    assert serial["shares"] == pytest.approx(1.0, abs=1e-12)
+    assert len(serial["cells"]) > 8  # it covers the strip from x = 1 to 7
+    lines = _run(tmp_path, "domain across a rank", 2)
+    assert all(line["error"] == "ConvergenceError" for line in lines), lines
+    assert all("reaches past the cells this MPI rank holds" in x["message"] for x in lines)
+    assert all("its corners [[1.0, 0.2], [1.0, 0.8], [7.0, 0.5]]" in x["message"] for x in lines)
 
 
 def test_the_ghost_penalty_on_a_grid_without_ghost_cells_is_refused_on_every_rank(tmp_path):
