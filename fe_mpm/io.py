@@ -65,23 +65,11 @@ class ParticleWriter:
         n, g = points.x.shape
         xyz = np.zeros((n, 3))
         xyz[:, :g] = points.x
-        disp = np.zeros((n, 3))
-        disp[:, :g] = points.x - points.x0
-        F3 = np.tile(np.eye(3), (n, 1, 1))
-        F3[:, :g, :g] = points.F
-        data = {
-            "displacement": disp,
-            "velocity": np.pad(points.velocity, ((0, 0), (0, 3 - g))),
-            "volume": points.volume,
-            "mass": points.mass,
-            "deformation_gradient": F3.reshape(n, 9),
-            "stress": points.stress.reshape(n, 9),
-            "pressure": -np.trace(points.stress, axis1=1, axis2=2) / 3.0,
-            "cell": points.cell.astype(np.float64),
-        }
-        data.update({k: _rows(v, n) for k, v in points.history.items()})
-        data.update({k: _rows(np.asarray(v), n) for k, v in fields.items()})
         cells = [("vertex", np.arange(n, dtype=np.int64).reshape(-1, 1))]
+        return self._write(t, xyz, cells, point_data=point_fields(points, fields))
+
+    def _write(self, t: float, xyz: np.ndarray, cells: list, **data: dict) -> Path:
+        """Write one step's piece of ``xyz`` (m, 3) and ``cells`` with ``data``; list it."""
         stem = f"{self.name}_{len(self._entries):06d}"
         names = (
             [f"{stem}.vtu"]
@@ -91,7 +79,7 @@ class ParticleWriter:
         import meshio  # here: a run that writes nothing need not import it (~60 ms)
 
         fname = names[self.comm.rank]
-        meshio.write(self.folder / fname, meshio.Mesh(xyz, cells, point_data=data))
+        meshio.write(self.folder / fname, meshio.Mesh(xyz, cells, **data))
         self._entries.append((t, names))
         if self.comm.rank == 0:
             self._write_pvd()
@@ -110,6 +98,65 @@ class ParticleWriter:
         ]
         lines += ["  </Collection>", "</VTKFile>", ""]
         self.pvd.write_text("\n".join(lines))
+
+
+class DomainWriter(ParticleWriter):
+    """Writes the point domains as ``<folder>/<name>_NNNNNN.vtu`` plus ``<name>.pvd``.
+
+    Each domain (:mod:`fe_mpm.domains`) is a triangle or tetrahedron of its own
+    corners, carrying its point's fields as cell data (those of
+    :meth:`ParticleWriter.write`), so ParaView shows how the body is tiled and where
+    domains stretch or were redrawn. Under MPI, pieces per rank as for the points.
+    """
+
+    def __init__(self, folder: str | Path, name: str = "domains", comm: MPI.Comm = MPI.COMM_SELF):
+        super().__init__(folder, name, comm)
+
+    def write(
+        self, t: float, points: MaterialPoints, corners: np.ndarray, **fields: np.ndarray
+    ) -> Path:
+        """Write one step of domains.
+
+        Args:
+            t: Time (s), or pseudo-time in static runs.
+            points: The material points, one per domain.
+            corners: The domains' vertices (n, g + 1, g) in m.
+            fields: More per-point arrays of leading dimension n.
+        """
+        n, v, g = corners.shape
+        xyz = np.zeros((n * v, 3))
+        xyz[:, :g] = corners.reshape(n * v, g)
+        cells = [
+            ("triangle" if g == 2 else "tetra", np.arange(n * v, dtype=np.int64).reshape(n, v))
+        ]
+        data = point_fields(points, fields)
+        return self._write(t, xyz, cells, cell_data={k: [a] for k, a in data.items()})
+
+
+def point_fields(points: MaterialPoints, fields: dict) -> dict[str, np.ndarray]:
+    """The per-point arrays fe-mpm writes, one row per point, vectors and tensors in 3D.
+
+    Displacement, velocity, volume, mass, F, stress, pressure, the cell, the material's
+    history (e.g. ``plastic_strain``) and ``fields`` (arrays of leading dimension n).
+    """
+    n, g = points.x.shape
+    disp = np.zeros((n, 3))
+    disp[:, :g] = points.x - points.x0
+    F3 = np.tile(np.eye(3), (n, 1, 1))
+    F3[:, :g, :g] = points.F
+    data = {
+        "displacement": disp,
+        "velocity": np.pad(points.velocity, ((0, 0), (0, 3 - g))),
+        "volume": points.volume,
+        "mass": points.mass,
+        "deformation_gradient": F3.reshape(n, 9),
+        "stress": points.stress.reshape(n, 9),
+        "pressure": -np.trace(points.stress, axis1=1, axis2=2) / 3.0,
+        "cell": points.cell.astype(np.float64),
+    }
+    data.update({k: _rows(v, n) for k, v in points.history.items()})
+    data.update({k: _rows(np.asarray(v), n) for k, v in fields.items()})
+    return data
 
 
 def _rows(values: np.ndarray, n: int) -> np.ndarray:

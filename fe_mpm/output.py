@@ -1,7 +1,9 @@
 """What a run writes for ParaView: the points at every written step, and the grid's.
 
 ``particles.pvd`` holds the material points (positions, stress, pressure, F,
-volume, history; :class:`~fe_mpm.io.ParticleWriter`), ``grid.bp`` the grid
+volume, history; :class:`~fe_mpm.io.ParticleWriter`), with point domains
+``domains.pvd`` their domains, each a cell with its point's fields
+(:class:`~fe_mpm.io.DomainWriter`), ``grid.bp`` the grid
 displacement increment of the step and, for the mixed forms, ``grid_pressure.bp``
 the grid pressure (ADIOS2 files that ParaView opens with its VTX reader). After
 the N-th repartition of the grid under MPI the grid's files are ``grid_N.bp`` and
@@ -12,9 +14,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
+
 from fe_mpm._dolfinx import dolfinx
 from fe_mpm.formulations import GridFields, collapse
-from fe_mpm.io import ParticleWriter
+from fe_mpm.io import DomainWriter, ParticleWriter
 from fe_mpm.particles import MaterialPoints
 
 
@@ -25,12 +29,17 @@ class SimulationOutput:
         folder: Where to write (created if missing).
         fields: The grid unknowns: Δu, or (Δu, p).
         every: Write every this many steps, ≥ 1.
+        domains: Whether the points carry domains, written as ``domains.pvd``.
     """
 
-    def __init__(self, folder: str | Path, fields: GridFields, every: int = 1):
+    def __init__(
+        self, folder: str | Path, fields: GridFields, every: int = 1, domains: bool = False
+    ):
         self.folder, self.fields, self.every = Path(folder), fields, int(every)
         self._written_step = -1
-        self._points = ParticleWriter(self.folder, comm=fields.W.mesh.comm)
+        comm = fields.W.mesh.comm
+        self._points = ParticleWriter(self.folder, comm=comm)
+        self._domains = DomainWriter(self.folder, comm=comm) if domains else None
         self._grids = 0  # grids written so far: a repartition starts another
         self._open_grid()
 
@@ -71,16 +80,26 @@ class SimulationOutput:
             p_map,
         ]
 
-    def write(self, step: int, t: float, points: MaterialPoints, force: bool = False) -> bool:
+    def write(
+        self,
+        step: int,
+        t: float,
+        points: MaterialPoints,
+        force: bool = False,
+        corners: np.ndarray | None = None,
+    ) -> bool:
         """Write the state after ``step`` at time ``t`` if it is due; True if written.
 
         A step is written once, when it is a multiple of ``every`` or ``force`` is set
-        (the first and the last frame of a run).
+        (the first and the last frame of a run). ``corners``: the points' domains
+        (n, g + 1, g) in m, written when the output was opened with ``domains``.
         """
         if step == self._written_step or (not force and step % self.every):
             return False
         self._written_step = step
         self._points.write(t, points)
+        if self._domains is not None:
+            self._domains.write(t, points, corners)
         for out, dofs in zip(self._grid, self._maps, strict=True):
             out.x.array[:] = self.fields.w.x.array[dofs]
         for writer in self._writers:

@@ -289,7 +289,9 @@ class Simulation:
         if self._rebalance_if_due(imbalance(mesh.comm, len(points))):
             self._track()
         if output_dir is not None:  # on the grid the run starts on
-            self.output = SimulationOutput(output_dir, self.fields, output_every)
+            self.output = SimulationOutput(
+                output_dir, self.fields, output_every, domains=self.domains is not None
+            )
 
     def _set_ghost_penalty(self) -> None:
         """The ghost penalty on the current grid (none if its factor is 0)."""
@@ -731,7 +733,8 @@ class Simulation:
 
     def _write_output(self, force: bool = False) -> None:
         t0, out = time.perf_counter(), self.output
-        if out is not None and out.write(self.step_number, self.t, self.points, force=force):
+        corners = None if self.domains is None else self.domains.corners
+        if out is not None and out.write(self.step_number, self.t, self.points, force, corners):
             if self.walls and self.history and parallel.on_rank_zero(self.mesh.comm):
                 # The rows of the steps since the last output only: a long run's file
                 # grows by its new steps, not rewritten whole.

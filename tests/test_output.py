@@ -122,3 +122,33 @@ def test_a_run_writes_the_state_of_its_points_at_every_step(tmp_path):
     )
     assert np.array_equal(last.point_data["plastic_strain"], points.history["plastic_strain"])
     assert last.point_data["plastic_strain"].max() > 0
+
+
+def test_a_run_with_point_domains_writes_each_domain_as_a_cell_with_its_points_fields(tmp_path):
+    """Cook, Neo-Hookean, u-p, point domains, 5 N over 4 steps on n = 8:
+    ``domains.pvd`` lists the frames of ``particles.pvd``, and in each frame every
+    point's domain is one triangle of its corners, centred on the point, with
+    the point's stress and volume; the triangles' areas add up to the body's volume
+    (no domain is redrawn here, so the domains tile the body as they move)."""
+    sim = scenes.cook_membrane(
+        8, traction=5 / 16, margin=2, output_dir=tmp_path, point_domains=True
+    )
+    sim.run(1.0, 4, progress=False)
+    assert sim.domains.resets == 0
+    frames = _frames(tmp_path / "domains.pvd")
+    assert [t for t, _ in frames] == [t for t, _ in _frames(tmp_path / "particles.pvd")]
+    assert len(frames) == 5
+    for _, name in (frames[0], frames[-1]):
+        mesh = meshio.read(tmp_path / name)
+        (block,) = mesh.cells
+        assert block.type == "triangle" and len(block.data) == len(sim.points)
+        corners = mesh.points[block.data][:, :, :2]
+        centroids = corners.mean(axis=1)
+        particles = meshio.read(tmp_path / name.replace("domains", "particles"))
+        np.testing.assert_allclose(centroids, particles.points[:, :2], rtol=0, atol=1e-12)
+        for field in ("stress", "volume", "deformation_gradient"):
+            assert np.array_equal(mesh.cell_data[field][0], particles.point_data[field])
+        edges = corners[:, 1:] - corners[:, :1]
+        areas = 0.5 * np.abs(np.linalg.det(edges))
+        assert areas.sum() == pytest.approx(particles.point_data["volume"].sum(), rel=1e-10)
+    assert np.array_equal(corners, sim.domains.corners)
