@@ -166,6 +166,30 @@ def test_a_residual_that_stays_above_its_smallest_for_stall_iterations_stops_the
         assert test(None, it, (0.0, 0.0, 1.0)) == Reason.ITERATING
 
 
+def test_a_residual_that_crawls_down_by_less_than_a_thousandth_stops_the_solve():
+    """A backtracking line search that has lost its way lowers ‖R‖ a little at every
+    iterate (the strip footing with point domains: 2.893 in the fourth digit for 19
+    iterations): six iterates in a row that gain less than 0.1 % over the smallest
+    stop the solve, where any new smallest used to restart the count; an iterate that
+    gains more restarts it."""
+    Reason = PETSc.SNES.ConvergedReason
+    test = ForceTest(rtol=1e-10, atol=0.0, max_it=50, length=1.0)
+    test.loads, test.displacement_norm = 1.0, 1.0  # never passes
+    assert test(None, 0, (0.0, 0.0, 344.2)) == Reason.ITERATING
+    assert test(None, 1, (0.0, 0.0, 3.057)) == Reason.ITERATING
+    crawl = 2.893 * (1.0 - 1e-4) ** np.arange(3 * STALL_ITERATIONS)
+    assert test(None, 2, (0.0, 0.0, crawl[0])) == Reason.ITERATING  # 5 % lower: progress
+    for it in range(3, 3 + STALL_ITERATIONS - 1):
+        assert test(None, it, (0.0, 0.0, crawl[it - 2])) == Reason.ITERATING
+    reason = test(None, 3 + STALL_ITERATIONS - 1, (0.0, 0.0, crawl[STALL_ITERATIONS]))
+    assert reason == Reason.DIVERGED_DTOL and test.verdict.startswith("stalled")
+    assert test.smallest == crawl[STALL_ITERATIONS]  # the smallest is still tracked
+    # Gaining 0.2 % an iterate is progress, however long it lasts.
+    assert test(None, 0, (0.0, 0.0, 344.2)) == Reason.ITERATING
+    for it, norm in enumerate(2.893 * 0.998 ** np.arange(4 * STALL_ITERATIONS), start=1):
+        assert test(None, it, (0.0, 0.0, norm)) == Reason.ITERATING
+
+
 def test_the_pressure_rows_are_judged_against_the_nodal_volumes():
     """‖V‖ of the pressure rows: each point's volume shared among its cell's nodes by
     N_I(x_p). With seed's symmetric 3-point rule, equal volumes |K|/3, every node of a
