@@ -56,6 +56,10 @@ def install(venv: Path) -> None:
 def whole_process(cmd: list[str]) -> tuple[float, dict]:
     """Wall time (s) of one process and the JSON record on its last line."""
     env = dict(os.environ, OMP_NUM_THREADS="1")
+    # pip compiled Kratos's modules to bytecode at install; fe-mpm, installed editable,
+    # writes its own on the first import unless this is set (some machines set it),
+    # and then compiles its 80 modules at every start (0.06 s measured).
+    env.pop("PYTHONDONTWRITEBYTECODE", None)
     t0 = time.perf_counter()
     done = subprocess.run(cmd, env=env, capture_output=True, text=True)
     wall = time.perf_counter() - t0
