@@ -66,7 +66,7 @@ class ParticleWriter:
         xyz = np.zeros((n, 3))
         xyz[:, :g] = points.x
         cells = [("vertex", np.arange(n, dtype=np.int64).reshape(-1, 1))]
-        return self._write(t, xyz, cells, point_data=point_fields(points, fields))
+        return self._write(t, xyz, cells, point_data=_point_fields(points, fields))
 
     def _write(self, t: float, xyz: np.ndarray, cells: list, **data: dict) -> Path:
         """Write one step's piece of ``xyz`` (m, 3) and ``cells`` with ``data``; list it."""
@@ -129,11 +129,11 @@ class DomainWriter(ParticleWriter):
         cells = [
             ("triangle" if g == 2 else "tetra", np.arange(n * v, dtype=np.int64).reshape(n, v))
         ]
-        data = point_fields(points, fields)
+        data = _point_fields(points, fields)
         return self._write(t, xyz, cells, cell_data={k: [a] for k, a in data.items()})
 
 
-def point_fields(points: MaterialPoints, fields: dict) -> dict[str, np.ndarray]:
+def _point_fields(points: MaterialPoints, fields: dict) -> dict[str, np.ndarray]:
     """The per-point arrays fe-mpm writes, one row per point, vectors and tensors in 3D.
 
     Displacement, velocity, volume, mass, F, stress, pressure, the cell, the material's
