@@ -54,7 +54,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from fe_mpm import parallel
-from fe_mpm._dolfinx import dolfinx
 from fe_mpm.clipping import piece_rule, simplex_volumes
 from fe_mpm.errors import ConvergenceError, PointsOutsideError
 from fe_mpm.markers import Markers
@@ -189,7 +188,6 @@ class PointDomains:
         #: on this rank (:func:`fe_mpm.parallel.total` sums the ranks').
         self.resets = 0
         self._drawn_quality = shape_quality(self.corners)
-        self._outside = np.zeros((0, self.corners.shape[2]))  # corners the last cut missed
         self._short = _no_short(self.corners.shape)  # domains the last cut found short
         self.regrid(tracker)
 
@@ -264,12 +262,11 @@ class PointDomains:
         """
         n, v, g = corners.shape
         if n == 0:  # a rank without points, under MPI
-            self._outside, self._short = np.zeros((0, g)), _no_short(corners.shape)
+            self._short = _no_short(corners.shape)
             none, cells = np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int32)
             return Pieces(none, cells, np.zeros(0), np.zeros((0, g)), cells, np.zeros((0, v)))
         corner_cells = tracker.locate(corners.reshape(-1, g), np.repeat(guess, v))
         outside = corner_cells < 0
-        self._outside = corners.reshape(-1, g)[outside]  # for _beyond_ghosts
         # A corner that has left the grid (a body bulging past the grid's edge) is
         # searched around the domain's last cell; its part outside the grid is lost.
         corner_cells = np.where(outside, np.repeat(guess, v), corner_cells)
@@ -400,8 +397,7 @@ class PointDomains:
         """A sub-point for every piece of every domain, with its share of the point's state."""
         self._reset_distorted(points, tracker)
         ready, self._ready = self._ready, None
-        self._outside, error = np.zeros((0, points.gdim)), None
-        self._short = _no_short(self.corners.shape)
+        self._short, error = _no_short(self.corners.shape), None
         try:
             if ready is not None and np.array_equal(ready[0], self.corners):
                 p = ready[1]
@@ -478,8 +474,7 @@ class PointDomains:
         moved = self.corners + grid_displacement(p.corner_cell, p.corner_bary).reshape(n, g + 1, g)
         before = np.linalg.det(self.corners[:, 1:] - self.corners[:, :1])
         after = np.linalg.det(moved[:, 1:] - moved[:, :1])
-        self._outside, error = np.zeros((0, g)), None
-        self._short = _no_short(self.corners.shape)
+        self._short, error = _no_short(self.corners.shape), None
         if np.any(after / before <= 0):
             bad = int(np.flatnonzero(after / before <= 0)[0])
             error = ConvergenceError(
@@ -505,32 +500,21 @@ class PointDomains:
 
         Collective. On one rank a domain that leaves the tracker's cells leaves the
         grid; under MPI it may reach past this rank's ghost layer
-        (:data:`DOMAIN_GHOST_LAYERS`) instead, where the cut would lose its pieces:
-        with a corner there (in a cell DOLFINx's point ownership finds on another
-        rank), or between corners that are not (the domains the last cut found short
-        of their area, whose area in every rank's owned cells adds up to more).
+        (:data:`DOMAIN_GHOST_LAYERS`) instead, at a corner or between corners, where
+        the cut would lose its pieces. Such a domain is short of its area (the last
+        cut recorded those), and its area in every rank's owned cells adds up to more
+        than this rank found.
         """
         comm = tracker.mesh.comm
-        if comm.size == 1:
-            return None
         corners, inside = self._short
-        missed = np.array([len(self._outside) > 0, len(corners) > 0], dtype=np.int8)
-        missed = parallel.largest(comm, missed)
-        where = None
-        if missed[0]:
-            x3 = np.zeros((len(self._outside), 3))
-            x3[:, : self._outside.shape[1]] = self._outside
-            owner = dolfinx.geometry.determine_point_ownership(tracker.mesh, x3, 0.0).src_owner
-            if np.any(owner >= 0):
-                where = f"its corner at x = {self._outside[np.flatnonzero(owner >= 0)[0]].tolist()}"
-        if missed[1]:
-            lost = inside < self._area_in_owned_cells(corners, tracker) * (1.0 - COVERAGE_TOL)
-            if where is None and np.any(lost):
-                where = f"its corners {corners[np.flatnonzero(lost)[0]].tolist()}"
-        if where is None:
+        if comm.size == 1 or not parallel.any_rank(comm, len(corners) > 0):
+            return None
+        lost = inside < self._area_in_owned_cells(corners, tracker) * (1.0 - COVERAGE_TOL)
+        if not np.any(lost):
             return None
         return ConvergenceError(
-            f"a point domain ({where}) reaches past the cells this MPI rank holds "
+            f"a point domain (its corners {corners[np.flatnonzero(lost)[0]].tolist()}) "
+            "reaches past the cells this MPI rank holds "
             f"({DOMAIN_GHOST_LAYERS} layers of ghost cells): it has stretched over more "
             "cells than that. Take smaller steps, or run on fewer ranks."
         )
