@@ -351,9 +351,9 @@ def _load(file: Path, sha256: str, count: int | None) -> dict:
 def _joined_domains(pieces: list[dict], sim, path: Path) -> tuple[np.ndarray, np.ndarray]:
     """This rank's pieces' domains: corners (n, d + 1, d) and drawn quality (n,).
 
-    Empty without point domains.
+    Empty without point domains, or on a rank that read no piece.
     """
-    if sim.domains is None:
+    if sim.domains is None or not pieces:
         return np.zeros((0, sim.gdim + 1, sim.gdim)), np.zeros(0)
     if any("domain_corners" not in p or "domain_quality" not in p for p in pieces):
         raise CheckpointError(f"checkpoint {path}: a piece lacks its points' domains")
@@ -364,10 +364,7 @@ def _joined_domains(pieces: list[dict], sim, path: Path) -> tuple[np.ndarray, np
         for c, p in zip(corners, pieces, strict=True)
     ):
         raise CheckpointError(f"checkpoint {path}: a piece has a domain count unlike its points'")
-    quality = [p["domain_quality"] for p in pieces]
-    if not corners:
-        return np.zeros((0, sim.gdim + 1, sim.gdim)), np.zeros(0)
-    return np.concatenate(corners), np.concatenate(quality)
+    return np.concatenate(corners), np.concatenate([p["domain_quality"] for p in pieces])
 
 
 def _joined(pieces: list[dict], sim) -> MaterialPoints:
