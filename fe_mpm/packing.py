@@ -27,7 +27,13 @@ from fe_mpm._dolfinx import (
     original_coefficient_positions,
     tabulate_expression,
 )
-from fe_mpm.quadrature import PER_ENTITY_FIELDS, SLOT_FIELDS, MaterialPointQuadrature, SlotLayout
+from fe_mpm.quadrature import (
+    PER_ENTITY_FIELDS,
+    SLOT_FIELDS,
+    MaterialPointQuadrature,
+    PointValues,
+    SlotLayout,
+)
 
 
 def coefficient_columns(ufl_object, ufcx_object) -> tuple[dict, int]:
@@ -85,9 +91,16 @@ class _Kernel:
         self.columns, self.width, self.cells = columns, width, cells
         self.quadrature = quadrature
         self.array: np.ndarray | None = None
+        self._packed: dict = {}  # slot field -> the slot data last written
+        self._gathered: dict = {}  # finite element field -> its dofs when last gathered
 
     def pack(self, only: Iterable | None = None) -> np.ndarray:
-        """Write the columns of every coefficient, or of those in ``only``."""
+        """Write the columns of every coefficient, or of those in ``only``.
+
+        What has not changed since this kernel last wrote it is not written again:
+        slot data packed once (the same object) and finite element fields whose
+        dofs are the same.
+        """
         if self.array is None:
             self.array = np.zeros((len(self.cells), self.width))
             only = None
@@ -96,11 +109,29 @@ class _Kernel:
             if only is not None and c not in only:
                 continue
             if q is not None and c in q.values:
-                self.array[:, cols] = q.values[c]
+                self._pack_slots(c, cols, q.values[c])
             elif not is_per_entity(c):
-                self.array[:, cols] = gather(c, self.cells)
+                dofs = c.x.array
+                last = self._gathered.get(c)
+                if last is None or not np.array_equal(last, dofs):
+                    self.array[:, cols] = gather(c, self.cells)
+                    self._gathered[c] = dofs.copy()
             # else: another rule's field, which this kernel does not read
         return self.array
+
+    def _pack_slots(self, c, cols: slice, data) -> None:
+        """Write slot field ``c``'s ``data`` (an array or PointValues) into its columns."""
+        last = self._packed.get(c)
+        if last is data:
+            return
+        if isinstance(data, PointValues):
+            if data.fills_like(last):  # its vacant slots hold what they should
+                data.scatter(self.array, cols)
+            else:
+                self.array[:, cols] = data.slots
+        else:
+            self.array[:, cols] = data
+        self._packed[c] = data
 
 
 class BoundForm:
@@ -174,12 +205,16 @@ class PointExpression:
             expression, expression_kernel(self.expression)
         )
         self._shape = self.expression.value_shape
+        self._kernel: tuple[SlotLayout, _Kernel] | None = None  # that of the last layout
 
     def evaluate(self, layout: SlotLayout) -> np.ndarray:
         """Values at every point of ``layout``, shape ``(n, value size)``."""
         q = self.quadrature
-        kernel = _Kernel(self._columns, self._width, layout.entities, q)
+        if self._kernel is None or self._kernel[0] is not layout:
+            self._kernel = (layout, _Kernel(self._columns, self._width, layout.entities, q))
         values = np.zeros((layout.num_entities, q.nslot, *self._shape))
-        tabulate_expression(self.expression, kernel.pack(), q.mesh, layout.entities, values)
+        coefficients = self._kernel[1].pack()  # what changed since the last evaluation
+        tabulate_expression(self.expression, coefficients, q.mesh, layout.entities, values)
         width = int(np.prod(self._shape))  # explicit: a rank may hold no points
-        return values.reshape(layout.num_entities, q.nslot, width)[layout.entity, layout.slot]
+        points, _ = layout.slot_rows(q.nslot)
+        return values.reshape(layout.num_entities * q.nslot, width)[points]

@@ -190,6 +190,58 @@ class SlotLayout:
         return rows
 
 
+class PointValues:
+    """A slot field's values per point, placed in the slots by the kernels that read them.
+
+    What :meth:`MaterialPointQuadrature.pack` keeps for a field that Newton changes
+    at every iterate (``per_iterate=True``): each kernel writes the points' rows
+    straight into its own coefficient array (:meth:`scatter`), instead of a copy of
+    every slot being made here and copied again into each kernel's array. The
+    values are not copied: they must not change once packed.
+
+    Args:
+        values: One row per point (n, ...), size values each.
+        layout: The points' slot layout.
+        nslot: Slots per entity of the rule.
+        empty: What the vacant slots hold (size,): the field's value size.
+    """
+
+    def __init__(self, values: np.ndarray, layout: SlotLayout, nslot: int, empty: np.ndarray):
+        self.values = values.reshape(len(values), empty.size)  # explicit: a rank may hold none
+        self.layout, self.nslot, self.empty = layout, nslot, empty
+        self._slots: np.ndarray | None = None
+
+    @property
+    def slots(self) -> np.ndarray:
+        """Every slot's value, one row per entity (E, nslot · size), made once."""
+        if self._slots is None:
+            size = self.values.shape[1]
+            points, vacant = self.layout.slot_rows(self.nslot)
+            data = np.empty((self.layout.num_entities * self.nslot, size))
+            data[points] = self.values
+            data[vacant] = self.empty
+            self._slots = data.reshape(self.layout.num_entities, self.nslot * size)
+        return self._slots
+
+    def fills_like(self, other: object) -> bool:
+        """Whether ``other`` leaves the same vacant slots, with the same value."""
+        return (
+            isinstance(other, PointValues)
+            and other.layout is self.layout
+            and other.nslot == self.nslot
+            and np.array_equal(other.empty, self.empty)
+        )
+
+    def scatter(self, array: np.ndarray, columns: slice) -> None:
+        """Write the points' rows into ``columns`` of ``array`` (E, width), a kernel's.
+
+        Its vacant slots are left as they are.
+        """
+        from fe_mpm.slot_scatter import scatter_rows
+
+        scatter_rows(array, columns.start, self.layout.entity, self.layout.slot, self.values)
+
+
 class MaterialPointQuadrature:
     """The slot rule of one slot count on one mesh, and the UFL to integrate with it.
 
@@ -222,8 +274,9 @@ class MaterialPointQuadrature:
             },
         )
         gdim = mesh.geometry.dim
-        #: Slot data of this step by field: (E, nslot · value size) arrays.
-        self.values: dict[dolfinx.fem.Function, np.ndarray] = {}
+        #: Slot data of this step by field: (E, nslot · value size) arrays, or
+        #: :class:`PointValues` for the fields that change at every iterate.
+        self.values: dict[dolfinx.fem.Function, np.ndarray | PointValues] = {}
         self.offset = self.function((gdim,), "offset")  # d = x_p - x_slot (m)
         self.scale = self.function((), "volume_scale")  # V_p / (w_s |det J|)
 
@@ -287,14 +340,22 @@ class MaterialPointQuadrature:
         layout: SlotLayout,
         values: np.ndarray,
         empty: float | np.ndarray = 0.0,
+        per_iterate: bool = False,
     ) -> None:
         """Set the slot data of ``f`` from per-point ``values`` ``(n, *value_shape)``.
 
         Empty slots carry zero weight but are still evaluated, so they get the
         harmless value ``empty`` (e.g. the identity for a deformation gradient,
-        where zero would give ``ln det F = nan`` and ``nan * 0 = nan``).
+        where zero would give ``ln det F = nan`` and ``nan * 0 = nan``). With
+        ``per_iterate`` (a field Newton changes at every iterate, such as a
+        pointwise law's stress), ``values`` are kept as they are
+        (:class:`PointValues`) and must not change afterwards.
         """
         size = f.function_space.dofmap.bs
+        if per_iterate:
+            empty = np.broadcast_to(np.asarray(empty, dtype=float).reshape(-1), (size,))
+            self.values[f] = PointValues(values, layout, self.nslot, empty)
+            return
         # One flat row per slot: a single index array scatters the points (twice as
         # fast as indexing by entity and slot), and only the vacant slots get ``empty``.
         points, vacant = layout.slot_rows(self.nslot)

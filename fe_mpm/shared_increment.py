@@ -85,7 +85,7 @@ class SharedIncrement:
         local = forms.dF_at_points.evaluate(self.layout)  # (k, g * g)
         mean = share_weighted_mean(local, self.owner, self.share, self.n_points)
         shift = (mean[self.owner] - local).reshape(-1, g, g)
-        forms.q.pack(forms.dF_shift, self.layout, shift)
+        forms.q.pack(forms.dF_shift, self.layout, shift, per_iterate=True)
         self._at = self.w.x.array.copy()
 
     def hold(self, bcs) -> None:

@@ -454,7 +454,8 @@ class ReturnMapAtIterate:
             values = forms.values_at_points.evaluate(layout)
             self.result, packed = lin.returned(forms.material, values, self.points.history)
             for field, array in packed.items():
-                q.pack(field, layout, array, empty=eye if field is lin.dF else 0.0)
+                empty = eye if field is lin.dF else 0.0
+                q.pack(field, layout, array, empty=empty, per_iterate=True)
             # The residual reads the tangent only times a difference from this
             # iterate, which is 0: an old one must not linger (it may belong to
             # another step's entities), and none is needed.
@@ -464,7 +465,7 @@ class ReturnMapAtIterate:
             self._at, self._has_tangent = self.w.x.array.copy(), False
         if tangent and not self._has_tangent:
             for field, array in lin.tangent_values(self.result).items():
-                q.pack(field, layout, array)
+                q.pack(field, layout, array, per_iterate=True)
             self._has_tangent = True
         return self.result
 

@@ -372,3 +372,52 @@ def test_boundary_point_penalty_equals_particle_sum(degree):
         R_bf[nodes] += pts.volume[k] * np.outer(N, force)
     R_bf = R_bf.ravel()
     assert np.linalg.norm(R_mp - R_bf) <= RTOL * np.linalg.norm(R_bf)
+
+
+def test_a_bound_form_repacks_what_changed_between_assemblies_and_only_that():
+    """Per-iterate slot data and changed finite element fields reach the next assembly.
+
+    A bound form writes a field into its coefficients again only when its slot data
+    are new or its dofs differ (:mod:`fe_mpm.packing`); per-iterate fields go in
+    point by point, over the vacant slots' values of the first pack. Each assembly
+    must equal a form bound afresh to eagerly packed data: the particle sum.
+    """
+    dim = 2
+    rng, mesh, pts, layout, q = _setup(dim, seed=3, F_spread=0.1, nslot=2)
+    assert layout.num_entities * layout.nslot > len(pts), "want vacant slots"
+    mat = NeoHookean(E=10.0, nu=0.3)
+    V = dolfinx.fem.functionspace(mesh, ("Lagrange", 1, (dim,)))
+    du = dolfinx.fem.Function(V)
+    F_n = q.function((dim, dim), "F_n")
+    rho = q.function((), "density")
+    q.pack(rho, layout, pts.density)
+    R = displacement.residual(du, ufl.TestFunction(V), q, F_n, rho, mat.kirchhoff)
+    form = StepForm(R, mesh, quadratures={OCCUPIED: q}, dynamic={F_n})
+    bound = form.bind(layout)
+
+    def fresh(F):
+        q.pack(F_n, layout, F, empty=np.eye(dim))
+        vector = form.bind(layout).assemble_vector().copy()
+        q.pack(F_n, layout, F, empty=np.eye(dim), per_iterate=True)
+        return vector
+
+    for trial in range(3):
+        F = pts.F + 0.05 * rng.standard_normal(pts.F.shape)
+        du.x.array[:] = rng.uniform(-0.05, 0.05, du.x.array.size)  # in place
+        expected = fresh(F)
+        got = bound.assemble_vector()
+        assert np.linalg.norm(got - expected) <= RTOL * np.linalg.norm(expected), trial
+        assert np.array_equal(bound.assemble_vector(), got)  # nothing new: the same
+
+
+def test_per_iterate_fields_pack_where_a_rank_holds_no_points():
+    """Under MPI a rank may hold no points; its per-iterate packs must not fail (a
+    rank that raised alone left the others waiting in the next collective)."""
+    mesh = _mesh(2)
+    layout = SlotLayout.from_cells(np.zeros(0, dtype=np.int32), 1)
+    q = MaterialPointQuadrature(mesh, layout.nslot)
+    tau = q.function((3, 3), "tau_k")
+    q.pack(tau, layout, np.zeros((0, 3, 3)), per_iterate=True)
+    assert q.values[tau].slots.shape == (0, 9)
+    array = np.zeros((0, 9))
+    q.values[tau].scatter(array, slice(0, 9))

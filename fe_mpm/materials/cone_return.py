@@ -63,10 +63,12 @@ from fe_mpm.materials.compiled import (
     _dot,
     _matvec,
     _vecmat,
+    clear_point,
     elastic_state_point,
     from_principal_point,
     jit,
     point_arrays,
+    store_point,
     trial_decomposition,
     trial_point,
 )
@@ -665,7 +667,7 @@ def _cone_loop(
     surface,
 ):
     n = dF.shape[0]
-    tau, be, dgamma, region, x, Q, F3, y, D, work, b = point_arrays(n)
+    tau, be, dgamma, region, x, Q, F3, y, D, work, b, y_p, D_p = point_arrays(n)
     C = np.empty((3, 3))  # the compliance a⁻¹, for bᵉ
     for i in range(3):
         for j in range(3):
@@ -673,26 +675,28 @@ def _cone_loop(
     for p in range(n):
         trial_point(p, dF, b_n, x_given, Q_given, plane, F3, x, Q, b, work)
         eps = (0.5 * math.log(x[p, 0]), 0.5 * math.log(x[p, 1]), 0.5 * math.log(x[p, 2]))
+        clear_point(y_p, D_p)
         if surface == DRUCKER_PRAGER:
             region[p], dgamma[p] = _cone_return(
-                eps, K, G, rho_F[p], rho_G[p], kappa[p], T[p], k, tolerance, y[p], D[p]
+                eps, K, G, rho_F[p], rho_G[p], kappa[p], T[p], k, tolerance, y_p, D_p
             )
         elif surface == SMOOTH_CAP:
             region[p], dgamma[p] = _cap_return(
-                eps, K, G, rho_F[p], rho_G[p], kappa[p], tolerance, y[p], D[p]
+                eps, K, G, rho_F[p], rho_G[p], kappa[p], tolerance, y_p, D_p
             )
         else:
             potential = -1.0 if kappa_G.shape[0] == 0 else kappa_G[p]
             region[p], dgamma[p] = _matsuoka_nakai_return(
-                eps, K, G, kappa_MN[p], rho_G[p], potential, T[p], tolerance, y[p], D[p]
+                eps, K, G, kappa_MN[p], rho_G[p], potential, T[p], tolerance, y_p, D_p
             )
-        from_principal_point(Q[p], y[p], tau[p])
+        store_point(y, D, p, y_p, D_p)
+        from_principal_point(Q, p, y_p, tau)
         if region[p] == ELASTIC:
             for i in range(3):
                 for j in range(3):
                     be[p, i, j] = b[i, j]
         else:
-            elastic_state_point(Q[p], y[p], C, be[p])
+            elastic_state_point(Q, p, y_p, C, be)
     return tau, be, dgamma, region, x, Q, F3, y, D
 
 
