@@ -156,10 +156,12 @@ class StepLength:
     Args:
         nominal: The run's step length (s or pseudo-time), > 0.
         floor: The shortest step allowed (same unit).
+        advice: What the message of a run that stops adds, if anything (what in the
+            run's set-up may have left Newton without a solution).
     """
 
-    def __init__(self, nominal: float, floor: float):
-        self.nominal, self.floor = nominal, floor
+    def __init__(self, nominal: float, floor: float, advice: str = ""):
+        self.nominal, self.floor, self.advice = nominal, floor, advice
         self.dt, self._successes = nominal, 0
 
     def cut(self) -> bool:
@@ -179,6 +181,7 @@ class StepLength:
             raise ConvergenceError(
                 f"{failure} The step was cut to {2 * self.dt:.3g} without success, "
                 f"and the floor is min_step = {self.floor:.3g}."
+                + (f" {self.advice}" if self.advice else "")
             ) from None
 
     def accepted(self) -> None:

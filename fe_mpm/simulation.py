@@ -470,7 +470,8 @@ class Simulation:
         check_range("Simulation.run", "t_end", t_end, lo=self.t, lo_open=True)
         nominal = (t_end - self.t) / int(n_steps)
         floor = DEFAULT_MIN_STEP * nominal if self.min_step is None else self.min_step
-        length = StepLength(nominal, floor)
+        advice = model_checks.failure_advice(self.domains is not None, self._ghost_factor)
+        length = StepLength(nominal, floor, advice)
         can_hold = not self.dynamic and self.domains is None  # pieces differ per attempt
         bar, reports = ProgressBar(int(n_steps), progress), []
         if self.step_number == 0:

@@ -157,3 +157,22 @@ def test_auto_line_search_backtracks_for_plastic_laws_and_falls_back_to_the_othe
     )
     assert forced.petsc_options["snes_linesearch_type"] == "l2"
     assert forced.ladder.line_searches("l2") == [None, "bt"]
+
+
+@pytest.mark.parametrize("gamma", [0.0, 0.1])
+def test_a_run_with_point_domains_and_no_ghost_penalty_says_so_when_it_stops(gamma):
+    """Without a ghost penalty a cell holding a sliver of a domain ties its nodes weakly;
+    a domain run that stops with ``ghost_penalty=0`` says so (here Newton is allowed
+    one iteration, so every attempt fails); with the penalty the message does not."""
+    sim = scenes.cook_membrane(
+        4,
+        formulation="up",
+        point_domains=True,
+        ghost_penalty=gamma,
+        petsc_options={"snes_max_it": 1},
+        min_step=0.5,
+    )
+    with pytest.raises(ConvergenceError) as info:
+        sim.run(1.0, 1, progress=False)
+    assert "min_step = 0.5" in str(info.value)
+    assert ("ghost_penalty=0" in str(info.value)) == (gamma == 0.0)
