@@ -207,6 +207,10 @@ class PointValues:
     """
 
     def __init__(self, values: np.ndarray, layout: SlotLayout, nslot: int, empty: np.ndarray):
+        if len(values) != layout.entity.size:  # the scatter would write out of bounds
+            raise ValueError(
+                f"per-iterate slot values: {len(values)} rows for {layout.entity.size} points"
+            )
         self.values = values.reshape(len(values), empty.size)  # explicit: a rank may hold none
         self.layout, self.nslot, self.empty = layout, nslot, empty
         self._slots: np.ndarray | None = None
@@ -235,10 +239,16 @@ class PointValues:
     def scatter(self, array: np.ndarray, columns: slice) -> None:
         """Write the points' rows into ``columns`` of ``array`` (E, width), a kernel's.
 
-        Its vacant slots are left as they are.
+        Its vacant slots are left as they are. Without numba (whose absence
+        :mod:`fe_mpm.materials.route` allows) numpy does it, slower.
         """
-        from fe_mpm.slot_scatter import scatter_rows
-
+        try:
+            from fe_mpm.slot_scatter import scatter_rows
+        except ImportError:
+            size = self.values.shape[1]
+            block = array[:, columns].reshape(self.layout.num_entities, self.nslot, size)
+            block[self.layout.entity, self.layout.slot] = self.values
+            return
         scatter_rows(array, columns.start, self.layout.entity, self.layout.slot, self.values)
 
 

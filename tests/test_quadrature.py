@@ -7,6 +7,8 @@ two slots per entity (so cells with up to 5 points appear up to 3 times, each
 copy with its own points).
 """
 
+import sys
+
 import basix.ufl
 import dolfinx.fem.petsc  # noqa: F401
 import numpy as np
@@ -421,3 +423,24 @@ def test_per_iterate_fields_pack_where_a_rank_holds_no_points():
     assert q.values[tau].slots.shape == (0, 9)
     array = np.zeros((0, 9))
     q.values[tau].scatter(array, slice(0, 9))
+
+
+def test_per_iterate_rows_are_scattered_the_same_without_numba(monkeypatch):
+    """numba writes a per-iterate field's rows into a kernel's array; without numba
+    (which fe-mpm's numpy route allows) numpy writes the same, and a row count that
+    does not match the layout is refused rather than written out of bounds."""
+    rng, mesh, pts, layout, q = _setup(2, seed=4, nslot=2)
+    tau = q.function((3, 3), "tau_k")
+    values = rng.standard_normal((len(pts), 3, 3))
+    q.pack(tau, layout, values, per_iterate=True)
+    width, columns = 40, slice(7, 7 + 2 * 9)
+    with_numba = rng.standard_normal((layout.num_entities, width))
+    without = with_numba.copy()
+    q.values[tau].scatter(with_numba, columns)
+    monkeypatch.setitem(sys.modules, "fe_mpm.slot_scatter", None)  # its import fails
+    q.values[tau].scatter(without, columns)
+    assert np.array_equal(with_numba, without)
+    block = with_numba[:, columns].reshape(layout.num_entities, 2, 9)
+    assert np.array_equal(block[layout.entity, layout.slot], values.reshape(-1, 9))
+    with pytest.raises(ValueError, match="rows for"):
+        q.pack(tau, layout, values[1:], per_iterate=True)
