@@ -219,6 +219,8 @@ class PointValues:
     def slots(self) -> np.ndarray:
         """Every slot's value, one row per entity (E, nslot · size), made once."""
         if self._slots is None:
+            # One flat row per slot: a single index array scatters the points (twice
+            # as fast as indexing by entity and slot), only the vacant slots get empty.
             size = self.values.shape[1]
             points, vacant = self.layout.slot_rows(self.nslot)
             data = np.empty((self.layout.num_entities * self.nslot, size))
@@ -362,17 +364,9 @@ class MaterialPointQuadrature:
         (:class:`PointValues`) and must not change afterwards.
         """
         size = f.function_space.dofmap.bs
-        if per_iterate:
-            empty = np.broadcast_to(np.asarray(empty, dtype=float).reshape(-1), (size,))
-            self.values[f] = PointValues(values, layout, self.nslot, empty)
-            return
-        # One flat row per slot: a single index array scatters the points (twice as
-        # fast as indexing by entity and slot), and only the vacant slots get ``empty``.
-        points, vacant = layout.slot_rows(self.nslot)
-        data = np.empty((layout.num_entities * self.nslot, size))
-        data[points] = values.reshape(values.shape[0], size)
-        data[vacant] = np.reshape(empty, (-1,))
-        self.values[f] = data.reshape(layout.num_entities, self.nslot * size)
+        empty = np.broadcast_to(np.asarray(empty, dtype=float).reshape(-1), (size,))
+        data = PointValues(values, layout, self.nslot, empty)
+        self.values[f] = data if per_iterate else data.slots
 
     def pack_cell_field(
         self, f: dolfinx.fem.Function, layout: SlotLayout, values: np.ndarray
