@@ -21,6 +21,7 @@ from fe_mpm import _dolfinx  # noqa: F401, I001
 from fe_mpm.boundary import STICKING, Dirichlet, PointDirichlet, PointTraction, RigidWall, Traction
 from fe_mpm.checkpoint import CheckpointError
 from fe_mpm.errors import ConvergenceError, PointsOutsideError
+from fe_mpm.initial_stress import geostatic_stress
 from fe_mpm.materials import (
     DruckerPrager,
     HenckyJ2,
@@ -62,6 +63,7 @@ __all__ = [
     "StepReport",
     "Traction",
     "WallForces",
+    "geostatic_stress",
     "merge",
     "seed",
 ]

@@ -34,6 +34,7 @@ from fe_mpm.forms.mixed_up import PPPData
 from fe_mpm.formulations import FORMULATIONS, GridFields
 from fe_mpm.ghost import GhostStabilisation
 from fe_mpm.grid_conditions import GridConditions
+from fe_mpm.initial_stress import start_stressed
 from fe_mpm.markers import Markers
 from fe_mpm.materials import ReturnMapResult
 from fe_mpm.materials.mixed_return import MixedReturnResult
@@ -166,6 +167,10 @@ class Simulation:
             (default): never. It pays where the points' own work (return map,
             packing, assembly over occupied cells) dominates a step; see
             docs/limitations.md. Serial runs never repartition.
+        initial_stress: Cauchy stress (Pa) of each of this rank's points at t = 0,
+            shape ``(n, 3, 3)``, e.g. :func:`fe_mpm.geostatic_stress`; carried as
+            an elastic strain of a Hencky law (:mod:`fe_mpm.initial_stress`). None
+            (default): the points start unstressed.
     """
 
     def __init__(
@@ -206,6 +211,7 @@ class Simulation:
         checkpoint_dir: str | Path | None = None,
         checkpoint_every: int = 10,
         rebalance_above: float | None = None,
+        initial_stress: np.ndarray | None = None,
     ):
         model_checks.check_grid_and_points(mesh, points)
         parallel.one_thread_per_rank(mesh.comm)
@@ -223,6 +229,13 @@ class Simulation:
         )
         model_checks.check_law(material, self.spec, formulation)
         model_checks.take_density(material, points)
+        if initial_stress is not None:  # refused on every rank if on one
+            refused = None
+            try:
+                start_stressed(points, material, initial_stress, self.spec.pressure)
+            except ValueError as err:
+                refused = err
+            parallel.raise_together(mesh.comm, refused)
         for name, h in material.history.items():
             points.history.setdefault(name, h.initial_values(len(points)))
         self.mesh, self.points, self.material = mesh, points, material

@@ -405,6 +405,25 @@ try:
                         "q": [scenes.footing_pressure(r) for r in steps],
                         "migrated": sum(r.migrated_points for r in steps)},
         }
+    elif case in ("geostatic", "geostatic refused"):
+        mesh = dolfinx.mesh.create_box(MPI.COMM_WORLD, [[0, 0, 0], [2, 1, 1]], [4, 2, 2],
+                                       dolfinx.mesh.CellType.tetrahedron)
+        points = fe_mpm.seed(mesh, per_cell=4, density=2000.0)
+        stress = fe_mpm.geostatic_stress(points, 1.0, 10.0, 0.3 / 0.7)
+        if case == "geostatic refused" and rank == MPI.COMM_WORLD.size - 1:
+            stress = stress[:-1]
+        side = lambda x: np.isclose(x[0], 0) | np.isclose(x[0], 2)  # noqa: E731
+        front = lambda x: np.isclose(x[1], 0) | np.isclose(x[1], 1)  # noqa: E731
+        sim = fe_mpm.Simulation(
+            mesh, points, fe_mpm.MohrCoulomb(1e7, 0.3, 1e4, 30.0, density=2000.0), "u-nbva",
+            dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[2], 0.0)),
+                       fe_mpm.Dirichlet(side, component=0), fe_mpm.Dirichlet(front, component=1)],
+            body_force=(0, 0, -10.0), dynamic=True, mass="lumped", initial_stress=stress)
+        reports = sim.run(0.1, 5, progress=False)
+        moved = float(np.abs(points.x - points.x0).max(initial=0.0))
+        result = {"iterations": [r.newton_iterations for r in reports],
+                  "moved": parallel.largest(MPI.COMM_WORLD, moved),
+                  "points": int(parallel.total(MPI.COMM_WORLD, len(points)))}
     else:  # a serial mesh on each rank: independent runs
         mesh = fe_mpm.meshes.rectangle_mesh((0, 0), (1, 1), (4, 4), comm=MPI.COMM_SELF)
         points = fe_mpm.seed(mesh, per_cell=3, density=2000.0)
@@ -685,6 +704,20 @@ def test_the_ghost_penalty_ties_the_same_facets_on_every_rank_count(tmp_path):
             assert sum(g[1] for run in result.values() for g in run["ghost facets"]) > 0
     assert all(max(w[0] for w in run["ghost facets"]) > 0 for run in serial.values())
     assert serial["up 16 4 repartitioned"]["repartitions"] == 0
+
+
+def test_a_layer_started_geostatic_stays_at_rest_on_two_ranks(tmp_path):
+    """A 3D Mohr-Coulomb layer (u-nbva, Newmark) started with its stress at rest: on
+    two ranks, as in serial, no Newton iteration and no motion (measured 0 m); an
+    initial stress of the wrong shape on one rank stops both, naming the field."""
+    (serial,) = _run(tmp_path, "geostatic", 1)
+    for got in [serial, *_run(tmp_path, "geostatic", 2)]:
+        assert got["iterations"] == [0] * 5 and got["moved"] < 1e-12, got
+        assert got["points"] == serial["points"] == 384
+    lines = _run(tmp_path, "geostatic refused", 2)
+    assert all(line["error"] == "ValueError" for line in lines), lines
+    assert all("initial_stress must have shape" in x["message"] for x in lines)
+    assert "(on rank 1)" in lines[0]["message"]
 
 
 def test_a_feature_not_yet_distributed_is_refused_on_every_rank(tmp_path):

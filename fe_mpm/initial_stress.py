@@ -1,0 +1,160 @@
+r"""A body that starts stressed: the geostatic state, and the elastic strain that carries it.
+
+A soil layer at rest under gravity carries a vertical stress
+:math:`\sigma_v = -\rho g d` at depth :math:`d` and a horizontal stress
+:math:`\sigma_h = K_0 \sigma_v`, with :math:`K_0 = \nu/(1-\nu)` for an elastic layer
+that was never strained sideways (Mast 2013, §7.4; Jaky's :math:`1 - \sin\varphi`
+for a normally consolidated sand). Released unstressed, the same layer first falls
+onto its own stiffness and rings; started from that state it stays where it is.
+
+fe-mpm's Hencky laws (:class:`~fe_mpm.MohrCoulomb`, the Drucker–Prager family,
+:class:`~fe_mpm.HenckyJ2`) keep the elastic left Cauchy–Green tensor
+:math:`b^e` and compute the stress from it alone,
+:math:`\tau = K\,\mathrm{tr}\,\varepsilon^e\,I + 2G\,\mathrm{dev}\,\varepsilon^e`
+with :math:`\varepsilon^e = \tfrac12 \ln b^e`. A stress at rest is therefore an
+elastic strain the points carry while :math:`F = I`, i.e. a plastic
+deformation :math:`F^p = (F^e)^{-1}` of the stress-free body:
+
+.. math::
+
+    \varepsilon^e = \frac{\mathrm{tr}\,\tau_0}{9K} I + \frac{\mathrm{dev}\,\tau_0}{2G},
+    \qquad b^e = \exp(2\varepsilon^e).
+
+In the u-p forms the pressure is the grid field of
+:math:`p = -K(J-1)` with :math:`J = \det F`, so a mean stress at rest also needs
+:math:`\det F_0 = J_0 = 1 + \mathrm{tr}\,\sigma_0/(3K)`: the points start with
+:math:`F_0 = J_0^{1/g} I` (their volumes stay as given: they are the current ones)
+and :math:`\tau_0 = J_0 \sigma_0`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import numpy.typing as npt
+
+from fe_mpm.particles import MaterialPoints
+
+
+def geostatic_stress(
+    points: MaterialPoints, surface: float, gravity: float, K0: float
+) -> np.ndarray:
+    r"""The stress at rest of a level layer: σ_v = −ρ_p g (surface − z), σ_h = K₀ σ_v.
+
+    The vertical is the last coordinate (y in 2D, z in 3D); the other two
+    directions, the out-of-plane one of plane strain included, carry
+    :math:`K_0 \sigma_v`. Each point takes its own density :math:`m_p/V_p` for the
+    whole depth above it, which is exact for a layer of one density.
+
+    Args:
+        points: The points (positions in m, masses in kg, volumes in m³ or m²).
+        surface: Height of the layer's free surface (m); no point may lie above it.
+        gravity: Magnitude g > 0 of gravity (m/s²), acting along −z (−y in 2D).
+        K0: Ratio K₀ ≥ 0 of horizontal to vertical stress at rest.
+
+    Returns:
+        Cauchy stresses (Pa), shape ``(n, 3, 3)``, compression negative.
+
+    Raises:
+        ValueError: ``gravity`` ≤ 0, ``K0`` < 0, or a point above ``surface``.
+    """
+    if not (np.isfinite(gravity) and gravity > 0.0):
+        raise ValueError(f"geostatic_stress: gravity must be > 0 (m/s²), got {gravity!r}")
+    if not (np.isfinite(K0) and K0 >= 0.0):
+        raise ValueError(f"geostatic_stress: K0 must be >= 0, got {K0!r}")
+    depth = surface - points.x[:, -1]
+    if len(depth) and depth.min() < -1e-12 * max(1.0, abs(surface)):
+        p = int(np.argmin(depth))
+        raise ValueError(
+            f"geostatic_stress: point {p} lies {-depth[p]:.3g} m above the surface "
+            f"{surface:g} m; surface must be >= every point's height"
+        )
+    vertical = -points.mass / points.volume * gravity * np.maximum(depth, 0.0)
+    stress = np.zeros((len(points), 3, 3))
+    g = points.gdim
+    for axis in range(3):
+        stress[:, axis, axis] = vertical if axis == g - 1 else K0 * vertical
+    return stress
+
+
+def elastic_left_cauchy_green(
+    kirchhoff: npt.ArrayLike, bulk_modulus: float, shear_modulus: float
+) -> np.ndarray:
+    """bᵉ = exp(2εᵉ) whose Hencky stress is ``kirchhoff``, shape ``(n, 3, 3)``.
+
+    Args:
+        kirchhoff: Symmetric Kirchhoff stresses τ (Pa), shape ``(n, 3, 3)``.
+        bulk_modulus: K (Pa).
+        shear_modulus: G (Pa).
+    """
+    tau = np.asarray(kirchhoff, dtype=np.float64)
+    mean = np.trace(tau, axis1=1, axis2=2) / 3.0
+    eye = np.eye(3)
+    strain = (mean / (3.0 * bulk_modulus))[:, None, None] * eye + (
+        tau - mean[:, None, None] * eye
+    ) / (2.0 * shear_modulus)
+    values, vectors = np.linalg.eigh(strain)
+    return np.einsum("nij,nj,nkj->nik", vectors, np.exp(2.0 * values), vectors)
+
+
+def start_stressed(
+    points: MaterialPoints, law, stress: npt.ArrayLike, pressure_field: bool
+) -> None:
+    """Give the points the elastic state that carries ``stress`` at rest, in place.
+
+    Sets ``points.history["be"]``, ``points.stress`` and, for a pressure field,
+    ``points.F`` (see the module's docstring).
+
+    Args:
+        points: The points, still undeformed (``F = I``).
+        law: A Hencky law: its history has ``"be"``; it has ``bulk_modulus`` and ``mu``.
+        stress: Cauchy stresses (Pa), shape ``(n, 3, 3)``, symmetric; in 2D
+            (plane strain) with no in-plane/out-of-plane shear.
+        pressure_field: Whether the formulation has the pressure as a grid field (u-p).
+
+    Raises:
+        ValueError: The law keeps no ``be``, the points are deformed, or the
+            stress has the wrong shape, is not finite, or is not symmetric.
+    """
+    n, g = len(points), points.gdim
+    sigma = np.asarray(stress, dtype=np.float64)
+    if sigma.shape != (n, 3, 3):
+        raise ValueError(
+            f"Simulation: initial_stress must have shape ({n}, 3, 3) for this rank's "
+            f"{n} points, got {sigma.shape}"
+        )
+    bad = ~np.isfinite(sigma).all(axis=(1, 2))
+    bad |= np.abs(sigma - sigma.transpose(0, 2, 1)).max(axis=(1, 2), initial=0.0) > 1e-12 * (
+        1.0 + np.abs(sigma).max(axis=(1, 2), initial=0.0)
+    )
+    if g == 2:
+        bad |= np.abs(sigma[:, :2, 2]).max(axis=1, initial=0.0) > 0.0
+    if bad.any():
+        p = int(np.flatnonzero(bad)[0])
+        raise ValueError(
+            f"Simulation: initial_stress of point {p} must be finite and symmetric"
+            + (" with no shear between the plane and its normal (plane strain)" if g == 2 else "")
+            + f", got {sigma[p].tolist()}"
+        )
+    if not np.allclose(points.F, np.eye(g), rtol=0.0, atol=1e-14):
+        raise ValueError(
+            "Simulation: initial_stress needs undeformed points (F = I); these carry "
+            "a deformation already"
+        )
+    kept = getattr(law, "history", {}).get("be")
+    if kept is None or kept.shape != (3, 3):
+        raise ValueError(
+            "Simulation: initial_stress needs a law that keeps the elastic left "
+            "Cauchy-Green tensor 'be' (MohrCoulomb, the Drucker-Prager family, "
+            f"HenckyJ2); {type(law).__name__} does not"
+        )
+    K, G = law.bulk_modulus, law.mu
+    J0 = 1.0 + np.trace(sigma, axis1=1, axis2=2) / (3.0 * K) if pressure_field else np.ones(n)
+    if J0.min(initial=1.0) <= 0.0:
+        raise ValueError(
+            "Simulation: initial_stress compresses a point past J = 0 at the law's "
+            f"bulk modulus {K:g} Pa"
+        )
+    points.history["be"] = elastic_left_cauchy_green(J0[:, None, None] * sigma, K, G)
+    points.stress[:] = sigma
+    if pressure_field:
+        points.F[:] = J0[:, None, None] ** (1.0 / g) * np.eye(g)
