@@ -531,8 +531,9 @@ def test_column_impact_contract_on_a_short_block_cut_short(tmp_path):
     first second (768 points, about 40 steps of up to 0.1 s; 40 s): the contract's
     keys, the soil's front reaching the face 1 m ahead after it has slumped across the
     gap (measured at t = 0.91–0.93 s), the bed carrying the soil's weight over the
-    last second to 10 % (measured 0.961: the block still settles), and the check not
-    made on a run cut short."""
+    last second to 3 % (measured 0.994 from the geostatic start; 0.961 when it
+    started unstressed and still settled), and the check not made on a run cut
+    short."""
     stdout = run_demo(
         "column_impact.py",
         *("--height", "2", "--length", "2", "--t-end", "1.0", "--dt", "0.1"),
@@ -540,12 +541,22 @@ def test_column_impact_contract_on_a_short_block_cut_short(tmp_path):
         cwd=tmp_path,
     )
     out = _last_json(stdout)
-    for key in ("R_pk", "R_ss", "H_act", "face_force_peak_N", "points", "steps", "wall_time_s"):
+    for key in (
+        "R_pk",
+        "R_ss",
+        "H_act",
+        "face_force_peak_N",
+        "R_pk_over_nominal_step",
+        "points",
+        "steps",
+        "wall_time_s",
+        "start",
+    ):
         assert key in out
     assert out["check_passed"] and "not checked (cut short" in check_line(stdout)
     assert out["points"] == 768 and out["face_force_peak_N"] > 0.0 and out["H_act"] > 0.0
     assert 0.7 < out["t_pk"] <= 1.0
-    assert out["bed_push_over_weight"] == pytest.approx(1.0, abs=0.1)
+    assert out["bed_push_over_weight"] == pytest.approx(1.0, abs=0.03)
 
 
 @pytest.mark.parametrize("aspect, fronts, heights", [("2", 4, 3), ("1", 7, 2)])
