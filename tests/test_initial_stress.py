@@ -5,10 +5,11 @@ K₀ = ν/(1 − ν), which is the elastic layer's own equilibrium on a fixed ba
 rollers at its sides. The points' quadrature integrates that linear stress against
 P1 test functions exactly (the three-point rule also P2's), so in the displacement
 forms (and u-p without PPP, Taylor–Hood too) the first residual is zero to round-off
-and nothing moves, statically or dynamically; released unstressed, the same layer sinks by about ρ g H² / E. PPP penalises the
-pressure's variation inside a cell, a linear pressure too, so in ``"up"`` the
-geostatic state is not exactly at rest; the bound there is what was measured
-(about a tenth of the unstressed sinking) with room to spare.
+and nothing moves, statically or dynamically; released unstressed, the same layer
+sinks by about ρ g H² / E. PPP penalises the pressure's variation inside a cell, a
+linear pressure too, so in ``"up"`` the geostatic state is not exactly at rest; the
+bound there is what was measured (about a tenth of the unstressed sinking) with room
+to spare.
 """
 
 import numpy as np
