@@ -55,12 +55,15 @@ def geostatic_stress(
         Cauchy stresses (Pa), shape ``(n, 3, 3)``, compression negative.
 
     Raises:
-        ValueError: ``gravity`` ≤ 0, ``K0`` < 0, or a point above ``surface``.
+        ValueError: ``gravity`` ≤ 0, ``K0`` < 0, ``surface`` not finite, or a point
+            above it.
     """
     if not (np.isfinite(gravity) and gravity > 0.0):
         raise ValueError(f"geostatic_stress: gravity must be > 0 (m/s²), got {gravity!r}")
     if not (np.isfinite(K0) and K0 >= 0.0):
         raise ValueError(f"geostatic_stress: K0 must be >= 0, got {K0!r}")
+    if not np.isfinite(surface):
+        raise ValueError(f"geostatic_stress: surface must be a finite height (m), got {surface!r}")
     depth = surface - points.x[:, -1]
     if len(depth) and depth.min() < -1e-12 * max(1.0, abs(surface)):
         p = int(np.argmin(depth))

@@ -144,6 +144,8 @@ def test_bad_initial_stress_is_refused_with_the_field_named():
         fe_mpm.geostatic_stress(points, H, G, -0.1)
     with pytest.raises(ValueError, match="gravity must be > 0"):
         fe_mpm.geostatic_stress(points, H, 0.0, K0)
+    with pytest.raises(ValueError, match="surface must be a finite height"):
+        fe_mpm.geostatic_stress(points, np.nan, G, K0)
     good = fe_mpm.geostatic_stress(points, H, G, K0)
     with pytest.raises(ValueError, match="keeps the elastic left Cauchy-Green"):
         fe_mpm.Simulation(grid, points, fe_mpm.NeoHookean(E, NU, RHO), initial_stress=good)
