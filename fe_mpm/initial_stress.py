@@ -32,6 +32,7 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
+from fe_mpm.materials.spectral import deviator, from_principal, spectral_decomposition
 from fe_mpm.particles import MaterialPoints
 
 
@@ -91,12 +92,11 @@ def elastic_left_cauchy_green(
     """
     tau = np.asarray(kirchhoff, dtype=np.float64)
     mean = np.trace(tau, axis1=1, axis2=2) / 3.0
-    eye = np.eye(3)
-    strain = (mean / (3.0 * bulk_modulus))[:, None, None] * eye + (
-        tau - mean[:, None, None] * eye
-    ) / (2.0 * shear_modulus)
-    values, vectors = np.linalg.eigh(strain)
-    return np.einsum("nij,nj,nkj->nik", vectors, np.exp(2.0 * values), vectors)
+    strain = (mean / (3.0 * bulk_modulus))[:, None, None] * np.eye(3) + deviator(tau) / (
+        2.0 * shear_modulus
+    )
+    values, vectors = spectral_decomposition(strain)
+    return from_principal(np.exp(2.0 * values), vectors)
 
 
 def start_stressed(
