@@ -130,3 +130,41 @@ def apply_update(
         points.history[name] = value.reshape(points.history[name].shape)
     if return_map_history is not None:
         points.history.update(return_map_history)
+
+
+def volume_of_pressure(
+    new: PointUpdate, bulk_modulus: float, step: int, t: float, comm: MPI.Comm = MPI.COMM_SELF
+) -> np.ndarray:
+    """The volume change J = 1 − p/K (n,) that a fluid point's pressure p = −tr σ/3 says.
+
+    Args:
+        new: The points' checked update; its stress is the converged Cauchy stress.
+        bulk_modulus: The fluid's K (Pa).
+        step: The step's number, for messages.
+        t: Its end time, for messages.
+        comm: The grid's communicator: a check that fails on one rank stops them all.
+
+    Raises:
+        ConvergenceError: A pressure of K or more (J ≤ 0); nothing was updated.
+    """
+    J = 1.0 + np.trace(new.stress, axis1=1, axis2=2) / (3.0 * bulk_modulus)
+    error = None
+    if np.any(J <= 0.0):
+        bad = int(np.flatnonzero(J <= 0.0)[0])
+        error = ConvergenceError(
+            f"the pressure at fluid point {bad} reaches its bulk modulus K = "
+            f"{bulk_modulus:g} Pa in step {step} (t = {t:g}), so its volume would vanish; "
+            "take smaller steps or a larger K. Nothing was updated."
+        )
+    parallel.raise_together(comm, error)
+    return J
+
+
+def keep_volume_of_pressure(points: MaterialPoints, J: np.ndarray) -> None:
+    """A fluid point keeps no shape: ``F = J^{1/g} I`` and ``V = V_0 J`` (after the update).
+
+    ``V_0 = V / det F`` is the point's reference volume, which the update kept.
+    """
+    g = points.F.shape[1]
+    points.volume *= J / np.linalg.det(points.F)
+    points.F = (J ** (1.0 / g))[:, None, None] * np.eye(g)

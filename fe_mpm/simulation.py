@@ -41,7 +41,12 @@ from fe_mpm.materials.mixed_return import MixedReturnResult
 from fe_mpm.newton import NewtonResult, NewtonSolver
 from fe_mpm.output import SimulationOutput
 from fe_mpm.particles import MaterialPoints
-from fe_mpm.point_update import apply_update, checked_update
+from fe_mpm.point_update import (
+    apply_update,
+    checked_update,
+    keep_volume_of_pressure,
+    volume_of_pressure,
+)
 from fe_mpm.quadrature import SlotLayout
 from fe_mpm.report import ProgressBar, StepReport, imbalance, newton_failure
 from fe_mpm.retry import RetryLadder, StepLength
@@ -743,7 +748,15 @@ class Simulation:
         new = checked_update(
             values, forms.update_layout, pts, sizes, limit, step, t, self.mesh.comm
         )
+        # A fluid remembers no shape, and in the mixed forms its volume is what the
+        # pressure field says (fe_mpm.materials.fluid): kept apart, the points' own
+        # volumes drift from it and water at rest churns.
+        fluid = self.spec.pressure and not getattr(self.material, "keeps_shape", True)
+        if fluid:
+            J = volume_of_pressure(new, self.material.bulk_modulus, step, t, self.mesh.comm)
         apply_update(pts, new, self.markers, self.dynamics, dt, rm and rm.result.history)
+        if fluid:
+            keep_volume_of_pressure(pts, J)
 
     def _write_output(self, force: bool = False) -> None:
         t0, out = time.perf_counter(), self.output

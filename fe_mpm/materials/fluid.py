@@ -18,22 +18,38 @@ the step's length :math:`\Delta t`. The velocity gradient in the configuration a
 so :math:`d = \operatorname{sym} L`. The step's length reaches the law as
 ``PointState.step_length``.
 
-**The PPP scale.** The u-p form's stabilisation is :math:`\alpha/G` times a pressure
-jump term, with G the law's shear modulus. A fluid has none, so ``shear_scale`` G*
-(Pa) stands in for it (and sets a rigid wall's default penalty): the smaller G*,
-the stronger the projection. Choose a pressure scale of the flow. Measured on
-Martin & Moyce's dam break (``demos/dam_break.py --shear-scale``, h₀ = 0.114 m,
-cells of 8.2 mm, Δt = 1 ms), whose hydrostatic pressure at the base is
-ρ₀ g h₀ = 1.1 kPa: G* = 1, 2.2 and 10 kPa put the surge front within 1.7 % of one
-another; 300 Pa holds the flow back (front up to 8 % slower, height 5 % lower);
-with 1 MPa the pressure is left almost free and the points pile up in one cell
-(more than 256) at T = 1.9. The demo takes the surge's stagnation pressure ρ₀ v²
-with v = √(2 g h₀), 2.2 kPa.
+**Its points keep no shape.** In the u-p forms the pressure field p holds the
+volume, and a point's own det F, left to itself, drifts from the J = 1 − p/K the
+field says: the points' volumes then no longer add up to the water's (Mast's tank
+drain, measured: 0.62 of m/ρ after 1 s, single points compressed to J ≈ 0), and
+water at rest churns. So after every step a fluid point keeps the isotropic
+F = J^{1/g} I of its pressure, and its volume V₀ J (``keeps_shape = False``,
+:func:`fe_mpm.point_update.keep_volume_of_pressure`); its stress needs no more (the
+viscous term reads the step's ΔF).
+
+**Run it without PPP** (``Simulation(..., ppp_alpha=0)``). The u-p form's
+stabilisation penalises the pressure's variation inside each cell, the hydrostatic
+gradient too, at the scale α/G*; a fluid has no shear modulus, so ``shear_scale`` G*
+(Pa) stands in for it, and the smaller G* the harder PPP resists hydrostatics.
+Measured 2026-12-05 on a column of water filling a tank as wide as itself
+(h₀ = 0.114 m, 7 × 14 cells, 12 points per triangle, Δt = 1 ms, Bossak −0.3, started
+unstressed): with PPP (G* = 2ρ₀gh₀) the water moves at 0.14–0.20 m/s after 40 steps,
+with the rule above or without (without it 0.64 m/s after 200 steps, its points' det F
+spread to 0.07–2.7); without PPP and without the rule the motion grows from 1e-5 to
+0.3 m/s in 160 steps and the run stops; with
+the rule and without PPP it stays at rest (1.5e-5 m/s after 200 steps, point pressures
+within 0.4 % of ρ₀ g h₀ of hydrostatic). Martin & Moyce's dam break
+(``demos/dam_break.py``) then keeps its front and comes nearer the film's height on
+every grid checked (see the demo), and the tank drain's contraction coefficient comes
+out at 0.53 and 0.62 on cells of 12.5 and 6.25 cm (von Mises: 0.611). With PPP and the
+rule together the dam break's front runs 25 % ahead. ``shear_scale`` still sets a
+rigid wall's default penalty, and PPP's scale if ``ppp_alpha`` > 0.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar
 
 import ufl
 
@@ -48,8 +64,9 @@ class NewtonianFluid(CheckedFields):
     Args:
         bulk_modulus: Bulk modulus K (Pa), > 0 (water: 2.0e9).
         viscosity: Dynamic viscosity μ_v (Pa·s), ≥ 0 (water: 1.0e-3).
-        shear_scale: G* (Pa), > 0, in place of a shear modulus: it scales the u-p
-            form's PPP term (α/G*) and the walls' default penalty (see above).
+        shear_scale: G* (Pa), > 0, in place of a shear modulus: it sets the walls'
+            default penalty, and the u-p form's PPP term (α/G*) if PPP is on (run
+            fluids without it, see above).
         density: Reference mass density ρ₀ (kg/m³), > 0, or None to take it from the
             points (``seed(..., density=...)``).
     """
@@ -58,6 +75,8 @@ class NewtonianFluid(CheckedFields):
     viscosity: float
     shear_scale: float
     density: float | None = None
+    #: In the u-p forms the points keep the isotropic F of their pressure (above).
+    keeps_shape: ClassVar[bool] = False
 
     def __post_init__(self) -> None:
         self._check("bulk_modulus", lo=0.0, lo_open=True)
