@@ -142,7 +142,8 @@ t_end = args.T_end / time_scale
 # mm), and the points fill those cells. The mass is lumped, as for the sand
 # column: the thin surge carries no stress, and only its mass holds its nodes.
 #
-# The u-p form runs without its pressure stabilisation (PPP, `ppp_alpha=0`). PPP
+# The u-p form runs without its pressure stabilisation (PPP; `Simulation`'s default for
+# a fluid, passed here as `ppp_alpha=args.ppp_alpha` with `--ppp-alpha` 0). PPP
 # penalises the pressure's variation inside each cell at the scale of a shear
 # modulus, which water lacks (`NewtonianFluid(shear_scale=)` stands in for it), and it
 # resists the hydrostatic gradient too: with it, water at rest in a tank churns

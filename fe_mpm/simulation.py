@@ -115,7 +115,9 @@ class Simulation:
             ``walls.csv`` with the walls' forces after every step, or None.
         output_every: Write every this many steps (and always the last).
         ppp_alpha: The thesis's PPP coefficient α ≥ 0 (``up``), times Kratos's factor
-            (8 in 2D, 10 in 3D) in the form; α = 1 reproduces the thesis.
+            (8 in 2D, 10 in 3D) in the form; α = 1 reproduces the thesis. Default: 1,
+            or 0 for a law that keeps no shape (``NewtonianFluid``: PPP resists the
+            hydrostatic gradient, see :mod:`fe_mpm.materials.fluid`).
         dynamic: Implicit Newmark dynamics (β = 1/4, γ = 1/2 unless ``bossak_alpha``
             is set); False (default): static.
         mass: ``"consistent"`` (default, as the thesis) or ``"lumped"`` (dynamic only).
@@ -197,7 +199,7 @@ class Simulation:
         points_leaving: str = "raise",
         output_dir: str | Path | None = None,
         output_every: int = 1,
-        ppp_alpha: float = 1.0,
+        ppp_alpha: float | None = None,
         dynamic: bool = False,
         damping: float = 0.0,
         bossak_alpha: float = 0.0,
@@ -223,6 +225,8 @@ class Simulation:
         model_checks.check_choices(
             formulation, mass, points_leaving, linear_solver, line_search, fallback_line_search
         )
+        if ppp_alpha is None:
+            ppp_alpha = 1.0 if getattr(material, "keeps_shape", True) else 0.0
         model_checks.check_ranges(max_step_cells, ppp_alpha, damping, output_every)
         model_checks.check_dynamics(dynamic, formulation, damping, mass, bossak_alpha)
         self.spec = FORMULATIONS[formulation]

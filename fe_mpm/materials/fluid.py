@@ -27,7 +27,8 @@ F = J^{1/g} I of its pressure, and its volume V₀ J (``keeps_shape = False``,
 :func:`fe_mpm.point_update.keep_volume_of_pressure`); its stress needs no more (the
 viscous term reads the step's ΔF).
 
-**Run it without PPP** (``Simulation(..., ppp_alpha=0)``). The u-p form's
+**It runs without PPP**, the default of ``Simulation`` for a law that keeps no shape
+(``ppp_alpha=1`` turns it on). The u-p form's
 stabilisation penalises the pressure's variation inside each cell, the hydrostatic
 gradient too, at the scale α/G*; a fluid has no shear modulus, so ``shear_scale`` G*
 (Pa) stands in for it, and the smaller G* the harder PPP resists hydrostatics.
@@ -66,8 +67,8 @@ class NewtonianFluid(CheckedFields):
         bulk_modulus: Bulk modulus K (Pa), > 0 (water: 2.0e9).
         viscosity: Dynamic viscosity μ_v (Pa·s), ≥ 0 (water: 1.0e-3).
         shear_scale: G* (Pa), > 0, in place of a shear modulus: it sets the walls'
-            default penalty, and the u-p form's PPP term (α/G*) if PPP is on (run
-            fluids without it, see above).
+            default penalty, and the u-p form's PPP term (α/G*) if PPP is turned on
+            (off by default for a fluid, see above).
         density: Reference mass density ρ₀ (kg/m³), > 0, or None to take it from the
             points (``seed(..., density=...)``).
     """
