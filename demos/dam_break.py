@@ -151,6 +151,7 @@ t_end = args.T_end / time_scale
 # points keeping the volume their pressure says, water at rest stays at rest.
 # `--ppp-alpha 1` gives the thesis's stabilisation, with G* = 2ρ₀gh₀ (the surge's
 # stagnation pressure ρ₀v² with Ritter's speed scale v = √(2gh₀), 2.2 kPa here).
+
 # +
 nx, ny = 7 * across, math.ceil(h0 / h - 1e-9) + 2
 width = nx * h

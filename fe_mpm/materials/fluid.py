@@ -25,7 +25,8 @@ drain, measured: 0.62 of m/ρ after 1 s, single points compressed to J ≈ 0), a
 water at rest churns. So after every step a fluid point keeps the isotropic
 F = J^{1/g} I of its pressure, and its volume V₀ J (``keeps_shape = False``,
 :func:`fe_mpm.point_update.keep_volume_of_pressure`); its stress needs no more (the
-viscous term reads the step's ΔF).
+viscous term reads the step's ΔF). With point domains the points keep their corners'
+map instead (not measured for fluids).
 
 **It runs without PPP**, the default of ``Simulation`` for a law that keeps no shape
 (``ppp_alpha=1`` turns it on). The u-p form's
