@@ -122,9 +122,9 @@ def test_points_on_the_yield_surface_take_the_same_tangent_on_both_routes(monkey
 
 
 def test_an_in_plane_3d_state_and_an_off_plane_history_match_too(monkeypatch):
-    """3D increments that keep the third axis principal (numpy's closed form, LAPACK
-    compiled) and plane-strain increments on a bᵉ with off-plane entries (LAPACK on
-    both routes)."""
+    """3D increments that keep the third axis principal (numpy's closed form, Jacobi
+    compiled) and plane-strain increments on a bᵉ with off-plane entries (LAPACK in
+    numpy, Jacobi compiled)."""
     law = LAWS["non-associative"]
     dF2, history = states(2, 0.05, seed=7)
     dF3 = np.tile(np.eye(3), (len(dF2), 1, 1))
@@ -135,3 +135,31 @@ def test_an_in_plane_3d_state_and_an_off_plane_history_match_too(monkeypatch):
         np.testing.assert_array_equal(result.region, reference.region)
         assert relative(result.tau, reference.tau) < TOLERANCE
         assert relative(result.tangent, reference.tangent) < TOLERANCE
+
+
+def test_the_compiled_3d_eigen_decomposition_matches_lapack():
+    """Jacobi rotations (``compiled._jacobi_eigen``, what 3D trials take) against
+    LAPACK's ``eigh`` on random symmetric positive definite tensors, on tensors with
+    two or three equal eigenvalues, and a NaN: the eigenvalues to 1e-14 of the
+    largest, Q diag(x) Qᵀ = b and QᵀQ = I to 1e-14, and NaN for NaN."""
+    from fe_mpm.materials.compiled import _jacobi_eigen
+
+    rng = np.random.default_rng(11)
+    A = rng.standard_normal((500, 3, 3))
+    b = A @ np.swapaxes(A, 1, 2) + 0.01 * np.eye(3)
+    R = np.linalg.qr(rng.standard_normal((3, 3)))[0]
+    b[:3] = [np.eye(3), R @ np.diag([2.0, 2.0, 0.5]) @ R.T, R @ np.diag([1.0, 3.0, 3.0]) @ R.T]
+    b[3] = np.nan
+    x, Q, work = np.zeros((len(b), 3)), np.zeros((len(b), 3, 3)), np.zeros((3, 3))
+    for p in range(len(b)):
+        _jacobi_eigen(b[p], x, Q, p, work)
+    assert np.isnan(x[3]).all()
+    ok = np.arange(len(b)) != 3
+    x, Q, b = x[ok], Q[ok], b[ok]
+    scale = np.abs(x).max(axis=1)
+    reference = np.linalg.eigvalsh(b)[:, ::-1]
+    assert (np.abs(x - reference).max(axis=1) / scale).max() < 1e-14
+    assert np.all(np.diff(x, axis=1) <= 0.0)  # descending
+    rebuilt = (Q * x[:, None, :]) @ np.swapaxes(Q, 1, 2)
+    assert (np.abs(rebuilt - b).max(axis=(1, 2)) / scale).max() < 1e-14
+    assert np.abs(np.swapaxes(Q, 1, 2) @ Q - np.eye(3)).max() < 1e-14

@@ -67,9 +67,9 @@ from fe_mpm.materials.compiled import (
     elastic_state_point,
     from_principal_point,
     jit,
+    plane_strain,
     point_arrays,
     store_point,
-    trial_decomposition,
     trial_point,
 )
 
@@ -651,8 +651,6 @@ def _cap_return(eps, K, G, rho_F, rho_G, mu, tolerance, y, D):
 def _cone_loop(
     dF,
     b_n,
-    x_given,
-    Q_given,
     plane,
     K,
     G,
@@ -673,7 +671,7 @@ def _cone_loop(
         for j in range(3):
             C[i, j] = 1.0 / (9.0 * K) - 1.0 / (6.0 * G) + (1.0 / (2.0 * G) if i == j else 0.0)
     for p in range(n):
-        trial_point(p, dF, b_n, x_given, Q_given, plane, F3, x, Q, b, work)
+        trial_point(p, dF, b_n, plane, F3, x, Q, b, work)
         eps = (0.5 * math.log(x[p, 0]), 0.5 * math.log(x[p, 1]), 0.5 * math.log(x[p, 2]))
         clear_point(y_p, D_p)
         if surface == DRUCKER_PRAGER:
@@ -744,7 +742,7 @@ def cone_points(
     """
     dF = np.ascontiguousarray(dF, dtype=float)
     b_n = np.ascontiguousarray(b_n, dtype=float)
-    plane, x_given, Q_given = trial_decomposition(dF, b_n)
+    plane = plane_strain(dF, b_n)
     n = dF.shape[0]
     per_point = [
         np.ascontiguousarray(np.broadcast_to(v, (n,)), dtype=float)
@@ -757,8 +755,6 @@ def cone_points(
     out = _cone_loop(
         dF,
         b_n,
-        x_given,
-        Q_given,
         plane,
         float(K),
         float(G),
