@@ -69,7 +69,7 @@ FIT_FROM = 0.3
 
 
 def parse_args(argv=None):
-    """The command-line contract of the demo."""
+    """The command line of the benchmark."""
     p = argparse.ArgumentParser(description="Tank drain (Mast 2013, §6.1.3)")
     p.add_argument("--h", type=float, default=0.0625, help="cell size (m)")
     p.add_argument("--points-per-cell", type=int, default=6, help="points per triangle")
