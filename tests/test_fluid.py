@@ -132,3 +132,22 @@ def test_water_at_rest_in_a_tank_stays_at_rest_without_ppp_by_default():
     # PPP resists the hydrostatic gradient: the same water churns.
     error, speed, _, _ = still_water(40, ppp_alpha=1.0)
     assert speed > 1e-2, speed
+
+
+def test_a_fluid_pressure_of_its_bulk_modulus_stops_the_step_by_name():
+    """J = 1 − p/K has no volume for p ≥ K: the step is refused before anything moves,
+    naming the point and K; below K the volume is the pressure's."""
+    from fe_mpm.errors import ConvergenceError
+    from fe_mpm.point_update import volume_of_pressure
+    from fe_mpm.step_forms import PointUpdate
+
+    K = 2.0e6
+    pressures = np.array([0.5 * K, 1.5 * K])
+    stress = -pressures[:, None, None] * np.eye(3)
+    new = PointUpdate(np.zeros((2, 2)), np.tile(np.eye(2), (2, 1, 1)), stress, None, {})
+    with pytest.raises(
+        ConvergenceError, match=r"fluid point 1 reaches its bulk modulus K = 2e\+06"
+    ):
+        volume_of_pressure(new, K, step=7, t=0.5)
+    below = PointUpdate(new.du, new.dF, stress[:1].repeat(2, axis=0), None, {})
+    assert volume_of_pressure(below, K, step=7, t=0.5) == pytest.approx([0.5, 0.5], rel=1e-15)
