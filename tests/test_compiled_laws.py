@@ -122,9 +122,9 @@ def test_points_on_the_yield_surface_take_the_same_tangent_on_both_routes(monkey
 
 
 def test_an_in_plane_3d_state_and_an_off_plane_history_match_too(monkeypatch):
-    """3D increments that keep the third axis principal (numpy's closed form, Jacobi
-    compiled) and plane-strain increments on a bᵉ with off-plane entries (LAPACK in
-    numpy, Jacobi compiled)."""
+    """3D increments that keep the third axis principal (the closed form on both
+    routes, as the u-p forms' mixed return hands them to the law) and plane-strain
+    increments on a bᵉ with off-plane entries (LAPACK in numpy, Jacobi compiled)."""
     law = LAWS["non-associative"]
     dF2, history = states(2, 0.05, seed=7)
     dF3 = np.tile(np.eye(3), (len(dF2), 1, 1))

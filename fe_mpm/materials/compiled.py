@@ -225,19 +225,26 @@ def _return(eps, a, C, k, m, two_c_sqrt_k, p1, p2, apex, has_apex, tolerance, y,
 def plane_strain(dF: np.ndarray, b_n: np.ndarray) -> bool:
     """Whether the loops may decompose b^tr in closed form: the third axis is principal.
 
+    It is when neither ΔF nor b^e_n couples the third axis to the plane: a plane
+    strain ΔF (n, 2, 2), or one embedded in 3D, as the u-p forms' mixed return hands
+    it to the law (its ΔF_33 is the volumetric shift's, its off-plane entries zero).
+
     Args:
         dF: Deformation gradient increments (n, g, g).
         b_n: b^e at t_n (n, 3, 3).
     """
-    g = dF.shape[1]
-    return bool(g == 2 and not (b_n[:, 2, :2].any() or b_n[:, :2, 2].any()))
+    coupled = b_n[:, 2, :2].any() or b_n[:, :2, 2].any()
+    if dF.shape[1] == 3:
+        coupled = coupled or dF[:, 2, :2].any() or dF[:, :2, 2].any()
+    return not coupled
 
 
 @jit
 def trial_point(p, dF, b_n, plane, F3, x, Q, b, work):
     """b^tr of point ``p`` into ``b``, ΔF embedded in 3D into ``F3[p]``, its eigen-pairs.
 
-    ``x[p]`` (descending) and ``Q[p]`` (columns) are written; ``work`` is a (3, 3)
+    ``x[p]`` (descending) and ``Q[p]`` (columns) are written: in closed form if
+    ``plane`` (:func:`plane_strain`), else by Jacobi rotations; ``work`` is a (3, 3)
     scratch array.
     """
     g = dF.shape[1]
