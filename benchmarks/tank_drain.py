@@ -118,7 +118,8 @@ rectangle = rectangle_mesh((0.0, -below * h), (W, above * h), (n_across, below +
 c = cell_centroids(rectangle)
 kept = np.flatnonzero((c[:, 1] > 0.0) | (np.abs(c[:, 0] - W / 2) < b / 2)).astype(np.int32)
 grid = dolfinx.mesh.create_submesh(rectangle, rectangle.topology.dim, kept)[0]
-water_cells = np.flatnonzero((cell_centroids(grid)[:, 1] > 0.0) & (cell_centroids(grid)[:, 1] < D))
+heights = cell_centroids(grid)[:, 1]
+water_cells = np.flatnonzero((heights > 0.0) & (heights < D))
 tol = 1e-9 * W
 
 

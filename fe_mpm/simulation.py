@@ -225,11 +225,15 @@ class Simulation:
         model_checks.check_choices(
             formulation, mass, points_leaving, linear_solver, line_search, fallback_line_search
         )
+        # A fluid keeps no shape (fe_mpm.materials.fluid): no PPP by default, and in
+        # the mixed forms its points take the volume of their pressure after a step.
+        keeps_shape = getattr(material, "keeps_shape", True)
         if ppp_alpha is None:
-            ppp_alpha = 1.0 if getattr(material, "keeps_shape", True) else 0.0
+            ppp_alpha = 1.0 if keeps_shape else 0.0
         model_checks.check_ranges(max_step_cells, ppp_alpha, damping, output_every)
         model_checks.check_dynamics(dynamic, formulation, damping, mass, bossak_alpha)
         self.spec = FORMULATIONS[formulation]
+        self._volume_of_pressure = self.spec.pressure and not keeps_shape
         model_checks.check_domains(point_domains, ghost_penalty, points, points_leaving, self.spec)
         model_checks.check_shared_increment(shared_increment, point_domains, self.spec)
         model_checks.check_serial_only(
@@ -752,14 +756,12 @@ class Simulation:
         new = checked_update(
             values, forms.update_layout, pts, sizes, limit, step, t, self.mesh.comm
         )
-        # A fluid remembers no shape, and in the mixed forms its volume is what the
-        # pressure field says (fe_mpm.materials.fluid): kept apart, the points' own
-        # volumes drift from it and water at rest churns.
-        fluid = self.spec.pressure and not getattr(self.material, "keeps_shape", True)
-        if fluid:
+        # Kept apart from the pressure field's, a fluid point's own volume drifts and
+        # water at rest churns (fe_mpm.materials.fluid).
+        if self._volume_of_pressure:
             J = volume_of_pressure(new, self.material.bulk_modulus, step, t, self.mesh.comm)
         apply_update(pts, new, self.markers, self.dynamics, dt, rm and rm.result.history)
-        if fluid:
+        if self._volume_of_pressure:
             keep_volume_of_pressure(pts, J)
 
     def _write_output(self, force: bool = False) -> None:
