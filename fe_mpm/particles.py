@@ -7,6 +7,7 @@ number of points and ``g`` for the geometric dimension (2 or 3).
 from __future__ import annotations
 
 import reprlib
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import basix
@@ -16,6 +17,7 @@ import numpy.typing as npt
 from fe_mpm import parallel
 from fe_mpm._dolfinx import dolfinx
 from fe_mpm.checks import check_choice, check_finite, check_int, check_range
+from fe_mpm.cut_cells import inside_simplices
 
 #: The per-point arrays of :class:`MaterialPoints` (all indexed by point first).
 PER_POINT_FIELDS = ("x", "volume", "mass", "F", "stress", "cell", "x0", "velocity", "acceleration")
@@ -181,6 +183,7 @@ def seed(
     density: float | None = None,
     cells: npt.ArrayLike | None = None,
     volumes: str = "gauss",
+    level_set: Callable[[np.ndarray], np.ndarray] | None = None,
 ) -> MaterialPoints:
     """Place material points at the Gauss points of the cells of ``mesh``.
 
@@ -204,6 +207,17 @@ def seed(
         volumes: ``"gauss"`` gives each point the Gauss weight times the cell
             volume (exact quadrature of the initial body); ``"equal"`` splits the
             cell volume equally, as in the thesis.
+        level_set: The body as the region where ``level_set(x) >= 0``, for a body
+            whose surface crosses cells (a water level, a slope drawn on a plain
+            grid). ``x`` has shape ``(3, n)``, as in
+            ``dolfinx.mesh.locate_entities``; the result, shape ``(n,)``, is
+            positive inside (a signed distance, e.g. ``lambda x: depth - x[1]``).
+            Cells wholly inside get ``per_cell`` points; a cell the surface cuts
+            gets ``per_cell`` points on each triangle (tetrahedron) of its inside
+            part, where the level set's linear interpolant is ≥ 0 (exact for a
+            planar surface), so the points integrate the body to the rule's degree
+            and a fluid at rest stands in equilibrium; cells wholly outside get
+            none. Combines with ``cells``, which then names the cells to consider.
 
     Returns:
         The material points, undeformed (``F = I``).
@@ -211,8 +225,10 @@ def seed(
     Raises:
         TypeError: ``per_cell`` is not an int, or ``cells`` is a boolean mask or
             not integer indices.
-        ValueError: A value lies outside its range, or ``cells`` is not 1-D, is
-            empty, holds duplicates or indices of no cell on this rank.
+        ValueError: A value lies outside its range, ``cells`` is not 1-D, is
+            empty, holds duplicates or indices of no cell on this rank, or
+            ``level_set`` gives values of the wrong shape, non-finite values, or
+            leaves no cell inside on any rank.
     """
     if density is not None:
         check_range("seed", "density", density, lo=0.0, lo_open=True)
@@ -236,6 +252,12 @@ def seed(
 
     X = mesh.geometry.x[:, : mesh.geometry.dim]
     nodes = X[mesh.geometry.dofmaps[0][cells]]  # (nc, tdim+1, g)
+    if level_set is not None:
+        values = _level_set_values(level_set, mesh.geometry.x)
+        nodes, piece_cell = inside_simplices(nodes, values[mesh.geometry.dofmaps[0][cells]])
+        cells = cells[piece_cell]
+        if parallel.total(mesh.comm, cells.size) == 0:
+            raise ValueError("seed: level_set is negative at every vertex of the cells to seed")
     x0 = nodes[:, 0, :]
     jac = nodes[:, 1:, :] - x0[:, None, :]  # rows are edge vectors: x = x0 + ξ @ jac
     x = x0[:, None, :] + np.einsum("qk,ckg->cqg", ref_pts, jac)
@@ -253,6 +275,19 @@ def seed(
         cell=np.repeat(cells, per_cell),
         density_given=density is not None,
     )
+
+
+def _level_set_values(level_set: Callable, x: np.ndarray) -> np.ndarray:
+    """``level_set`` at the grid's nodes ``x`` (n, 3), checked: shape (n,), finite."""
+    if not callable(level_set):
+        raise TypeError(f"seed: level_set must be a function of x (3, n), got {level_set!r}")
+    values = check_finite("seed", "level_set", level_set(x.T), what="grid node")
+    if values.shape != (len(x),):
+        raise ValueError(
+            f"seed: level_set must return one value per point, shape ({len(x)},) for "
+            f"x of shape (3, {len(x)}), got shape {values.shape}"
+        )
+    return values
 
 
 def _cells(cells: npt.ArrayLike, num_cells: int, num_ghosts: int = 0) -> np.ndarray:
