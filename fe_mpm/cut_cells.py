@@ -38,7 +38,7 @@ def inside_simplices(corners: np.ndarray, values: np.ndarray) -> tuple[np.ndarra
         lies in, shape ``(m,)``. A cell with every vertex ≥ 0 is returned whole; one
         with every vertex < 0 not at all.
     """
-    n, corners_per_cell, dim = corners.shape
+    dim = corners.shape[2]
     whole = np.all(values >= 0.0, axis=1)
     split = np.flatnonzero(~whole & np.any(values > 0.0, axis=1))
     if dim == 3:
