@@ -292,15 +292,21 @@ if not args.no_output and rank0:
 
 # ## Check against the reference
 #
-# Measured (2026-12-05, u-p without PPP, the defaults: 2352 points, 186 steps, 3.0
-# Newton iterations per step, 7 s): the front runs −3.9 to +14.7 % ahead of the film
-# (behind only at its first point, T = 0.41), the height lies −3.9 to +1.7 % about it,
-# as Mast found with averaging ("slightly faster than observed"); with Δt halved,
-# −3.9 to +14.4 % and −3.5 to +2.1 %. With h₀ = l₀
-# (`--aspect 1`: 1176 points, 260 steps) the front leads by +3.5 to +23.6 % and the
-# height lies −4.2 to +8.6 % about the film's. On cells of half the size (`--h
-# 0.0041`) the fronts stay in the band (n² = 2: −1.8 … +19.8 %; n² = 1: +7.5 … +24.7 %)
-# and so do the heights (−4.1 … +0.9 % and −4.3 … +6.3 %). With PPP (`--ppp-alpha 1`,
+# Measured (2026-12-05, u-p without PPP, the starting pressure by parts, the
+# defaults: 2352 points, 186 steps, 3.0 Newton iterations per step, 5 s): the front
+# runs −3.9 to +15.5 % ahead of the film (behind only at its first point, T = 0.41),
+# the height lies −4.5 to +0.3 % about it, as Mast found with averaging ("slightly
+# faster than observed"); with Δt halved, −3.9 to +15.2 % and −4.7 to +0.5 %. With
+# h₀ = l₀ (`--aspect 1`: 1176 points, 262 steps) the front leads by +3.6 to +24.5 %
+# and the height lies −4.7 to +9.5 % about the film's. On cells of half the size
+# (`--h 0.0041`) n² = 2 stays in the band (front −1.7 … +20.6 %, height −4.2 …
+# +0.7 %); n² = 1 leaves it at the front's last point (+7.7 … +25.7 %, height −4.5 …
+# +6.3 %). With the pressure's force in the usual form alone
+# (`Simulation(pressure_by_parts=False)`, as until 2026-12-05) the fronts were
+# −3.9 … +14.7 % and +3.5 … +23.6 %, on the finer cells −1.8 … +19.8 % and +7.5 …
+# +24.7 %, the heights −3.9 … +1.7 %, −4.2 … +8.6 %, −4.1 … +0.9 % and −4.3 …
+# +6.3 %: the split changes the surge by about a per cent, where it keeps a vortex's
+# energy (`benchmarks/fluid_energy.py`). With PPP (`--ppp-alpha 1`,
 # as until 2026-12-05, when the fluid's points still kept their own volume) the
 # heights fell to −9.5 % and −13.7 % on the finer cells, the latter outside the band;
 # with PPP and the points' volume from their pressure the front runs +25.1 % ahead and

@@ -84,6 +84,8 @@ class GridFields:
         U: The displacement (sub)space, where Dirichlet conditions act.
         Q: The collapsed space of the scalar field (p or θ) and its dofs in ``W``,
             or None.
+        p_start: The step's starting pressure p̄ (a P1 function on ``Q``), the
+            projection of :meth:`start_from_rest`; u-p formulations only.
     """
 
     def __init__(self, mesh: dolfinx.mesh.Mesh, spec: FormulationSpec):
@@ -107,6 +109,7 @@ class GridFields:
             self.du, scalar_field = ufl.split(self.w)
             if spec.pressure:
                 self.p = scalar_field
+                self.p_start = dolfinx.fem.Function(self.Q[0], name="p_start")
             else:
                 self.volume_change = scalar_field
         else:
@@ -162,7 +165,8 @@ class GridFields:
         """Newton's start: Δu = 0, and the pressure projected from the points (Eq. 5.20).
 
         ``p_I = Σ_p N_I(x_p) m_p p_p / Σ_p N_I(x_p) m_p``, mass weighted, with the
-        point pressure ``p_p = −tr(σ_p)/3`` of the last step.
+        point pressure ``p_p = −tr(σ_p)/3`` of the last step; also kept as
+        :attr:`p_start`.
 
         Args:
             cells: The points' cells (n,).
@@ -175,6 +179,7 @@ class GridFields:
             p_p = -np.trace(stress, axis1=1, axis2=2) / 3.0
             nodal, _ = mass_weighted_projection(self.Q[0], cells, bary, mass, p_p[:, None])
             self.set_pressure(nodal[:, 0])
+            self.p_start.x.array[:] = nodal[:, 0]
 
     def pressure_volume(self, cells: np.ndarray, bary: np.ndarray, volume: np.ndarray) -> float:
         """‖V‖: the points' volumes (n,) gathered on the scalar field's nodes (m³; m² in 2D).

@@ -198,8 +198,10 @@ class GhostStabilisation:
         self.constrained.destroy()
 
 
-def require_facet_ghosts(mesh: dolfinx.mesh.Mesh) -> None:
+def require_facet_ghosts(mesh: dolfinx.mesh.Mesh, what: str = "the ghost penalty") -> None:
     """Refuse, on every rank, a distributed grid without shared-facet ghost cells.
+
+    ``what`` names the facet integrals that need them, for the message.
 
     Raises:
         ValueError: Some facet between two ranks has its cell on one side only.
@@ -214,7 +216,7 @@ def require_facet_ghosts(mesh: dolfinx.mesh.Mesh) -> None:
     missing = np.setdiff1d(one_sided, exterior).size
     if parallel.any_rank(mesh.comm, missing > 0):
         raise ValueError(
-            "Simulation: the ghost penalty on a grid distributed over "
+            f"Simulation: {what} on a grid distributed over "
             f"{mesh.comm.size} MPI ranks needs the cells across each rank's facets "
             "(DOLFINx's ghost mode shared_facet); this grid has none. Build it with "
             "ghost_mode=dolfinx.mesh.GhostMode.shared_facet (create_rectangle/create_box) "

@@ -162,6 +162,31 @@ def check_shared_increment(shared: bool, point_domains: bool, spec: FormulationS
         )
 
 
+def pressure_by_parts(
+    given: bool | None, keeps_shape: bool, point_domains: bool, spec: FormulationSpec
+) -> bool:
+    """Whether the starting pressure is integrated by parts (:mod:`fe_mpm.pressure_by_parts`).
+
+    None: for a law that keeps no shape (a fluid) in a u-p formulation without point
+    domains. True needs a pressure field and no point domains.
+    """
+    if given is None:
+        return spec.pressure and not keeps_shape and not point_domains
+    if not isinstance(given, bool | np.bool_):
+        raise TypeError(f"Simulation: pressure_by_parts must be True, False or None, got {given!r}")
+    if given and not spec.pressure:
+        raise ValueError(
+            f"Simulation: pressure_by_parts=True needs a pressure field: formulation "
+            f"'up', 'up-nostab' or 'up-p2p1', got {spec.name!r}"
+        )
+    if given and point_domains:
+        raise NotImplementedError(
+            "Simulation: pressure_by_parts=True with point_domains=True: not yet "
+            "(a domain's pieces would need their cells' χ)"
+        )
+    return bool(given)
+
+
 def ghost_factor(ghost_penalty: float | None, point_domains: bool, degree: int) -> float:
     """γ of the ghost penalty: as given, else :data:`~fe_mpm.ghost.WITH_DOMAINS` with domains."""
     if ghost_penalty is None:

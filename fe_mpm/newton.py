@@ -157,6 +157,7 @@ class NewtonSolver:
         self._F = self._J = None
         self._bcs: Sequence = ()
         self._ghost = None
+        self._extra_force = None
         self._before_residual: Callable[[], None] | None = None
         self._after_jacobian: Callable[[PETSc.Mat], None] | None = None
         self._before_jacobian: Callable[[], None] | None = None
@@ -261,6 +262,8 @@ class NewtonSolver:
             b_local.set(0.0)
         fem_petsc.assemble_vector(b, self._F.form, coeffs=self._F.coefficients())
         b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        if self._extra_force is not None:
+            b.axpy(1.0, self._extra_force)
         if self._ghost is not None:
             self._ghost.full.multAdd(x, b, b)  # G Δu, linear in the increment
         # Before the conditions overwrite them, supported rows hold their reactions.
@@ -352,6 +355,7 @@ class NewtonSolver:
         ghost=None,
         keep_best: bool = False,
         after_jacobian: Callable[[PETSc.Mat], None] | None = None,
+        extra_force: PETSc.Vec | None = None,
     ) -> NewtonResult:
         """Solve from the current value of ``u``; on return ``u`` holds the last iterate.
 
@@ -366,12 +370,15 @@ class NewtonSolver:
         iterate of smallest ‖R‖ for :meth:`resume_from_best`. ``after_jacobian(A)``
         adds what the forms cannot assemble to each Jacobian (couplings across cells,
         :mod:`fe_mpm.shared_increment`), the conditions' rows and columns left alone.
+        ``extra_force`` is a force of the step that does not depend on Δu, added to
+        every residual (the facet terms of :mod:`fe_mpm.pressure_by_parts`).
 
         With ``pc_type redistribute`` every solve gets a fresh linear solver: the
         constrained dofs it removes change from step to step, but the matrix
         pattern does not, so PETSc would keep the last step's reduced system.
         """
         self._F, self._J, self._bcs, self._ghost = F, J, bcs, ghost
+        self._extra_force = extra_force
         self._before_residual = before_residual
         self._before_jacobian = before_jacobian
         self._after_jacobian = after_jacobian

@@ -47,6 +47,7 @@ from fe_mpm.point_update import (
     keep_volume_of_pressure,
     volume_of_pressure,
 )
+from fe_mpm.pressure_by_parts import PressureByParts
 from fe_mpm.quadrature import SlotLayout
 from fe_mpm.report import ProgressBar, StepReport, imbalance, newton_failure
 from fe_mpm.retry import RetryLadder, StepLength
@@ -159,6 +160,12 @@ class Simulation:
             its point's increment, the mean of the grid's over the pieces, with the
             exact Jacobian (:mod:`fe_mpm.shared_increment`; P1 only); False
             (default): each piece takes its own cell's.
+        pressure_by_parts: Whether the pressure at the step's start is integrated by
+            parts in the cells whose neighbours all hold material
+            (:mod:`fe_mpm.pressure_by_parts`), so that a flowing fluid does not gain
+            energy as its points cross cells; u-p formulations without point domains.
+            None (default): True for a law that keeps no shape (``NewtonianFluid``)
+            there, else False.
         ghost_penalty: γ ≥ 0 of the ghost penalty on the facets of poorly filled
             cells (:mod:`fe_mpm.ghost`); 0: none. Default:
             :data:`fe_mpm.ghost.WITH_DOMAINS` with point domains (0.1 for P1, 0.01
@@ -214,6 +221,7 @@ class Simulation:
         max_step_cells: float = 10.0,
         point_domains: bool = False,
         shared_increment: bool = False,
+        pressure_by_parts: bool | None = None,
         ghost_penalty: float | None = None,
         checkpoint_dir: str | Path | None = None,
         checkpoint_every: int = 10,
@@ -236,6 +244,9 @@ class Simulation:
         self._volume_of_pressure = self.spec.pressure and not keeps_shape
         model_checks.check_domains(point_domains, ghost_penalty, points, points_leaving, self.spec)
         model_checks.check_shared_increment(shared_increment, point_domains, self.spec)
+        self._pressure_by_parts = model_checks.pressure_by_parts(
+            pressure_by_parts, keeps_shape, point_domains, self.spec
+        )
         model_checks.check_serial_only(
             mesh.comm,
             {"shared_increment=True": bool(shared_increment)},
@@ -287,6 +298,7 @@ class Simulation:
         self._wall_rows = 0  # steps whose wall forces are in the output's walls.csv
         self._shared = bool(shared_increment)
         self._shift: SharedIncrement | None = None
+        self._by_parts: PressureByParts | None = None
         # Under MPI a point's domain covers cells past its rank's, across a vertex too.
         self._ghost_layers = DOMAIN_GHOST_LAYERS if point_domains and mesh.comm.size > 1 else 0
         self.domains = None
@@ -371,7 +383,11 @@ class Simulation:
             self._given["mass"],
             self.walls,
             shared_increment=self._shared,
+            pressure_by_parts=self._pressure_by_parts,
         )
+        if self._by_parts is not None:
+            self._by_parts.destroy()
+        self._by_parts = PressureByParts(self.fields) if self._pressure_by_parts else None
         self._current: StepInProgress | None = None
         self._newton: NewtonSolver | None = None
 
@@ -624,6 +640,9 @@ class Simulation:
         t0, pts = time.perf_counter(), self.points
         bary = self.tracker.barycentric(pts.x, layout.cell)
         forms.pack(layout, pts, self.tracker, bary)
+        if self._by_parts is not None:
+            interior = self._by_parts.update(layout.occupied)
+            forms.q.pack(forms.interior, layout, interior[layout.cell].astype(np.float64))
         if boundary is not None:
             self._boundary.pack(forms, t_new)
         R, J = forms.residual.bind(layout, boundary), forms.jacobian.bind(layout, boundary)
@@ -689,6 +708,8 @@ class Simulation:
             hooks["before_jacobian"] = self.refresh_material
         if self.ghost is not None:
             hooks["ghost"] = self.ghost
+        if self._by_parts is not None:
+            hooks["extra_force"] = self._by_parts.vector
         if self._shift is not None:
             self._shift.hold(bcs)
             hooks["after_jacobian"] = self._shift.correct
@@ -720,15 +741,28 @@ class Simulation:
         return self.ladder.solve(attempt, self._newton.line_search)
 
     def _internal_force(self, R) -> Callable[[], np.ndarray]:
-        """The residual's assembly, with the ghost penalty's force G Δu when there is one."""
-        if self.ghost is None:
-            return R.assemble_vector
-        return lambda: R.assemble_vector() + self.ghost.force(self.w)
+        """The residual's assembly, with G Δu and the starting pressure's facet terms.
+
+        The ghost penalty's force and :mod:`fe_mpm.pressure_by_parts`'s, where there are.
+        """
+
+        def force() -> np.ndarray:
+            b = R.assemble_vector()
+            if self.ghost is not None:
+                b = b + self.ghost.force(self.w)
+            if self._by_parts is not None:
+                with self._by_parts.vector.localForm() as local:
+                    b = b + local.array_r
+            return b
+
+        return force
 
     def _initial_guess(self) -> None:
         """Δu = 0 and the projected pressure (:meth:`GridFields.start_from_rest`)."""
         current, pts = self._current, self.points
         self.fields.start_from_rest(current.layout.cell, current.bary, pts.mass, pts.stress)
+        if self._by_parts is not None:  # its facet terms at the new starting pressure
+            self._by_parts.assemble()
 
     def _consistent_initial_acceleration(
         self, forms: StepForms, layout: SlotLayout, R, bcs: list, dt: float
@@ -803,5 +837,8 @@ class Simulation:
             self._newton = None
         if self.ghost is not None:
             self.ghost.destroy()
+        if self._by_parts is not None:
+            self._by_parts.destroy()
+            self._by_parts = None
         if self._shift is not None:
             self._shift.destroy()

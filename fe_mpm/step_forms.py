@@ -116,6 +116,9 @@ class StepForms:
         lumped: Whether the mass matrix is lumped (dynamics).
         walls: The rigid walls of the grid, or None.
         step_length: The step's length Δt (s) as a constant, for rate-dependent laws.
+        shared_increment: Whether a point domain's pieces share its increment.
+        pressure_by_parts: Whether the starting pressure is integrated by parts in
+            the cells of χ = 1 (:mod:`fe_mpm.pressure_by_parts`; u-p only).
     """
 
     def __init__(
@@ -133,6 +136,7 @@ class StepForms:
         walls: RigidWalls | None = None,
         step_length: ufl.Constant | None = None,
         shared_increment: bool = False,
+        pressure_by_parts: bool = False,
     ):
         mesh, g = fields.W.mesh, fields.W.mesh.geometry.dim
         self.mesh, self.spec, self.material, self.newmark = mesh, spec, material, newmark
@@ -182,6 +186,8 @@ class StepForms:
         if shared_increment:
             self.increment_tangent = self._increment_tangent(fields, step_length)
         w = ufl.TestFunctions(fields.W)[0] if spec.mixed else ufl.TestFunction(fields.W)
+        #: χ of each point's cell (:mod:`fe_mpm.pressure_by_parts`), or None.
+        self.interior = q.function((), "interior") if pressure_by_parts else None
         R = self._residual(fields, conditions, ppp)
         self.q_boundary = None
         if nslot_boundary:
@@ -259,6 +265,7 @@ class StepForms:
                 u_degree=deg,
                 state=state,
                 increment=None if self.dF_shift is None else self.dF,
+                by_parts=None if self.interior is None else (fields.p_start, self.interior),
             )
         averaged = self.spec.volume_average
         if averaged:
@@ -377,6 +384,7 @@ class FormsBySlotCount:
         dynamics: Newmark's rule, or None (static).
         mass: ``"consistent"`` or ``"lumped"`` (dynamics).
         walls: The rigid walls of the grid, or None.
+        shared_increment, pressure_by_parts: As for :class:`StepForms`.
     """
 
     def __init__(
@@ -390,12 +398,14 @@ class FormsBySlotCount:
         mass: str,
         walls: RigidWalls | None = None,
         shared_increment: bool = False,
+        pressure_by_parts: bool = False,
     ):
         self.fields, self.spec, self.material = fields, spec, material
         #: The step's length Δt (s), set before each step (:meth:`set_step_length`).
         self.step_length = dolfinx.fem.Constant(fields.W.mesh, 1.0)
         self.options = dict(
             shared_increment=shared_increment,
+            pressure_by_parts=pressure_by_parts,
             walls=walls,
             conditions=conditions,
             ppp=ppp,

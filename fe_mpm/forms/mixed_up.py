@@ -108,15 +108,17 @@ def stress_parts(material, F: ufl.core.expr.Expr, p: ufl.core.expr.Expr, state=N
     return -J * p * ufl.Identity(g) + material.kirchhoff_deviatoric(F, state), J
 
 
-def point_terms(material, dF, F_n, p_p, state=None):
+def point_terms(material, dF, F_n, p_p, state=None, p_stress=None):
     """What a point puts against ∇w and against q in :func:`residual`.
 
     ``(τ ΔF⁻ᵀ / det F_n, det ΔF · e)`` at the point's increment ``dF`` (g x g), with e
     the volumetric equation in strain units, (J − 1) + p/K or a pressure-dependent
     law's own (with its plastic volume change, :mod:`fe_mpm.materials.mixed_return`).
+    ``p_stress``: the pressure in τ, if not ``p_p`` (the part of it not integrated by
+    parts, :mod:`fe_mpm.pressure_by_parts`); the volumetric equation keeps ``p_p``.
     """
     F = dF * F_n
-    tau, J = stress_parts(material, F, p_p, state)
+    tau, J = stress_parts(material, F, p_p if p_stress is None else p_stress, state)
     volumetric = getattr(material, "volumetric_equation", lambda state: None)(state)
     if volumetric is None:
         volumetric = (J - 1.0) + p_p / material.bulk_modulus
@@ -138,6 +140,7 @@ def residual(
     u_degree: int = 1,
     state=None,
     increment: ufl.core.expr.Expr | None = None,
+    by_parts: tuple[ufl.Coefficient, ufl.Coefficient] | None = None,
 ) -> ufl.Form:
     """Residual of one static u-p step.
 
@@ -158,12 +161,22 @@ def residual(
             for laws with internal variables.
         increment: The point's ΔF, if not the grid's at the point (the shared
             increment of a point domain's pieces, :mod:`fe_mpm.domains`).
+        by_parts: ``(p̄, χ)``: the step's starting pressure (P1) and each point's
+            cell's χ (slot field, 1 or 0); p̄ is integrated by parts where χ = 1, at
+            the points and on the grid of the step's start
+            (:mod:`fe_mpm.pressure_by_parts`, whose facet terms complete it).
     """
     g = ufl.shape(du)[0]
     dF = ufl.Identity(g) + mpq.grad_at_points(du, u_degree) if increment is None else increment
     p_p = mpq.at_points(p)
-    stress, volume = point_terms(material, dF, F_n, p_p, state)
+    p_stress = None
+    if by_parts is not None:
+        p_start, chi = by_parts
+        p_stress = p_p - chi * mpq.at_points(p_start)
+    stress, volume = point_terms(material, dF, F_n, p_p, state, p_stress)
     R = mpq.sum(ufl.inner(stress, mpq.grad_at_points(w, u_degree)))
+    if by_parts is not None:
+        R += mpq.sum(chi * ufl.dot(mpq.at_points(w, u_degree), ufl.grad(p_start)))
     R -= mpq.sum(volume * mpq.at_points(q_test))
     if ppp is not None:
         x = ufl.SpatialCoordinate(mpq.mesh)
