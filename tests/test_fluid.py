@@ -75,6 +75,35 @@ def test_bad_fluid_parameters_are_refused_by_name():
         fe_mpm.NewtonianFluid(2e9, 1e-3, shear_scale=0.0)
 
 
+def water_in_tank(mesh, points, width, depth, rho, lid=None, **options) -> fe_mpm.Simulation:
+    """Water (K = 2 GPa, μ_v = 1e-3 Pa·s) in a tank ``width`` wide with slip walls and
+    floor (and a slip lid at height ``lid``), under gravity, in u-p: lumped mass,
+    Bossak −0.3. ``options`` go to :class:`fe_mpm.Simulation`."""
+    g = 9.81
+
+    def floor(x):
+        return np.isclose(x[1], 0.0) | (lid is not None and np.isclose(x[1], lid))
+
+    water = fe_mpm.NewtonianFluid(2.0e9, 1.0e-3, shear_scale=2 * rho * g * depth, density=rho)
+    return fe_mpm.Simulation(
+        mesh,
+        points,
+        water,
+        "up",
+        dirichlet=[
+            fe_mpm.Dirichlet(
+                lambda x: np.isclose(x[0], 0.0) | np.isclose(x[0], width), component=0
+            ),
+            fe_mpm.Dirichlet(floor, component=1),
+        ],
+        body_force=(0.0, -g),
+        dynamic=True,
+        mass="lumped",
+        bossak_alpha=-0.3,
+        **options,
+    )
+
+
 def still_water(steps: int, ppp_alpha: float | None = None, per_cell: int = 6):
     """Water 0.114 m deep filling a tank as wide as 7 cells, released unstressed in u-p.
 
@@ -87,23 +116,7 @@ def still_water(steps: int, ppp_alpha: float | None = None, per_cell: int = 6):
     mesh = rectangle_mesh((0.0, 0.0), (l0, 16 * h), (7, 16))
     cells = np.flatnonzero(cell_centroids(mesh)[:, 1] < depth)
     points = fe_mpm.seed(mesh, per_cell, density=rho, cells=cells)
-    water = fe_mpm.NewtonianFluid(2.0e9, 1.0e-3, shear_scale=2 * rho * g * depth, density=rho)
-    sim = fe_mpm.Simulation(
-        mesh,
-        points,
-        water,
-        "up",
-        dirichlet=[
-            fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0), component=0),
-            fe_mpm.Dirichlet(lambda x: np.isclose(x[0], l0), component=0),
-            fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0), component=1),
-        ],
-        body_force=(0.0, -g),
-        dynamic=True,
-        mass="lumped",
-        bossak_alpha=-0.3,
-        ppp_alpha=ppp_alpha,
-    )
+    sim = water_in_tank(mesh, points, l0, depth, rho, ppp_alpha=ppp_alpha)
     sim.run(steps * 1.0e-3, steps, progress=False)
     p = sim.points
     pressure = -np.trace(p.stress, axis1=1, axis2=2) / 3.0
@@ -117,7 +130,7 @@ def test_water_at_rest_in_a_tank_stays_at_rest_without_ppp_by_default():
     released unstressed, the water settles onto its hydrostatic pressure and stays.
     Measured after 100 steps: the points' pressures within 0.8 % of ρ g h₀ (rms) of
     ρ g d (measured from the top point, half a point spacing above the surface), the
-    fastest point at 1.3e-5 m/s, the volumes summing to the water's mass over ρ to
+    fastest point at 1.1e-5 m/s (1.3e-5 with the pressure's usual form), the volumes summing to the water's mass over ρ to
     3e-7. Without the rule the motion grows tenfold every 30–40 steps: 8e-3 m/s after
     100 steps, the pressures 190 % off (with twelve points per triangle 0.3 m/s after
     160 steps, then Newton fails); with PPP (G* = 2ρgh₀) the water churns at 0.17 m/s
@@ -165,7 +178,7 @@ def unstructured_still_water(level_set: bool, steps: int = 100) -> float:
 
     from fe_mpm.meshes.gmsh_session import gmsh_session, to_dolfinx
 
-    rho, g, width, depth = 1000.0, 9.81, 0.2, 0.1
+    rho, width, depth = 1000.0, 0.2, 0.1
     with gmsh_session("tank") as model:
         model.occ.addRectangle(0.0, 0.0, 0.0, width, 1.5 * depth)
         model.occ.synchronize()
@@ -179,23 +192,7 @@ def unstructured_still_water(level_set: bool, steps: int = 100) -> float:
         near = np.flatnonzero(cell_centroids(mesh)[:, 1] < depth + 0.02)
         points = fe_mpm.seed(mesh, 6, density=rho, cells=near)
         points.keep(points.x[:, 1] < depth)
-    water = fe_mpm.NewtonianFluid(2.0e9, 1.0e-3, shear_scale=2 * rho * g * depth, density=rho)
-    sim = fe_mpm.Simulation(
-        mesh,
-        points,
-        water,
-        "up",
-        dirichlet=[
-            fe_mpm.Dirichlet(
-                lambda x: np.isclose(x[0], 0.0) | np.isclose(x[0], width), component=0
-            ),
-            fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0), component=1),
-        ],
-        body_force=(0.0, -g),
-        dynamic=True,
-        mass="lumped",
-        bossak_alpha=-0.3,
-    )
+    sim = water_in_tank(mesh, points, width, depth, rho)
     sim.run(steps * 1.0e-3, steps, progress=False)
     return np.abs(sim.points.velocity).max()
 
@@ -203,11 +200,12 @@ def unstructured_still_water(level_set: bool, steps: int = 100) -> float:
 def test_water_whose_surface_cuts_the_cells_stays_at_rest_when_seeded_by_level_set():
     """A free surface inside cells: seeded on the cut cells' wet parts, the points
     integrate the water exactly and its hydrostatic pressure balances its weight at
-    every node (measured: 3.0e-5 m/s after 100 steps, the release's pressure wave,
-    as in a closed tank; 300 steps the same). With the Gauss points above the surface
-    dropped, each cut cell is out of balance by about ρ g times a point spacing and
-    the water moves: 2.5e-2 m/s after 100 steps (5.2e-2 after 300; on cells of 6 and
-    3 mm 5.3e-2 and 1.7e-2, so it does not fall with the cell size)."""
+    every node (measured: 2.6e-5 m/s after 100 steps, the release's pressure wave, as
+    in a closed tank; 3.0e-5 with the pressure's usual form, also after 300 steps).
+    With the Gauss points above the surface dropped, each cut cell is out of balance
+    by about ρ g times a point spacing and the water moves: 2.8e-2 m/s after 100 steps
+    (with the usual form 2.5e-2, 5.2e-2 after 300; on cells of 6 and 3 mm 5.3e-2 and
+    1.7e-2, so it does not fall with the cell size)."""
     assert unstructured_still_water(level_set=True) < 1e-4
     assert unstructured_still_water(level_set=False) > 1e-3
 
@@ -217,7 +215,7 @@ def vortex_energy(closed: bool, by_parts: bool | None, steps: int = 50) -> float
     water 0.5 m deep in a tank 1 m wide, 20 cells across, under gravity
     (``benchmarks/fluid_energy.py --n 20``), closed by a slip lid or under a free
     surface."""
-    rho, g, width, depth = 1000.0, 9.81, 1.0, 0.5
+    rho, width, depth = 1000.0, 1.0, 0.5
     top = depth if closed else depth + 0.1
     mesh = rectangle_mesh((0.0, 0.0), (width, top), (20, round(20 * top)))
     points = fe_mpm.seed(mesh, 6, density=rho, level_set=lambda x: depth - x[1])
@@ -225,22 +223,8 @@ def vortex_energy(closed: bool, by_parts: bool | None, steps: int = 50) -> float
     points.velocity = 0.05 * np.column_stack(
         [np.sin(np.pi * x) * np.cos(np.pi * y), -0.5 * np.cos(np.pi * x) * np.sin(np.pi * y)]
     )
-    walls = [
-        fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0) | np.isclose(x[0], width), component=0),
-        fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0) | np.isclose(x[1], top), component=1),
-    ]
-    water = fe_mpm.NewtonianFluid(2.0e9, 1.0e-3, shear_scale=2 * rho * g * depth, density=rho)
-    sim = fe_mpm.Simulation(
-        mesh,
-        points,
-        water,
-        "up",
-        dirichlet=walls,
-        body_force=(0.0, -g),
-        dynamic=True,
-        mass="lumped",
-        bossak_alpha=-0.3,
-        pressure_by_parts=by_parts,
+    sim = water_in_tank(
+        mesh, points, width, depth, rho, lid=top if closed else None, pressure_by_parts=by_parts
     )
 
     def kinetic() -> float:  # over every rank's points
