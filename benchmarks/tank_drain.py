@@ -199,20 +199,22 @@ t, depth, volume_ratio, push = np.array(history).T
 # √d falls linearly in t with slope −C_c (b/W) √(g/2): a least-squares line through
 # √d from t = 0.3 s gives C_c.
 #
-# Measured (2026-12-05, one core, to t = 1 s): C_c = 0.518 on cells of 12.5 cm (12 288
-# points, 200 steps, 15 s), 0.596 on 6.25 cm (49 152 points, 202 steps, 75 s) and
-# 0.750 on 3.125 cm (214 steps, 657 s beside another run, Newton's mean rising to 11
-# a step by t = 0.8 s), against von Mises's 0.619: the discharge grows with the grid
-# instead of converging, and on the finest grid the depth at t = 1 s (2.77 m) is
-# nearly that of Torricelli's outflow at 0.619 from t = 0 with no start-up at all
-# (2.75 m). The points crowd: at the end the occupied cells hold a median 1.00 and at
-# most 1.83 times their area of point volume on 12.5 cm, 1.17 and 2.33 on 6.25 cm,
-# so the water is denser than its points' volumes say, which a volume tied to the
-# pressure does not resist. The volumes add up to the water's mass over ρ₀
-# to 1e-5 on every grid. The fill printed below (the points' volumes in a cell over
-# its area, 1 for a filled cell) says whether points crowd. The wall's push rings
-# from step to step between about 0.2 and 1.7 times hydrostatic (12.5 cm): Mast's
-# triangle of hydrostatic magnitude only on average. Until 2026-12-05 (PPP, the
+# Measured (2026-12-05, to t = 1 s, with the pressure at the step's start by parts,
+# `fe_mpm.pressure_by_parts`, the default for a fluid): C_c = 0.499 on cells of
+# 12.5 cm (12 288 points, 200 steps), 0.545 on 6.25 cm (49 152 points, 202 steps) and
+# 0.569 on 3.125 cm (196 608 points, 211 steps, 592 s beside other runs, Newton's mean
+# 5.0 a step, at most 13), against von Mises's 0.619: the discharge now grows with the
+# grid by halving steps (0.046, then 0.024), as a first-order approach to a limit near
+# 0.595 (Richardson, 4 % below von Mises's) would. The points still crowd: at the end
+# the occupied cells hold a median 1.00 and at most 1.67, 2.17 and 2.83 times their
+# area of point volume, so near the slot the water is denser than its points'
+# volumes say, which a volume tied to the pressure does not resist. The volumes add
+# up to the water's mass over ρ₀ to 1e-5 on every grid. The wall's push rings from
+# step to step between about 0.2 and 1.6 times hydrostatic: Mast's triangle of
+# hydrostatic magnitude only on average. With the pressure's usual form alone
+# (`pressure_by_parts=False`, as until then) C_c was 0.518, 0.596 and 0.750 (657 s,
+# Newton's mean rising to 11 a step by t = 0.8 s), growing without converging, the
+# fill at most 1.83 and 2.33 on the two coarser grids. Until 2026-12-05 (PPP, the
 # points' own volumes) the points converging on the slot collapsed, their volumes
 # summing to 0.62 of the water's after 1 s, and on 6.25 cm a point turned inside out
 # at t = 0.40 s.
