@@ -19,9 +19,10 @@ the volume term at the points (its integrand barely jumps across a facet where t
 pressure is smooth) and the facet terms exactly; between two such cells they cancel,
 so only the facets on the boundary of the χ = 1 region remain,
 :math:`-\int_F \bar p\, w\cdot[\![\chi n]\!]`. The rest, :math:`p - \chi\bar p`, keeps
-the usual form. With exact quadrature the sum is the usual residual for any
-:math:`\bar p`, so water at rest stays in balance; the cells at the free surface,
-partly filled, keep the usual form, and their pressure is small.
+the usual form. With exact quadrature the sum is the usual residual at the step's
+start (Δu = 0) for any :math:`\bar p`, so water at rest stays in balance; the cells
+at the free surface, partly filled, keep the usual form, and their pressure is
+small.
 
 The :math:`\bar p` part is taken on the grid of the step's start (it is a load of
 the step, not linearised): the facet vector is assembled once per step.
