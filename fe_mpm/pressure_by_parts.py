@@ -50,7 +50,7 @@ class PressureByParts:
             once :meth:`GridFields.start_from_rest` has run.
 
     Attributes:
-        interior: χ of every owned cell of the last :meth:`update` (bool).
+        chi: χ as a DG0 function (owned and ghost cells), for the facet terms.
         vector: The facet terms (a PETSc vector over the grid unknown): added to
             every residual of the step.
     """
@@ -72,7 +72,6 @@ class PressureByParts:
         facets -= self.chi * p0 * ufl.dot(w, n) * ufl.ds
         self._form = dolfinx.fem.form(facets)
         self.vector = fem_petsc.create_vector(fields.W)
-        self.interior = np.zeros(self._num_cells, dtype=bool)
 
     def update(self, occupied: np.ndarray) -> np.ndarray:
         """χ of every owned cell from the cells that hold points on this rank.
@@ -88,12 +87,12 @@ class PressureByParts:
         empty[occupied] = False
         bordering = touched_nodes(self._nodes, np.flatnonzero(empty))
         vertices = self._nodes.dofmap.list[: self._num_cells]
-        self.interior = ~empty & ~bordering[vertices].any(axis=1)
+        interior = ~empty & ~bordering[vertices].any(axis=1)
         dofs = self.chi.function_space.dofmap.list[: self._num_cells, 0]
         self.chi.x.array[:] = 0.0
-        self.chi.x.array[dofs] = self.interior
+        self.chi.x.array[dofs] = interior
         self.chi.x.scatter_forward()  # the facets on a rank boundary see both sides
-        return self.interior
+        return interior
 
     def assemble(self) -> PETSc.Vec:
         """The facet terms at the current p̄ (call after the initial guess)."""
