@@ -21,7 +21,7 @@ from fe_mpm.errors import ConvergenceError
 from fe_mpm.forms import inertia
 from fe_mpm.formulations import GridFields, collapse
 from fe_mpm.solver_options import LINEAR_SOLVERS, with_petsc_options
-from fe_mpm.transfer import mass_weighted_projection
+from fe_mpm.transfer import consistent_projection
 
 
 class NewmarkDynamics:
@@ -35,6 +35,10 @@ class NewmarkDynamics:
             system of the initial acceleration is solved the same way.
         petsc_options: The user's PETSc overrides; those for the linear solver (all but
             ``snes_*``) apply to the mass system too.
+        projection_passes: Passes k ≥ 1 of the consistent-mass projection of the
+            points' velocity and acceleration
+            (:func:`~fe_mpm.transfer.consistent_projection`): 1 is the thesis's
+            mass-weighted projection (Eqs. 2.6–2.9).
 
     Attributes:
         data: The Newmark fields and constants the forms read.
@@ -52,8 +56,10 @@ class NewmarkDynamics:
         bossak_alpha: float = 0.0,
         linear_solver: str = "direct",
         petsc_options: dict | None = None,
+        projection_passes: int = 1,
     ):
         mesh = fields.W.mesh
+        self.projection_passes = projection_passes
         self.n_unknowns = fields.w.x.array.size
         # The grid velocity/acceleration live on the displacement space itself.
         if fields.spec.mixed:
@@ -89,8 +95,9 @@ class NewmarkDynamics:
     ) -> None:
         """Project the points' velocity and acceleration to the nodes and set Δt.
 
-        Mass weighted: ``ṽ_I = Σ_p N_I m_p v_p / Σ_p N_I m_p``, likewise ã; and
-        Newmark's coefficients for a step of length ``dt`` (s).
+        Mass weighted, ``ṽ_I = Σ_p N_I m_p v_p / Σ_p N_I m_p`` and likewise ã, then
+        corrected towards the consistent-mass projection in ``projection_passes − 1``
+        more passes; and Newmark's coefficients for a step of length ``dt`` (s).
 
         Args:
             cells: The points' cells (n,).
@@ -102,7 +109,9 @@ class NewmarkDynamics:
         """
         g = velocity.shape[1]
         both = np.hstack([velocity, acceleration])
-        nodal, self.grid_mass = mass_weighted_projection(self.space, cells, bary, mass, both)
+        nodal, self.grid_mass = consistent_projection(
+            self.space, cells, bary, mass, both, self.projection_passes
+        )
         self.data.v_n.x.array.reshape(-1, g)[:] = nodal[:, :g]
         self.data.a_n.x.array.reshape(-1, g)[:] = nodal[:, g:]
         self.data.set_step(dt)

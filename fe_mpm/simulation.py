@@ -128,6 +128,15 @@ class Simulation:
             the modes the step cannot resolve (a reaction that rings from step to step),
             second-order accurate. 0 (default) is the thesis's trapezoidal rule, which
             dissipates nothing; Kratos MPM's documentation shows its Bossak scheme with −0.3.
+        projection_passes: Passes k ≥ 1 with which the points' velocity and
+            acceleration are projected to the grid at each step, dynamic only
+            (:func:`fe_mpm.transfer.consistent_projection`, Nairn's FMPM(k)): 1 is
+            the thesis's mass-weighted projection (Eqs. 2.6–2.9), which smooths the
+            velocity at every step and so dissipates the energy of a vibrating body;
+            more passes approach the consistent-mass projection, which keeps that
+            energy (docs/dynamics.md). Default 1; more need the consistent mass
+            and no rigid walls, where the consistent projection overshoots the
+            velocity's jump at the contact.
         reactions: Boundaries whose reaction force is computed after every step,
             name -> facet tag or marker (see ``StepReport.reactions``).
         min_step: Shortest step :meth:`run` may cut to (s); default 1/1024 of nominal.
@@ -210,6 +219,7 @@ class Simulation:
         dynamic: bool = False,
         damping: float = 0.0,
         bossak_alpha: float = 0.0,
+        projection_passes: int = 1,
         mass: str = "consistent",
         reactions: dict[str, int | Callable] | None = None,
         min_step: float | None = None,
@@ -240,6 +250,7 @@ class Simulation:
             ppp_alpha = 1.0 if keeps_shape else 0.0
         model_checks.check_ranges(max_step_cells, ppp_alpha, damping, output_every)
         model_checks.check_dynamics(dynamic, formulation, damping, mass, bossak_alpha)
+        passes = model_checks.check_projection_passes(projection_passes, dynamic, mass, walls)
         self.spec = FORMULATIONS[formulation]
         self._volume_of_pressure = self.spec.pressure and not keeps_shape
         model_checks.check_domains(point_domains, ghost_penalty, points, points_leaving, self.spec)
@@ -285,7 +296,7 @@ class Simulation:
             "conditions": (dirichlet, tractions, body_force, body_force_scale, reactions),
             "walls": model_checks.check_walls(walls, self.spec, formulation, point_domains),
             "boundary": [*point_dirichlet, *point_tractions],
-            "dynamics": (damping, bossak_alpha, petsc_options),
+            "dynamics": (damping, bossak_alpha, petsc_options, passes),
             "ppp_alpha": ppp_alpha,
             "mass": mass,
             "points_leaving": points_leaving,
@@ -357,9 +368,9 @@ class Simulation:
         self.fields = GridFields(mesh, self.spec)
         self.dynamics = None
         if self.dynamic:
-            damping, bossak_alpha, petsc_options = self._given["dynamics"]
+            damping, bossak_alpha, petsc_options, passes = self._given["dynamics"]
             self.dynamics = NewmarkDynamics(
-                self.fields, damping, bossak_alpha, self.linear_solver, petsc_options
+                self.fields, damping, bossak_alpha, self.linear_solver, petsc_options, passes
             )
         self.conditions = GridConditions(self.fields, *self._given["conditions"], facet_tags)
         self.conditions._warned_share = self._conditions_warned  # warned once per run

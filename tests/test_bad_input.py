@@ -125,6 +125,16 @@ def test_other_bad_values():
         fe_mpm.Simulation(mesh, points, material, bossak_alpha=-0.1)
     with pytest.raises(ValueError, match="mass='lumped' needs dynamic=True"):
         fe_mpm.Simulation(mesh, points, material, mass="lumped")
+    for passes, error in ((0, ValueError), (2.5, TypeError), (True, TypeError)):
+        with pytest.raises(error, match="Simulation: projection_passes must"):
+            fe_mpm.Simulation(mesh, points, material, dynamic=True, projection_passes=passes)
+    with pytest.raises(ValueError, match="projection_passes > 1 needs dynamic=True"):
+        fe_mpm.Simulation(mesh, points, material, projection_passes=4)
+    with pytest.raises(ValueError, match="projection_passes > 1 .* needs mass='consistent'"):
+        fe_mpm.Simulation(mesh, points, material, dynamic=True, mass="lumped", projection_passes=4)
+    floor = fe_mpm.RigidWall("floor", lambda x: np.isclose(x[1], 0.0))
+    with pytest.raises(ValueError, match="projection_passes > 1 cannot be used with rigid walls"):
+        fe_mpm.Simulation(mesh, points, material, dynamic=True, walls=[floor], projection_passes=4)
     with pytest.raises(ValueError, match="unknown fallback_line_search 'newton'"):
         fe_mpm.Simulation(mesh, points, material, fallback_line_search="newton")
     with pytest.raises(ValueError, match="unknown line_search 'newton'; choose one of auto, basic"):

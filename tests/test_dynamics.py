@@ -218,6 +218,40 @@ def test_vibrating_bar_energy_never_grows_and_its_loss_converges():
     assert abs(fine) < 0.3 * abs(coarse)
 
 
+def vibrating_free_block(passes, formulation="u", ncell=20, dt=2e-3, n=50):
+    """A free elastic block (0.4 m square, 8 cells across, three points per triangle,
+    E = 1 MPa, ν = 0.3, ρ = 1000 kg/m³) started with the stretching velocity
+    v_x = 2 (x − 0.5) /s, so that it rings in its own modes (the first's period is about
+    20 ms, ten steps). Returns its energy after every step over the start's."""
+    mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (ncell, ncell))
+    points = fe_mpm.seed(mesh, per_cell=3, density=1000.0)
+    points.keep(np.all(np.abs(points.x - 0.5) < 0.2, axis=1))
+    points.velocity[:, 0] = 2.0 * (points.x[:, 0] - 0.5)
+    material = fe_mpm.NeoHookean(1e6, 0.3, density=1000.0)
+    sim = fe_mpm.Simulation(
+        mesh, points, material, formulation, dynamic=True, projection_passes=passes
+    )
+    energy = [total_energy(points, material)]
+    for k in range(1, n + 1):
+        sim.step(k * dt)
+        energy.append(total_energy(points, material))
+    return np.array(energy) / energy[0]
+
+
+def test_a_free_vibrating_block_keeps_its_energy_with_the_consistent_projection():
+    """The thesis's mass-weighted projection (one pass) smooths the velocity at every
+    step, most at a free surface, where it does not reproduce even a linear field:
+    the block loses 16 % of its energy in 0.1 s (50 steps; 64 % with 4 cells across
+    and 1 ms steps in 0.1 s, 67 % with 8 in 0.4 s), with a fixed grid's trapezoidal
+    rule losing none. Eight passes of FMPM(k) keep it within 0.25 % (measured
+    0.9991 at the end, 1.0023 at most): a body's vibration is no longer damped by the
+    transfers. Measured 2026-12-05."""
+    lumped, consistent = vibrating_free_block(1), vibrating_free_block(8)
+    assert lumped[-1] < 0.9
+    assert np.all(lumped <= 1.0 + 1e-9)
+    assert np.all(np.abs(consistent - 1.0) < 5e-3)
+
+
 def test_lumped_mass_is_the_row_sum_of_the_consistent_mass():
     """M^L_II = Σ_p m_p N_I(x_p): diagonal, and equal to the projection's nodal masses."""
 

@@ -130,11 +130,12 @@ def test_water_at_rest_in_a_tank_stays_at_rest_without_ppp_by_default():
     released unstressed, the water settles onto its hydrostatic pressure and stays.
     Measured after 100 steps: the points' pressures within 0.8 % of ρ g h₀ (rms) of
     ρ g d (measured from the top point, half a point spacing above the surface), the
-    fastest point at 1.1e-5 m/s (1.3e-5 with the pressure's usual form), the volumes summing to the water's mass over ρ to
-    3e-7. Without the rule the motion grows tenfold every 30–40 steps: 8e-3 m/s after
-    100 steps, the pressures 190 % off (with twelve points per triangle 0.3 m/s after
-    160 steps, then Newton fails); with PPP (G* = 2ρgh₀) the water churns at 0.17 m/s
-    within 40 steps, with the rule or without."""
+    fastest point at 1.1e-5 m/s (1.3e-5 with the pressure's usual form), the volumes
+    summing to the water's mass over ρ to 3e-7. Without the rule the motion grows
+    tenfold every 30–40 steps: 8e-3 m/s after 100 steps, the pressures 190 % off
+    (with twelve points per triangle 0.3 m/s after 160 steps, then Newton fails); with
+    PPP (G* = 2ρgh₀) the water churns at 0.17 m/s within 40 steps, with the rule or
+    without."""
     error, speed, volume, sim = still_water(100)
     assert error < 0.01, error
     assert speed < 1e-4, speed
