@@ -15,7 +15,7 @@ from fe_mpm._dolfinx import dolfinx
 from fe_mpm.boundary import PointDirichlet, RigidWall
 from fe_mpm.checks import check_choice, check_int, check_range
 from fe_mpm.formulations import FORMULATIONS, FormulationSpec
-from fe_mpm.ghost import WITH_DOMAINS
+from fe_mpm.ghost import WITH_DOMAINS, WITH_DOMAINS_DYNAMIC
 from fe_mpm.materials.protocol import Law, MixedLaw, missing_members
 from fe_mpm.particles import MaterialPoints, simplex_cell_type
 
@@ -213,10 +213,16 @@ def pressure_by_parts(
     return bool(given)
 
 
-def ghost_factor(ghost_penalty: float | None, point_domains: bool, degree: int) -> float:
-    """γ of the ghost penalty: as given, else :data:`~fe_mpm.ghost.WITH_DOMAINS` with domains."""
+def ghost_factor(
+    ghost_penalty: float | None, point_domains: bool, degree: int, dynamic: bool = False
+) -> float:
+    """γ of the ghost penalty: as given, else with domains
+    :data:`~fe_mpm.ghost.WITH_DOMAINS` in a static run and
+    :data:`~fe_mpm.ghost.WITH_DOMAINS_DYNAMIC` in a dynamic one; 0 without."""
     if ghost_penalty is None:
-        return WITH_DOMAINS[degree] if point_domains else 0.0
+        if not point_domains:
+            return 0.0
+        return WITH_DOMAINS_DYNAMIC if dynamic else WITH_DOMAINS[degree]
     return float(ghost_penalty)
 
 
@@ -232,8 +238,8 @@ def failure_advice(point_domains: bool, ghost_factor: float) -> str:
         return (
             "This run has point domains without a ghost penalty (ghost_penalty=0): a "
             "cell holding only a sliver of a domain ties its nodes weakly, and that can "
-            "leave Newton without a solution; the default penalty ties them (on the "
-            "strip footing 0.001 was enough)."
+            "leave Newton without a solution; a penalty ties them (ghost_penalty=γ, the "
+            "default of static runs; on the strip footing 0.001 was enough)."
         )
     return ""
 

@@ -177,8 +177,10 @@ class Simulation:
             there, else False.
         ghost_penalty: γ ≥ 0 of the ghost penalty on the facets of poorly filled
             cells (:mod:`fe_mpm.ghost`); 0: none. Default:
-            :data:`fe_mpm.ghost.WITH_DOMAINS` with point domains (0.1 for P1, 0.01
-            for P2), else 0.
+            :data:`fe_mpm.ghost.WITH_DOMAINS` with point domains in a static run (0.1
+            for P1, 0.01 for P2), else 0 (in dynamics the penalty, which acts on each
+            step's increment, damps the motion like a dashpot:
+            :data:`fe_mpm.ghost.WITH_DOMAINS_DYNAMIC`).
         checkpoint_dir: Folder for a checkpoint every ``checkpoint_every`` steps
             (:mod:`fe_mpm.checkpoint`; :meth:`restore` continues from one); None
             (default): none.
@@ -317,7 +319,7 @@ class Simulation:
         self._add_time("setup", t0)
         self._track()  # once now, so a bad initial layout fails at set-up
         self._ghost_factor = model_checks.ghost_factor(
-            ghost_penalty, point_domains, self.spec.u_degree
+            ghost_penalty, point_domains, self.spec.u_degree, self.dynamic
         )
         self.ghost = None
         #: Grid repartitions so far (:meth:`rebalance`).

@@ -247,6 +247,7 @@ def test_the_p2_penalty_sees_the_jump_of_the_second_derivative():
 
 
 def test_point_domains_bring_the_ghost_penalty_unless_told_otherwise():
+    """In static runs; in dynamic ones only when asked for (it damps like a dashpot)."""
     mesh = meshes.rectangle_mesh((0.0, 0.0), (1.0, 1.0), (2, 2))
     law = fe_mpm.NeoHookean(3.0, 0.25)
 
@@ -257,6 +258,9 @@ def test_point_domains_bring_the_ghost_penalty_unless_told_otherwise():
     assert ghost(point_domains=True).scale.value == pytest.approx(2 * WITH_DOMAINS[1] * law.mu)
     assert ghost(point_domains=True, ghost_penalty=0.0) is None
     assert ghost(ghost_penalty=0.3).scale.value == pytest.approx(0.6 * law.mu)
+    assert ghost(point_domains=True, dynamic=True) is None
+    dynamic = ghost(point_domains=True, dynamic=True, ghost_penalty=0.1)
+    assert dynamic.scale.value == pytest.approx(0.2 * law.mu)
 
 
 @pytest.mark.parametrize("gamma", [0.0, 1.0])
