@@ -216,9 +216,11 @@ def pressure_by_parts(
 def ghost_factor(
     ghost_penalty: float | None, point_domains: bool, degree: int, dynamic: bool = False
 ) -> float:
-    """γ of the ghost penalty: as given, else with domains
-    :data:`~fe_mpm.ghost.WITH_DOMAINS` in a static run and
-    :data:`~fe_mpm.ghost.WITH_DOMAINS_DYNAMIC` in a dynamic one; 0 without."""
+    """γ of the ghost penalty: as given, else by the run's kind.
+
+    With point domains :data:`~fe_mpm.ghost.WITH_DOMAINS` in a static run and
+    :data:`~fe_mpm.ghost.WITH_DOMAINS_DYNAMIC` in a dynamic one; 0 without.
+    """
     if ghost_penalty is None:
         if not point_domains:
             return 0.0
