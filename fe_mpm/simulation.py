@@ -130,7 +130,7 @@ class Simulation:
             dissipates nothing; Kratos MPM's documentation shows its Bossak scheme with −0.3.
         projection_passes: Passes k ≥ 1 with which the points' velocity and
             acceleration are projected to the grid at each step, dynamic only
-            (:func:`fe_mpm.transfer.consistent_projection`, Nairn's FMPM(k)): 1 is
+            (:func:`fe_mpm.transfer.consistent_projection`, FMPM(k)): 1 is
             the thesis's mass-weighted projection (Eqs. 2.6–2.9), which smooths the
             velocity at every step and so dissipates the energy of a vibrating body;
             more passes approach the consistent-mass projection, which keeps that

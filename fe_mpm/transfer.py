@@ -107,23 +107,23 @@ def consistent_projection(
     bary: np.ndarray,
     mass: np.ndarray,
     values: np.ndarray,
-    iterations: int,
+    passes: int,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The consistent-mass projection of point values, approximated in ``iterations`` passes.
+    """The consistent-mass projection of point values, approximated in ``passes`` passes.
 
     The field ``ṽ`` that interpolates the points' values best in the mass norm solves
     ``M ṽ = Σ_p N m_p v_p`` with the consistent mass ``M_IJ = Σ_p m_p N_I N_J``.
     Each pass adds the lumped projection of what the field still misses at the
-    points (Nairn and Hammerquist's FMPM(k), a Jacobi iteration on ``M`` with the
-    lumped mass):
+    points (FMPM(k): Nairn and Hammerquist 2021, revised in Nairn 2026,
+    arXiv:2604.07307; a Jacobi iteration on ``M`` with the lumped mass):
 
         ṽ ← ṽ + M_L⁻¹ Σ_p N m_p (v_p − ṽ(x_p)),   starting from ṽ = 0,
 
     so one pass is :func:`mass_weighted_projection` and more passes approach the
     consistent projection, which reproduces any P1 field exactly. A mode the
-    points barely see (``M`` near-singular, one point per cell) grows by at most
-    one lumped projection a pass, where the exact solve would amplify it without
-    bound.
+    points barely see (``M`` near-singular, one point per cell) grows at most
+    linearly with the passes, where the exact solve would amplify it without bound
+    (on the rolling disk's grid the exact solve stopped Newton in step 53).
 
     Args:
         space: A P1 space (its local dofs follow the cell's vertices).
@@ -131,7 +131,7 @@ def consistent_projection(
         bary: Their barycentric coordinates there (n, g + 1).
         mass: The points' masses (n,) in kg.
         values: Per-point values, shape ``(n, k)``.
-        iterations: The number of passes, ≥ 1.
+        passes: The number of passes k, ≥ 1.
 
     Returns:
         Nodal values ``(nodes, k)`` (zero where no point reaches) and the nodal
@@ -139,7 +139,7 @@ def consistent_projection(
     """
     nodal, nodal_mass = mass_weighted_projection(space, cells, bary, mass, values)
     vertices = space.dofmap.list[cells]
-    for _ in range(iterations - 1):
+    for _ in range(passes - 1):
         missed = values - np.einsum("pv,pvk->pk", bary, nodal[vertices])
         nodal += mass_weighted_projection(space, cells, bary, mass, missed)[0]
     return nodal, nodal_mass
