@@ -27,7 +27,8 @@
 #   velocity the grid does not see), over the spin's energy.
 #
 # Usage: `python benchmarks/vibration_energy.py [--scene ring|spin] [--n 20 40 80]
-# [--dt 1e-3] [--passes 1 2 4 8] [--formulation u]`.
+# [--dt 1e-3] [--passes 1 2 4 8] [--formulation u] [--plot docs/vibration_energy.png]`;
+# `--plot` draws the measure against time, one panel per grid.
 
 # +
 import argparse
@@ -37,6 +38,7 @@ import numpy as np
 
 import fe_mpm
 from fe_mpm.meshes import rectangle_mesh
+from fe_mpm.plotting import pyplot
 
 
 def parse_args(argv=None):
@@ -48,6 +50,7 @@ def parse_args(argv=None):
     p.add_argument("--t-end", type=float, default=0.4, help="duration (s)")
     p.add_argument("--passes", type=int, nargs="+", default=[1, 2, 4, 8])
     p.add_argument("--formulation", default="u")
+    p.add_argument("--plot", default=None, help="PNG of the measure against time")
     return p.parse_args(argv)
 
 
@@ -80,8 +83,11 @@ def measure(points, material, scene: str) -> float:
     return 0.5 * float(m @ np.sum((v - rigid) ** 2, axis=1))
 
 
-def run(n: int, passes: int, args) -> tuple[list[float], float]:
-    """The measure over its start's (ring) or over the spin's energy (spin) every 0.1 s."""
+def run(n: int, passes: int, args) -> tuple[np.ndarray, np.ndarray, float]:
+    """Times (s), the measure after every step and the wall time (s).
+
+    The measure is over its start's (ring) or over the spin's energy (spin).
+    """
     mesh, points = block(n, args.scene)
     material = fe_mpm.NeoHookean(1e6, 0.3, density=1000.0)
     sim = fe_mpm.Simulation(
@@ -89,13 +95,33 @@ def run(n: int, passes: int, args) -> tuple[list[float], float]:
     )
     scale = measure(points, material, "ring") if args.scene == "spin" else None
     start = measure(points, material, args.scene)
-    every = round(0.1 / args.dt)
+    steps = round(args.t_end / args.dt)
     t0, values = time.perf_counter(), []
-    for k in range(1, round(args.t_end / args.dt) + 1):
+    for k in range(1, steps + 1):
         sim.step(k * args.dt)
-        if k % every == 0:
-            values.append(measure(points, material, args.scene) / (scale or start))
-    return values, time.perf_counter() - t0
+        values.append(measure(points, material, args.scene) / (scale or start))
+    return args.dt * np.arange(1, steps + 1), np.array(values), time.perf_counter() - t0
+
+
+def plot(curves: dict, args) -> None:
+    """The measure against time, one panel per grid, one curve per number of passes."""
+    plt = pyplot()
+    if plt is None:
+        return
+    sizes = sorted({n for n, _ in curves})
+    fig, axes = plt.subplots(1, len(sizes), figsize=(4.2 * len(sizes), 3.6), sharey=True)
+    for ax, n in zip(np.atleast_1d(axes), sizes, strict=True):
+        for (size, passes), (t, values) in curves.items():
+            if size == n:
+                ax.plot(t, values, label=f"{passes} pass{'es' if passes > 1 else ''}")
+        ax.set_title(f"{n * 2 // 5} cells across the block")
+        ax.set_xlabel("t (s)")
+    first = np.atleast_1d(axes)[0]
+    first.set_ylabel("E / E₀" if args.scene == "ring" else "spurious KE / spin KE")
+    first.legend()
+    fig.tight_layout()
+    fig.savefig(args.plot, dpi=110)
+    print(f"wrote {args.plot}")
 
 
 # -
@@ -104,11 +130,16 @@ if __name__ == "__main__":
     args = parse_args()
     what = "energy / start" if args.scene == "ring" else "spurious KE / spin KE"
     print(f"scene {args.scene}, {args.formulation}, dt = {args.dt} s: {what} every 0.1 s")
+    curves = {}
+    every = round(0.1 / args.dt)
     for n in args.n:
         for passes in args.passes:
-            values, wall = run(n, passes, args)
+            t, values, wall = run(n, passes, args)
+            curves[n, passes] = (t, values)
             print(
                 f"  n = {n:3d} ({n * 2 // 5} cells across), passes {passes}: "
-                + " ".join(f"{v:.4f}" for v in values)
+                + " ".join(f"{v:.4f}" for v in values[every - 1 :: every])
                 + f"  ({wall:.1f} s)"
             )
+    if args.plot:
+        plot(curves, args)
