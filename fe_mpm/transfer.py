@@ -125,17 +125,8 @@ def consistent_projection(
     linearly with the passes, where the exact solve would amplify it without bound
     (on the rolling disk's grid the exact solve stopped Newton in step 53).
 
-    Args:
-        space: A P1 space (its local dofs follow the cell's vertices).
-        cells: The points' cells (n,).
-        bary: Their barycentric coordinates there (n, g + 1).
-        mass: The points' masses (n,) in kg.
-        values: Per-point values, shape ``(n, k)``.
-        passes: The number of passes k, ≥ 1.
-
-    Returns:
-        Nodal values ``(nodes, k)`` (zero where no point reaches) and the nodal
-        masses ``Σ_p N_I m_p`` ``(nodes,)``.
+    The arguments and what is returned are :func:`mass_weighted_projection`'s, with
+    ``passes`` the number of passes k ≥ 1.
     """
     nodal, nodal_mass = mass_weighted_projection(space, cells, bary, mass, values)
     vertices = space.dofmap.list[cells]
