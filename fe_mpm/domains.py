@@ -29,7 +29,7 @@ returns from the point's own state).
 
 A domain that has distorted too far (:func:`shape_quality`) is redrawn around its
 point at the start of a step, which breaks the tiling there; the ghost penalty
-(:mod:`fe_mpm.ghost`, on by default with domains) ties the cells the domains fill
+(:mod:`fe_mpm.ghost`, on by default with domains in static runs) ties the cells the domains fill
 in part. With P2 displacements each piece has three sub-points that integrate
 quadratics exactly (:func:`~fe_mpm.clipping.piece_rule`; triangles only). Not yet:
 P2 on tetrahedra, and splitting a distorted domain into smaller ones. The

@@ -45,7 +45,7 @@ WITH_DOMAINS = {1: 0.1, 2: 0.01}
 #: γ when point domains are on in a dynamic run (P1 only) and ``ghost_penalty`` is
 #: not given. The penalty acts on each step's increment Δu = v Δt and is forgotten
 #: at the next step, so in dynamics it resists motion like a dashpot, while the
-#: consistent mass already keeps the step's matrix regular. Measured 2026-12-05: the
+#: mass matrix already keeps the step's matrix regular. Measured 2026-12-05: the
 #: granular collapse of ``demos/column_collapse.py`` (a = 3, h = 0.015, three points
 #: per cell) runs out −26.5 % short of Lube et al. with γ = 0.1 and −14.9 % with 0;
 #: a free elastic square ringing in its own modes (8 cells across, u-p, Δt = 1 ms,

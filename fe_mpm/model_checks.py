@@ -100,7 +100,7 @@ def check_projection_passes(passes: int, dynamic: bool, mass: str, walls) -> int
     if passes > 1 and mass != "consistent":
         raise ValueError(
             "Simulation: projection_passes > 1 approaches the consistent-mass projection "
-            "and needs mass='consistent'; with mass='lumped' the projection is the lumped one (1)"
+            "and needs mass='consistent'; use projection_passes=1 with mass='lumped'"
         )
     if passes > 1 and walls:
         raise ValueError(

@@ -252,7 +252,6 @@ class Simulation:
             ppp_alpha = 1.0 if keeps_shape else 0.0
         model_checks.check_ranges(max_step_cells, ppp_alpha, damping, output_every)
         model_checks.check_dynamics(dynamic, formulation, damping, mass, bossak_alpha)
-        passes = model_checks.check_projection_passes(projection_passes, dynamic, mass, walls)
         self.spec = FORMULATIONS[formulation]
         self._volume_of_pressure = self.spec.pressure and not keeps_shape
         model_checks.check_domains(point_domains, ghost_penalty, points, points_leaving, self.spec)
@@ -293,10 +292,12 @@ class Simulation:
         self.ladder = RetryLadder(
             fallback_line_search, bool(fallback_hold_cells), bool(fallback_from_best)
         )
+        walls = model_checks.check_walls(walls, self.spec, formulation, point_domains)
+        passes = model_checks.check_projection_passes(projection_passes, dynamic, mass, walls)
         # What the grid's objects are built from, again after a repartition.
         self._given = {
             "conditions": (dirichlet, tractions, body_force, body_force_scale, reactions),
-            "walls": model_checks.check_walls(walls, self.spec, formulation, point_domains),
+            "walls": walls,
             "boundary": [*point_dirichlet, *point_tractions],
             "dynamics": (damping, bossak_alpha, petsc_options, passes),
             "ppp_alpha": ppp_alpha,

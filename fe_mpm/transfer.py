@@ -109,12 +109,12 @@ def consistent_projection(
     values: np.ndarray,
     passes: int,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The consistent-mass projection of point values, approximated in ``passes`` passes.
+    """The consistent-mass projection of point values, approximated in ``passes`` passes (FMPM).
 
     The field ``ṽ`` that interpolates the points' values best in the mass norm solves
     ``M ṽ = Σ_p N m_p v_p`` with the consistent mass ``M_IJ = Σ_p m_p N_I N_J``.
     Each pass adds the lumped projection of what the field still misses at the
-    points (FMPM(k): Nairn and Hammerquist 2021, revised in Nairn 2026,
+    points (FMPM(k), k the passes: Nairn and Hammerquist 2021, revised in Nairn 2026,
     arXiv:2604.07307; a Jacobi iteration on ``M`` with the lumped mass):
 
         ṽ ← ṽ + M_L⁻¹ Σ_p N m_p (v_p − ṽ(x_p)),   starting from ṽ = 0,
@@ -126,12 +126,14 @@ def consistent_projection(
     (on the rolling disk's grid the exact solve stopped Newton in step 53).
 
     The arguments and what is returned are :func:`mass_weighted_projection`'s, with
-    ``passes`` the number of passes k ≥ 1.
+    ``passes`` the number of passes, ≥ 1.
     """
+    if passes < 1:
+        raise ValueError(f"consistent_projection: passes must be ≥ 1, got {passes}")
     nodal, nodal_mass = mass_weighted_projection(space, cells, bary, mass, values)
     vertices = space.dofmap.list[cells]
     for _ in range(passes - 1):
-        missed = values - np.einsum("pv,pvk->pk", bary, nodal[vertices])
+        missed = values - np.einsum("pv,pvc->pc", bary, nodal[vertices])
         nodal += mass_weighted_projection(space, cells, bary, mass, missed)[0]
     return nodal, nodal_mass
 

@@ -219,10 +219,12 @@ def test_vibrating_bar_energy_never_grows_and_its_loss_converges():
 
 
 def vibrating_free_block(passes, formulation="u", ncell=20, dt=2e-3, n=50):
-    """A free elastic block (0.4 m square, 8 cells across, three points per triangle,
-    E = 1 MPa, ν = 0.3, ρ = 1000 kg/m³) started with the stretching velocity
-    v_x = 2 (x − 0.5) /s, so that it rings in its own modes (the first's period is about
-    20 ms, ten steps). Returns its energy after every step over the start's."""
+    """A free elastic block's energy after every step, over the start's.
+
+    The block: a 0.4 m square, 8 cells across, three points per triangle, E = 1 MPa,
+    ν = 0.3, ρ = 1000 kg/m³, started with the stretching velocity v_x = 2 (x − 0.5) /s,
+    so that it rings in its own modes (the first's period is about 20 ms, ten steps).
+    """
     mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (ncell, ncell))
     points = fe_mpm.seed(mesh, per_cell=3, density=1000.0)
     points.keep(np.all(np.abs(points.x - 0.5) < 0.2, axis=1))

@@ -638,7 +638,7 @@ def test_a_block_falling_onto_the_base_in_dynamics_gives_the_serial_answer(tmp_p
             _check_fall(result[mass], want, want["iterations"], mass)
         assert sum(r[mass]["seeded"] for r in runs) == want["seeded"]
     assert min(r["lumped"]["seeded"] for r in runs) == 0  # a rank starts empty
-    assert all(r[m]["migrated"] > 0 for r in runs for m in ("consistent", "lumped"))
+    assert all(r[m]["migrated"] > 0 for r in runs for m in ("consistent", "lumped", "projected"))
     want = serial["lumped"]
     _run(tmp_path, "write checkpoint", 2)
     assert (tmp_path / "ck" / "step_000005" / "points_r0001.npz").is_file()
