@@ -84,8 +84,24 @@ def mass_weighted_projection(
         Nodal values ``(nodes, k)`` (zero where no point reaches) and the nodal
         masses ``Σ_p N_I m_p`` ``(nodes,)``.
     """
-    nodes, weights, n = nodal_shares(space, cells, bary, mass)
+    shares = nodal_shares(space, cells, bary, mass)
+    nodes, weights, n = shares
     nodal_mass = summed_over_ranks(space, np.bincount(nodes, weights=weights, minlength=n))
+    return _weighted_means(space, shares, nodal_mass, values), nodal_mass
+
+
+def _weighted_means(
+    space: dolfinx.fem.FunctionSpace,
+    shares: tuple[np.ndarray, np.ndarray, int],
+    nodal_mass: np.ndarray,
+    values: np.ndarray,
+) -> np.ndarray:
+    """``Σ_p N_I m_p v_p / Σ_p N_I m_p`` (nodes, k), zero where no point reaches.
+
+    From :func:`nodal_shares`' output and the nodal masses, both computed once, so
+    that each pass of :func:`consistent_projection` sums over the ranks once.
+    """
+    nodes, weights, n = shares
     repeated = np.repeat(values, space.dofmap.list.shape[1], axis=0)
     moment = np.stack(
         [
@@ -95,10 +111,9 @@ def mass_weighted_projection(
         axis=1,
     )
     moment = summed_over_ranks(space, moment)
-    nodal = np.divide(
+    return np.divide(
         moment, nodal_mass[:, None], out=np.zeros_like(moment), where=nodal_mass[:, None] > 0
     )
-    return nodal, nodal_mass
 
 
 def consistent_projection(
@@ -130,11 +145,14 @@ def consistent_projection(
     """
     if passes < 1:
         raise ValueError(f"consistent_projection: passes must be ≥ 1, got {passes}")
-    nodal, nodal_mass = mass_weighted_projection(space, cells, bary, mass, values)
+    shares = nodal_shares(space, cells, bary, mass)
+    nodes, weights, n = shares
+    nodal_mass = summed_over_ranks(space, np.bincount(nodes, weights=weights, minlength=n))
+    nodal = _weighted_means(space, shares, nodal_mass, values)
     vertices = space.dofmap.list[cells]
     for _ in range(passes - 1):
         missed = values - np.einsum("pv,pvc->pc", bary, nodal[vertices])
-        nodal += mass_weighted_projection(space, cells, bary, mass, missed)[0]
+        nodal += _weighted_means(space, shares, nodal_mass, missed)
     return nodal, nodal_mass
 
 
