@@ -134,9 +134,9 @@ class Simulation:
             the thesis's mass-weighted projection (Eqs. 2.6–2.9), which smooths the
             velocity at every step and so dissipates the energy of a vibrating body;
             more passes approach the consistent-mass projection, which keeps that
-            energy (docs/dynamics.md). Default 1; more need the consistent mass
-            and no rigid walls, where the consistent projection overshoots the
-            velocity's jump at the contact.
+            energy (docs/dynamics.md). Default 1; more need the consistent mass,
+            and with rigid walls ``bossak_alpha`` < 0 (a contact rings under the
+            trapezoidal rule once the projection no longer smooths it).
         reactions: Boundaries whose reaction force is computed after every step,
             name -> facet tag or marker (see ``StepReport.reactions``).
         min_step: Shortest step :meth:`run` may cut to (s); default 1/1024 of nominal.
@@ -293,7 +293,9 @@ class Simulation:
             fallback_line_search, bool(fallback_hold_cells), bool(fallback_from_best)
         )
         walls = model_checks.check_walls(walls, self.spec, formulation, point_domains)
-        passes = model_checks.check_projection_passes(projection_passes, dynamic, mass, walls)
+        passes = model_checks.check_projection_passes(
+            projection_passes, dynamic, mass, walls, bossak_alpha
+        )
         # What the grid's objects are built from, again after a repartition.
         self._given = {
             "conditions": (dirichlet, tractions, body_force, body_force_scale, reactions),

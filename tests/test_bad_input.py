@@ -133,8 +133,11 @@ def test_other_bad_values():
     with pytest.raises(ValueError, match="projection_passes > 1 .* needs mass='consistent'"):
         fe_mpm.Simulation(mesh, points, material, dynamic=True, mass="lumped", projection_passes=4)
     floor = fe_mpm.RigidWall("floor", lambda x: np.isclose(x[1], 0.0))
-    with pytest.raises(ValueError, match="projection_passes > 1 cannot be used with rigid walls"):
+    with pytest.raises(ValueError, match="projection_passes > 1 with rigid walls needs Bossak"):
         fe_mpm.Simulation(mesh, points, material, dynamic=True, walls=[floor], projection_passes=4)
+    fe_mpm.Simulation(  # with Bossak's dissipation they may
+        mesh, points, material, dynamic=True, walls=[floor], projection_passes=4, bossak_alpha=-0.3
+    )
     with pytest.raises(ValueError, match="unknown fallback_line_search 'newton'"):
         fe_mpm.Simulation(mesh, points, material, fallback_line_search="newton")
     with pytest.raises(ValueError, match="unknown line_search 'newton'; choose one of auto, basic"):
