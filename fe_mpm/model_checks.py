@@ -99,14 +99,16 @@ def check_projection_passes(
     push holds ρ c v₀ to 1.3 %, with −0.3 to 0.1 %, and the block stays.
     """
     passes = check_int("Simulation", "projection_passes", passes, lo=1)
-    if passes > 1 and not dynamic:
+    if passes == 1:
+        return passes
+    if not dynamic:
         raise ValueError("Simulation: projection_passes > 1 needs dynamic=True")
-    if passes > 1 and mass != "consistent":
+    if mass != "consistent":
         raise ValueError(
             "Simulation: projection_passes > 1 approaches the consistent-mass projection "
             "and needs mass='consistent'; use projection_passes=1 with mass='lumped'"
         )
-    if passes > 1 and walls and bossak_alpha == 0.0:
+    if walls and bossak_alpha == 0.0:
         raise ValueError(
             "Simulation: projection_passes > 1 with rigid walls needs Bossak's "
             "dissipation, bossak_alpha in [-1/3, 0) (e.g. -0.3): with the trapezoidal "

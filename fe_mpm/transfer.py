@@ -84,10 +84,17 @@ def mass_weighted_projection(
         Nodal values ``(nodes, k)`` (zero where no point reaches) and the nodal
         masses ``Σ_p N_I m_p`` ``(nodes,)``.
     """
+    shares, nodal_mass = _shares_and_nodal_mass(space, cells, bary, mass)
+    return _weighted_means(space, shares, nodal_mass, values), nodal_mass
+
+
+def _shares_and_nodal_mass(
+    space: dolfinx.fem.FunctionSpace, cells: np.ndarray, bary: np.ndarray, mass: np.ndarray
+) -> tuple[tuple[np.ndarray, np.ndarray, int], np.ndarray]:
+    """:func:`nodal_shares` of the masses, and the nodal masses ``Σ_p N_I m_p`` (nodes,)."""
     shares = nodal_shares(space, cells, bary, mass)
     nodes, weights, n = shares
-    nodal_mass = summed_over_ranks(space, np.bincount(nodes, weights=weights, minlength=n))
-    return _weighted_means(space, shares, nodal_mass, values), nodal_mass
+    return shares, summed_over_ranks(space, np.bincount(nodes, weights=weights, minlength=n))
 
 
 def _weighted_means(
@@ -145,9 +152,7 @@ def consistent_projection(
     """
     if passes < 1:
         raise ValueError(f"consistent_projection: passes must be ≥ 1, got {passes}")
-    shares = nodal_shares(space, cells, bary, mass)
-    nodes, weights, n = shares
-    nodal_mass = summed_over_ranks(space, np.bincount(nodes, weights=weights, minlength=n))
+    shares, nodal_mass = _shares_and_nodal_mass(space, cells, bary, mass)
     nodal = _weighted_means(space, shares, nodal_mass, values)
     vertices = space.dofmap.list[cells]
     for _ in range(passes - 1):
