@@ -251,7 +251,13 @@ class PointDirichlet:
         name: Name of the condition; its force on the body is reported in
             ``StepReport.reactions[name]`` (N, per unit thickness in 2D).
         x: Initial positions of the boundary points (n, g), m. Under MPI every
-            rank gives all of them; each point then acts on one rank.
+            rank gives all of them; each point then acts on one rank. A face that
+            grows is held only where points are: lay them over all the face will
+            reach (a point beyond the material waits at its target until material
+            reaches it). A block squeezed to half its length by a platen laid over
+            its initial face only flows around the platen's last point, and the
+            force falls 10 % short in the last 5 % of the stroke
+            (:func:`fe_mpm.scenes.platen_compression` covers the grid's side).
         weight: Boundary measure each point represents (n,): length (m) in 2D,
             area (m²) in 3D, > 0. Points may also fill a rigid body to tie the grid
             nodes inside it (see ``meshes.footing_points``); each then carries the

@@ -12,9 +12,9 @@ import numpy as np
 from fe_mpm import meshes
 from fe_mpm._dolfinx import dolfinx
 from fe_mpm.boundary import SNAP_REACH, Dirichlet, PointDirichlet, PointTraction, Traction
-from fe_mpm.checks import check_int
+from fe_mpm.checks import check_int, check_range
 from fe_mpm.formulations import FORMULATIONS
-from fe_mpm.materials import MohrCoulomb, NeoHookean
+from fe_mpm.materials import J2Plasticity, MohrCoulomb, NeoHookean
 from fe_mpm.particles import merge, seed
 from fe_mpm.report import StepReport
 from fe_mpm.simulation import Simulation
@@ -302,3 +302,124 @@ def column_stress_error(sim: Simulation) -> float:
     exact = -rho * g * (L - pts.x0[:, up])
     error = np.sum(np.abs(pts.stress[:, up, up] - exact) * pts.volume)
     return float(error / (rho * g * L * pts.volume.sum()))
+
+
+#: The squeezed block of :func:`platen_compression`: Young's modulus (Pa), Poisson's
+#: ratio, and the flow stress of its von Mises law (Pa).
+PLATEN = {"E": 1000.0, "nu": 0.3, "yield_stress": 1.0}
+PLATEN_LAWS = ("neo-hookean", "j2")
+
+
+def _platen_law(law: str):
+    """The block's law by name: ``"neo-hookean"`` or perfectly plastic ``"j2"``."""
+    if law not in PLATEN_LAWS:
+        raise ValueError(f"platen_compression: law must be one of {PLATEN_LAWS}, got {law!r}")
+    E, nu = PLATEN["E"], PLATEN["nu"]
+    if law == "j2":
+        return J2Plasticity(E, nu, PLATEN["yield_stress"])
+    return NeoHookean(E, nu)
+
+
+def platen_compression(
+    n: int,
+    per_cell: int = 3,
+    *,
+    law: str = "neo-hookean",
+    dim: int = 2,
+    formulation: str = "u",
+    compression: float = 0.5,
+    **options,
+) -> Simulation:
+    """A unit block squeezed between smooth platens to ``1 − compression`` of its length.
+
+    The deformation is homogeneous, so the platen's force has a closed form
+    (:func:`platen_force_exact`) at every stretch, for any grid and any number of
+    steps: what a run adds to it is the method's own error, mostly cell crossing
+    as the block widens through the empty cells beside it. A quarter (an eighth in
+    3D) of the block, [0, 1]^dim, with rollers on the planes x = 0, y = 0 (and z = 0),
+    on a grid of ``n`` cells per metre (triangles, or six tetrahedra per cube) wide
+    enough for the block's widening; the platen is a :class:`PointDirichlet` named
+    ``"platen"`` on x = 1 that constrains x only and moves by ``−compression · t``.
+    Its points cover the whole grid beside the block, two per cell width: the block's
+    side face widens, and a point above it takes part once material reaches it.
+
+    Args:
+        n: Cells per metre (the block is ``n`` cells long), ≥ 2.
+        per_cell: Material points per cell.
+        law: ``"neo-hookean"`` or ``"j2"`` (von Mises, perfectly plastic), with
+            :data:`PLATEN`'s constants.
+        dim: 2 (plane strain) or 3.
+        formulation: Passed to :class:`Simulation`.
+        compression: Shortening at ``t = 1`` over the initial length, in (0, 0.8].
+        options: Passed on to :class:`~fe_mpm.simulation.Simulation`.
+    """
+    n = check_int("platen_compression", "n", n, lo=2)
+    dim = check_int("platen_compression", "dim", dim, lo=2, hi=3)
+    compression = check_range(
+        "platen_compression", "compression", compression, lo=0.0, hi=0.8, lo_open=True
+    )
+    material = _platen_law(law)
+    # The widest the block gets: incompressible, its side grows by λ^(−1/(dim − 1)).
+    side = (1.0 - compression) ** (-1.0 / (dim - 1)) + 2.0 / n
+    extent = [1.0 + 2.0 / n] + [side] * (dim - 1)
+    cells = [int(np.ceil(e * n)) for e in extent]
+    top = [c / n for c in cells]
+    kind = dolfinx.mesh.CellType.triangle if dim == 2 else dolfinx.mesh.CellType.tetrahedron
+    create = dolfinx.mesh.create_rectangle if dim == 2 else dolfinx.mesh.create_box
+    mesh = create(MPI.COMM_WORLD, [[0.0] * dim, top], cells, kind)
+    points = seed(mesh, per_cell=per_cell, density=1.0)
+    points.keep(np.all(points.x < 1.0, axis=1))
+    # Two platen points per cell width over the grid's side, less a margin of a cell.
+    m = 2 * (cells[1] - 1)
+    spacing = (top[1] - 1.0 / n) / m
+    lateral = (np.arange(m) + 0.5) * spacing
+    grids = np.meshgrid(*[lateral] * (dim - 1), indexing="ij")
+    x_platen = np.column_stack([np.ones(m ** (dim - 1))] + [g.ravel() for g in grids])
+    platen = PointDirichlet(
+        "platen",
+        x_platen,
+        np.full(len(x_platen), spacing ** (dim - 1)),
+        lambda t: np.r_[-compression * t, np.zeros(dim - 1)],
+        penalty=1e3 * PLATEN["E"] * n,
+        components=(0,),
+    )
+    rollers = [Dirichlet(lambda x, i=i: np.isclose(x[i], 0.0), component=i) for i in range(dim)]
+    return Simulation(
+        mesh, points, material, formulation, dirichlet=rollers, point_dirichlet=[platen], **options
+    )
+
+
+def platen_force_exact(law: str, stretch: float, dim: int = 2) -> float:
+    """The force (N; N/m in 2D) on the platen of :func:`platen_compression` at ``stretch``.
+
+    ``stretch`` λ is the block's length over its initial length. The block is
+    homogeneous and free across, so the platen carries ``−τ_xx / λ`` on the unit
+    face: Kirchhoff's τ_xx (its Cauchy stress times J) over λ, since the face's area
+    grows by J / λ.
+
+    - Neo-Hookean: F = diag(λ, μ_t, μ_t) (plane strain: μ_t in y only), the
+      transverse stretch μ_t from τ_yy = λ_L ln J + μ (μ_t² − 1) = 0 (bisection).
+    - Perfectly plastic J2: the rigid-plastic limit, (2/√3) σ_Y / λ in plane strain
+      (s_zz = 0 once the flow is plastic) and σ_Y / λ in 3D. The elastic part,
+      σ_Y / E = 10⁻³ here, changes the force by less than that once the block flows.
+    """
+    material = _platen_law(law)
+    dim = check_int("platen_force_exact", "dim", dim, lo=2, hi=3)
+    if law == "j2":
+        return (2.0 / np.sqrt(3.0) if dim == 2 else 1.0) * material.yield_stress / stretch
+    mu, lam = material.mu, material.lmbda
+
+    def transverse_stress(t: float) -> float:
+        return lam * np.log(stretch * t ** (dim - 1)) + mu * (t * t - 1.0)
+
+    lo, hi = 1.0, 1.0 / stretch  # τ_yy < 0 at 1 (λ < 1), > 0 at 1/λ
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if transverse_stress(mid) < 0.0 else (lo, mid)
+    J = stretch * lo ** (dim - 1)
+    return -(lam * np.log(J) + mu * (stretch**2 - 1.0)) / stretch
+
+
+def platen_force(report: StepReport) -> float:
+    """The platen's push on the block of :func:`platen_compression` (N; N/m in 2D), > 0."""
+    return -float(report.reactions["platen"][0])

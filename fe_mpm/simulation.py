@@ -528,7 +528,17 @@ class Simulation:
         check_range("Simulation.run", "t_end", t_end, lo=self.t, lo_open=True)
         nominal = (t_end - self.t) / int(n_steps)
         floor = DEFAULT_MIN_STEP * nominal if self.min_step is None else self.min_step
-        advice = model_checks.failure_advice(self.domains is not None, self._ghost_factor)
+        # Domains are refused with walls, with points dropped, and for P2 on tetrahedra.
+        domains_would_do = (
+            self.domains is None
+            and not self.dynamic
+            and not self._given["walls"]
+            and self._given["points_leaving"] == "raise"
+            and (self.gdim == 2 or self.spec.u_degree == 1)
+        )
+        advice = model_checks.failure_advice(
+            self.domains is not None, self._ghost_factor, domains_would_do
+        )
         length = StepLength(nominal, floor, advice)
         can_hold = not self.dynamic and self.domains is None  # pieces differ per attempt
         bar, reports = ProgressBar(int(n_steps), progress), []

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 import fe_mpm
+from fe_mpm import scenes
 from fe_mpm._dolfinx import dolfinx
 from fe_mpm.boundary import boundary_facets
 from fe_mpm.checks import check_range
@@ -23,6 +24,20 @@ def test_poisson_ratio_out_of_range(nu):
 def test_young_modulus_not_positive(E):
     with pytest.raises(ValueError, match=r"NeoHookean: E must lie in \(0, inf\]"):
         fe_mpm.NeoHookean(E=E, nu=0.3)
+
+
+@pytest.mark.parametrize(
+    ("options", "match"),
+    [
+        ({"law": "tresca"}, r"law must be one of \('neo-hookean', 'j2'\), got 'tresca'"),
+        ({"compression": 0.9}, r"compression must lie in \(0, 0.8\]"),
+        ({"compression": float("nan")}, r"compression must lie in \(0, 0.8\], got nan"),
+        ({"dim": 1}, r"dim must"),
+    ],
+)
+def test_the_squeezed_block_scene_names_its_bad_option(options, match):
+    with pytest.raises(ValueError, match=f"platen_compression: {match}"):
+        scenes.platen_compression(4, **options)
 
 
 def _scene():

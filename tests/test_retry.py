@@ -176,3 +176,26 @@ def test_a_run_with_point_domains_and_no_ghost_penalty_says_so_when_it_stops(gam
         sim.run(1.0, 1, progress=False)
     assert "min_step = 0.5" in str(info.value)
     assert ("ghost_penalty=0" in str(info.value)) == (gamma == 0.0)
+
+
+@pytest.mark.parametrize(
+    ("options", "names_domains"),
+    [
+        ({}, True),
+        ({"dynamic": True}, False),
+        ({"point_domains": True, "ghost_penalty": 0.1}, False),
+    ],
+)
+def test_a_static_standard_run_that_stops_names_point_domains(options, names_domains):
+    """Standard MPM's points cross cells with their whole volume, which can leave a
+    static step without a solution (``scenes.platen_compression``'s J2 block in u-p
+    stops so on n = 40): a static run without domains that stops says that domains
+    spread them; a dynamic run or one with domains does not (Newton is allowed one
+    iteration, so every attempt fails)."""
+    sim = scenes.cook_membrane(
+        4, formulation="up", petsc_options={"snes_max_it": 1}, min_step=0.5, **options
+    )
+    with pytest.raises(ConvergenceError) as info:
+        sim.run(1.0, 1, progress=False)
+    assert "min_step = 0.5" in str(info.value)
+    assert ("point_domains=True spreads" in str(info.value)) == names_domains
