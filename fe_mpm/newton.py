@@ -268,7 +268,9 @@ class NewtonSolver:
             self._ghost.full.multAdd(x, b, b)  # G Δu, linear in the increment
         # Before the conditions overwrite them, supported rows hold their reactions.
         rows = self._u_rows
-        self.test.internal = self._norm(b.array_r[rows] + self._loads.array_r[rows])
+        internal = self._norm(b.array_r[rows] + self._loads.array_r[rows])
+        if np.isfinite(internal):  # a non-finite iterate's failure quotes the last real scale
+            self.test.internal = internal
         if self._needs_lifting(x):
             if self._before_jacobian is not None:
                 # The lifting assembles the tangent at this iterate: a pointwise law

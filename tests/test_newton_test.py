@@ -7,6 +7,8 @@ block under constant gravity then failed in step 2 or 3 (‖R‖ stalled at roun
 whose residual had not fallen at all.
 """
 
+import re
+
 from mpi4py import MPI
 from petsc4py import PETSc
 
@@ -251,3 +253,36 @@ def test_a_static_step_that_moves_a_point_many_cells_is_rejected():
     sim.step(1.0)
     moved = np.linalg.norm(points.x - points.x0, axis=1).max()
     assert 0.5 < moved / sim.tracker.sizes.max() < 10
+
+
+def test_a_step_that_ends_on_a_non_finite_residual_quotes_the_last_finite_force_scale(
+    monkeypatch,
+):
+    """A block squeezed by its supports alone (no loads) takes a step; then its law
+    returns NaN from the next step's second evaluation on, so every solve ends on a
+    non-finite residual. The failure quotes the forces in play at the last finite
+    residual, the first step's reactions, not 0: ``max(loads, nan)`` once made it 0,
+    and the accepted bound the round-off floor."""
+    law = fe_mpm.MohrCoulomb(1e6, 0.3, 1e4, friction_angle=20.0, density=1000.0)
+    evaluations = {"n": 0}
+    finite_return = type(law).return_map
+
+    def return_map(self, dF, history):
+        result = finite_return(self, dF, history)
+        evaluations["n"] += 1
+        if evaluations["n"] > 1:
+            result.tau[:] = np.nan
+        return result
+
+    mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (4, 4))
+    squeeze = [
+        fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0)),
+        fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 1.0), value=lambda t: (0.0, -0.01 * t)),
+    ]
+    sim = fe_mpm.Simulation(mesh, fe_mpm.seed(mesh, 3), law, dirichlet=squeeze, min_step=0.5)
+    sim.run(0.5, 1, progress=False)
+    monkeypatch.setattr(type(law), "return_map", return_map)
+    with pytest.raises(fe_mpm.ConvergenceError, match="DIVERGED_FUNCTION_NANORINF") as info:
+        sim.run(1.0, 1, progress=False)
+    scale = float(re.search(r"against the force scale ([0-9.e+-]+)", str(info.value))[1])
+    assert scale > 0.0
