@@ -69,8 +69,9 @@ class NewtonResult:
         reason: Why the solve ended, in words (e.g. ``"‖R‖ = 3.1e-12 of the force
             scale 1.234e+03"``), or PETSc's reason when it failed.
         residual_norms: ‖R‖ at each iterate (displacement and pressure rows).
-        force_scale: The forces in play at the last iterate, S (N; N/m in 2D).
-        tolerance: The largest ‖R‖ accepted at the last iterate (N).
+        force_scale: The forces in play at the last iterate whose forces were finite,
+            S (N; N/m in 2D).
+        tolerance: The largest ‖R‖ accepted at that scale (N).
     """
 
     converged: bool
@@ -124,6 +125,7 @@ class ForceTest:
         self.rtol, self.atol, self.max_it, self.length = rtol, atol, max_it, length
         self.loads = 0.0  # ‖f_ext‖ of the step
         self.internal = 0.0  # ‖f_int‖ at the last residual
+        self.finite_internal = 0.0  # ‖f_int‖ at the last residual where it was finite
         self.round_off = 0.0  # f_ε from the last tangent (kept across steps for iteration 0)
         self.volume = 0.0  # ‖V‖ of the pressure nodes; 0 without pressure
         self.pressure_norm = 0.0  # ‖R_p‖ at the last residual
@@ -133,21 +135,41 @@ class ForceTest:
         self.smallest = np.inf  # the smallest ‖R‖ of iterates 1, 2, … of this solve
         self.stalled = 0  # iterates since the smallest
 
+    def record_internal(self, norm: float) -> None:
+        """‖f_int‖ (N) of the residual just assembled, supported rows included."""
+        self.internal = norm
+        if np.isfinite(norm):
+            self.finite_internal = norm
+
     @property
     def scale(self) -> float:
         """S = max(‖f_ext‖, ‖f_int‖) at the last residual (N)."""
         return max(self.loads, self.internal)
 
     @property
+    def reported_scale(self) -> float:
+        """S at the last residual whose forces were finite (N): what a failure quotes.
+
+        A non-finite iterate fails the solve; ``max(loads, nan)`` would quote 0.
+        """
+        return max(self.loads, self.finite_internal)
+
+    def tolerance_at(self, scale: float) -> float:
+        """The largest ‖R_u‖ accepted at the force scale ``scale`` (N)."""
+        return max(self.rtol * scale, self.atol, self.round_off)
+
+    @property
     def tolerance(self) -> float:
         """The largest ‖R_u‖ accepted at the last residual (N)."""
-        return max(self.rtol * self.scale, self.atol, self.round_off)
+        return self.tolerance_at(self.scale)
 
     def __call__(self, snes, it: int, norms) -> int:
         """SNES's convergence test: a ``PETSc.SNES.ConvergedReason`` for iterate ``it``."""
         _, _, fnorm = norms
         Reason = PETSc.SNES.ConvergedReason
-        if not np.isfinite(fnorm):
+        # Non-finite forces only in supported rows leave fnorm finite (the conditions
+        # overwrite those rows): the reactions are not finite, so neither is the iterate.
+        if not (np.isfinite(fnorm) and np.isfinite(self.internal)):
             self.verdict = "non-finite residual"
             return Reason.DIVERGED_FUNCTION_NANORINF
         pressure_ok = self.pressure_norm <= max(self.rtol, PRESSURE_ROUND_OFF) * self.volume

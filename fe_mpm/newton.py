@@ -268,9 +268,7 @@ class NewtonSolver:
             self._ghost.full.multAdd(x, b, b)  # G Δu, linear in the increment
         # Before the conditions overwrite them, supported rows hold their reactions.
         rows = self._u_rows
-        internal = self._norm(b.array_r[rows] + self._loads.array_r[rows])
-        if np.isfinite(internal):  # a non-finite iterate's failure quotes the last real scale
-            self.test.internal = internal
+        self.test.record_internal(self._norm(b.array_r[rows] + self._loads.array_r[rows]))
         if self._needs_lifting(x):
             if self._before_jacobian is not None:
                 # The lifting assembles the tangent at this iterate: a pointwise law
@@ -419,8 +417,8 @@ class NewtonSolver:
             iterations=self.snes.getIterationNumber(),
             reason=self.test.verdict or _REASONS.get(reason, str(reason)),
             residual_norms=list(self.norms),
-            force_scale=self.test.scale,
-            tolerance=self.test.tolerance,
+            force_scale=self.test.reported_scale,
+            tolerance=self.test.tolerance_at(self.test.reported_scale),
         )
 
     def destroy(self) -> None:

@@ -398,25 +398,33 @@ def platen_compression(
     )
 
 
-def _platen_state(law: str, stretch: float, dim: int, formulation: str) -> tuple[float, float]:
+def _platen_state(
+    owner: str, law: str, stretch: float, dim: int, formulation: str
+) -> tuple[float, float]:
     """Kirchhoff's τ_xx (Pa) and J of the block of :func:`platen_compression` at ``stretch``.
 
     - Neo-Hookean: F = diag(λ, μ_t, μ_t) (plane strain: μ_t in y only), the
       transverse stretch μ_t from τ_yy = 0 (bisection). In the u forms the law is
       the full one, τ = λ_L ln J I + μ (b − I); the mixed forms split it,
       τ = K J (J − 1) I + μ dev(b̄) (``docs/formulations.md``), another material
-      away from J = 1.
+      away from J = 1, whose volumetric stress is weakest at J = 1/2: past that
+      (near λ = 0.47 in plane strain) a squeezed block has no stable state, and
+      below λ ≈ 0.4 none free across.
     - Perfectly plastic J2: the rigid-plastic limit, τ_xx = −(2/√3) σ_Y in plane
-      strain (s_zz = 0 once the flow is plastic) and −σ_Y in 3D, with J = 1. The
-      elastic part, σ_Y / E = 10⁻³ here, changes either by less than that once the
-      block flows.
+      strain (s_zz = 0 once the flow is plastic) and −σ_Y in 3D, exact once
+      1 − λ ≫ σ_Y / E (10⁻³ here). J = 1 leaves out the elastic volume change,
+      σ_Y / (√3 K) = 7e-4 in plane strain here.
+
+    Raises:
+        ValueError: ``stretch`` is not in (0, 1], or the split law has no stable
+            state there (the message says so, with ``owner``'s name).
     """
     material = _platen_law(law)
-    dim = check_int("platen_compression", "dim", dim, lo=2, hi=3)
+    dim = check_int(owner, "dim", dim, lo=2, hi=3)
+    stretch = check_range(owner, "stretch", stretch, lo=0.0, hi=1.0, lo_open=True)
     if formulation not in FORMULATIONS:
         raise ValueError(
-            f"platen_compression: formulation must be one of {tuple(FORMULATIONS)}, "
-            f"got {formulation!r}"
+            f"{owner}: formulation must be one of {tuple(FORMULATIONS)}, got {formulation!r}"
         )
     if law == "j2":
         return -(2.0 / np.sqrt(3.0) if dim == 2 else 1.0) * material.yield_stress, 1.0
@@ -433,29 +441,37 @@ def _platen_state(law: str, stretch: float, dim: int, formulation: str) -> tuple
             return K * J * (J - 1.0) + mu * dev[0], K * J * (J - 1.0) + mu * dev[1], J
         return lam * np.log(J) + mu * (stretch**2 - 1.0), lam * np.log(J) + mu * (t * t - 1.0), J
 
-    lo, hi = 1.0, 1.0 / stretch  # τ_yy < 0 at 1 (λ < 1), > 0 at 1/λ
-    for _ in range(200):
+    lo, hi = 1.0, 1.0 / stretch  # τ_yy(1) < 0 (λ ≤ 1) and τ_yy(1/λ) > 0, but see the split law
+    if stretch < 1.0 and kirchhoff(lo)[1] >= 0.0:
+        lo = hi  # no root in the bracket: refused below
+    for _ in range(100):
         mid = 0.5 * (lo + hi)
         lo, hi = (mid, hi) if kirchhoff(mid)[1] < 0.0 else (lo, mid)
-    tau_xx, _, J = kirchhoff(lo)
+    tau_xx, tau_yy, J = kirchhoff(lo)
+    if split and (J <= 0.5 or abs(tau_yy) > 1e-9 * abs(tau_xx)):
+        raise ValueError(
+            f"{owner}: the mixed forms' split Neo-Hookean has no stable state free "
+            f"across at stretch {stretch:g} (J ≤ 1/2, where its volumetric stress "
+            f"K J (J − 1) turns over): squeeze it less"
+        )
     return tau_xx, J
 
 
 def platen_force_exact(law: str, stretch: float, dim: int = 2, formulation: str = "u") -> float:
     """The force (N; N/m in 2D) on the platen of :func:`platen_compression` at ``stretch``.
 
-    ``stretch`` λ is the block's length over its initial length. The block is
-    homogeneous and free across, so the platen carries ``−τ_xx / λ`` on the unit
+    ``stretch`` λ, in (0, 1], is the block's length over its initial length. The block
+    is homogeneous and free across, so the platen carries ``−τ_xx / λ`` on the unit
     face: Kirchhoff's τ_xx (its Cauchy stress times J) over λ, since the face's area
     grows by J / λ. τ_xx is :func:`_platen_state`'s; ``formulation`` matters for the
     Neo-Hookean law, which the mixed forms split.
     """
-    return -_platen_state(law, stretch, dim, formulation)[0] / stretch
+    return -_platen_state("platen_force_exact", law, stretch, dim, formulation)[0] / stretch
 
 
 def platen_stress_exact(law: str, stretch: float, dim: int = 2, formulation: str = "u") -> float:
     """The Cauchy stress σ_xx (Pa) of every point of :func:`platen_compression` at ``stretch``."""
-    tau, J = _platen_state(law, stretch, dim, formulation)
+    tau, J = _platen_state("platen_stress_exact", law, stretch, dim, formulation)
     return tau / J
 
 

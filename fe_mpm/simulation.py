@@ -305,6 +305,7 @@ class Simulation:
             "ppp_alpha": ppp_alpha,
             "mass": mass,
             "points_leaving": points_leaving,
+            "pressure_by_parts": pressure_by_parts,
         }
         self.tracking: PointTracking | None = None
         self._boundary: BoundaryPointStep | None = None
@@ -528,12 +529,14 @@ class Simulation:
         check_range("Simulation.run", "t_end", t_end, lo=self.t, lo_open=True)
         nominal = (t_end - self.t) / int(n_steps)
         floor = DEFAULT_MIN_STEP * nominal if self.min_step is None else self.min_step
-        # Domains are refused with walls, with points dropped, and for P2 on tetrahedra.
+        # Static only: in flows domains cut the run-out (docs/cell_crossing.md). They are
+        # refused with walls, points dropped, the pressure by parts and P2 on tetrahedra.
         domains_would_do = (
             self.domains is None
             and not self.dynamic
             and not self._given["walls"]
             and self._given["points_leaving"] == "raise"
+            and self._given["pressure_by_parts"] is not True
             and (self.gdim == 2 or self.spec.u_degree == 1)
         )
         advice = model_checks.failure_advice(

@@ -93,10 +93,12 @@ def test_gravity_block_runs_four_steps_and_carries_its_weight(law, formulation, 
 def test_force_test_verdicts():
     """The verdicts of the test on its own: at iteration 0 a residual below 1e-10 of
     the forces passes (a step that starts in equilibrium), above it Newton goes on;
-    the pressure rows must pass too; NaN and the iteration limit fail."""
+    the pressure rows must pass too; NaN (in ‖R‖ or in the forces of supported rows)
+    and the iteration limit fail."""
     Reason = PETSc.SNES.ConvergedReason
     test = ForceTest(rtol=1e-10, atol=0.0, max_it=25, length=1.0)
-    test.loads, test.internal = 100.0, 300.0
+    test.loads = 100.0
+    test.record_internal(300.0)
     test.displacement_norm = 2e-8
     assert test(None, 0, (0.0, 0.0, 2e-8)) == Reason.CONVERGED_FNORM_ABS and test.passed
     test.passed = False
@@ -108,6 +110,12 @@ def test_force_test_verdicts():
     assert test(None, 3, (0.0, 0.0, 4e-8)) == Reason.ITERATING
     assert test(None, 25, (0.0, 0.0, 4e-8)) == Reason.DIVERGED_MAX_IT
     assert test(None, 3, (0.0, 0.0, np.nan)) == Reason.DIVERGED_FUNCTION_NANORINF
+    # Non-finite forces in supported rows only: ‖R‖ is finite, the reactions are not.
+    test.volume, test.round_off = 0.0, 0.0
+    test.record_internal(np.nan)
+    test.displacement_norm = 0.0
+    assert test(None, 3, (0.0, 0.0, 0.0)) == Reason.DIVERGED_FUNCTION_NANORINF
+    assert test.reported_scale == 300.0  # the last finite forces, for the message
     # No forces at all (nothing loaded, nothing stressed): only an exact zero passes.
     empty = ForceTest(rtol=1e-10, atol=0.0, max_it=25, length=1.0)
     assert empty(None, 0, (0.0, 0.0, 0.0)) == Reason.CONVERGED_FNORM_ABS
