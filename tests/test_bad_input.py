@@ -40,6 +40,21 @@ def test_the_squeezed_block_scene_names_its_bad_option(options, match):
         scenes.platen_compression(4, **options)
 
 
+@pytest.mark.parametrize(
+    ("stretch", "formulation", "match"),
+    [
+        (1.2, "u", r"stretch must lie in \(0, 1\]"),
+        (0.0, "u", r"stretch must lie in \(0, 1\]"),
+        (0.3, "up", r"the mixed forms' split Neo-Hookean has no stable state free across"),
+    ],
+)
+def test_the_squeezed_blocks_closed_form_refuses_what_it_does_not_cover(
+    stretch, formulation, match
+):
+    with pytest.raises(ValueError, match=f"platen_force_exact: {match}"):
+        scenes.platen_force_exact("neo-hookean", stretch, 2, formulation)
+
+
 def _scene():
     mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (2, 2))
     return mesh, fe_mpm.seed(mesh)
