@@ -42,6 +42,32 @@ TIE = 1e-8
 NUDGE = 1e-9
 #: Direction of the nudge (unit vector; its first g components, normalised, in 2D).
 DIRECTION = np.array([1.0, np.sqrt(2.0) - 1.0, (np.sqrt(5.0) - 2.0)])
+#: Two cells hold a point outside them equally well (:meth:`Tracker.snap_to`) when
+#: their smallest barycentric coordinates differ by less than this, and are equally
+#: near when their centroids' squared distances differ by less than this fraction.
+EQUAL_HOLD = 1e-12
+
+
+def preferred(x: np.ndarray, score: np.ndarray, centroid: np.ndarray) -> int:
+    """Which of several cells takes a point ``x`` (g,) from outside: an index into them.
+
+    The largest ``score`` (each cell's smallest barycentric coordinate at ``x``);
+    among scores within :data:`EQUAL_HOLD` of it, the cell whose centroid is
+    nearest; among those equally near, the lowest centroid (x, then y, then z).
+    Ties are common on structured grids (a point beside two triangles of a square),
+    and breaking them by the cells' order on a rank made two ranks read a platen
+    point's field from another cell than one rank did (the squeezed block of
+    :func:`fe_mpm.scenes.platen_compression`); geometry is the same on every
+    partition. ``centroid`` is (k, 3) or (k, g); cells with score −inf never win
+    unless all do.
+    """
+    near = score >= np.max(score) - EQUAL_HOLD
+    g = x.shape[0]
+    d2 = np.where(near, np.sum((centroid[:, :g] - x) ** 2, axis=1), np.inf)
+    near &= d2 <= d2.min() * (1.0 + EQUAL_HOLD)
+    candidates = np.flatnonzero(near)
+    keys = centroid[candidates, :g]
+    return int(candidates[np.lexsort(keys.T[::-1])[0]])
 
 
 class Tracker:
@@ -216,7 +242,7 @@ class Tracker:
         if candidates.size == 0:
             return -np.inf, -1
         lam = self.barycentric(np.repeat(x[None, :], candidates.size, axis=0), candidates)
-        best = np.argmax(lam.min(axis=1))
+        best = preferred(x, lam.min(axis=1), self.centroids[candidates])
         return float(lam[best].min()), int(candidates[best])
 
     def claim(
@@ -266,6 +292,7 @@ class Tracker:
         nodes[mine] = index_map.local_to_global(local).reshape(-1, k)
         nodes = parallel.largest(comm, nodes)
         score, choice = np.full(n, -np.inf), np.full(n, -1, dtype=np.int32)
+        centroid = np.zeros((n, self.centroids.shape[1]))
         order, sorted_globals = self._nodes_by_global_index()
         starts = self._cells_of_nodes()[1]
         for i in np.flatnonzero(found & ~taken):
@@ -274,8 +301,14 @@ class Tracker:
             local_nodes = local_nodes[local_nodes < starts.size - 1]
             if local_nodes.size:
                 score[i], choice[i] = self._best_allowed(x[i], local_nodes, allowed)
+                if choice[i] >= 0:
+                    centroid[i] = self.centroids[choice[i]]
         scores = np.array(comm.allgather(score))  # (ranks, n)
-        winner = np.argmax(scores, axis=0)  # the lowest rank among equals
+        centroids = np.array(comm.allgather(centroid))  # (ranks, n, 3)
+        # The rule of one rank across the ranks' best cells: the same cell on any partition.
+        winner = np.argmax(scores, axis=0)
+        for i in np.flatnonzero(found & ~taken):
+            winner[i] = preferred(x[i], scores[:, i], centroids[:, i])
         close = scores[winner, np.arange(n)] >= -np.maximum(np.broadcast_to(tol, (n,)), ON_FACET)
         snapped = found & ~taken & close & (winner == rank)
         out[snapped] = choice[snapped]

@@ -397,7 +397,11 @@ try:
         footing = scenes.strip_footing(h=0.2, h_far=0.2, E=1e4, points_near=3, smooth=True,
                                        settlement=0.16)
         steps = footing.run(1.0, 10, progress=False)
+        platen = scenes.platen_compression(10, 3)
+        squeezed = platen.run(1.0, 10, progress=False)
         result = {
+            "platen": {"iterations": [r.newton_iterations for r in squeezed],
+                       "force": [scenes.platen_force(r) for r in squeezed]},
             "cook": {"iterations": [r.newton_iterations for r in reports],
                      "tip": scenes.tip_deflection(cook),
                      "load": reports[-1].reactions["load"].tolist(),
@@ -801,11 +805,15 @@ def test_boundary_points_act_on_one_rank_each_and_give_the_serial_answer(tmp_pat
     migrating), and the smooth strip footing, a PointDirichlet pushed 0.16 B down over
     10 steps (h = 0.2 B; q rises 4.5-fold as the soil yields). Measured against
     serial: the same iterations, tip and q to 5e-14 relative, also on 2 ranks; the
-    traction's reported force is the whole load on every rank."""
+    traction's reported force is the whole load on every rank. And the squeezed block
+    of ``scenes.platen_compression`` (standard MPM, 10 steps to half its length),
+    whose platen points above the block's corner lie as near two occupied cells: they
+    must take the same one on every partition (by index, 2 ranks once ended 0.5 %
+    off the serial force)."""
     (serial,) = _run(tmp_path, "boundary points", 1)
     runs = _run(tmp_path, "boundary points", ranks)
     for result in runs:
-        for scene, key in (("cook", "tip"), ("footing", "q")):
+        for scene, key in (("cook", "tip"), ("footing", "q"), ("platen", "force")):
             want, got = serial[scene], result[scene]
             assert got["iterations"] == want["iterations"], scene
             assert np.allclose(got[key], want[key], rtol=1e-10, atol=0), scene

@@ -7,7 +7,7 @@ import fe_mpm
 from fe_mpm._dolfinx import dolfinx
 from fe_mpm.markers import Markers
 from fe_mpm.meshes import rectangle_mesh
-from fe_mpm.tracker import Tracker
+from fe_mpm.tracker import Tracker, preferred
 
 
 def _barycentric(mesh, x, cells):
@@ -276,3 +276,19 @@ def test_a_point_on_a_facet_or_vertex_takes_one_cell_wherever_the_search_starts(
     assert np.all(in_grid.any(axis=1))
     assert np.all(_inside(mesh, first, cells, tol=0.0))
     assert np.all(_inside(mesh, x, cells))
+
+
+def test_a_point_held_equally_by_two_cells_takes_the_nearer_whatever_their_order():
+    """Two cells whose smallest barycentric coordinates at a point outside both are
+    equal (to round-off) tie; the nearer centroid wins, then the lower centroid, so
+    that every partition of a grid, which numbers its cells differently, picks the
+    same cell. A clearly larger score wins however far its centroid."""
+    x = np.array([0.95, 1.1417])
+    score = np.array([-0.4167, -0.4167 + 1e-15, -0.9])
+    centroids = np.array([[0.9333, 1.0667, 0.0], [0.8333, 1.0667, 0.0], [0.95, 1.14, 0.0]])
+    for order in ([0, 1, 2], [1, 0, 2], [2, 1, 0]):
+        assert order[preferred(x, score[order], centroids[order])] == 0
+    level = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])  # both 1 from the origin
+    for order in ([0, 1], [1, 0]):
+        assert order[preferred(np.zeros(2), np.zeros(2), level[order])] == 1  # x 0 < 1
+    assert preferred(x, np.array([-0.5, -0.1]), centroids[:2]) == 1
