@@ -356,6 +356,30 @@ def check_supports(conditions, boundary, occupied: np.ndarray, walls=None) -> No
         )
 
 
+def domains_would_be_taken(
+    points: MaterialPoints,
+    points_leaving: str,
+    walls: tuple,
+    formulation: str,
+    spec: FormulationSpec,
+    pressure_by_parts_given: bool | None,
+    keeps_shape: bool,
+) -> bool:
+    """Whether these options would take ``point_domains=True``: no check refuses them.
+
+    Asks the checks themselves (:func:`check_domains`, :func:`check_walls`,
+    :func:`pressure_by_parts`), so that advice to turn domains on follows their
+    refusals as they change.
+    """
+    try:
+        check_domains(True, None, points, points_leaving, spec)
+        check_walls(walls, spec, formulation, True)
+        pressure_by_parts(pressure_by_parts_given, keeps_shape, True, spec)
+    except (ValueError, NotImplementedError):
+        return False
+    return True
+
+
 def check_walls(walls, spec, formulation: str, point_domains: bool) -> tuple:
     """The rigid walls as a tuple, or raise where they cannot act yet.
 

@@ -305,8 +305,22 @@ class Simulation:
             "ppp_alpha": ppp_alpha,
             "mass": mass,
             "points_leaving": points_leaving,
-            "pressure_by_parts": pressure_by_parts,
         }
+        # A static standard run that stops names point domains, where they would be
+        # taken; not in dynamics, where they cut a flow's run-out (docs/cell_crossing.md).
+        self._domains_would_do = (
+            not point_domains
+            and not dynamic
+            and model_checks.domains_would_be_taken(
+                points,
+                points_leaving,
+                walls,
+                formulation,
+                self.spec,
+                pressure_by_parts,
+                keeps_shape,
+            )
+        )
         self.tracking: PointTracking | None = None
         self._boundary: BoundaryPointStep | None = None
         self._conditions_warned: dict[int, float] = {}
@@ -529,18 +543,8 @@ class Simulation:
         check_range("Simulation.run", "t_end", t_end, lo=self.t, lo_open=True)
         nominal = (t_end - self.t) / int(n_steps)
         floor = DEFAULT_MIN_STEP * nominal if self.min_step is None else self.min_step
-        # Static only: in flows domains cut the run-out (docs/cell_crossing.md). They are
-        # refused with walls, points dropped, the pressure by parts and P2 on tetrahedra.
-        domains_would_do = (
-            self.domains is None
-            and not self.dynamic
-            and not self._given["walls"]
-            and self._given["points_leaving"] == "raise"
-            and self._given["pressure_by_parts"] is not True
-            and (self.gdim == 2 or self.spec.u_degree == 1)
-        )
         advice = model_checks.failure_advice(
-            self.domains is not None, self._ghost_factor, domains_would_do
+            self.domains is not None, self._ghost_factor, self._domains_would_do
         )
         length = StepLength(nominal, floor, advice)
         can_hold = not self.dynamic and self.domains is None  # pieces differ per attempt
