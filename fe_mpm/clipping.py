@@ -18,7 +18,7 @@ import numpy as np
 from fe_mpm.tet_clipping import clip_to_reference_tet, tet_volumes
 
 
-def _clip(polygon: np.ndarray, count: np.ndarray, distance: np.ndarray, size: int):
+def clip_half_plane(polygon: np.ndarray, count: np.ndarray, distance: np.ndarray, size: int):
     """Keep the part of each polygon where ``distance`` ≥ 0 (one Sutherland–Hodgman pass).
 
     Args:
@@ -105,7 +105,7 @@ def _pieces_in_reference_cell(xi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     polygons[inside, :3], counts[inside] = xi[inside], 3
     polygon, count = xi[cut], np.full(cut.sum(), 3)
     for size, distance in zip((4, 5, 6), half_planes, strict=True):
-        polygon, count = _clip(polygon, count, distance(polygon), size)
+        polygon, count = clip_half_plane(polygon, count, distance(polygon), size)
     polygons[cut], counts[cut] = polygon, count
     return polygons, counts
 

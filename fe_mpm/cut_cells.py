@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from fe_mpm.clipping import _clip, simplex_volumes
+from fe_mpm.clipping import clip_half_plane, simplex_volumes
 from fe_mpm.tet_clipping import cut
 
 #: Pieces smaller than this share of their cell are dropped: a surface through a
@@ -47,7 +47,7 @@ def inside_simplices(corners: np.ndarray, values: np.ndarray) -> tuple[np.ndarra
         at_corners = values[split]
         tets, owner = cut(corners[split], split, lambda _: at_corners)
     else:
-        polygon, count = _clip(corners[split], np.full(split.size, 3), values[split], 4)
+        polygon, count = clip_half_plane(corners[split], np.full(split.size, 3), values[split], 4)
         triangles, owners = [], []
         for k in (1, 2):  # fan: triangles (0, k, k + 1) of polygons with k + 2 vertices
             has = count >= k + 2

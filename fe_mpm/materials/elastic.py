@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
 import ufl
 
 from fe_mpm.checks import check_range
@@ -81,6 +82,21 @@ class NeoHookean(IsotropicModuli):
     def lmbda(self) -> float:
         """First Lamé parameter λ (Pa)."""
         return self.E * self.nu / ((1.0 + self.nu) * (1.0 - 2.0 * self.nu))
+
+    def stored_energy(self, F: np.ndarray) -> np.ndarray:
+        """The energy Ψ per unit reference volume (J/m³, i.e. Pa) of deformations ``F``.
+
+        Args:
+            F: Deformation gradients (n, g, g); in plane strain (g = 2) ``C_33 = 1``.
+
+        Returns:
+            Ψ (n,). A body's elastic energy is ``(V / J) @ Ψ`` with the points'
+            current volumes V (reference volume V / J).
+        """
+        F = np.asarray(F, dtype=float)
+        J = np.linalg.det(F)
+        tr_C = np.einsum("pij,pij->p", F, F) + (3 - F.shape[-1])  # C_33 = 1 in plane strain
+        return 0.5 * self.lmbda * np.log(J) ** 2 - self.mu * np.log(J) + 0.5 * self.mu * (tr_C - 3)
 
     def kirchhoff(
         self, F: ufl.core.expr.Expr, state: PointState | None = None
