@@ -92,6 +92,38 @@ def cell_weights(num_cells: int, cells: np.ndarray) -> np.ndarray:
     return 1 + POINT_WEIGHT * np.bincount(cells, minlength=num_cells).astype(np.int64)
 
 
+def has_facet_ghosts(mesh: dolfinx.mesh.Mesh) -> bool:
+    """Whether every rank holds the cells across its facets (``GhostMode.shared_facet``).
+
+    Collective. True on one rank. A facet between two ranks' cells that a rank sees
+    with one cell only, and that is not on the grid's boundary, says no.
+    """
+    if mesh.comm.size == 1:
+        return True
+    tdim = mesh.topology.dim
+    mesh.topology.create_connectivity(tdim - 1, tdim)
+    facet_cells = mesh.topology.connectivity(tdim - 1, tdim)
+    owned = mesh.topology.index_map(tdim - 1).size_local
+    one_sided = np.flatnonzero(np.diff(facet_cells.offsets)[:owned] == 1)
+    exterior = dolfinx.mesh.exterior_facet_indices(mesh.topology)
+    missing = np.setdiff1d(one_sided, exterior).size
+    return not parallel.any_rank(mesh.comm, missing > 0)
+
+
+def with_facet_ghosts(mesh: dolfinx.mesh.Mesh) -> dolfinx.mesh.Mesh:
+    """The grid of ``mesh`` with the cells across each rank's facets as ghosts.
+
+    Collective. Every cell stays on the rank that owns it (no METIS); only the
+    shared-facet ghost layer that the ghost penalty and a fluid's pressure by parts
+    integrate over is added, as ``GhostMode.shared_facet`` would have given it. The
+    new grid keeps the original cell and input node indices, so
+    :func:`owners_of_original_cells` and :func:`carried_facet_tags` map onto it.
+    """
+    if mesh.comm.size == 1:
+        return mesh
+    return _rebuilt(mesh, np.ones(mesh.topology.index_map(mesh.topology.dim).size_local), 0, True)
+
+
 def repartitioned(
     mesh: dolfinx.mesh.Mesh, weights: np.ndarray, vertex_layers: int = 0
 ) -> dolfinx.mesh.Mesh:
@@ -113,12 +145,23 @@ def repartitioned(
     Raises:
         ImportError: ``pymetis`` (a dependency of fe-mpm) is not installed.
     """
-    comm = mesh.comm
-    if comm.size == 1:
+    if mesh.comm.size == 1:
         return mesh
     _pymetis()  # on every rank: a missing pymetis stops them all, not rank 0 alone
+    return _rebuilt(mesh, weights, vertex_layers, False)
+
+
+def _rebuilt(
+    mesh: dolfinx.mesh.Mesh, weights: np.ndarray, vertex_layers: int, keep_owners: bool
+) -> dolfinx.mesh.Mesh:
+    """The grid rebuilt: :func:`repartitioned`, or :func:`with_facet_ghosts`.
+
+    With ``keep_owners`` every cell stays on its rank and the shared-facet ghost
+    layer is added; otherwise METIS partitions the cells by ``weights``.
+    """
+    comm = mesh.comm
     tdim, gdim = mesh.topology.dim, mesh.geometry.dim
-    ghosted = parallel.any_rank(comm, mesh.topology.index_map(tdim).num_ghosts > 0)
+    ghosted = keep_owners or parallel.any_rank(comm, mesh.topology.index_map(tdim).num_ghosts > 0)
     owned = mesh.topology.index_map(tdim).size_local
     node_input = np.asarray(mesh.geometry.input_global_indices, dtype=np.int64)
     cells = node_input[mesh.geometry.dofmaps[0][:owned]]
@@ -140,7 +183,7 @@ def repartitioned(
     error = None
     if comm.rank == 0:
         try:
-            all_cells, x, parts, graph = _partitioned(gathered, comm.size, tdim, gdim)
+            all_cells, x, parts, graph = _partitioned(gathered, comm.size, tdim, gdim, keep_owners)
         except (ValueError, RuntimeError, MemoryError) as err:  # METIS's own included
             error = err
     parallel.raise_together(comm, error)  # rank 0 alone may fail; the others would wait
@@ -160,7 +203,7 @@ def repartitioned(
     return dolfinx.mesh.create_mesh(comm, all_cells, element, x, partitioner=partitioner)
 
 
-def _partitioned(gathered: list, size: int, tdim: int, gdim: int):
+def _partitioned(gathered: list, size: int, tdim: int, gdim: int, keep_owners: bool = False):
     """On rank 0: the cells' nodes, the nodes' positions, the parts and the dual graph.
 
     Cells and nodes are in input order; the dual graph is (xadj, adjncy).
@@ -171,6 +214,7 @@ def _partitioned(gathered: list, size: int, tdim: int, gdim: int):
         size: The number of ranks.
         tdim: The cells' dimension.
         gdim: The nodes' dimension.
+        keep_owners: Each cell's part is the rank that owns it now (no METIS).
 
     Raises:
         ValueError: The original cell indices are not 0, ..., N − 1 (the new grid
@@ -190,8 +234,10 @@ def _partitioned(gathered: list, size: int, tdim: int, gdim: int):
     x = np.zeros((int(inputs.max()) + 1, gdim))  # rows no cell uses are never read
     x[inputs] = np.concatenate([g[4] for g in gathered])
     graph = dual_graph(all_cells)  # METIS's, and the ghost layer's if the grid has one
-    parts = partition(all_cells, cell_weight, size, graph)
     now = np.repeat(np.arange(size), [len(g[0]) for g in gathered])[order]
+    if keep_owners:
+        return all_cells, x, now.astype(np.int32), graph
+    parts = partition(all_cells, cell_weight, size, graph)
     return all_cells, x, _kept_in_place(parts, now, cell_weight, size), graph
 
 

@@ -10,7 +10,8 @@ columns of Dirichlet dofs zeroed, to add to the tangent).
 
 Under MPI a facet between two ranks joins an owned cell to a ghost: the grid needs
 DOLFINx's shared-facet ghost layer (the default of ``create_rectangle`` and
-``create_box``, and of fe-mpm's gmsh scenes). The points' fill of each cell is
+``create_box``, and of fe-mpm's gmsh scenes; :class:`~fe_mpm.Simulation` adds it to
+a grid built without it, :func:`fe_mpm.balance.with_facet_ghosts`). The points' fill of each cell is
 summed on the rank that owns it and sent to the ranks that hold it as a ghost, so
 every rank picks the same facets; each facet is assembled by the rank that owns it.
 """
@@ -21,7 +22,7 @@ import dolfinx.fem.petsc as fem_petsc
 import numpy as np
 import ufl
 
-from fe_mpm import parallel
+from fe_mpm import balance, parallel
 from fe_mpm._dolfinx import FormFactory, dolfinx
 from fe_mpm.forms.ghost import GHOST_FACETS, ghost_penalty
 from fe_mpm.formulations import GridFields
@@ -216,15 +217,7 @@ def require_facet_ghosts(mesh: dolfinx.mesh.Mesh, what: str = "the ghost penalty
     Raises:
         ValueError: Some facet between two ranks has its cell on one side only.
     """
-    if mesh.comm.size == 1:
-        return
-    tdim = mesh.topology.dim
-    facet_cells = mesh.topology.connectivity(tdim - 1, tdim)
-    owned = mesh.topology.index_map(tdim - 1).size_local
-    one_sided = np.flatnonzero(np.diff(facet_cells.offsets)[:owned] == 1)
-    exterior = dolfinx.mesh.exterior_facet_indices(mesh.topology)
-    missing = np.setdiff1d(one_sided, exterior).size
-    if parallel.any_rank(mesh.comm, missing > 0):
+    if not balance.has_facet_ghosts(mesh):
         raise ValueError(
             f"Simulation: {what} on a grid distributed over "
             f"{mesh.comm.size} MPI ranks needs the cells across each rank's facets "

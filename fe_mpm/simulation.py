@@ -87,7 +87,10 @@ class Simulation:
         sim.run(n_steps=1)
 
     Args:
-        mesh: Background grid: affine triangles (plane strain) or tetrahedra.
+        mesh: Background grid: affine triangles (plane strain) or tetrahedra. Under
+            MPI, where the run needs ghost cells the grid lacks (point domains, the
+            ghost penalty, a fluid's pressure by parts), ``sim.mesh`` is the same grid
+            rebuilt with them.
         points: The material points (moved and updated in place).
         material: Constitutive law (see :mod:`fe_mpm.materials`); its internal
             variables are added to ``points.history`` if missing.
@@ -333,12 +336,15 @@ class Simulation:
         # Under MPI a point's domain covers cells past its rank's, across a vertex too.
         self._ghost_layers = DOMAIN_GHOST_LAYERS if point_domains and mesh.comm.size > 1 else 0
         self.domains = None
-        self._set_grid(mesh, facet_tags)
-        self._add_time("setup", t0)
-        self._track()  # once now, so a bad initial layout fails at set-up
         self._ghost_factor = model_checks.ghost_factor(
             ghost_penalty, point_domains, self.spec.u_degree, self.dynamic
         )
+        needs_facet_ghosts = self._pressure_by_parts or (self._ghost_factor and not point_domains)
+        if needs_facet_ghosts and not balance.has_facet_ghosts(mesh):
+            mesh, facet_tags = self._with_facet_ghosts(mesh, facet_tags)
+        self._set_grid(mesh, facet_tags)
+        self._add_time("setup", t0)
+        self._track()  # once now, so a bad initial layout fails at set-up
         self.ghost = None
         #: Grid repartitions so far (:meth:`rebalance`).
         self.repartitions = 0
@@ -361,6 +367,25 @@ class Simulation:
             self.output = SimulationOutput(
                 output_dir, self.fields, output_every, domains=self.domains is not None
             )
+
+    def _with_facet_ghosts(self, mesh: dolfinx.mesh.Mesh, facet_tags):
+        """The grid again with the cells across each rank's facets, and its facet tags.
+
+        The ghost penalty and a fluid's pressure by parts integrate over facets
+        between ranks, which a grid built without ghost cells (``model_to_mesh`` and
+        ``create_mesh`` by default) does not hold. Every cell stays on its rank
+        (:func:`fe_mpm.balance.with_facet_ghosts`), so each point keeps its rank and
+        takes its cell's new local index.
+        """
+        ghosted = balance.with_facet_ghosts(mesh)
+        if facet_tags is not None:
+            facet_tags = balance.carried_facet_tags(facet_tags, mesh, ghosted)
+        cell = self.points.cell
+        found = np.flatnonzero(cell >= 0)
+        here = np.column_stack([np.full(found.size, mesh.comm.rank), cell[found]])
+        where = balance.owners_of_original_cells(ghosted, balance.original_indices(mesh, here))
+        cell[found] = where[:, 1]
+        return ghosted, facet_tags
 
     def _set_ghost_penalty(self) -> None:
         """The ghost penalty on the current grid (none if its factor is 0)."""
