@@ -201,9 +201,14 @@ class Traction:
 
 
 def boundary_facets(
-    mesh: dolfinx.mesh.Mesh, where: Where, facet_tags: dolfinx.mesh.MeshTags | None
+    mesh: dolfinx.mesh.Mesh,
+    where: Where,
+    facet_tags: dolfinx.mesh.MeshTags | None,
+    owner: str = "a boundary condition",
 ) -> np.ndarray:
     """Local indices of the exterior facets selected by ``where``.
+
+    ``owner`` names the condition in the messages (``"Dirichlet 1"``).
 
     Raises:
         ValueError: ``facet_tags`` does not tag facets (e.g. cell tags), a tag
@@ -221,17 +226,23 @@ def boundary_facets(
         facets = dolfinx.mesh.locate_entities_boundary(mesh, fdim, where)
     else:
         if facet_tags is None:
-            raise ValueError(f"boundary tag {where} given but the mesh has no facet tags")
+            raise ValueError(
+                f"{owner}: boundary tag {where} given but no facet_tags were passed to Simulation"
+            )
         facets = facet_tags.find(int(where))
         # On a distributed mesh a rank may hold none of them: only none anywhere is wrong.
         if not any_rank(mesh.comm, facets.size > 0):
             present = set(facet_tags.values.tolist())
             present = set().union(*mesh.comm.allgather(present))
             raise ValueError(
-                f"boundary tag {where} selects no facets; tags present: {sorted(present)}"
+                f"{owner}: boundary tag {where} selects no facets; tags present: {sorted(present)}"
             )
     if not any_rank(mesh.comm, facets.size > 0):
-        raise ValueError("boundary marker selects no exterior facets")
+        raise ValueError(
+            f"{owner}: its boundary marker selects no facet on the grid's boundary (a marker "
+            "is called with the facet vertices' coordinates x, shape (3, n), and must be true "
+            "at every vertex of a facet on the grid's outer boundary)"
+        )
     return np.asarray(facets, dtype=np.int32)
 
 

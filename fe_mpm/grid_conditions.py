@@ -87,10 +87,12 @@ class GridConditions:
 
         self.dirichlet = []  # (spec, value Function, DirichletBC)
         self.dirichlet_nodes = []  # grid nodes of each condition's facets
-        for spec in dirichlet:
-            facets = boundary_facets(mesh, spec.where, facet_tags)
+        for k, spec in enumerate(dirichlet):
+            facets = boundary_facets(mesh, spec.where, facet_tags, f"Dirichlet {k}")
             if spec.component is not None:
-                check_range("Dirichlet", "component", spec.component, lo=0, hi=g - 1)
+                check_range(f"Dirichlet {k}", "component", spec.component, lo=0, hi=g - 1)
+            if spec.profile is None and not callable(spec.value):
+                _check_dirichlet_size(k, spec, spec.at(0.0).size, g)
             self.dirichlet.append((spec, *self._dirichlet_bc(spec.component, facets)))
             self.dirichlet_nodes.append(
                 np.unique(dolfinx.mesh.entities_to_geometry(mesh, fdim, facets))
@@ -107,14 +109,16 @@ class GridConditions:
             if len(spec.value) != g:
                 raise ValueError(f"Traction: value must have {g} components, got {len(spec.value)}")
             value = dolfinx.fem.Constant(mesh, np.zeros(g))
-            self.traction_facets[i] = boundary_facets(mesh, spec.where, facet_tags)
+            self.traction_facets[i] = boundary_facets(
+                mesh, spec.where, facet_tags, f"Traction {i - 1}"
+            )
             self._traction_nodes[i] = facet_node_weights(mesh, self.traction_facets[i])
             self.traction_terms.append((value, ds(i)))
             self.tractions.append((spec, value))
 
         self.reaction_dofs = {}  # name -> W dofs of each displacement component
         for name, where in (reactions or {}).items():
-            facets = boundary_facets(mesh, where, facet_tags)
+            facets = boundary_facets(mesh, where, facet_tags, f"reactions[{name!r}]")
             comps = []
             for c in range(g):
                 sub_c = fields.U.sub(c)
@@ -163,7 +167,7 @@ class GridConditions:
         Returns:
             The Dirichlet conditions on the increment t_old → t_new, then the pins.
         """
-        for spec, value, _ in self.dirichlet:
+        for k, (spec, value, _) in enumerate(self.dirichlet):
             if spec.profile is not None:
                 value.interpolate(lambda x: spec.profile(x, t_new) - spec.profile(x, t_old))
                 if not np.all(np.isfinite(value.x.array)):
@@ -173,8 +177,9 @@ class GridConditions:
                     )
             else:
                 increment = spec.at(t_new) - spec.at(t_old)
+                _check_dirichlet_size(k, spec, increment.size, self.mesh.geometry.dim)
                 bs = value.function_space.dofmap.bs
-                value.x.array.reshape(-1, bs)[:] = increment.reshape(-1)[:bs]
+                value.x.array.reshape(-1, bs)[:] = increment.reshape(-1)
         for spec, value in self.tractions:
             value.value = spec.at(t_new)
         if self.body_force is not None and self._body_force_scale is not None:
@@ -245,3 +250,20 @@ class GridConditions:
             name: np.array([parallel.total(comm, float(b[d[d < owned]].sum())) for d in comps])
             for name, comps in self.reaction_dofs.items()
         }
+
+
+def _check_dirichlet_size(k: int, spec, size: int, g: int) -> None:
+    """Refuse a value of the wrong size for Dirichlet ``k``.
+
+    One number with a ``component``; without, one number (it moves every component)
+    or ``g`` of them.
+    """
+    if spec.component is not None and size != 1:
+        raise ValueError(
+            f"Dirichlet {k}: value must be one number with component={spec.component}, "
+            f"got {size} components"
+        )
+    if spec.component is None and size not in (1, g):
+        raise ValueError(
+            f"Dirichlet {k}: value must be one number or a vector of {g} components, got {size}"
+        )

@@ -564,7 +564,7 @@ class Simulation:
         ``min_step`` the run stops with the last failure's message.
         ``on_step(report)`` is called after every accepted step, the points updated.
         """
-        check_range("Simulation.run", "n_steps", n_steps, lo=1)
+        check_int("Simulation.run", "n_steps", n_steps, lo=1)
         check_range("Simulation.run", "t_end", t_end, lo=self.t, lo_open=True)
         nominal = (t_end - self.t) / int(n_steps)
         floor = DEFAULT_MIN_STEP * nominal if self.min_step is None else self.min_step

@@ -198,7 +198,7 @@ class RigidWalls:
         self.walls = [
             _Wall(
                 spec,
-                boundary_facets(mesh, spec.where, facet_tags),
+                boundary_facets(mesh, spec.where, facet_tags, f"RigidWall {spec.name!r}"),
                 self.space,
                 gaps,
                 gap_coordinates,

@@ -136,7 +136,10 @@ def test_other_bad_values():
     sim = fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1.0, 0.3))
     with pytest.raises(ValueError, match=r"Simulation.run: n_steps must lie in \[1, inf\]"):
         sim.run(n_steps=0)
-    with pytest.raises(ValueError, match="boundary tag 7 given but the mesh has no facet tags"):
+    with pytest.raises(TypeError, match=r"Simulation.run: n_steps must be an int, got 2.5"):
+        sim.run(n_steps=2.5)  # was taken as 2 steps
+    no_tags = "Dirichlet 0: boundary tag 7 given but no facet_tags were passed to Simulation"
+    with pytest.raises(ValueError, match=no_tags):
         fe_mpm.Simulation(
             mesh, points, fe_mpm.NeoHookean(1.0, 0.3), dirichlet=[fe_mpm.Dirichlet(7)]
         )
@@ -584,3 +587,43 @@ def test_more_points_in_a_cell_than_the_slots_hold_names_the_cell_count_and_when
     piled = fe_mpm.MaterialPoints(x=x, volume=np.full(300, 1e-3), mass=np.full(300, 1e-3))
     with pytest.raises(ValueError, match="set-up: 300 material points in one cell exceeds"):
         fe_mpm.Simulation(mesh, piled, fe_mpm.NeoHookean(1.0, 0.3))
+
+
+def test_a_boundary_condition_that_selects_nothing_or_takes_the_wrong_size_is_named():
+    """Found 2026-12-05 trying a new user's scene: a marker that missed the boundary
+    said only "boundary marker selects no exterior facets" (which of several?), and a
+    Dirichlet value of three components on a 2D grid was taken, its third dropped
+    without a word (a vector value with ``component`` kept its first entry)."""
+    mesh, points = _scene()
+    law = fe_mpm.NeoHookean(1.0, 0.3)
+    base = lambda x: np.isclose(x[1], 0.0)  # noqa: E731
+    missed = lambda x: np.isclose(x[1], -5.0)  # noqa: E731
+    cases = [
+        (dict(dirichlet=[fe_mpm.Dirichlet(base), fe_mpm.Dirichlet(missed)]), "Dirichlet 1: its"),
+        (
+            dict(dirichlet=[fe_mpm.Dirichlet(base)], tractions=[fe_mpm.Traction(missed, (1, 0))]),
+            "Traction 0: its",
+        ),
+        (
+            dict(dirichlet=[fe_mpm.Dirichlet(base)], reactions={"top": missed}),
+            r"reactions\['top'\]: its",
+        ),
+        (
+            dict(dirichlet=[fe_mpm.Dirichlet(base, value=(0.0, 0.1, 0.0))]),
+            "Dirichlet 0: value must be one number or a vector of 2 components, got 3",
+        ),
+        (
+            dict(dirichlet=[fe_mpm.Dirichlet(base, value=(0.0, 0.1), component=1)]),
+            "Dirichlet 0: value must be one number with component=1, got 2 components",
+        ),
+    ]
+    for options, message in cases:
+        with pytest.raises(ValueError, match=message):
+            fe_mpm.Simulation(mesh, points, law, **options)
+    # A callable value is checked when it is first read, before anything is solved.
+    sim = fe_mpm.Simulation(
+        mesh, points, law, dirichlet=[fe_mpm.Dirichlet(base, value=lambda t: (0.0, t, 0.0))]
+    )
+    with pytest.raises(ValueError, match="Dirichlet 0: value must be one number or a vector"):
+        sim.run(1.0, 1, progress=False)
+    assert sim.step_number == 0

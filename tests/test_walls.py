@@ -205,7 +205,7 @@ def test_wall_bad_input_names_the_field():
     with pytest.raises(ValueError, match="not on one plane"):
         fe_mpm.Simulation(grid, points, law, walls=[fe_mpm.RigidWall("L", corner)])
     outside = lambda x: x[1] < -1.0  # noqa: E731  # a structure the grid does not reach
-    with pytest.raises(ValueError, match="selects no exterior facets"):
+    with pytest.raises(ValueError, match="RigidWall 'far': its boundary marker selects no facet"):
         fe_mpm.Simulation(grid, points, law, walls=[fe_mpm.RigidWall("far", outside)])
     with pytest.raises(NotImplementedError, match="P1 displacements"):
         fe_mpm.Simulation(grid, points, law, "up-p2p1", walls=[fe_mpm.RigidWall("base", on_base)])
