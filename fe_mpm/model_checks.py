@@ -234,7 +234,21 @@ def ghost_factor(
     return float(ghost_penalty)
 
 
-def failure_advice(point_domains: bool, ghost_factor: float, domains_would_do: bool = False) -> str:
+#: What a static run of a law that yields adds to its stop message.
+LIMIT_LOAD_ADVICE = (
+    "Its law yields, and a static load past what the body can carry (its limit load) has "
+    "no solution at all, however short the step: if the load against a displacement "
+    "(the StepReports) had flattened before this step, the body has failed; "
+    "dynamic=True follows the collapse."
+)
+
+
+def failure_advice(
+    point_domains: bool,
+    ghost_factor: float,
+    domains_would_do: bool = False,
+    static_plastic: bool = False,
+) -> str:
     """What a run's stop message adds about its options (empty if nothing).
 
     Point domains without a ghost penalty leave a cell that holds only a sliver of
@@ -245,22 +259,28 @@ def failure_advice(point_domains: bool, ghost_factor: float, domains_would_do: b
     takes them) may stop because its points cross cells with their whole volume: the
     squeezed J2 block of :func:`fe_mpm.scenes.platen_compression` in u-p stops at 23 %
     shortening (of 50) on n = 40, and with domains runs to the end on n = 10 and 20.
+    A static run of a law that yields (``static_plastic``) may have passed its limit
+    load (:data:`LIMIT_LOAD_ADVICE`): a J2 block standing free under rising gravity
+    stops so once its base yields, and the advice about domains alone misled there.
     """
+    advice = []
     if point_domains and ghost_factor == 0.0:
-        return (
+        advice.append(
             "This run has point domains without a ghost penalty (ghost_penalty=0): a "
             "cell holding only a sliver of a domain ties its nodes weakly, and that can "
             "leave Newton without a solution; a penalty ties them (ghost_penalty=γ, the "
             "default of static runs; on the strip footing 0.001 was enough)."
         )
-    if domains_would_do:
-        return (
+    elif domains_would_do:
+        advice.append(
             "Its points cross cells with their whole volume (standard MPM), so the "
             "cells they enter and leave fill and empty at once, which can leave Newton "
             "without a solution; point_domains=True spreads each point over the cells "
             "its domain covers (see docs/cell_crossing.md)."
         )
-    return ""
+    if static_plastic:
+        advice.append(LIMIT_LOAD_ADVICE)
+    return " ".join(advice)
 
 
 def check_law(material, spec: FormulationSpec, formulation: str) -> None:

@@ -569,7 +569,10 @@ class Simulation:
         nominal = (t_end - self.t) / int(n_steps)
         floor = DEFAULT_MIN_STEP * nominal if self.min_step is None else self.min_step
         advice = model_checks.failure_advice(
-            self.domains is not None, self._ghost_factor, self._domains_would_do
+            self.domains is not None,
+            self._ghost_factor,
+            self._domains_would_do,
+            static_plastic=not self.dynamic and bool(self.material.history),
         )
         length = StepLength(nominal, floor, advice)
         can_hold = not self.dynamic and self.domains is None  # pieces differ per attempt

@@ -201,3 +201,35 @@ def test_a_static_standard_run_that_stops_names_point_domains(options, names_dom
         sim.run(1.0, 1, progress=False)
     assert "min_step = 0.5" in str(info.value)
     assert ("point_domains=True spreads" in str(info.value)) == names_domains
+
+
+def test_a_static_plastic_body_past_its_limit_load_is_told_so():
+    """A J2 block standing free under rising gravity (8 x 8 cells, ρ g H = 9.81 σ_Y at
+    the end) has no static solution once its base yields (ρ g H ≈ 1.15 σ_Y in plane
+    strain): run in 10 steps it stops near t = 0.25 (here Newton is allowed one
+    iteration, so the first step stops). Found 2026-12-05 trying a new user's scene,
+    whose message named only point domains; it now says that a load past the limit
+    load has no solution and that a dynamic run follows the collapse. An elastic
+    law is not told so."""
+    mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.5), (8, 12))
+    below = np.flatnonzero(fe_mpm.meshes.cell_centroids(mesh)[:, 1] < 1.0)
+    base = fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))
+    for law, told in (
+        (fe_mpm.J2Plasticity(1e3, 0.3, 1.0), True),
+        (fe_mpm.NeoHookean(1e3, 0.3), False),
+    ):
+        sim = fe_mpm.Simulation(
+            mesh,
+            fe_mpm.seed(mesh, per_cell=3, cells=below),
+            law,
+            "u",
+            dirichlet=[base],
+            body_force=(0.0, -9.81),
+            body_force_scale=lambda t: t,
+            petsc_options={"snes_max_it": 1},  # every attempt fails, as past the limit
+            min_step=0.5,
+        )
+        with pytest.raises(ConvergenceError) as info:
+            sim.run(1.0, 1, progress=False)
+        assert ("limit load" in str(info.value)) == told
+        assert "point_domains=True spreads" in str(info.value)
