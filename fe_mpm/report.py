@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from pathlib import Path
 
 from mpi4py import MPI
 
@@ -127,6 +128,64 @@ class StepReport:
             relative_residual=result.relative_residual,
             lost_load=lost,
         )
+
+
+#: The columns of :func:`write_steps` that count (written as integers).
+COUNTS = ("step", "newton_iterations", "failed_iterations", "occupied_cells")
+
+
+def write_steps(history: list[StepReport], path: str | Path, first: int = 0) -> Path:
+    """Write one CSV row per step of ``history``: what a load–displacement curve needs.
+
+    Columns: ``step, t, dt, newton_iterations, failed_iterations, relative_residual,
+    force_scale, occupied_cells``, then each reaction's components (``{name}_x``, in N,
+    per unit thickness in 2D), each marker's position (``{name}_x``, m) and each
+    grid traction's lost share (``lost {name}``), those of the run's first step.
+    Every rank's reports carry the same numbers, so call it on one.
+
+    Args:
+        history: The :class:`StepReport` objects of a run (``Simulation.history``).
+        path: The CSV file to write.
+        first: 0 writes the file anew; k > 0 appends the rows of ``history[k:]`` to
+            it, as a run does at each output (each step's row written once).
+
+    Returns:
+        The path written, a :class:`pathlib.Path`.
+    """
+    path = Path(path)
+    if not history:
+        return path
+    head = history[0]
+    axes = "xyz"
+    fixed = [
+        "step",
+        "t",
+        "dt",
+        "newton_iterations",
+        "failed_iterations",
+        "relative_residual",
+        "force_scale",
+        "occupied_cells",
+    ]
+    vectors = [("reactions", name) for name in head.reactions]
+    vectors += [("markers", name) for name in head.markers]
+    g = next((np.size(getattr(head, kind)[name]) for kind, name in vectors), 0)
+    header = [*fixed, *(f"{name}_{c}" for _, name in vectors for c in axes[:g])]
+    header += [f"lost {name}" for name in head.lost_load]
+    lines = [] if first else [",".join(header)]
+    for report in history[first:]:
+        values = [
+            str(getattr(report, name)) if name in COUNTS else repr(float(getattr(report, name)))
+            for name in fixed
+        ]
+        for kind, name in vectors:
+            vector = getattr(report, kind).get(name, np.full(g, np.nan))
+            values += [repr(float(v)) for v in np.ravel(vector)]
+        values += [repr(float(report.lost_load.get(name, 0.0))) for name in head.lost_load]
+        lines.append(",".join(values))
+    with path.open("a" if first else "w") as csv:
+        csv.write("".join(line + "\n" for line in lines))
+    return path
 
 
 def imbalance(comm, count: int) -> float:

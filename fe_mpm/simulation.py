@@ -49,7 +49,7 @@ from fe_mpm.point_update import (
 )
 from fe_mpm.pressure_by_parts import PressureByParts
 from fe_mpm.quadrature import SlotLayout
-from fe_mpm.report import ProgressBar, StepReport, imbalance, newton_failure
+from fe_mpm.report import ProgressBar, StepReport, imbalance, newton_failure, write_steps
 from fe_mpm.retry import RetryLadder, StepLength
 from fe_mpm.shared_increment import SharedIncrement
 from fe_mpm.step_forms import (
@@ -115,8 +115,10 @@ class Simulation:
             and of the linear solver's (:data:`fe_mpm.newton.LINEAR_SOLVERS`).
         points_leaving: ``"raise"`` (default) stops when points leave the grid; ``"drop"``
             removes them with a warning and counts them in ``dropped``.
-        output_dir: Folder for ParaView output (``particles.pvd``, ``grid.bp``), and
-            ``walls.csv`` with the walls' forces after every step, or None.
+        output_dir: Folder for ParaView output (``particles.pvd``, ``grid.bp``),
+            ``steps.csv`` with every step's time, Newton iterations, reactions and
+            markers (:func:`fe_mpm.report.write_steps`: a load–displacement curve),
+            and ``walls.csv`` with the walls' forces after every step, or None.
         output_every: Write every this many steps (and always the last).
         ppp_alpha: The thesis's PPP coefficient α ≥ 0 (``up``), times Kratos's factor
             (8 in 2D, 10 in 3D) in the form; α = 1 reproduces the thesis. Default: 1,
@@ -329,7 +331,7 @@ class Simulation:
         self._conditions_warned: dict[int, float] = {}
         self._iterations_of_old_grids = 0  # Newton iterations on grids since repartitioned
         self.output = None
-        self._wall_rows = 0  # steps whose wall forces are in the output's walls.csv
+        self._rows_written = 0  # steps in the output's steps.csv (and walls.csv)
         self._shared = bool(shared_increment)
         self._shift: SharedIncrement | None = None
         self._by_parts: PressureByParts | None = None
@@ -863,11 +865,13 @@ class Simulation:
         t0, out = time.perf_counter(), self.output
         corners = None if self.domains is None else self.domains.corners
         if out is not None and out.write(self.step_number, self.t, self.points, force, corners):
-            if self.walls and self.history and parallel.on_rank_zero(self.mesh.comm):
-                # The rows of the steps since the last output only: a long run's file
-                # grows by its new steps, not rewritten whole.
-                write_wall_forces(self.history, out.folder / "walls.csv", self._wall_rows)
-            self._wall_rows = len(self.history)
+            if self.history and parallel.on_rank_zero(self.mesh.comm):
+                # The rows of the steps since the last output only: a long run's files
+                # grow by their new steps, not rewritten whole.
+                write_steps(self.history, out.folder / "steps.csv", self._rows_written)
+                if self.walls:
+                    write_wall_forces(self.history, out.folder / "walls.csv", self._rows_written)
+            self._rows_written = len(self.history)
             self._add_time("output", t0)
 
     def _add_time(self, key: str, t0: float) -> None:

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import fe_mpm
-from fe_mpm import scenes
+from fe_mpm import meshes, scenes
 from fe_mpm.io import ParticleWriter
 from fe_mpm.particles import MaterialPoints
 
@@ -106,11 +106,24 @@ def test_a_run_writes_the_state_of_its_points_at_every_step(tmp_path):
     and the last frame is the points' final state (stress, F, plastic strain, position)."""
     material = fe_mpm.J2Plasticity(70.0, 0.499, 0.243, 0.135)
     sim = scenes.cook_membrane(
-        4, formulation="up", material=material, traction=0.1125, output_dir=tmp_path
+        4,
+        formulation="up",
+        material=material,
+        traction=0.1125,
+        output_dir=tmp_path,
+        reactions={"clamp": meshes.COOK_CLAMPED},
     )
-    sim.run(1.0, 3, progress=False)
+    reports = sim.run(1.0, 3, progress=False)
     frames = _frames(tmp_path / "particles.pvd")
     assert [t for t, _ in frames] == pytest.approx([0.0, 1 / 3, 2 / 3, 1.0], rel=1e-9)
+    # steps.csv: a row per step with its markers and reactions, as the reports give them.
+    steps = np.genfromtxt(tmp_path / "steps.csv", delimiter=",", names=True)
+    assert list(steps["step"]) == [1, 2, 3]
+    assert {"A_x", "A_y", "clamp_x", "clamp_y"} <= set(steps.dtype.names)
+    for name, position in reports[-1].markers.items():
+        np.testing.assert_array_equal([steps[f"{name}_x"][-1], steps[f"{name}_y"][-1]], position)
+    for name, force in reports[-1].reactions.items():
+        np.testing.assert_array_equal([steps[f"{name}_x"][-1], steps[f"{name}_y"][-1]], force)
     first = meshio.read(tmp_path / frames[0][1]).point_data
     assert np.all(first["stress"] == 0.0) and np.all(first["displacement"] == 0.0)
     last = meshio.read(tmp_path / frames[-1][1])

@@ -137,6 +137,12 @@ def test_block_at_rest_on_a_wall_weighs_on_it_in_a_static_run(tmp_path):
     rows = np.genfromtxt(tmp_path / "walls.csv", delimiter=",", names=True, dtype=None)
     assert list(rows["step"]) == [1, 2, 3]
     np.testing.assert_array_equal(rows["normal"], [r.walls["base"].normal for r in reports])
+    # steps.csv beside it, appended the same way: every step's row once, as reported.
+    steps = np.genfromtxt(tmp_path / "steps.csv", delimiter=",", names=True)
+    assert list(steps["step"]) == [1, 2, 3]
+    np.testing.assert_array_equal(steps["t"], [r.t for r in reports])
+    iterations = [r.newton_iterations for r in reports]
+    np.testing.assert_array_equal(steps["newton_iterations"], iterations)
     weight = G * points.mass.sum()
     force = reports[-1].walls["base"]
     assert force.normal == pytest.approx(weight, rel=1e-9)
