@@ -59,7 +59,7 @@ from fe_mpm.step_forms import (
     StepInProgress,
 )
 from fe_mpm.tracker import Tracker
-from fe_mpm.tracking import PointTracking, check_points_per_cell, occupied_cells_anywhere
+from fe_mpm.tracking import PointTracking, cell_fill_anywhere, check_points_per_cell
 from fe_mpm.walls import RigidWalls, write_wall_forces
 
 #: A run ends when less than this fraction of its nominal step is left to ``t_end``.
@@ -692,9 +692,11 @@ class Simulation:
         t0 = time.perf_counter()
         boundary = None
         if self._boundary is not None:  # in the owned cells that hold material on any rank
-            owned = self._boundary.tracker.num_cells
-            occupied = occupied_cells_anywhere(self.mesh, layout.occupied, owned)
-            boundary = self._boundary.locate(occupied, t_new)
+            owners = self._boundary.tracker
+            fill = cell_fill_anywhere(
+                self.mesh, layout.cell, self.points.volume, owners.volumes, owners.num_cells
+            )
+            boundary = self._boundary.locate(np.flatnonzero(fill > 0.0), t_new, fill)
         nslot_b = 0 if boundary is None else boundary.nslot
         forms = self._forms.get(layout.nslot, nslot_b)
         self._forms.set_step_length(t_new - self.t)

@@ -151,7 +151,13 @@ class PointTracking:
             first += f" (in none of the {comm.size} MPI ranks' cells)"
         if self.points_leaving == "raise":
             parallel.raise_together(
-                comm, PointsOutsideError(first + ". Pass points_leaving='drop' to remove them.")
+                comm,
+                PointsOutsideError(
+                    first + ". The grid does not move with the body: leave empty cells "
+                    "wherever it may go (a face on the grid's edge bulges out of it unless "
+                    "a Dirichlet condition holds it), or pass points_leaving='drop' to "
+                    "remove what flies off."
+                ),
             )
         warn(first + "; dropped.")
         keep = cells >= 0
@@ -198,6 +204,27 @@ def occupied_cells_anywhere(
     held[occupied] = 1.0
     held = summed_over_ranks(cell_map, held)
     return np.flatnonzero(held[:owned] > 0).astype(occupied.dtype)
+
+
+def cell_fill_anywhere(
+    mesh: dolfinx.mesh.Mesh,
+    cells: np.ndarray,
+    volumes: np.ndarray,
+    cell_volumes: np.ndarray,
+    owned: int,
+) -> np.ndarray:
+    """The share of each owned cell (owned,) that material fills, summed over the ranks.
+
+    ``cells`` and ``volumes`` (n,) are this rank's points' cells (ghost cells included:
+    point domains put pieces there) and volumes (m² or m³); ``cell_volumes`` the
+    owned cells' own. Collective under MPI.
+    """
+    cell_map = mesh.topology.index_map(mesh.topology.dim)
+    size = cell_map.size_local + (cell_map.num_ghosts if mesh.comm.size > 1 else 0)
+    held = np.bincount(cells, weights=volumes, minlength=size).astype(float)
+    if mesh.comm.size > 1:
+        held = summed_over_ranks(cell_map, held)
+    return held[:owned] / cell_volumes[:owned]
 
 
 def check_points_per_cell(
