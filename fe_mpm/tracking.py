@@ -188,24 +188,6 @@ def _when(step: int, t: float) -> str:
     return f"step {step} (t = {t:g})" if step else "set-up"
 
 
-def occupied_cells_anywhere(
-    mesh: dolfinx.mesh.Mesh, occupied: np.ndarray, owned: int
-) -> np.ndarray:
-    """This rank's owned cells (sorted) that hold material here or on another rank.
-
-    ``occupied`` (sorted) are the cells this rank's points lie in, ghost cells
-    included (point domains put pieces there); ``owned``: this rank's owned cells.
-    Collective under MPI.
-    """
-    if mesh.comm.size == 1:
-        return occupied
-    cell_map = mesh.topology.index_map(mesh.topology.dim)
-    held = np.zeros(cell_map.size_local + cell_map.num_ghosts)
-    held[occupied] = 1.0
-    held = summed_over_ranks(cell_map, held)
-    return np.flatnonzero(held[:owned] > 0).astype(occupied.dtype)
-
-
 def cell_fill_anywhere(
     mesh: dolfinx.mesh.Mesh,
     cells: np.ndarray,
