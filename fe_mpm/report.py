@@ -131,17 +131,17 @@ class StepReport:
 
 
 #: The columns of :func:`write_steps` that count (written as integers).
-COUNTS = ("step", "newton_iterations", "failed_iterations", "occupied_cells")
+COUNTS = ("step", "newton_iterations", "occupied_cells")
 
 
 def write_steps(history: list[StepReport], path: str | Path, first: int = 0) -> Path:
     """Write one CSV row per step of ``history``: what a load–displacement curve needs.
 
-    Columns: ``step, t, dt, newton_iterations, failed_iterations, relative_residual,
-    force_scale, occupied_cells``, then each reaction's components (``{name}_x``, in N,
-    per unit thickness in 2D), each marker's position (``{name}_x``, m) and each
-    grid traction's lost share (``lost {name}``), those of the run's first step.
-    Every rank's reports carry the same numbers, so call it on one.
+    Columns: ``step, t, dt, newton_iterations, relative_residual, force_scale,
+    occupied_cells``, then each reaction's components (``{name}_x``, in N, per unit
+    thickness in 2D) and each marker's position (``{name}_x``, m): those the run's
+    first step reports (a marker added later is not written). Every rank's reports
+    carry the same numbers, so call it on one.
 
     Args:
         history: The :class:`StepReport` objects of a run (``Simulation.history``).
@@ -162,7 +162,6 @@ def write_steps(history: list[StepReport], path: str | Path, first: int = 0) -> 
         "t",
         "dt",
         "newton_iterations",
-        "failed_iterations",
         "relative_residual",
         "force_scale",
         "occupied_cells",
@@ -171,7 +170,6 @@ def write_steps(history: list[StepReport], path: str | Path, first: int = 0) -> 
     vectors += [("markers", name) for name in head.markers]
     g = next((np.size(getattr(head, kind)[name]) for kind, name in vectors), 0)
     header = [*fixed, *(f"{name}_{c}" for _, name in vectors for c in axes[:g])]
-    header += [f"lost {name}" for name in head.lost_load]
     lines = [] if first else [",".join(header)]
     for report in history[first:]:
         values = [
@@ -181,7 +179,6 @@ def write_steps(history: list[StepReport], path: str | Path, first: int = 0) -> 
         for kind, name in vectors:
             vector = getattr(report, kind).get(name, np.full(g, np.nan))
             values += [repr(float(v)) for v in np.ravel(vector)]
-        values += [repr(float(report.lost_load.get(name, 0.0))) for name in head.lost_load]
         lines.append(",".join(values))
     with path.open("a" if first else "w") as csv:
         csv.write("".join(line + "\n" for line in lines))

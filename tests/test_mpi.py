@@ -404,9 +404,12 @@ try:
         sim = fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(70.0, 0.3), ghost_penalty=0.1,
                                 facet_tags=tags, dirichlet=[fe_mpm.Dirichlet(7)],
                                 body_force=(0.0, -10.0), body_force_scale=lambda t: t)
+        owned = lambda m: set(m.topology.original_cell_index[:m.topology.index_map(2).size_local])
+        kept = owned(sim.mesh) == owned(mesh)  # the rebuilt grid's cells on the same ranks
         reports = sim.run(1.0, 3, progress=False)
         result["block"] = {"iterations": [r.newton_iterations for r in reports],
-                           "motion": mean_motion(sim), "ghost facets": ghost_facets(sim)}
+                           "motion": mean_motion(sim), "ghost facets": ghost_facets(sim),
+                           "kept owners": kept, "rebuilt": sim.mesh is not mesh}
         # Water sloshing in the tank: its pressure by parts (on by default for a fluid).
         mesh = grid()
         points = fe_mpm.seed(mesh, per_cell=6, density=1000.0,
@@ -845,6 +848,7 @@ def test_a_grid_without_ghost_cells_gets_them_for_the_ghost_penalty_and_a_fluid(
             np.testing.assert_allclose(got["motion"], want["motion"], rtol=0, atol=1e-10 * scale)
         assert result["block"]["ghost facets"][0] == serial["block"]["ghost facets"][0]
         assert result["block"]["ghost facets"][1] > 0  # some lie between the ranks
+        assert result["block"]["rebuilt"] and result["block"]["kept owners"]
 
 
 def test_boundary_points_act_on_one_rank_each_and_give_the_serial_answer(tmp_path, ranks=3):
