@@ -429,3 +429,43 @@ def test_the_footing_jitter_falls_with_domains_and_a_soft_dense_base():
         point_domains=True, base_points_per_cell=32, footing_thickness=0.0, penalty=50 * 1e4 / 0.2
     )
     assert standard / smooth > 1.2
+
+
+def test_a_first_domain_past_the_grids_edge_moves_into_its_cell():
+    """A body seeded by level set whose surface cuts cells on the grid's edge: their
+    points take their cells shrunk around them, which reached past the grid where a
+    point lay near the edge (4 corners of 438 domains here; a 3D slope in a gmsh box
+    stopped at set-up with 0.45 of a domain inside). Found 2026-12-05 trying a new
+    user's scene. Now each such domain lies in its cell, its point moved with it
+    (x and x0, still in its cell, at the domain's centroid) and its volume kept; the
+    other domains are untouched."""
+    from fe_mpm.tilings import initial_domains
+
+    mesh = meshes.rectangle_mesh((0.0, 0.0), (1.0, 1.0), (10, 10))
+    surface = lambda x: 0.537 - x[0] + 0.2 * x[1]  # noqa: E731
+    before = fe_mpm.seed(mesh, per_cell=3, level_set=surface)
+    tracker = Tracker(mesh)
+    first = initial_domains(fe_mpm.seed(mesh, per_cell=3, level_set=surface), tracker.cell_vertices)
+    outside = tracker.locate(first.reshape(-1, 2)).reshape(first.shape[:2]) < 0
+    assert outside.sum() >= 3  # the scene has such domains
+    points = fe_mpm.seed(mesh, per_cell=3, level_set=surface)
+    sim = fe_mpm.Simulation(
+        mesh,
+        points,
+        fe_mpm.NeoHookean(1e3, 0.3),
+        point_domains=True,
+        dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))],
+    )
+    corners = sim.domains.corners
+    assert np.all(tracker.locate(corners.reshape(-1, 2)) >= 0)
+    np.testing.assert_allclose(corners.mean(axis=1), points.x, rtol=0, atol=1e-15)
+    np.testing.assert_array_equal(points.x0, points.x)
+    moved = np.any(outside, axis=1)
+    np.testing.assert_array_equal(corners[~moved], first[~moved])
+    assert np.all(tracker.locate(points.x[moved]) == before.cell[moved])  # in their cells
+    # Each moved domain lies in its point's cell: its corners' barycentric coordinates there.
+    k = np.flatnonzero(moved)
+    bary = tracker.barycentric(corners[k].reshape(-1, 2), np.repeat(points.cell[k], 3))
+    assert bary.min() >= -1e-12
+    area = np.abs(np.linalg.det(corners[:, 1:] - corners[:, :1])) / 2
+    np.testing.assert_allclose(area, points.volume, rtol=1e-12)
