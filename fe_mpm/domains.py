@@ -86,6 +86,9 @@ RESET_QUALITY = 0.2
 #: (:func:`fe_mpm.balance.with_vertex_layers`). A domain's corners lie about a cell
 #: from its point; two layers leave room for a domain stretched to twice that.
 DOMAIN_GHOST_LAYERS = 2
+#: A first domain's corner whose barycentric coordinates in its point's cell are all
+#: above minus this lies in that cell (:func:`_inside_the_grid`).
+CELL_TOLERANCE = 1e-12
 #: A corner past the grid's edge moves with the cell of its domain's pieces that it is
 #: least outside of, compared to this many decimals of the barycentric coordinates.
 CORNER_TIE_DIGITS = 9
@@ -636,20 +639,26 @@ def _inside_the_grid(points: MaterialPoints, corners: np.ndarray, tracker: Track
     n, v, g = corners.shape
     if n == 0:
         return corners
-    found = tracker.locate(corners.reshape(-1, g), np.repeat(points.cell, v)).reshape(n, v)
-    out = np.flatnonzero(np.any(found < 0, axis=1))
+    flat, cells = corners.reshape(-1, g), np.repeat(points.cell, v)
+    # Only a corner past its point's cell may be past the grid: a tile's corners on the
+    # grid's edge are in their cell, whatever the search says of them.
+    beyond = np.flatnonzero(tracker.barycentric(flat, cells).min(axis=1) < -CELL_TOLERANCE)
+    lost = beyond[tracker.locate(flat[beyond], cells[beyond]) < 0]
+    out = np.unique(lost // v)
     if out.size == 0:
         return corners
+    scale = (
+        simplex_volumes(corners[out]) / simplex_volumes(tracker.cell_vertices[points.cell[out]])
+    ) ** (1.0 / g)
+    out, scale = out[scale < 1.0], scale[scale < 1.0]  # a larger domain cannot lie in its cell
     own = tracker.cell_vertices[points.cell[out]]
     centre = own.mean(axis=1)
-    scale = (simplex_volumes(corners[out]) / simplex_volumes(own)) ** (1.0 / g)
     # The copy x + s (cell − centre) lies in the cell iff every barycentric coordinate
-    # of x is at least s / (d + 1): move x towards the centre until the least one is.
+    # of x is at least s / (d + 1): move x towards the centre until the least one is
+    # (it is less, as the copy reaches past the cell; so 1 / (d + 1) − least > 0).
     least = tracker.barycentric(points.x[out], points.cell[out]).min(axis=1)
     need = scale / v
-    t = np.where(least < need, (1.0 / v - need) / (1.0 / v - least), 1.0)
-    fits = scale < 1.0  # a domain larger than its cell cannot lie in it
-    out, t, centre, own, scale = out[fits], t[fits], centre[fits], own[fits], scale[fits]
+    t = np.minimum(1.0, (1.0 / v - need) / (1.0 / v - least))
     x = centre + t[:, None] * (points.x[out] - centre)
     corners = corners.copy()
     corners[out] = x[:, None, :] + scale[:, None, None] * (own - centre[:, None, :])
