@@ -380,14 +380,24 @@ class Simulation:
         takes its cell's new local index.
         """
         ghosted = balance.with_facet_ghosts(mesh)
-        if facet_tags is not None:
-            facet_tags = balance.carried_facet_tags(facet_tags, mesh, ghosted)
-        cell = self.points.cell
-        found = np.flatnonzero(cell >= 0)
-        here = np.column_stack([np.full(found.size, mesh.comm.rank), cell[found]])
-        where = balance.owners_of_original_cells(ghosted, balance.original_indices(mesh, here))
-        cell[found] = where[:, 1]
-        return ghosted, facet_tags
+        return ghosted, self._carried_onto(mesh, ghosted, facet_tags)
+
+    def _carried_onto(self, old: dolfinx.mesh.Mesh, new: dolfinx.mesh.Mesh, facet_tags):
+        """Move the points' cells and ``facet_tags`` from ``old`` to ``new``, its rebuild.
+
+        Collective. A cell is known by its original index on both grids; a point keeps
+        its cell's local index on ``new`` where this rank owns that cell, else −1 (the
+        next tracking sends it to its new rank). Returns the tags on ``new`` (or None).
+        """
+        comm, cell = old.comm, self.points.cell
+        found = np.flatnonzero(cell >= 0)  # all but after a rebalance untracked
+        here = np.column_stack([np.full(found.size, comm.rank), cell[found]])
+        where = balance.owners_of_original_cells(new, balance.original_indices(old, here))
+        cell[:] = -1
+        cell[found] = np.where(where[:, 0] == comm.rank, where[:, 1], -1)
+        if facet_tags is None:
+            return None
+        return balance.carried_facet_tags(facet_tags, old, new)
 
     def _set_ghost_penalty(self) -> None:
         """The ghost penalty on the current grid (none if its factor is 0)."""
@@ -509,16 +519,12 @@ class Simulation:
         old, home = self.mesh, self.tracking._home
         weights = balance.cell_weights(self.tracker.num_cells, self.points.cell)
         mesh = balance.repartitioned(old, weights, self._ghost_layers)
-        tags = self.facet_tags
-        if tags is not None:
-            tags = balance.carried_facet_tags(tags, old, mesh)
+        # The next tracking starts from the cell each point was in, where this rank
+        # owns it now; the others are searched for and sent to their new ranks.
+        tags = self._carried_onto(old, mesh, self.facet_tags)
         keep_home = parallel.all_ranks(comm, home is not None)
         if keep_home:  # a retry of the next step may still hold the points there
             home = balance.original_indices(old, home)
-        # Each point's cell by its original index, to start the next search from.
-        found = np.flatnonzero(self.points.cell >= 0)  # all but after a rebalance untracked
-        here = np.column_stack([np.full(found.size, comm.rank), self.points.cell[found]])
-        cells = balance.original_indices(old, here)
         if self._newton is not None:
             self._iterations_of_old_grids += self._newton.iterations_total
             self._newton.destroy()
@@ -528,11 +534,6 @@ class Simulation:
         self._set_ghost_penalty()
         if keep_home:
             self.tracking._home = balance.owners_of_original_cells(mesh, home)
-        # The next tracking starts from the cell each point was in, where this rank
-        # owns it now; the others are searched for and sent to their new ranks.
-        where = balance.owners_of_original_cells(mesh, cells)
-        self.points.cell[:] = -1
-        self.points.cell[found] = np.where(where[:, 0] == comm.rank, where[:, 1], -1)
         if self.output is not None:
             self.output.regrid(self.fields)
         self.repartitions += 1
@@ -566,9 +567,9 @@ class Simulation:
         ``min_step`` the run stops with the last failure's message.
         ``on_step(report)`` is called after every accepted step, the points updated.
         """
-        check_int("Simulation.run", "n_steps", n_steps, lo=1)
+        n_steps = check_int("Simulation.run", "n_steps", n_steps, lo=1)
         check_range("Simulation.run", "t_end", t_end, lo=self.t, lo_open=True)
-        nominal = (t_end - self.t) / int(n_steps)
+        nominal = (t_end - self.t) / n_steps
         floor = DEFAULT_MIN_STEP * nominal if self.min_step is None else self.min_step
         advice = model_checks.failure_advice(
             self.domains is not None,
@@ -578,7 +579,7 @@ class Simulation:
         )
         length = StepLength(nominal, floor, advice)
         can_hold = not self.dynamic and self.domains is None  # pieces differ per attempt
-        bar, reports = ProgressBar(int(n_steps), progress), []
+        bar, reports = ProgressBar(n_steps, progress), []
         if self.step_number == 0:
             self._write_output(force=True)  # the initial state as the t = 0 frame
         before = self.newton_iterations_total
