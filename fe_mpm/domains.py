@@ -27,8 +27,10 @@ velocity and acceleration are the share-weighted means of its pieces'. Averaging
 history is exact for elastic laws and an approximation for plastic ones (each piece
 returns from the point's own state).
 
-A domain that has distorted too far (:func:`shape_quality`) is redrawn around its
-point at the start of a step, which breaks the tiling there; the ghost penalty
+A triangle that has distorted too far (:func:`shape_quality`) is flipped with a
+neighbour across the edge they share at the start of a step, which keeps the tiling
+(:mod:`fe_mpm.domain_flips`); one that no flip helps, and a distorted tetrahedron, is
+redrawn around its point, which breaks the tiling there. The ghost penalty
 (:mod:`fe_mpm.ghost`, on by default with domains in static runs) ties the cells the domains fill
 in part. With P2 displacements each piece has three sub-points that integrate
 quadratics exactly (:func:`~fe_mpm.clipping.piece_rule`; triangles only). Not yet:
@@ -55,13 +57,14 @@ import numpy as np
 
 from fe_mpm import parallel
 from fe_mpm.clipping import piece_rule, simplex_volumes
+from fe_mpm.domain_flips import flip_distorted
 from fe_mpm.errors import ConvergenceError, PointsOutsideError
 from fe_mpm.markers import Markers
 from fe_mpm.migration import migrate
 from fe_mpm.particles import MaterialPoints
 from fe_mpm.point_update import apply_update
 from fe_mpm.step_forms import PointUpdate
-from fe_mpm.tilings import initial_domains, shrunk_cells
+from fe_mpm.tilings import initial_domains, shape_quality, shrunk_cells
 from fe_mpm.tracker import Tracker
 
 #: A domain's pieces must add up to its area to this relative tolerance.
@@ -134,20 +137,6 @@ def share_weighted_mean(
     return out
 
 
-def shape_quality(corners: np.ndarray) -> np.ndarray:
-    """The mean-ratio quality of simplices (n, d + 1, d): 1 if regular, 0 if flat.
-
-    Triangles: 4√3 A / Σ edge²; tetrahedra: 12 (3V)^(2/3) / Σ edge² (over the six edges).
-    """
-    d = corners.shape[2]
-    i, j = np.triu_indices(d + 1, k=1)
-    edges = corners[:, i] - corners[:, j]
-    squares = np.einsum("ncg,ncg->n", edges, edges)
-    if d == 2:
-        return 4.0 * np.sqrt(3.0) * simplex_volumes(corners) / squares
-    return 12.0 * (3.0 * simplex_volumes(corners)) ** (2.0 / 3.0) / squares
-
-
 class PointDomains:
     """The domain of every point, and the pieces that integrate it in a step.
 
@@ -192,6 +181,9 @@ class PointDomains:
         #: Domains redrawn so far because they had distorted (:data:`RESET_QUALITY`),
         #: on this rank (:func:`fe_mpm.parallel.total` sums the ranks').
         self.resets = 0
+        #: Distorted domains flipped with a neighbour so far (:mod:`fe_mpm.domain_flips`;
+        #: triangles only), on this rank, each flip counting its two domains.
+        self.flips = 0
         self._drawn_quality = shape_quality(self.corners)
         self._short = _no_short(self.corners.shape)  # domains the last cut found short
         self.regrid(tracker)
@@ -200,6 +192,10 @@ class PointDomains:
         """Cut by the cells of ``tracker``'s grid from now on (after a repartition)."""
         # The cells' bounding boxes (lower and upper corners, each (nc, d)).
         self._boxes = (tracker.cell_vertices.min(axis=1), tracker.cell_vertices.max(axis=1))
+        comm = tracker.mesh.comm
+        lower = parallel.smallest(comm, self._boxes[0].min(axis=0))
+        upper = parallel.largest(comm, self._boxes[1].max(axis=0))
+        self._extent = float(np.max(upper - lower))  # the grid's, for telling corners apart
         self._ready = None  # pieces numbered by the old grid's cells
 
     def saved_state(self) -> tuple[np.ndarray, np.ndarray]:
@@ -426,18 +422,30 @@ class PointDomains:
         return sub
 
     def _reset_distorted(self, points: MaterialPoints, tracker: Tracker) -> bool:
-        """Redraw the domains whose shape quality fell too far (:data:`RESET_QUALITY`).
+        """Re-tile or redraw the domains whose shape quality fell too far (:data:`RESET_QUALITY`).
 
-        A redrawn domain is its point's cell, shrunk to the domain's area and centred
-        on the point; it no longer tiles with its neighbours (it may overlap them or
-        leave a gap), which is the price of going on. The point's ``F``, volume and
-        state are untouched: only where its volume lies changes. Returns whether any
-        domain was redrawn; :attr:`resets` counts them.
+        Collective. A distorted triangle is first flipped with a neighbour across the
+        edge they share (:mod:`fe_mpm.domain_flips`), which keeps the tiling and
+        remaps the pair's state; :attr:`flips` counts them. A domain that no flip
+        helps (on the body's edge, a tetrahedron, one that no longer tiles) is
+        redrawn as its point's cell, shrunk to the domain's area and centred on the
+        point; it no longer tiles with its neighbours (it may overlap them or leave a
+        gap), which is the price of going on. The point's ``F``, volume and state
+        are then untouched: only where its volume lies changes. Returns whether any
+        domain was flipped or redrawn; :attr:`resets` counts the redrawn ones.
         """
         limit = np.minimum(RESET_QUALITY, 0.5 * self._drawn_quality)
-        bad = np.flatnonzero(shape_quality(self.corners) < limit)
+        flipped = np.zeros(len(self.corners), dtype=bool)
+        if self.corners.shape[2] == 2:
+            # A new array where any flipped: the pieces cut ahead (sample) hold the old.
+            self.corners, flipped = flip_distorted(
+                self.corners, limit, points, tracker, self._extent
+            )
+            self._drawn_quality[flipped] = shape_quality(self.corners[flipped])
+            self.flips += int(flipped.sum())
+        bad = np.flatnonzero((shape_quality(self.corners) < limit) & ~flipped)
         if bad.size == 0:
-            return False
+            return bool(flipped.any())
         own = tracker.cell_vertices[points.cell[bad]]
         redrawn = shrunk_cells(points.x[bad], simplex_volumes(self.corners[bad]), own)
         g = own.shape[2]
@@ -451,7 +459,7 @@ class PointDomains:
         self.corners[bad] = redrawn
         self._drawn_quality[bad] = shape_quality(redrawn)
         self.resets += bad.size
-        return bad.size > 0
+        return bad.size > 0 or bool(flipped.any())
 
     def move_corners(
         self,

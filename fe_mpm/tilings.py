@@ -184,3 +184,17 @@ def _assign(x: np.ndarray, tiles: np.ndarray) -> np.ndarray:
         distance[rows, point, :] = np.inf
         distance[rows, :, tile] = np.inf
     return np.take_along_axis(tiles, taken[:, :, None, None], axis=1)
+
+
+def shape_quality(corners: np.ndarray) -> np.ndarray:
+    """The mean-ratio quality of simplices (n, d + 1, d): 1 if regular, 0 if flat.
+
+    Triangles: 4√3 A / Σ edge²; tetrahedra: 12 (3V)^(2/3) / Σ edge² (over the six edges).
+    """
+    d = corners.shape[2]
+    i, j = np.triu_indices(d + 1, k=1)
+    edges = corners[:, i] - corners[:, j]
+    squares = np.einsum("ncg,ncg->n", edges, edges)
+    if d == 2:
+        return 4.0 * np.sqrt(3.0) * simplex_volumes(corners) / squares
+    return 12.0 * (3.0 * simplex_volumes(corners)) ** (2.0 / 3.0) / squares
