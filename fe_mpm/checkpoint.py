@@ -118,6 +118,7 @@ def write(sim, directory: str | Path) -> Path:
     pieces = comm.gather({"file": piece, "points": len(sim.points), "sha256": digest})
     fingerprint, dropped = scene(sim), sim.dropped  # collective: before rank 0 goes alone
     resets = 0 if sim.domains is None else int(parallel.total(comm, sim.domains.resets))
+    flips = 0 if sim.domains is None else int(parallel.total(comm, sim.domains.flips))
     springs = sim.walls.springs()
     if comm.rank == 0:
         try:
@@ -134,6 +135,7 @@ def write(sim, directory: str | Path) -> Path:
                 "step": sim.step_number,
                 "dropped": dropped,
                 "domain_resets": resets,
+                "domain_flips": flips,
                 "slots": sim.tracking._nslot,
                 "boundary_slots": None if sim._boundary is None else sim._boundary._nslot,
                 "ranks": comm.size,
@@ -225,7 +227,8 @@ def read(sim, path: str | Path) -> None:
     sim.tracking.dropped = int(state["dropped"]) if comm.rank == 0 else 0
     if sim.domains is not None:
         resets = int(state.get("domain_resets", 0)) if comm.rank == 0 else 0
-        sim.domains.restore_state(*domains, resets, sim.domain_tracker)
+        flips = int(state.get("domain_flips", 0)) if comm.rank == 0 else 0
+        sim.domains.restore_state(*domains, resets, sim.domain_tracker, flips)
     # Where a retry of the next step may hold the points: the cells of the last step.
     sim.tracking.forget()
     # Not kept before the first step; a rank that read no piece has no points to hold.

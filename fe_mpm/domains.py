@@ -203,10 +203,19 @@ class PointDomains:
         return self.corners, self._drawn_quality
 
     def restore_state(
-        self, corners: np.ndarray, quality: np.ndarray, resets: int, tracker: Tracker
+        self,
+        corners: np.ndarray,
+        quality: np.ndarray,
+        resets: int,
+        tracker: Tracker,
+        flips: int = 0,
     ) -> None:
-        """Take a checkpoint's domains (:meth:`saved_state`), of the points read with them."""
-        self.corners, self._drawn_quality, self.resets = corners, quality, resets
+        """Take a checkpoint's domains (:meth:`saved_state`), of the points read with them.
+
+        ``resets`` and ``flips`` go on from the checkpoint's counts (on one rank).
+        """
+        self.corners, self._drawn_quality = corners, quality
+        self.resets, self.flips = resets, flips
         self._pieces = None
         self.regrid(tracker)
 
