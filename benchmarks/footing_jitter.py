@@ -63,7 +63,7 @@ def run(h: float, h_far: float, steps: int, options: dict) -> tuple[list[dict], 
     ]
     wall = time.perf_counter() - t0
     if sim.domains is not None:
-        print(f"  {sim.domains.resets} domain resets")
+        print(f"  {sim.domains.flips} domains flipped, {sim.domains.resets} redrawn")
     sim.close()
     return rows, wall
 

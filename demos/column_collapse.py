@@ -368,6 +368,9 @@ if args.json:
                 "point_domain_resets": None
                 if sim.domains is None
                 else int(parallel.total(scene.mesh.comm, sim.domains.resets)),
+                "point_domain_flips": None
+                if sim.domains is None
+                else int(parallel.total(scene.mesh.comm, sim.domains.flips)),
                 "timings": sim.timings,
                 "point_imbalance": reports[-1].point_imbalance,
                 "point_imbalance_max": max(r.point_imbalance for r in reports),

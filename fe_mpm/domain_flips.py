@@ -208,7 +208,9 @@ def flip_distorted(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Flip the domains whose shape quality is below ``limit``, where a flip helps.
 
-    Collective. Args:
+    Collective.
+
+    Args:
         corners: This rank's domains (n, 3, 2) in m.
         limit: The quality below which each is distorted (n,).
         points: Their points, updated here: those of flipped domains take their new
