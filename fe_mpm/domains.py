@@ -84,6 +84,13 @@ MIN_SHARE = 1e-9
 #: with 0.2 alone both runs finish; with a quarter of the first quality alone the
 #: run without the ghost penalty stops at s/B = 0.98.
 RESET_QUALITY = 0.2
+#: Said at the second step of a P2/P1 run whose cells hold more than one point domain.
+P2_DENSE_DOMAINS_WARNING = (
+    "Simulation: 'up-p2p1' with point domains and more than one point in a cell was "
+    "found unstable over many steps: on Cook's membrane with three points per cell the "
+    "points' det F spreads and the body turns over after about 25 steps, whatever "
+    "their size (docs/cell_crossing.md, 'Not yet'). One point per cell is stable."
+)
 #: Under MPI each rank cuts its points' domains by its own cells and its ghosts: the
 #: cells within this many layers of cells sharing a vertex with its own
 #: (:func:`fe_mpm.balance.with_vertex_layers`). A domain's corners lie about a cell

@@ -1,6 +1,8 @@
 """Point domains (``Simulation(point_domains=True)``): a point's volume spread over the
 cells its convected domain covers, integrated exactly piece by piece."""
 
+import warnings
+
 from mpi4py import MPI
 
 import meshio
@@ -100,6 +102,26 @@ def test_taylor_hood_with_domains_needs_one_point_per_cell_and_meets_cook():
     assert sim.ghost.scale.value == pytest.approx(2 * 0.01 * sim.material.mu)
     assert sim.domains.degree == 2
     assert abs(scenes.tip_deflection(sim) / converged - 1) < 0.02
+
+
+def test_taylor_hood_domains_with_more_than_one_point_per_cell_warn_at_the_second_step():
+    """P2/P1 with three points per cell is unstable over many steps (Cook at 10 N,
+    n = 16: the points' det F spreads to 0.29–1.51 and the membrane turns over by
+    step 30 of 160; ``docs/cell_crossing.md``); the run says so once, at its second
+    step. One point per cell, which is stable, says nothing."""
+    mesh = meshes.rectangle_mesh((0.0, 0.0), (1.0, 1.0), (4, 4))
+    for per_cell, warns in ((3, True), (1, False)):
+        points = fe_mpm.seed(mesh, per_cell=per_cell)
+        sim = fe_mpm.Simulation(
+            mesh, points, fe_mpm.NeoHookean(1.0, 0.3), "up-p2p1", point_domains=True
+        )
+        sim.step(0.5)
+        with warnings.catch_warnings(record=True) as said:
+            warnings.simplefilter("always")
+            sim.step(1.0)
+            sim.step(1.5)
+        unstable = [w for w in said if "found unstable over many steps" in str(w.message)]
+        assert len(unstable) == (1 if warns else 0), per_cell
 
 
 def test_a_domain_that_leaves_the_grid_stops_the_run():
