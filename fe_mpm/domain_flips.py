@@ -4,7 +4,8 @@ Two triangular domains that share an edge cover a quadrilateral. Where it is con
 its other diagonal cuts it into two other triangles that cover the same ground (a
 Lawson flip, as in Delaunay triangulation). A domain that a squeeze or a shear band
 has made a needle or a cap is flipped with the neighbour across the edge that gives
-the pair the better worst shape, and the domains still tile the body. Redrawing it
+the pair the better worst shape, where that leaves neither distorted, and the domains
+still tile the body. Redrawing it
 around its point instead (:meth:`fe_mpm.domains.PointDomains._reset_distorted`, which
 stays for the domains no flip helps) breaks the tiling: the redrawn domain overlaps
 its neighbours or leaves a gap. Measured (``docs/cell_crossing.md``): a J2 block in
@@ -17,13 +18,16 @@ least) and the parts of the old pair that triangle covers: its volume and mass a
 those parts' shares of the old points' (so both are conserved, and a domain's volume
 per area stays that of the ground it covers), its ``F``, stress and history their
 volume-weighted mean, its velocity and acceleration their mass-weighted mean (so
-momentum is conserved). The point moves to its new triangle's centroid, and ``x0``
-with it. This is a remap of the pair's state: a smoothing over two domains, at the
-place where the body deforms most.
+momentum is conserved; the pair's mass centre moves where their densities differ).
+The point moves to its new triangle's centroid, and ``x0`` with it. This is a remap
+of the pair's state: a smoothing over two domains, at the place where the body
+deforms most. Where the mean of the two F would lose much of their volume (two F
+rotated far apart, :data:`MIN_DET_KEPT`) the pair is not flipped but redrawn. Flips
+made at the start of a step that then fails stay: the retry starts from them.
 
 Under MPI the two domains of a pair may live on two ranks. Every rank sends the
-distorted domains' corners to all, then each rank the rows of its domains that share
-two corners with one of them (the candidates, with their state); every rank chooses
+distorted domains' corners to all, then each rank the rows of its domains that have
+two corners among them (the candidates, with their state); every rank chooses
 the same flips from the same rows in the same order (sorted by position, not by rank),
 and updates its own points.
 """
@@ -39,9 +43,15 @@ from fe_mpm.particles import MaterialPoints
 from fe_mpm.tilings import shape_quality
 from fe_mpm.tracker import Tracker
 
-#: A flip must raise the worse shape quality of its pair by this factor.
+#: A flip must raise the worse shape quality of its pair by this factor, and leave
+#: both above the quality below which they count as distorted.
 FLIP_GAIN = 1.2
-#: Corners within this fraction of the grid's extent are the same corner.
+#: A flip is not made where a point's remapped F, the mean of two, would have less
+#: than this fraction of the smaller det F of the pair (two F rotated far apart, in
+#: a shear band, average to a nearly singular one).
+MIN_DET_KEPT = 0.5
+#: Corners are told apart by their coordinates rounded to this fraction of the
+#: grid's extent.
 CORNER_TOL = 1e-10
 #: Two pairs' areas that differ by less than this relative amount are equal (the
 #: test of a convex quadrilateral).
@@ -108,55 +118,57 @@ def _flipped(corners: np.ndarray, d: int, k: int, e: int, j: int):
     f = corners[e, j]
     old_d, old_e = abs(_area(a, b, c)), abs(_area(a, b, f))
     new_a, new_b = _area(a, f, c), _area(b, c, f)
-    if new_a * new_b <= 0.0 or abs(abs(new_a) + abs(new_b) - old_d - old_e) > AREA_TOL * (
-        old_d + old_e
-    ):
+    convex = new_a * new_b > 0.0 and abs(abs(new_a) + abs(new_b) - old_d - old_e) <= (
+        AREA_TOL * (old_d + old_e)
+    )
+    if not convex or old_d == 0.0 or old_e == 0.0:
         return None
-    # The diagonals ab and cf cross at o = a + s (b − a); (a, f, c) is (a, o, c) of d
-    # and (a, f, o) of e.
+    # The diagonals ab and cf cross at o = a + s (b − a). (a, f, c) is (a, o, c) of d
+    # and (a, o, f) of e, triangles on ab with d's and e's apexes: a fraction s of each.
     s = np.linalg.solve(np.column_stack([b - a, c - f]), c - a)[0]
-    o = a + s * (b - a)
-    to_a = np.array([abs(_area(a, o, c)) / old_d, abs(_area(a, f, o)) / old_e])
     triangles = np.array([[a, f, c], [b, c, f]])
-    return triangles, shape_quality(triangles), np.array([to_a, 1.0 - to_a])
+    return triangles, shape_quality(triangles), np.array([[s, s], [1.0 - s, 1.0 - s]])
 
 
-def choose_flips(corners: np.ndarray, quality: np.ndarray, bad: np.ndarray, scale: float):
+def choose_flips(
+    corners: np.ndarray, quality: np.ndarray, limit: np.ndarray, bad: np.ndarray, scale: float
+) -> list[Flip]:
     """The flips that re-tile the distorted domains ``bad``, taken in that order.
 
     Args:
         corners: The domains (n, 3, 2) in m.
         quality: Their shape qualities (n,).
+        limit: The quality below which each counts as distorted (n,).
         bad: The distorted ones, in the order to treat them.
         scale: The grid's extent (m), for telling corners apart (:data:`CORNER_TOL`).
 
     Returns:
         The flips (:class:`Flip`); a domain takes part in one at most. A distorted
         domain is flipped across the edge that gives its pair the best worst quality,
-        if that beats the pair's worse quality now by :data:`FLIP_GAIN`.
+        if that beats the pair's worse quality now by :data:`FLIP_GAIN` and leaves
+        neither of them distorted.
     """
     keys = np.round(corners.reshape(-1, 2) / (CORNER_TOL * scale))
     ids = np.unique(keys, axis=0, return_inverse=True)[1].reshape(len(corners), 3)
     partner = _edge_partners(ids)
-    taken = np.zeros(len(corners), dtype=bool)
+    used = np.zeros(len(corners), dtype=bool)
     flips = []
     for d in bad:
-        if taken[d]:
+        if used[d]:
             continue
         best = None
         for k in range(3):
             if partner[3 * d + k] < 0:
                 continue
             e, j = divmod(int(partner[3 * d + k]), 3)
-            if taken[e]:
+            if used[e]:
                 continue
             flipped = _flipped(corners, d, k, e, j)
             if flipped is None:
                 continue
             worst = flipped[1].min()
-            if worst > FLIP_GAIN * min(quality[d], quality[e]) and (
-                best is None or worst > best[0]
-            ):
+            better = worst > FLIP_GAIN * min(quality[d], quality[e])
+            if better and worst >= max(limit[d], limit[e]) and (best is None or worst > best[0]):
                 best = (worst, e, flipped)
         if best is None:
             continue
@@ -167,15 +179,16 @@ def choose_flips(corners: np.ndarray, quality: np.ndarray, bad: np.ndarray, scal
         if np.sum((now - new) ** 2) > np.sum((now - new[::-1]) ** 2):
             triangles, fractions = triangles[::-1], fractions[::-1]
         flips.append(Flip(int(d), int(e), triangles, fractions))
-        taken[d] = taken[e] = True
+        used[d] = used[e] = True
     return flips
 
 
 def _state(points: MaterialPoints, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The points' state that a flip remaps, as rows: (volume-weighted, mass-weighted).
+    """The state that a flip remaps, of the points ``rows`` (k,).
 
-    Volume-weighted: F, stress and the history (by name, in sorted order);
-    mass-weighted: velocity and acceleration.
+    Returns (k, w) volume-weighted rows: F first (g², so that :func:`_remapped` finds
+    it), then stress and the history by name in sorted order; and (k, 2g)
+    mass-weighted rows: velocity and acceleration.
     """
 
     def flat(values: np.ndarray) -> np.ndarray:  # (k, size), also for k = 0
@@ -187,16 +200,81 @@ def _state(points: MaterialPoints, rows: np.ndarray) -> tuple[np.ndarray, np.nda
 
 
 def _set_state(points: MaterialPoints, row: int, by_volume: np.ndarray, by_mass: np.ndarray):
-    """Write one point's remapped state (the rows of :func:`_state`)."""
+    """Write one point's remapped state (one row of each of :func:`_state`'s)."""
     start = 0
-    for array in [points.F, points.stress] + [
-        points.history[name] for name in sorted(points.history)
-    ]:
+    arrays = [points.F, points.stress] + [points.history[name] for name in sorted(points.history)]
+    for array in arrays:
         size = int(np.prod(array.shape[1:]))
         array[row] = by_volume[start : start + size].reshape(array.shape[1:])
         start += size
     g = points.velocity.shape[1]
     points.velocity[row], points.acceleration[row] = by_mass[:g], by_mass[g:]
+
+
+@dataclass
+class _Rows:
+    """The candidates of every rank, one row each, in one order on every rank."""
+
+    corners: np.ndarray  # (k, 3, 2) m
+    quality: np.ndarray  # (k,)
+    limit: np.ndarray  # (k,)
+    volume: np.ndarray  # (k,)
+    mass: np.ndarray  # (k,)
+    rank: np.ndarray  # (k,) the rank that holds it
+    index: np.ndarray  # (k,) its index there
+    by_volume: np.ndarray  # (k, w), :func:`_state`
+    by_mass: np.ndarray  # (k, 2g)
+
+
+def _gathered_rows(comm, mine, corners, quality, limit, points, scale) -> _Rows:
+    """This rank's candidates ``mine`` and every other rank's, sorted by centroid.
+
+    Collective. The order depends on the domains' places only, not on the partition.
+    """
+    by_volume, by_mass = _state(points, mine)
+    local = [
+        corners[mine].reshape(-1, 6),
+        quality[mine][:, None],
+        limit[mine][:, None],
+        points.volume[mine][:, None],
+        points.mass[mine][:, None],
+        np.full((len(mine), 1), comm.rank),
+        mine[:, None],
+        by_volume,
+        by_mass,
+    ]
+    widths = np.cumsum([0] + [block.shape[1] for block in local])
+    rows = parallel.gathered(comm, np.hstack(local).astype(float))
+    centre = np.round(rows[:, :6].reshape(-1, 3, 2).mean(axis=1) / (CORNER_TOL * scale))
+    rows = rows[np.lexsort((centre[:, 1], centre[:, 0]))]
+    column = [rows[:, widths[i] : widths[i + 1]] for i in range(len(local))]
+    return _Rows(
+        column[0].reshape(-1, 3, 2),
+        column[1][:, 0],
+        column[2][:, 0],
+        column[3][:, 0],
+        column[4][:, 0],
+        column[5][:, 0].astype(int),
+        column[6][:, 0].astype(int),
+        column[7],
+        column[8],
+    )
+
+
+def _remapped(flip: Flip, rows: _Rows, g: int):
+    """The two new points' volumes, masses and state rows (each (2, ...)) of ``flip``."""
+    pair = [flip.first, flip.second]
+    # taken[i, k] of old domain k goes to new triangle i.
+    parts_v, parts_m = flip.taken * rows.volume[pair], flip.taken * rows.mass[pair]
+    volume, mass = parts_v.sum(axis=1), parts_m.sum(axis=1)
+    by_volume = parts_v @ rows.by_volume[pair] / volume[:, None]
+    by_mass = rows.by_mass[pair].copy()
+    with_mass = mass > 0.0
+    by_mass[with_mass] = (parts_m @ rows.by_mass[pair])[with_mass] / mass[with_mass, None]
+    det_new = np.linalg.det(by_volume[:, : g * g].reshape(2, g, g))
+    det_old = np.linalg.det(rows.by_volume[pair, : g * g].reshape(2, g, g))
+    keeps_volume = bool(np.all(det_new >= MIN_DET_KEPT * det_old.min()))
+    return volume, mass, by_volume, by_mass, keeps_volume
 
 
 def flip_distorted(
@@ -222,67 +300,42 @@ def flip_distorted(
         The new corners (a new array where any domain flipped; ``corners`` itself
         otherwise) and which of this rank's domains flipped (n,).
     """
-    comm, n = tracker.mesh.comm, len(corners)
+    comm, (n, _, g) = tracker.mesh.comm, corners.shape
     quality = shape_quality(corners)
     distorted = quality < limit
     flipped = np.zeros(n, dtype=bool)
     if not parallel.any_rank(comm, bool(distorted.any())):
         return corners, flipped
-    # This rank's candidates: its distorted domains and those sharing two corners
-    # with a distorted domain of any rank.
+    # This rank's candidates: its distorted domains and those with two corners among
+    # the distorted domains' of every rank (their neighbours, and a few more).
     keys = np.round(corners.reshape(-1, 2) / (CORNER_TOL * scale))
     far = parallel.gathered(comm, keys.reshape(n, 3, 2)[distorted].reshape(-1, 2))
     ids = np.unique(np.vstack([far, keys]), axis=0, return_inverse=True)[1]
     shared = np.isin(ids[len(far) :], ids[: len(far)]).reshape(n, 3).sum(axis=1) >= 2
     mine = np.flatnonzero(distorted | shared)
-    by_volume, by_mass = _state(points, mine)
-    rows = np.column_stack(
-        [
-            corners[mine].reshape(-1, 6),
-            quality[mine],
-            limit[mine],
-            points.volume[mine],
-            points.mass[mine],
-            np.full(len(mine), comm.rank),
-            mine,
-            by_volume,
-            by_mass,
-        ]
-    )
-    rows = parallel.gathered(comm, rows)
-    # One order on every rank, whatever the partition: by the domains' centroids.
-    centre = np.round(rows[:, :6].reshape(-1, 3, 2).mean(axis=1) / (CORNER_TOL * scale))
-    rows = rows[np.lexsort((centre[:, 1], centre[:, 0]))]
-    all_corners, all_quality = rows[:, :6].reshape(-1, 3, 2), rows[:, 6]
-    bad = np.flatnonzero(all_quality < rows[:, 7])
-    bad = bad[np.argsort(np.round(all_quality[bad], QUALITY_DIGITS), kind="stable")]
-    flips = choose_flips(all_corners, all_quality, bad, scale)
-    if not flips:
-        return corners, flipped
-    volume, mass, rank, index = rows[:, 8], rows[:, 9], rows[:, 10], rows[:, 11].astype(int)
-    width = by_volume.shape[1]
-    weighted_by_volume, weighted_by_mass = rows[:, 12 : 12 + width], rows[:, 12 + width :]
+    rows = _gathered_rows(comm, mine, corners, quality, limit, points, scale)
+    bad = np.flatnonzero(rows.quality < rows.limit)
+    bad = bad[np.argsort(np.round(rows.quality[bad], QUALITY_DIGITS), kind="stable")]
     new = corners.copy()
-    for flip in flips:
-        pair = [flip.first, flip.second]
-        # taken[i, k] of old domain k's volume and mass goes to new triangle i.
-        parts_v, parts_m = flip.taken * volume[pair], flip.taken * mass[pair]
-        for i, member in enumerate(pair):
-            if rank[member] != comm.rank:
+    for flip in choose_flips(rows.corners, rows.quality, rows.limit, bad, scale):
+        volume, mass, by_volume, by_mass, keeps_volume = _remapped(flip, rows, g)
+        if not keeps_volume:
+            continue  # the same on every rank: its domains are redrawn instead
+        for i, member in enumerate([flip.first, flip.second]):
+            if rows.rank[member] != comm.rank:
                 continue
-            row = index[member]
-            v, m = parts_v[i].sum(), parts_m[i].sum()
-            points.volume[row], points.mass[row] = v, m
-            s_v = parts_v[i] @ weighted_by_volume[pair] / v
-            s_m = parts_m[i] @ weighted_by_mass[pair] / m if m > 0 else weighted_by_mass[member]
-            _set_state(points, row, s_v, s_m)
+            row = rows.index[member]
+            points.volume[row], points.mass[row] = volume[i], mass[i]
+            _set_state(points, row, by_volume[i], by_mass[i])
             centroid = flip.corners[i].mean(axis=0)
             points.x0[row] += centroid - points.x[row]
             points.x[row] = centroid
             new[row] = flip.corners[i]
             flipped[row] = True
+    if not flipped.any():
+        return corners, flipped
     moved = np.flatnonzero(flipped)
-    if moved.size:
-        cells = tracker.locate(points.x[moved], points.cell[moved])
-        points.cell[moved] = np.where(cells >= 0, cells, points.cell[moved])
+    cells = tracker.locate(points.x[moved], points.cell[moved])
+    # A point whose centroid lies past the grid's edge keeps its cell as a guess.
+    points.cell[moved] = np.where(cells >= 0, cells, points.cell[moved])
     return new, flipped

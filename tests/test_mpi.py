@@ -776,7 +776,8 @@ def test_point_domains_give_the_serial_answer_on_three_ranks_and_restart_across_
     steps), a 3D block of domains falling onto the base (5 Newmark steps) on a grid
     repartitioned as it goes, the rough strip footing on h = 0.2 B (8 steps to
     s/B = 0.8; from the fourth some domains have distorted and are redrawn or
-    flipped with a neighbour, a pair on two ranks too), and a
+    flipped with a neighbour; on 3 ranks one pair spanned two, seen by a debug
+    print), and a
     small block in the corner of a long grid (on 3 ranks two hold no point). The
     footing written after 4 steps on 2 ranks and restored on 3 goes on as in serial.
     Measured against serial: the same iterations, the tip, the mass centre and q to
