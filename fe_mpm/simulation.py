@@ -448,7 +448,7 @@ class Simulation:
         else:
             self._boundary.tracker = self.tracker
         ppp = None
-        if self.spec.ppp:
+        if self.spec.ppp and self._given["ppp_alpha"] > 0:  # α = 0: no term at all
             ppp = PPPData.on_grid(mesh, self.tracker.centroids, self._given["ppp_alpha"])
         self._forms = FormsBySlotCount(
             self.fields,

@@ -194,7 +194,8 @@ class RigidWalls:
         node_of_dof[self.space.dofmap.list.reshape(-1)] = mesh.geometry.dofmaps[0].reshape(-1)
         inputs = np.asarray(mesh.geometry.input_global_indices, dtype=np.int64)
         self._node_inputs = inputs[node_of_dof]
-        E = young_modulus(material) if walls else 0.0
+        # E only for a default penalty: a fluid may have no shear scale to give it.
+        E = young_modulus(material) if any(s.penalty is None for s in walls) else 0.0
         self.walls = [
             _Wall(
                 spec,

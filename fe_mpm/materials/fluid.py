@@ -70,16 +70,18 @@ class NewtonianFluid(CheckedFields):
     Args:
         bulk_modulus: Bulk modulus K (Pa), > 0 (water: 2.0e9).
         viscosity: Dynamic viscosity μ_v (Pa·s), ≥ 0 (water: 1.0e-3).
-        shear_scale: G* (Pa), > 0, in place of a shear modulus: it sets the walls'
-            default penalty, and the u-p form's PPP term (α/G*) if PPP is turned on
-            (off by default for a fluid, see above).
+        shear_scale: G* (Pa), > 0, in place of a shear modulus, or None (the
+            default) where nothing needs it. It sets a rigid wall's default penalty,
+            the u-p form's PPP term (α/G*) if PPP is turned on (off by default for a
+            fluid, see above) and the ghost penalty's scale; a scene that needs it
+            without it stops at set-up, naming it. The demos take 2 ρ₀ g h₀.
         density: Reference mass density ρ₀ (kg/m³), > 0, or None to take it from the
             points (``seed(..., density=...)``).
     """
 
     bulk_modulus: float
     viscosity: float
-    shear_scale: float
+    shear_scale: float | None = None
     density: float | None = None
     #: In the u-p forms the points keep the isotropic F of their pressure (above).
     keeps_shape: ClassVar[bool] = False
@@ -87,12 +89,24 @@ class NewtonianFluid(CheckedFields):
     def __post_init__(self) -> None:
         self._check("bulk_modulus", lo=0.0, lo_open=True)
         self._check("viscosity", lo=0.0)
-        self._check("shear_scale", lo=0.0, lo_open=True)
+        if self.shear_scale is not None:
+            self._check("shear_scale", lo=0.0, lo_open=True)
         self._check_density()
 
     @property
     def mu(self) -> float:
-        """G* (Pa), which stands for a shear modulus (the PPP scale)."""
+        """G* (Pa), which stands for a shear modulus (the PPP scale).
+
+        Raises:
+            ValueError: No ``shear_scale`` was given.
+        """
+        if self.shear_scale is None:
+            raise ValueError(
+                "NewtonianFluid: this scene needs shear_scale (G*, Pa, > 0), which stands "
+                "for the shear modulus a fluid lacks: a RigidWall without a penalty of its "
+                "own, ppp_alpha > 0 or a ghost penalty scale by it. Give it, e.g. "
+                "NewtonianFluid(..., shear_scale=2 * rho * g * depth) as the demos do."
+            )
         return self.shear_scale
 
     @property

@@ -19,6 +19,7 @@ exist, not whether their signatures match.
 
 from __future__ import annotations
 
+import inspect
 from typing import Protocol, runtime_checkable
 
 import numpy as np
@@ -72,8 +73,20 @@ class PointwiseLaw(Law, Protocol):
 
 
 def missing_members(law: object, protocol: type) -> list[str]:
-    """The members of ``protocol`` that ``law`` lacks, in the protocol's order."""
-    return [name for name in _members(protocol) if not hasattr(law, name)]
+    """The members of ``protocol`` that ``law`` lacks, in the protocol's order.
+
+    Looked up without calling them: a property may refuse to give a value the scene
+    does not need (``NewtonianFluid.mu`` without a shear scale).
+    """
+    return [name for name in _members(protocol) if not _has(law, name)]
+
+
+def _has(law: object, name: str) -> bool:
+    try:
+        inspect.getattr_static(law, name)
+    except AttributeError:
+        return False
+    return True
 
 
 def _members(protocol: type) -> list[str]:
