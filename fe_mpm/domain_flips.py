@@ -79,6 +79,11 @@ class Flip:
     taken: np.ndarray
 
 
+def _keys(x: np.ndarray, scale: float) -> np.ndarray:
+    """Points (n, 2) in m as keys that tell them apart (:data:`CORNER_TOL`), (n, 2)."""
+    return np.round(x / (CORNER_TOL * scale))
+
+
 def _area(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> float:
     """The signed area of the triangle (a, b, c) (m²)."""
     return 0.5 * float((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]))
@@ -148,7 +153,7 @@ def choose_flips(
         if that beats the pair's worse quality now by :data:`FLIP_GAIN` and leaves
         neither of them distorted.
     """
-    keys = np.round(corners.reshape(-1, 2) / (CORNER_TOL * scale))
+    keys = _keys(corners.reshape(-1, 2), scale)
     ids = np.unique(keys, axis=0, return_inverse=True)[1].reshape(len(corners), 3)
     partner = _edge_partners(ids)
     used = np.zeros(len(corners), dtype=bool)
@@ -245,7 +250,7 @@ def _gathered_rows(comm, mine, corners, quality, limit, points, scale) -> _Rows:
     ]
     widths = np.cumsum([0] + [block.shape[1] for block in local])
     rows = parallel.gathered(comm, np.hstack(local).astype(float))
-    centre = np.round(rows[:, :6].reshape(-1, 3, 2).mean(axis=1) / (CORNER_TOL * scale))
+    centre = _keys(rows[:, :6].reshape(-1, 3, 2).mean(axis=1), scale)
     rows = rows[np.lexsort((centre[:, 1], centre[:, 0]))]
     column = [rows[:, widths[i] : widths[i + 1]] for i in range(len(local))]
     return _Rows(
@@ -279,6 +284,7 @@ def _remapped(flip: Flip, rows: _Rows, g: int):
 
 def flip_distorted(
     corners: np.ndarray,
+    quality: np.ndarray,
     limit: np.ndarray,
     points: MaterialPoints,
     tracker: Tracker,
@@ -290,6 +296,7 @@ def flip_distorted(
 
     Args:
         corners: This rank's domains (n, 3, 2) in m.
+        quality: Their shape qualities (n,) (:func:`~fe_mpm.tilings.shape_quality`).
         limit: The quality below which each is distorted (n,).
         points: Their points, updated here: those of flipped domains take their new
             triangle's share of the pair's volume, mass and state, and its centroid.
@@ -301,14 +308,13 @@ def flip_distorted(
         otherwise) and which of this rank's domains flipped (n,).
     """
     comm, (n, _, g) = tracker.mesh.comm, corners.shape
-    quality = shape_quality(corners)
     distorted = quality < limit
     flipped = np.zeros(n, dtype=bool)
     if not parallel.any_rank(comm, bool(distorted.any())):
         return corners, flipped
     # This rank's candidates: its distorted domains and those with two corners among
     # the distorted domains' of every rank (their neighbours, and a few more).
-    keys = np.round(corners.reshape(-1, 2) / (CORNER_TOL * scale))
+    keys = _keys(corners.reshape(-1, 2), scale)
     far = parallel.gathered(comm, keys.reshape(n, 3, 2)[distorted].reshape(-1, 2))
     ids = np.unique(np.vstack([far, keys]), axis=0, return_inverse=True)[1]
     shared = np.isin(ids[len(far) :], ids[: len(far)]).reshape(n, 3).sum(axis=1) >= 2

@@ -455,15 +455,17 @@ class PointDomains:
         domain was flipped or redrawn; :attr:`resets` counts the redrawn ones.
         """
         limit = np.minimum(RESET_QUALITY, 0.5 * self._drawn_quality)
+        quality = shape_quality(self.corners)
         flipped = np.zeros(len(self.corners), dtype=bool)
         if self.corners.shape[2] == 2:
             # A new array where any flipped: the pieces cut ahead (sample) hold the old.
             self.corners, flipped = flip_distorted(
-                self.corners, limit, points, tracker, self._extent
+                self.corners, quality, limit, points, tracker, self._extent
             )
+            # A flipped domain is drawn anew and not distorted (choose_flips).
             self._drawn_quality[flipped] = shape_quality(self.corners[flipped])
             self.flips += int(flipped.sum())
-        bad = np.flatnonzero((shape_quality(self.corners) < limit) & ~flipped)
+        bad = np.flatnonzero((quality < limit) & ~flipped)
         if bad.size == 0:
             return bool(flipped.any())
         own = tracker.cell_vertices[points.cell[bad]]

@@ -50,7 +50,7 @@ def test_two_thin_domains_are_flipped_to_the_other_diagonal_and_share_their_stat
     x0_shift = points.x0 - points.x
     limit = np.full(2, 0.5)
     assert np.all(shape_quality(corners) < limit)
-    new, flipped = flip_distorted(corners, limit, points, tracker, 1.0)
+    new, flipped = flip_distorted(corners, shape_quality(corners), limit, points, tracker, 1.0)
     assert flipped.tolist() == [True, True]
     assert np.all(shape_quality(new) > 2 * shape_quality(corners))
     # The new triangles share the short diagonal c–d and cover the kite.
@@ -79,7 +79,9 @@ def test_unequal_parts_go_to_the_triangle_that_covers_them():
     c, d = (0.3, 0.56), (0.3, 0.41)  # c–d crosses a–b at a sixth of its length
     corners, points, tracker = kite_pair(c, d)
     points.volume[:] = [area(corners[0]), area(corners[1])]  # a volume per area of 1
-    new, flipped = flip_distorted(corners, np.full(2, 0.4), points, tracker, 1.0)
+    new, flipped = flip_distorted(
+        corners, shape_quality(corners), np.full(2, 0.4), points, tracker, 1.0
+    )
     assert flipped.all()
     np.testing.assert_allclose(points.volume, [area(t) for t in new], rtol=1e-12)
 
@@ -87,7 +89,9 @@ def test_unequal_parts_go_to_the_triangle_that_covers_them():
 def test_a_pair_whose_quadrilateral_is_not_convex_is_not_flipped():
     corners, points, tracker = kite_pair(c=(0.0, 0.56), d=(0.1, 0.41))  # c–d misses a–b
     assert choose_flips(corners, shape_quality(corners), np.zeros(2), np.array([0, 1]), 1.0) == []
-    new, flipped = flip_distorted(corners, np.full(2, 0.9), points, tracker, 1.0)
+    new, flipped = flip_distorted(
+        corners, shape_quality(corners), np.full(2, 0.9), points, tracker, 1.0
+    )
     assert new is corners and not flipped.any()
 
 
@@ -110,7 +114,9 @@ def test_each_point_takes_the_new_triangle_nearer_to_it():
     """c and d apart along a–b: the point of (a, b, c) takes (a, d, c), whose centroid
     lies 0.05 from its own, not (b, c, d), 0.17 away."""
     corners, points, tracker = kite_pair((0.3, 0.56), (0.7, 0.41))
-    new, flipped = flip_distorted(corners, np.full(2, 0.25), points, tracker, 1.0)
+    new, flipped = flip_distorted(
+        corners, shape_quality(corners), np.full(2, 0.25), points, tracker, 1.0
+    )
     assert flipped.all()
     np.testing.assert_allclose(new[0].mean(axis=0), np.mean([A, D_ASIDE, (0.3, 0.56)], axis=0))
 
@@ -124,5 +130,7 @@ def test_a_pair_whose_mean_f_would_lose_its_volume_is_not_flipped():
         [[np.cos(s * turn), -np.sin(s * turn)], [np.sin(s * turn), np.cos(s * turn)]]
         for s in (1, -1)
     ]
-    new, flipped = flip_distorted(corners, np.full(2, 0.5), points, tracker, 1.0)
+    new, flipped = flip_distorted(
+        corners, shape_quality(corners), np.full(2, 0.5), points, tracker, 1.0
+    )
     assert new is corners and not flipped.any()
