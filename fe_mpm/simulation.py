@@ -366,10 +366,10 @@ class Simulation:
                 self.spec.volume_average,
                 self._shared,
             )
-        most = int(np.bincount(self.points.cell[self.points.cell >= 0]).max(initial=0))
-        self._dense_p2_domains = bool(
-            point_domains and self.spec.u_degree == 2 and parallel.largest(mesh.comm, most) > 1
-        )
+        self._dense_p2_domains = False  # more than one P2 domain in a cell: unstable
+        if point_domains and self.spec.u_degree == 2:
+            most = int(np.bincount(self.points.cell[self.points.cell >= 0]).max(initial=0))
+            self._dense_p2_domains = parallel.largest(mesh.comm, most) > 1
         self._set_ghost_penalty()
         self.rebalancing = balance.RebalanceRule(model_checks.check_rebalance(rebalance_above))
         if self._rebalance_if_due(imbalance(mesh.comm, len(points))):
