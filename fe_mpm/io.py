@@ -133,6 +133,19 @@ class DomainWriter(ParticleWriter):
         return self._write(t, xyz, cells, cell_data={k: [a] for k, a in data.items()})
 
 
+def write_csv_rows(path: str | Path, header: list[str], rows: list[str], first: int) -> Path:
+    """Write ``rows`` (comma-joined lines) to the CSV ``path``; returns it as a Path.
+
+    ``first`` 0 writes the file anew, under ``header``; k > 0 appends the rows to it,
+    as a run does at each output with the steps since the last one.
+    """
+    path = Path(path)
+    lines = rows if first else [",".join(header), *rows]
+    with path.open("a" if first else "w") as csv:
+        csv.write("".join(line + "\n" for line in lines))
+    return path
+
+
 def _point_fields(points: MaterialPoints, fields: dict) -> dict[str, np.ndarray]:
     """The per-point arrays fe-mpm writes, one row per point, vectors and tensors in 3D.
 

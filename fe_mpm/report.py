@@ -13,6 +13,7 @@ from fe_mpm import parallel
 from fe_mpm._dolfinx import dolfinx
 from fe_mpm.errors import ConvergenceError
 from fe_mpm.force_test import NewtonResult
+from fe_mpm.io import write_csv_rows
 from fe_mpm.quadrature import SlotLayout
 from fe_mpm.tracking import hinge_diagnosis
 from fe_mpm.walls import WallForces
@@ -170,7 +171,7 @@ def write_steps(history: list[StepReport], path: str | Path, first: int = 0) -> 
     vectors += [("markers", name) for name in head.markers]
     g = next((np.size(getattr(head, kind)[name]) for kind, name in vectors), 0)
     header = [*fixed, *(f"{name}_{c}" for _, name in vectors for c in axes[:g])]
-    lines = [] if first else [",".join(header)]
+    lines = []
     for report in history[first:]:
         values = [
             str(getattr(report, name)) if name in COUNTS else repr(float(getattr(report, name)))
@@ -180,9 +181,7 @@ def write_steps(history: list[StepReport], path: str | Path, first: int = 0) -> 
             vector = getattr(report, kind).get(name, np.full(g, np.nan))
             values += [repr(float(v)) for v in np.ravel(vector)]
         lines.append(",".join(values))
-    with path.open("a" if first else "w") as csv:
-        csv.write("".join(line + "\n" for line in lines))
-    return path
+    return write_csv_rows(path, header, lines, first)
 
 
 def imbalance(comm, count: int) -> float:

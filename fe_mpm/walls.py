@@ -22,6 +22,7 @@ from fe_mpm import parallel
 from fe_mpm._dolfinx import dolfinx
 from fe_mpm.boundary import RigidWall, boundary_facets
 from fe_mpm.forms import contact
+from fe_mpm.io import write_csv_rows
 from fe_mpm.transfer import touched_nodes
 
 #: The default penalty is this many times E / h (E the law's Young's modulus, h the
@@ -391,17 +392,14 @@ def write_wall_forces(history: Sequence, path: str | Path, first: int = 0) -> Pa
     """
     g = next((f.total.size for r in history for f in r.walls.values()), 0)
     header = ["step", "t", "wall", *(f"F_{c}" for c in "xyz"[:g]), "normal", "tangential"]
-    lines = [] if first else [",".join(header)]
+    lines = []
     for report in history[first:]:
         for name, force in report.walls.items():
             values = [*force.total, force.normal, np.linalg.norm(force.tangential)]
             lines.append(
                 ",".join([str(report.step), repr(report.t), name, *map(repr, map(float, values))])
             )
-    path = Path(path)
-    with path.open("a" if first else "w") as csv:
-        csv.write("".join(line + "\n" for line in lines))
-    return path
+    return write_csv_rows(path, header, lines, first)
 
 
 def plot_wall_forces(history: Sequence, path: str | Path, pyplot) -> Path:
