@@ -21,7 +21,9 @@ tiling the deformed body; each point's ``ΔF`` is the affine map of its domain's
 corners, so its volume and its domain's area change by the same factor. The stored
 deformation is thus that of one continuous piecewise-linear motion of the domains;
 the mean of the pieces' increments would drift further with the number of load
-steps (Cook, 5 N, n = 32, 80 steps: 1.3769 against 1.3910, converged 1.3542). The
+steps (Cook, 5 N, n = 32, 80 steps: 1.3769 against 1.3910, converged 1.3542). With
+P2 displacements and more than one point in a cell the points keep that mean
+instead (:func:`keeps_mean_increment`): there the corners' map is unstable. The
 point's position is its domain's centroid; its stress, history,
 velocity and acceleration are the share-weighted means of its pieces'. Averaging the
 history is exact for elastic laws and an approximation for plastic ones (each piece
@@ -84,14 +86,6 @@ MIN_SHARE = 1e-9
 #: with 0.2 alone both runs finish; with a quarter of the first quality alone the
 #: run without the ghost penalty stops at s/B = 0.98.
 RESET_QUALITY = 0.2
-#: Said at the second step of a P2/P1 run whose cells hold more than one point domain.
-P2_DENSE_DOMAINS_WARNING = (
-    "Simulation: 'up-p2p1' with point domains and more than one point in a cell was "
-    "found unstable over many steps: on Cook's membrane with three points per cell the "
-    "points' det F spreads and the body turns over after about 25 steps, whatever "
-    "their size; six per cell finished 160 steps with det F off 1 by up to 9 % "
-    "(docs/cell_crossing.md, 'Not yet'). One point per cell is stable."
-)
 #: Under MPI each rank cuts its points' domains by its own cells and its ghosts: the
 #: cells within this many layers of cells sharing a vertex with its own
 #: (:func:`fe_mpm.balance.with_vertex_layers`). A domain's corners lie about a cell
@@ -161,6 +155,10 @@ class PointDomains:
             its pieces' mean averaged volume change.
         shared: Whether the pieces share their point's increment
             (:mod:`fe_mpm.shared_increment`): the point then keeps it.
+        mean_increment: Whether each point keeps the share-weighted mean of its
+            pieces' increments ΔF instead of its corners' affine map (see
+            :func:`keeps_mean_increment`; its volume then no longer follows its
+            domain's area exactly).
 
     Attributes:
         corners: The domains' vertices (n, d + 1, d) in m.
@@ -174,6 +172,7 @@ class PointDomains:
         degree: int = 1,
         volume_average: bool = False,
         shared: bool = False,
+        mean_increment: bool = False,
     ):
         self.corners = _inside_the_grid(
             points, initial_domains(points, tracker.cell_vertices), tracker
@@ -181,6 +180,7 @@ class PointDomains:
         self.degree = degree
         self.volume_average = volume_average
         self.shared = shared
+        self.mean_increment = mean_increment
         self.active = False
         self._pieces: Pieces | None = None  # those of the step being taken
         self._moved = self.corners  # the corners after that step, once it converged
@@ -590,8 +590,8 @@ class PointDomains:
         old_edges = self.corners[:, 1:] - self.corners[:, :1]
         # The affine map of the corners: (new edges) = ΔF (old edges).
         dF = np.swapaxes(edges, 1, 2) @ np.linalg.inv(np.swapaxes(old_edges, 1, 2))
-        if self.shared:  # the pieces took the point's own increment
-            dF = mean(sub.F) @ np.linalg.inv(points.F)
+        if self.shared or self.mean_increment:  # the pieces took (shared) or the point
+            dF = mean(sub.F) @ np.linalg.inv(points.F)  # keeps their mean increment
         elif self.volume_average:
             # The pieces took the averaged volume change J̄ at their places: the point
             # keeps the corners' isochoric part and its pieces' mean J̄ (NB-VA).
@@ -612,6 +612,27 @@ class PointDomains:
         points.velocity, points.acceleration = mean(sub.velocity), mean(sub.acceleration)
         points.cell = self._next.cell[_heaviest(self._next, n)]  # where most of it lies
         self._ready = (corners, self._next)
+
+
+def keeps_mean_increment(degree: int, most_points_in_a_cell: int) -> bool:
+    """Whether points keep their pieces' mean ``ΔF`` rather than their corners' affine map.
+
+    Only with P2 displacements (``degree`` 2) and more than one point in some cell
+    at the start (``most_points_in_a_cell``, the largest count over every rank's
+    cells). A P2 increment is quadratic in a cell, which the corners of a domain
+    smaller than its cell do not follow: with three points per triangle (the
+    three-triangle fan about the centroid, :func:`~fe_mpm.tilings.equal_tiling`)
+    the corners' map lets the points' det F spread step by step until the body
+    turns over, whatever the step (Cook at 10 N, n = 8, 30 of 60 steps: det F
+    0.75–1.22 against 0.99–1.01 with the mean; n = 16, 160 steps: turned over,
+    against 2.6937, +2.1 %, and n = 32: +1.1 %). With four or six per cell the
+    mean ends as close as the corners do, on the other side (n = 16, 160 steps:
+    +0.75 and +0.58 % against −0.86 and −1.04 %), with det F within 1.2 and 2.4 %
+    of 1 against 5.9 and 9.2 %. A point alone in its cell, whose domain is the cell,
+    keeps its corners' map: there the mean ends 3.2 % high (n = 32, 40 steps)
+    against 0.6 % low. Measured 2026-12-05; ``docs/cell_crossing.md``.
+    """
+    return degree == 2 and most_points_in_a_cell > 1
 
 
 def step_with_domains(sim, t_new: float, rebin: bool):

@@ -29,8 +29,8 @@ from fe_mpm.boundary_points import BoundaryPointStep
 from fe_mpm.checks import check_finite, check_int, check_range
 from fe_mpm.domains import (
     DOMAIN_GHOST_LAYERS,
-    P2_DENSE_DOMAINS_WARNING,
     PointDomains,
+    keeps_mean_increment,
     step_with_domains,
 )
 from fe_mpm.dynamics import NewmarkDynamics
@@ -359,17 +359,15 @@ class Simulation:
             self.rebalance()
             self._track()
         if point_domains:
+            most = int(np.bincount(self.points.cell[self.points.cell >= 0]).max(initial=0))
             self.domains = PointDomains(
                 points,
                 self.domain_tracker,
                 self.spec.u_degree,
                 self.spec.volume_average,
                 self._shared,
+                keeps_mean_increment(self.spec.u_degree, parallel.largest(mesh.comm, most)),
             )
-        self._dense_p2_domains = False  # more than one P2 domain in a cell: unstable
-        if point_domains and self.spec.u_degree == 2:
-            most = int(np.bincount(self.points.cell[self.points.cell >= 0]).max(initial=0))
-            self._dense_p2_domains = parallel.largest(mesh.comm, most) > 1
         self._set_ghost_penalty()
         self.rebalancing = balance.RebalanceRule(model_checks.check_rebalance(rebalance_above))
         if self._rebalance_if_due(imbalance(mesh.comm, len(points))):
@@ -639,8 +637,6 @@ class Simulation:
         k, dt = self.step_number + 1, t_new - self.t
         if k == 2 and self.spec.u_degree == 2 and self.domains is None:
             warn(self.spec.multi_step_warning())
-        elif k == 2 and self._dense_p2_domains:
-            warn(P2_DENSE_DOMAINS_WARNING)
         # Track, lay out, pack, impose (and project the points' motion, in dynamics).
         forms, layout, R, J, bcs = self.prepare_step(t_new, rebin=rebin)
         if self.dynamics is not None and k == 1:
