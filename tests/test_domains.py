@@ -264,7 +264,7 @@ def test_point_domains_refuse_dropping_points():
         ("neo-hookean", "u", 2, 10, 10, 1e-3, 2e-3),
         # measured: 1.5e-3, 8e-4; standard −12.5 % (after 28 cut steps) and 66 %
         ("j2", "up", 2, 10, 10, 4e-3, 3e-3),
-        # measured: 3.7e-4, 8.6e-4 (the split law of the mixed forms)
+        # measured: 3.7e-4, 5.5e-4 (8.6e-4 before its points kept their pieces' mean ΔF)
         ("neo-hookean", "up-p2p1", 2, 10, 10, 1e-3, 3e-3),
         # measured: 8.7e-4, 1.2e-3; standard −1.4 % and 9 %
         ("neo-hookean", "u", 3, 4, 5, 3e-3, 3e-3),
@@ -302,9 +302,10 @@ def test_a_j2_block_in_taylor_hood_keeps_its_force_as_its_distorted_domains_flip
     keeps the tiling: the platen's force stays within 0.13 % of the exact one at
     every step (measured; 26 domains flipped, none redrawn). The same run with every
     distorted domain redrawn around its point instead, as until 2026-12-05, ends
-    0.78 % low (13 redrawn); on n = 10 and 20 steps, 12.3 % low against 0.5 %
-    (``benchmarks/platen_compression.py``; both measured before the points kept
-    their pieces' mean increment, when these were 34 flipped and 1.1 % low)."""
+    0.78 % low (13 redrawn). (Before the points kept their pieces' mean ΔF, this
+    run flipped 34 and ended 1.1 % low redrawn; on n = 10 and 20 steps,
+    ``benchmarks/platen_compression.py``, redrawn ended 12.3 % low and flipped
+    0.5 %, now 0.05 %.)"""
 
     def squeeze():
         sim = scenes.platen_compression(6, 3, law="j2", formulation="up-p2p1", point_domains=True)
