@@ -85,6 +85,7 @@ def cook(formulation, n, steps, load=1 / 16, margin=None, fail_at=(), restore=No
         "held": [r.held_points for r in reports],
         "repartitions": sim.repartitions,
         "ghost facets": ghosts,
+        "mean increment": sim.domains is not None and sim.domains.mean_increment,
     }
 
 def ghost_facets(sim):
@@ -334,6 +335,7 @@ try:
         result = {
             "up 16 8": cook("up", 16, 8, per_cell=3, **domains),
             "u-nbva 16 4": cook("u-nbva", 16, 4, **domains),
+            "up-p2p1 8 4": cook("up-p2p1", 8, 4, per_cell=3, **domains),
             "3D block": domain_block(5),
             "footing": domain_footing(1.0, 8),
             "corner": domain_corner(),
@@ -772,8 +774,9 @@ def test_a_feature_not_yet_distributed_is_refused_on_every_rank(tmp_path):
 @pytest.mark.slow
 def test_point_domains_give_the_serial_answer_on_three_ranks_and_restart_across_counts(tmp_path):
     """Point domains cut by each rank's cells and its ghosts, their pieces assembled
-    where they lie: Cook u-p at 5 N (three points per cell, 8 steps) and u-nbva (4
-    steps), a 3D block of domains falling onto the base (5 Newmark steps) on a grid
+    where they lie: Cook u-p at 5 N (three points per cell, 8 steps), u-nbva (4
+    steps) and P2/P1 (three points per cell, 4 steps, their pieces' mean increment
+    kept on every rank), a 3D block of domains falling onto the base (5 Newmark steps) on a grid
     repartitioned as it goes, the rough strip footing on h = 0.2 B (8 steps to
     s/B = 0.8; from the fourth some domains have distorted and are redrawn or
     flipped with a neighbour; on 3 ranks one pair spanned two, seen by a debug
@@ -798,6 +801,8 @@ def test_point_domains_give_the_serial_answer_on_three_ranks_and_restart_across_
                 np.testing.assert_allclose(got["tip"], want["tip"], rtol=1e-9, atol=0)
                 assert case == "corner" or got["migrated"] > 0, case
             assert result["footing"]["resets"] == serial["footing"]["resets"]
+            # Three points per P2 cell: every rank keeps the pieces' mean increment.
+            assert result["up-p2p1 8 4"]["mean increment"]
             assert result["3D block"]["repartitions"] > 1
     assert 0 in result["corner"]["points"]  # on 3 ranks a rank holds no point
     # Written after 4 steps on 2 ranks and restored on 3, the domains go on as in serial.
