@@ -359,14 +359,17 @@ class Simulation:
             self.rebalance()
             self._track()
         if point_domains:
-            most = int(np.bincount(self.points.cell[self.points.cell >= 0]).max(initial=0))
+            most = 0  # points in the fullest cell of any rank, which only P2 asks for
+            if self.spec.u_degree == 2:
+                here = np.bincount(self.points.cell[self.points.cell >= 0]).max(initial=0)
+                most = parallel.largest(mesh.comm, int(here))
             self.domains = PointDomains(
                 points,
                 self.domain_tracker,
                 self.spec.u_degree,
                 self.spec.volume_average,
                 self._shared,
-                keeps_mean_increment(self.spec.u_degree, parallel.largest(mesh.comm, most)),
+                keeps_mean_increment(self.spec.u_degree, most),
             )
         self._set_ghost_penalty()
         self.rebalancing = balance.RebalanceRule(model_checks.check_rebalance(rebalance_above))
