@@ -586,18 +586,21 @@ class PointDomains:
             return share_weighted_mean(values, p.owner, p.share, n)
 
         corners = self._moved
-        edges = corners[:, 1:] - corners[:, :1]
-        old_edges = self.corners[:, 1:] - self.corners[:, :1]
-        # The affine map of the corners: (new edges) = ΔF (old edges).
-        dF = np.swapaxes(edges, 1, 2) @ np.linalg.inv(np.swapaxes(old_edges, 1, 2))
-        if self.shared or self.mean_increment:  # the pieces took (shared) or the point
-            dF = mean(sub.F) @ np.linalg.inv(points.F)  # keeps their mean increment
-        elif self.volume_average:
-            # The pieces took the averaged volume change J̄ at their places: the point
-            # keeps the corners' isochoric part and its pieces' mean J̄ (NB-VA).
-            g = dF.shape[1]
-            averaged = mean(np.linalg.det(sub.F)) / np.linalg.det(points.F)
-            dF *= (averaged / np.linalg.det(dF))[:, None, None] ** (1.0 / g)
+        if self.shared or self.mean_increment:
+            # The pieces took the point's own increment (shared), or the point keeps
+            # their mean (keeps_mean_increment).
+            dF = mean(sub.F) @ np.linalg.inv(points.F)
+        else:
+            edges = corners[:, 1:] - corners[:, :1]
+            old_edges = self.corners[:, 1:] - self.corners[:, :1]
+            # The affine map of the corners: (new edges) = ΔF (old edges).
+            dF = np.swapaxes(edges, 1, 2) @ np.linalg.inv(np.swapaxes(old_edges, 1, 2))
+            if self.volume_average:
+                # The pieces took the averaged volume change J̄ at their places: the
+                # point keeps the corners' isochoric part and its pieces' mean J̄ (NB-VA).
+                g = dF.shape[1]
+                averaged = mean(np.linalg.det(sub.F)) / np.linalg.det(points.F)
+                dF *= (averaged / np.linalg.det(dF))[:, None, None] ** (1.0 / g)
         new = PointUpdate(
             du=corners.mean(axis=1) - self.corners.mean(axis=1),  # a point is its centroid
             dF=dF,
