@@ -12,7 +12,8 @@
 # dissipation of the highest frequencies. It measures a defect of standard MPM on
 # fluids: a fluid under pressure gains energy as its points cross cells
 # (`--usual-pressure`), and what `fe_mpm.pressure_by_parts` (the default for a
-# fluid in u-p) leaves of it. The numbers are in `docs/limitations.md`.
+# fluid in u-p and in `--formulation u-nbva`) leaves of it. The numbers are in
+# `docs/limitations.md`.
 #
 # **Scenes** (water, ρ₀ = 1000 kg/m³, K = 2 GPa, μ_v = 1e-3 Pa·s, `NewtonianFluid`;
 # a tank 1 m wide, slip walls; u-p without PPP, lumped mass, Bossak −0.3;

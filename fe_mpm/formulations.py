@@ -85,7 +85,8 @@ class GridFields:
         Q: The collapsed space of the scalar field (p or θ) and its dofs in ``W``,
             or None.
         p_start: The step's starting pressure p̄ (a P1 function on ``Q``), the
-            projection of :meth:`start_from_rest`; u-p formulations only.
+            projection of :meth:`start_from_rest`; mixed formulations only (u-p,
+            and NB-VA's, whose pressure is the law's at the points).
     """
 
     def __init__(self, mesh: dolfinx.mesh.Mesh, spec: FormulationSpec):
@@ -109,9 +110,9 @@ class GridFields:
             self.du, scalar_field = ufl.split(self.w)
             if spec.pressure:
                 self.p = scalar_field
-                self.p_start = dolfinx.fem.Function(self.Q[0], name="p_start")
             else:
                 self.volume_change = scalar_field
+            self.p_start = dolfinx.fem.Function(self.Q[0], name="p_start")
         else:
             self.du = self.w
         # Scalar subspaces, each collapsed once, to pin the dofs no point reaches.
@@ -175,10 +176,11 @@ class GridFields:
             stress: Their Cauchy stresses (n, 3, 3) in Pa.
         """
         self.w.x.array[:] = 0.0
-        if self.spec.pressure:
+        if self.spec.mixed:
             p_p = -np.trace(stress, axis1=1, axis2=2) / 3.0
             nodal, _ = mass_weighted_projection(self.Q[0], cells, bary, mass, p_p[:, None])
-            self.set_pressure(nodal[:, 0])
+            if self.spec.pressure:
+                self.set_pressure(nodal[:, 0])
             self.p_start.x.array[:] = nodal[:, 0]
 
     def pressure_volume(self, cells: np.ndarray, bary: np.ndarray, volume: np.ndarray) -> float:

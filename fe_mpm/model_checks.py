@@ -199,17 +199,17 @@ def pressure_by_parts(
 ) -> bool:
     """Whether the starting pressure is integrated by parts (:mod:`fe_mpm.pressure_by_parts`).
 
-    None: for a law that keeps no shape (a fluid) in a u-p formulation without point
-    domains. True needs a pressure field and no point domains.
+    None: for a law that keeps no shape (a fluid) in a mixed formulation (u-p, or NB-VA's
+    u-θ) without point domains. True needs such a formulation and no point domains.
     """
     if given is None:
-        return spec.pressure and not keeps_shape and not point_domains
+        return spec.mixed and not keeps_shape and not point_domains
     if not isinstance(given, bool | np.bool_):
         raise TypeError(f"Simulation: pressure_by_parts must be True, False or None, got {given!r}")
-    if given and not spec.pressure:
+    if given and not spec.mixed:
         raise ValueError(
-            f"Simulation: pressure_by_parts=True needs a pressure field: formulation "
-            f"'up', 'up-nostab' or 'up-p2p1', got {spec.name!r}"
+            f"Simulation: pressure_by_parts=True needs a pressure or an averaged "
+            f"volume: formulation 'up', 'up-nostab', 'up-p2p1' or 'u-nbva', got {spec.name!r}"
         )
     if given and point_domains:
         raise NotImplementedError(

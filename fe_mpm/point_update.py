@@ -14,11 +14,13 @@ from mpi4py import MPI
 import numpy as np
 
 from fe_mpm import parallel
+from fe_mpm._dolfinx import dolfinx
 from fe_mpm.dynamics import NewmarkDynamics
 from fe_mpm.errors import ConvergenceError
 from fe_mpm.markers import Markers
 from fe_mpm.particles import MaterialPoints
 from fe_mpm.step_forms import PointUpdate, UpdateLayout
+from fe_mpm.transfer import mass_weighted_projection
 
 
 def checked_update(
@@ -160,10 +162,37 @@ def volume_of_pressure(
     return J
 
 
+def volume_of_average(
+    space: dolfinx.fem.FunctionSpace,
+    cells: np.ndarray,
+    bary: np.ndarray,
+    mass: np.ndarray,
+    F: np.ndarray,
+) -> np.ndarray:
+    """The volume change J (n,) a fluid point takes in NB-VA: the points' own, averaged.
+
+    The points' det F, projected onto the nodes of ``space`` mass weighted and read back
+    at the points, ``J_p = Σ_I N_I(x_p) Σ_q N_I(x_q) m_q J_q / Σ_q N_I(x_q) m_q``. The
+    mass-weighted sum Σ m_p J_p is kept, so water of one density keeps its volume.
+
+    Args:
+        space: A scalar P1 space on the grid of the step's start.
+        cells: The points' cells there (n,).
+        bary: Their barycentric coordinates in them (n, g + 1).
+        mass: Their masses (n,) in kg.
+        F: Their deformation gradients after the step (n, g, g).
+    """
+    nodal, _ = mass_weighted_projection(space, cells, bary, mass, np.linalg.det(F)[:, None])
+    return np.einsum("nv,nv->n", bary, nodal[space.dofmap.list[cells], 0])
+
+
 def keep_volume_of_pressure(points: MaterialPoints, J: np.ndarray) -> None:
     """A fluid point keeps no shape: ``F = J^{1/g} I`` and ``V = V_0 J`` (after the update).
 
-    ``V_0 = V / det F`` is the point's reference volume, which the update kept.
+    ``V_0 = V / det F`` is the point's reference volume, which the update kept. ``J``
+    comes from the point's pressure (:func:`volume_of_pressure`, u-p) or from the
+    averaged volume changes (:func:`volume_of_average`, NB-VA); the stress stays the
+    step's converged one, and the next step's law starts from this J.
     """
     g = points.F.shape[1]
     points.volume *= J / np.linalg.det(points.F)

@@ -26,6 +26,13 @@ small.
 
 The :math:`\bar p` part is taken on the grid of the step's start (it is a load of
 the step, not linearised): the facet vector is assembled once per step.
+
+In u-p the rest is :math:`p - \chi\bar p` with p the pressure field
+(:func:`fe_mpm.forms.mixed_up.residual`). NB-VA (``"u-nbva"``) has no pressure
+field: its pressure is the law's at each point's averaged volume, and :math:`\bar p`
+the projection of the points' pressures; its points' Kirchhoff stress gives up
+:math:`\chi\bar p` the same way, :math:`\tau + \chi J \bar p I`
+(:func:`fe_mpm.forms.volume_average.without_start_pressure`).
 """
 
 from __future__ import annotations
@@ -46,8 +53,8 @@ class PressureByParts:
     """The χ = 1 cells of a step and the facet terms of p̄ on their boundary.
 
     Args:
-        fields: The grid unknown of a u-p formulation; its ``p_start`` holds p̄
-            once :meth:`GridFields.start_from_rest` has run.
+        fields: The grid unknown of a mixed formulation (u-p or NB-VA); its
+            ``p_start`` holds p̄ once :meth:`GridFields.start_from_rest` has run.
 
     Attributes:
         chi: χ as a DG0 function (owned and ghost cells), for the facet terms.

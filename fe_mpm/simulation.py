@@ -50,6 +50,7 @@ from fe_mpm.point_update import (
     apply_update,
     checked_update,
     keep_volume_of_pressure,
+    volume_of_average,
     volume_of_pressure,
 )
 from fe_mpm.pressure_by_parts import PressureByParts
@@ -182,9 +183,10 @@ class Simulation:
         pressure_by_parts: Whether the pressure at the step's start is integrated by
             parts in the cells whose neighbours all hold material
             (:mod:`fe_mpm.pressure_by_parts`), so that a flowing fluid does not gain
-            energy as its points cross cells; u-p formulations without point domains.
-            None (default): True for a law that keeps no shape (``NewtonianFluid``)
-            there, else False.
+            energy as its points cross cells; the u-p formulations and ``"u-nbva"``
+            (its pressure the law's, projected), without point domains. None
+            (default): True for a law that keeps no shape (``NewtonianFluid``) there,
+            else False.
         ghost_penalty: γ ≥ 0 of the ghost penalty on the facets of poorly filled
             cells (:mod:`fe_mpm.ghost`); 0: none. Default:
             :data:`fe_mpm.ghost.WITH_DOMAINS` with point domains in a static run (0.1
@@ -264,6 +266,7 @@ class Simulation:
         model_checks.check_dynamics(dynamic, formulation, damping, mass, bossak_alpha)
         self.spec = FORMULATIONS[formulation]
         self._volume_of_pressure = self.spec.pressure and not keeps_shape
+        self._volume_of_average = self.spec.volume_average and not keeps_shape
         model_checks.check_domains(point_domains, ghost_penalty, points, points_leaving, self.spec)
         model_checks.check_shared_increment(shared_increment, point_domains, self.spec)
         self._pressure_by_parts = model_checks.pressure_by_parts(
@@ -866,12 +869,17 @@ class Simulation:
         new = checked_update(
             values, forms.update_layout, pts, sizes, limit, step, t, self.mesh.comm
         )
-        # Kept apart from the pressure field's, a fluid point's own volume drifts and
-        # water at rest churns (fe_mpm.materials.fluid).
+        # Kept apart from the pressure field's (or, in NB-VA, the averaged volume's), a
+        # fluid point's own volume drifts and the water churns (fe_mpm.materials.fluid).
         if self._volume_of_pressure:
             J = volume_of_pressure(new, self.material.bulk_modulus, step, t, self.mesh.comm)
         apply_update(pts, new, self.markers, self.dynamics, dt, rm and rm.result.history)
         if self._volume_of_pressure:
+            keep_volume_of_pressure(pts, J)
+        if self._volume_of_average:
+            J = volume_of_average(
+                self.fields.Q[0], layout.cell, self._current.bary, pts.mass, pts.F
+            )
             keep_volume_of_pressure(pts, J)
 
     def _write_output(self, force: bool = False) -> None:

@@ -118,7 +118,7 @@ class StepForms:
         step_length: The step's length Δt (s) as a constant, for rate-dependent laws.
         shared_increment: Whether a point domain's pieces share its increment.
         pressure_by_parts: Whether the starting pressure is integrated by parts in
-            the cells of χ = 1 (:mod:`fe_mpm.pressure_by_parts`; u-p only).
+            the cells of χ = 1 (:mod:`fe_mpm.pressure_by_parts`; u-p and NB-VA).
     """
 
     def __init__(
@@ -272,13 +272,18 @@ class StepForms:
             w, w_theta = ufl.TestFunctions(fields.W)
         else:
             w = ufl.TestFunction(fields.W)
+        kirchhoff = lambda F: material.kirchhoff(F, state)  # noqa: E731
+        if self.interior is not None:
+            kirchhoff = volume_average.without_start_pressure(
+                kirchhoff, self.interior, q.at_points(fields.p_start)
+            )
         R = displacement.residual(
             fields.du,
             w,
             q,
             self.F_n,
             self.density,
-            lambda F: material.kirchhoff(F, state),
+            kirchhoff,
             conditions.body_force,
             conditions.traction_terms,
             material_increment=self.dF if averaged else None,
@@ -288,6 +293,8 @@ class StepForms:
             R += volume_average.projection_residual(
                 q, self.dF_grid, fields.volume_change, w_theta, self.second_moment
             )
+        if self.interior is not None:
+            R += q.sum(self.interior * ufl.dot(q.at_points(w), ufl.grad(fields.p_start)))
         return R
 
     def _field_mean_stress(self, dF, fields: GridFields) -> ufl.core.expr.Expr | None:

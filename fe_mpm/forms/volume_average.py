@@ -95,3 +95,25 @@ def projection_residual(
         second_moment * ufl.grad(volume_change), ufl.grad(test)
     )
     return q.sum(lumped_product - (ufl.det(dF) - 1.0) * q.at_points(test))
+
+
+def without_start_pressure(kirchhoff, chi: ufl.Coefficient, p_start: ufl.core.expr.Expr):
+    """τ(F) + χ det F p̄ I: the law's Kirchhoff stress less the step's starting pressure p̄.
+
+    Where χ = 1, p̄ is integrated by parts instead (:mod:`fe_mpm.pressure_by_parts`);
+    NB-VA has no pressure field to split, so the points' stress gives it up.
+
+    Args:
+        kirchhoff: Callable F (g x g) -> τ (Pa, g x g), the law at the points.
+        chi: χ of each point's cell (slot field, 1 or 0).
+        p_start: p̄ at the points (Pa, compression positive).
+
+    Returns:
+        The callable F -> τ + χ det F p̄ I.
+    """
+
+    def reduced(F):
+        g = ufl.shape(F)[0]
+        return kirchhoff(F) + chi * ufl.det(F) * p_start * ufl.Identity(g)
+
+    return reduced
