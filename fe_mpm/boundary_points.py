@@ -23,6 +23,16 @@ from fe_mpm.tracker import Tracker
 #: length (3 a step at the test's smaller load). Cells filled more than a tenth
 #: (the tip's others: 0.13–0.74) are not passed over.
 LOAD_MIN_FILL = 0.1
+#: A P2 field read this far outside a cell (its smallest barycentric coordinate below
+#: minus this) bends away from the material, and a PointDirichlet whose points read it
+#: there in more than :data:`P2_FAR_SHARE` of its points in a step is warned about (once
+#: a run). Measured 2026-12-05 (``docs/cell_crossing.md``, Not yet): a J2 block on a gmsh
+#: grid laid over it, sheared by point platens, held by P2/P1 to 1.5 N where P1 holds
+#: 22.4 N, 40–88 % of the platens' points reading more than a fifth of a cell out; the
+#: squeezed block of ``tests/test_domains.py``, whose P2/P1 force is exact to 0.05 %,
+#: 2–6 % of its points.
+P2_FAR_READ = 0.2
+P2_FAR_SHARE = 0.25
 
 
 class BoundaryPoints:
@@ -130,26 +140,31 @@ class BoundaryPointStep:
     Args:
         points: All boundary points of the simulation.
         tracker: The grid's point locator.
+        degree: The displacement's polynomial degree (1 or 2).
     """
 
-    def __init__(self, points: BoundaryPoints, tracker: Tracker):
-        self.points, self.tracker = points, tracker
+    def __init__(self, points: BoundaryPoints, tracker: Tracker, degree: int = 1):
+        self.points, self.tracker, self.degree = points, tracker, degree
         self.layout: SlotLayout | None = None
         self._nslot: int | None = None  # slots per entity, kept while they suit
         self._active = np.zeros(len(points), dtype=bool)
         self._gap = np.zeros((0, points.x.shape[1]))
         self._warned = False
+        self._warned_far = False
 
     @classmethod
     def of(
-        cls, conditions: Sequence[PointDirichlet | PointTraction], tracker: Tracker
+        cls,
+        conditions: Sequence[PointDirichlet | PointTraction],
+        tracker: Tracker,
+        degree: int = 1,
     ) -> BoundaryPointStep | None:
         """The boundary points of ``conditions`` on the grid of ``tracker``; None if none."""
         if not conditions:
             return None
         points = BoundaryPoints(conditions, tracker.mesh.geometry.dim)
         _check_same_on_every_rank(tracker.mesh.comm, points)
-        return cls(points, tracker)
+        return cls(points, tracker, degree)
 
     def locate(
         self, occupied_cells: np.ndarray, t_new: float, fill: np.ndarray | None = None
@@ -198,9 +213,39 @@ class BoundaryPointStep:
                 f"to t = {t_new:g} (first at x = {pp.x[first]}); their load is not applied."
             )
         cells = cells[self._active]
+        if self.degree == 2 and not self._warned_far:
+            self._warn_far_reading(cells, t_new)
         self._nslot = slot_count(np.bincount(cells), self._nslot, tracker.mesh.comm)
         self.layout = SlotLayout.from_cells(cells, self._nslot)
         return self.layout
+
+    def _warn_far_reading(self, cells: np.ndarray, t_new: float) -> None:
+        """Warn (once) where a PointDirichlet reads a P2 field far outside its cells.
+
+        Args:
+            cells: The active points' cells on this rank, in the order of ``_active``.
+            t_new: The step's end time, for the message.
+        """
+        pp, comm = self.points, self.tracker.mesh.comm
+        active = np.flatnonzero(self._active)
+        outside = self.tracker.barycentric(pp.x[active], cells).min(axis=1)
+        held = ~pp.loaded[active]
+        n = len(pp.conditions)
+        counted = np.bincount(pp.owner[active[held]], minlength=n)
+        far = np.bincount(pp.owner[active[held & (outside < -P2_FAR_READ)]], minlength=n)
+        counted, far = parallel.total(comm, counted), parallel.total(comm, far)
+        share = np.divide(far, counted, out=np.zeros(n), where=counted > 0)
+        if np.any(share > P2_FAR_SHARE):
+            self._warned_far = True
+            k = int(np.argmax(share))
+            warn(
+                f"{far[k]} of the {counted[k]} points of PointDirichlet "
+                f"{pp.conditions[k].name!r} acting at the step to t = {t_new:g} read the "
+                f"P2 displacement more than {P2_FAR_READ:g} of a cell outside the cells "
+                "that hold material, where a quadratic field bends away from the body: "
+                "the hold on it may be lost (docs/limitations.md). Fit the grid's lines "
+                "to the edges these points hold, or take a P1 formulation."
+            )
 
     def _active_anywhere(self) -> np.ndarray:
         """Whether each point takes part in the step on some rank (N,)."""

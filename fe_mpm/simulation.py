@@ -448,7 +448,9 @@ class Simulation:
             self.fields.du, self._given["walls"], mesh, facet_tags, self.material
         )
         if self._boundary is None:
-            self._boundary = BoundaryPointStep.of(self._given["boundary"], self.tracker)
+            self._boundary = BoundaryPointStep.of(
+                self._given["boundary"], self.tracker, self.spec.u_degree
+            )
         else:
             self._boundary.tracker = self.tracker
         ppp = None

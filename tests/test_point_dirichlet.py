@@ -13,10 +13,13 @@ to a few per cent, and the test allows for that; the stroke itself is exact to
 the penalty gap.
 """
 
+import warnings
+
 import numpy as np
 import pytest
 
 import fe_mpm
+from fe_mpm import meshes
 from fe_mpm.meshes import rectangle_mesh
 
 E, NU, STRETCH = 10.0, 0.3, 0.9
@@ -244,3 +247,43 @@ def test_a_tip_load_on_a_level_set_body_does_not_throw_the_nodes_of_a_sliver():
     np.testing.assert_allclose(reports[-1].reactions["tip"], [0.0, -1.0, 0.0], atol=1e-12)
     with pytest.raises(fe_mpm.ConvergenceError):
         _cantilever_with_a_tip_load(0.0)
+
+
+@pytest.mark.parametrize("fitted", [False, True])
+def test_p2_platen_points_read_far_outside_the_body_are_warned_about(fitted):
+    """A block 1 m square held by point platens on its top and bottom edges. On a grid
+    whose lines cut those edges mid-cell, half the base's points read the P2/P1 field
+    of a seeded cell from more than a fifth of a cell outside it (measured: 5 of 10),
+    where a quadratic field bends away (a user's sheared J2 block on such a grid held
+    1.5 N where P1 held 22.4 N): warned, naming the condition. On a grid fitted to the
+    edges, and in P1, nothing is said."""
+    offset = 0.1 if fitted else 0.0
+    mesh = meshes.rectangle_mesh(
+        (-0.3 - offset, -0.3 - offset), (1.3 - offset, 1.3 - offset), (8, 8)
+    )
+    centre = meshes.cell_centroids(mesh)
+    inside = (centre > 0.0) & (centre < 1.0)
+    x = np.linspace(0.05, 0.95, 10)
+    platens = [
+        fe_mpm.PointDirichlet(
+            name, np.column_stack([x, np.full(10, y)]), np.full(10, 0.1), value, penalty=1e6
+        )
+        for name, y, value in (
+            ("base", 0.0, lambda t: np.zeros(2)),
+            ("top", 1.0, lambda t: np.array([0.1 * t, 0.0])),
+        )
+    ]
+    for formulation in ("up-p2p1", "up"):
+        points = fe_mpm.seed(mesh, per_cell=3, cells=np.flatnonzero(inside.all(axis=1)))
+        sim = fe_mpm.Simulation(
+            mesh, points, fe_mpm.NeoHookean(1000.0, 0.3), formulation, point_dirichlet=platens
+        )
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            sim.run(1.0, 1, progress=False)
+        far = [str(w.message) for w in caught if "bends away from the body" in str(w.message)]
+        if formulation == "up-p2p1" and not fitted:
+            assert len(far) == 1 and "of PointDirichlet 'base'" in far[0], far
+            assert "Fit the grid's lines" in far[0]
+        else:
+            assert far == [], far
