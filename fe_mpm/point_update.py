@@ -167,23 +167,40 @@ def volume_of_average(
     cells: np.ndarray,
     bary: np.ndarray,
     mass: np.ndarray,
-    F: np.ndarray,
+    J: np.ndarray,
+    step: int,
+    t: float,
 ) -> np.ndarray:
-    """The volume change J (n,) a fluid point takes in NB-VA: the points' own, averaged.
+    """The volume change (n,) a fluid point takes in NB-VA: the points' own, averaged.
 
-    The points' det F, projected onto the nodes of ``space`` mass weighted and read back
-    at the points, ``J_p = Σ_I N_I(x_p) Σ_q N_I(x_q) m_q J_q / Σ_q N_I(x_q) m_q``. The
-    mass-weighted sum Σ m_p J_p is kept, so water of one density keeps its volume.
+    The points' volume changes J, projected onto the nodes of ``space`` mass weighted and
+    read back at the points, ``Σ_I N_I(x_p) Σ_q N_I(x_q) m_q J_q / Σ_q N_I(x_q) m_q``.
+    The mass-weighted sum Σ m_p J_p is kept, so water of one density keeps its volume.
 
     Args:
         space: A scalar P1 space on the grid of the step's start.
         cells: The points' cells there (n,).
         bary: Their barycentric coordinates in them (n, g + 1).
         mass: Their masses (n,) in kg.
-        F: Their deformation gradients after the step (n, g, g).
+        J: Their own volume changes det F after the step (n,).
+        step: The step's number, for messages.
+        t: Its end time, for messages.
+
+    Raises:
+        ConvergenceError: An averaged J ≤ 0 (a point held outside its cell reads the
+            nodes with weights of both signs); nothing was updated.
     """
-    nodal, _ = mass_weighted_projection(space, cells, bary, mass, np.linalg.det(F)[:, None])
-    return np.einsum("nv,nv->n", bary, nodal[space.dofmap.list[cells], 0])
+    nodal, _ = mass_weighted_projection(space, cells, bary, mass, J[:, None])
+    averaged = np.einsum("nv,nv->n", bary, nodal[space.dofmap.list[cells], 0])
+    error = None
+    if np.any(averaged <= 0.0):
+        bad = int(np.flatnonzero(averaged <= 0.0)[0])
+        error = ConvergenceError(
+            f"the averaged volume change at fluid point {bad} is {averaged[bad]:.3g} ≤ 0 in "
+            f"step {step} (t = {t:g}); take smaller steps. Nothing was updated."
+        )
+    parallel.raise_together(space.mesh.comm, error)
+    return averaged
 
 
 def keep_volume_of_pressure(points: MaterialPoints, J: np.ndarray) -> None:

@@ -848,12 +848,18 @@ class Simulation:
     def _consistent_initial_acceleration(
         self, forms: StepForms, layout: SlotLayout, R, bcs: list, dt: float
     ) -> None:
-        """Start from accelerations in equilibrium (:meth:`NewmarkDynamics.start`)."""
+        """Start from accelerations in equilibrium (:meth:`NewmarkDynamics.start`).
+
+        The residual at rest is Newton's, with the starting pressure's facet terms
+        (until 2026-12-05 they were left out here, so water started at its
+        hydrostatic pressure was thrown by its first step).
+        """
+        internal_force = self._internal_force(R)
 
         def residual_at_rest() -> np.ndarray:
             self._initial_guess()
             self.refresh_material(tangent=False)
-            return R.assemble_vector()
+            return internal_force()
 
         self.dynamics.start(
             residual_at_rest, forms.mass_matrix, layout, bcs, self._current.bary, self.points, dt
@@ -875,13 +881,12 @@ class Simulation:
         # fluid point's own volume drifts and the water churns (fe_mpm.materials.fluid).
         if self._volume_of_pressure:
             J = volume_of_pressure(new, self.material.bulk_modulus, step, t, self.mesh.comm)
+        elif self._volume_of_average:
+            own = np.linalg.det(new.dF) * np.linalg.det(pts.F)
+            bary = self._current.bary
+            J = volume_of_average(self.fields.Q[0], layout.cell, bary, pts.mass, own, step, t)
         apply_update(pts, new, self.markers, self.dynamics, dt, rm and rm.result.history)
-        if self._volume_of_pressure:
-            keep_volume_of_pressure(pts, J)
-        if self._volume_of_average:
-            J = volume_of_average(
-                self.fields.Q[0], layout.cell, self._current.bary, pts.mass, pts.F
-            )
+        if self._volume_of_pressure or self._volume_of_average:
             keep_volume_of_pressure(pts, J)
 
     def _write_output(self, force: bool = False) -> None:
