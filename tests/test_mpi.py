@@ -916,3 +916,14 @@ def test_demos_run_unchanged_on_two_ranks_and_print_the_serial_summary(demo, arg
     assert shared["check_passed"] and serial["check_passed"]
     # The column's stress error and the block's slide (a sum over every point).
     assert shared[key] == pytest.approx(serial[key], rel=1e-10, abs=0)
+
+
+def test_the_dam_break_in_nbva_gives_the_serial_surge_on_two_ranks():
+    """NB-VA water (its points take the volume changes averaged over the nodes, which
+    sums over the ranks, and the starting pressure by parts): the dam break to
+    T = 0.6 on two ranks, the serial steps, front and height (measured to 5e-12)."""
+    args = ("--formulation", "u-nbva", "--T-end", "0.6", "--no-output")
+    serial, shared = _demo_json("dam_break.py", 1, *args), _demo_json("dam_break.py", 2, *args)
+    assert shared["points"] == serial["points"] and shared["steps"] == serial["steps"]
+    for key in ("front_Z", "height_H"):
+        np.testing.assert_allclose(shared[key], serial[key], rtol=1e-10, atol=0)
