@@ -150,15 +150,15 @@ def volume_of_pressure(
         ConvergenceError: A pressure of K or more (J ≤ 0); nothing was updated.
     """
     J = 1.0 + np.trace(new.stress, axis1=1, axis2=2) / (3.0 * bulk_modulus)
-    error = None
-    if np.any(J <= 0.0):
-        bad = int(np.flatnonzero(J <= 0.0)[0])
-        error = ConvergenceError(
+    _refuse_vanishing_volumes(
+        J,
+        lambda bad: (
             f"the pressure at fluid point {bad} reaches its bulk modulus K = "
             f"{bulk_modulus:g} Pa in step {step} (t = {t:g}), so its volume would vanish; "
             "take smaller steps or a larger K. Nothing was updated."
-        )
-    parallel.raise_together(comm, error)
+        ),
+        comm,
+    )
     return J
 
 
@@ -192,15 +192,27 @@ def volume_of_average(
     """
     nodal, _ = mass_weighted_projection(space, cells, bary, mass, J[:, None])
     averaged = np.einsum("nv,nv->n", bary, nodal[space.dofmap.list[cells], 0])
-    error = None
-    if np.any(averaged <= 0.0):
-        bad = int(np.flatnonzero(averaged <= 0.0)[0])
-        error = ConvergenceError(
-            f"the averaged volume change at fluid point {bad} is {averaged[bad]:.3g} ≤ 0 in "
-            f"step {step} (t = {t:g}); take smaller steps. Nothing was updated."
-        )
-    parallel.raise_together(space.mesh.comm, error)
+    _refuse_vanishing_volumes(
+        averaged,
+        lambda bad: (
+            f"the averaged volume change at fluid point {bad} is "
+            f"{averaged[bad]:.3g} ≤ 0 in step {step} (t = {t:g}); take smaller steps. "
+            "Nothing was updated."
+        ),
+        space.mesh.comm,
+    )
     return averaged
+
+
+def _refuse_vanishing_volumes(J: np.ndarray, message, comm: MPI.Comm) -> None:
+    """Raise ConvergenceError on every rank if some J (n,) is ≤ 0 on any.
+
+    ``message(p)`` says what happened to the first such point p of this rank.
+    """
+    error = None
+    if np.any(J <= 0.0):
+        error = ConvergenceError(message(int(np.flatnonzero(J <= 0.0)[0])))
+    parallel.raise_together(comm, error)
 
 
 def keep_volume_of_pressure(points: MaterialPoints, J: np.ndarray) -> None:
