@@ -44,7 +44,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 COLLAPSE = [
     "demos/column_collapse.py", "--aspect", "3", "--h", "0.005", "--points-per-cell", "3",
-    "--t-end", "0.1", "--no-output",
+    "--t-end", "0.1", "--damping", "0", "--no-output",
 ]  # fmt: skip
 SCENES = {
     "footing": (
