@@ -97,6 +97,11 @@ def test_a_fluid_needs_its_shear_scale_only_where_something_uses_it():
         still_water(1, ppp_alpha=1.0, shear_scale=None)
 
 
+#: ``water_in_tank``'s default shear scale, G* = 2 ρ g d (the dam break demo's); None
+#: is a value of its own there (the fluid without one).
+STAGNATION_SCALE = object()
+
+
 def water_in_tank(
     mesh,
     points,
@@ -104,7 +109,7 @@ def water_in_tank(
     depth,
     rho,
     lid=None,
-    shear_scale="2 rho g depth",
+    shear_scale=STAGNATION_SCALE,
     formulation="up",
     **options,
 ) -> fe_mpm.Simulation:
@@ -112,7 +117,7 @@ def water_in_tank(
     floor (and a slip lid at height ``lid``), under gravity, in ``formulation``: lumped
     mass, Bossak −0.3. ``options`` go to :class:`fe_mpm.Simulation`."""
     g = 9.81
-    if shear_scale == "2 rho g depth":
+    if shear_scale is STAGNATION_SCALE:
         shear_scale = 2 * rho * g * depth
 
     def floor(x):
