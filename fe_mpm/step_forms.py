@@ -294,7 +294,7 @@ class StepForms:
                 q, self.dF_grid, fields.volume_change, w_theta, self.second_moment
             )
         if self.interior is not None:
-            R += q.sum(self.interior * ufl.dot(q.at_points(w), ufl.grad(fields.p_start)))
+            R += loads_form.start_pressure_gradient_work(w, q, self.interior, fields.p_start)
         return R
 
     def _field_mean_stress(self, dF, fields: GridFields) -> ufl.core.expr.Expr | None:

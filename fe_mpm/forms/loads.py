@@ -42,3 +42,26 @@ def external_work(
         terms.append(q.sum(density * ufl.dot(body_force, q.at_points(w, u_degree))))
     terms += [ufl.dot(t, w) * ds for t, ds in tractions]
     return sum(terms[1:], terms[0]) if terms else None
+
+
+def start_pressure_gradient_work(
+    w: ufl.core.expr.Expr,
+    q: MaterialPointQuadrature,
+    chi: ufl.Coefficient,
+    p_start: ufl.Coefficient,
+    u_degree: int = 1,
+) -> ufl.Form:
+    """Σ_p V_p χ w · ∇p̄: the volume part of the starting pressure taken by parts.
+
+    Added to the residual where the formulation's stress gives up χ p̄
+    (:mod:`fe_mpm.pressure_by_parts`, whose facet terms complete it); p̄ is a load of
+    the step on the grid of its start, not linearised.
+
+    Args:
+        w: Displacement test function (of degree ``u_degree``).
+        q: Material-point quadrature of the step.
+        chi: χ of each point's cell (slot field, 1 or 0).
+        p_start: The step's starting pressure p̄ (Pa, P1 on the grid).
+        u_degree: Polynomial degree of the displacement.
+    """
+    return q.sum(chi * ufl.dot(q.at_points(w, u_degree), ufl.grad(p_start)))

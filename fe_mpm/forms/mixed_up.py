@@ -50,7 +50,7 @@ import numpy as np
 import ufl
 
 from fe_mpm._dolfinx import dolfinx
-from fe_mpm.forms.loads import external_work
+from fe_mpm.forms.loads import external_work, start_pressure_gradient_work
 from fe_mpm.materials import embed_3d
 from fe_mpm.quadrature import OCCUPIED, MaterialPointQuadrature
 
@@ -176,7 +176,7 @@ def residual(
     stress, volume = point_terms(material, dF, F_n, p_p, state, p_stress)
     R = mpq.sum(ufl.inner(stress, mpq.grad_at_points(w, u_degree)))
     if by_parts is not None:
-        R += mpq.sum(chi * ufl.dot(mpq.at_points(w, u_degree), ufl.grad(p_start)))
+        R += start_pressure_gradient_work(w, mpq, chi, p_start, u_degree)
     R -= mpq.sum(volume * mpq.at_points(q_test))
     if ppp is not None:
         x = ufl.SpatialCoordinate(mpq.mesh)
