@@ -85,11 +85,20 @@ class GridFields:
         Q: The collapsed space of the scalar field (p or θ) and its dofs in ``W``,
             or None.
         p_start: The step's starting pressure p̄ (a P1 function on ``Q``), the
-            projection of :meth:`start_from_rest`; mixed formulations only (u-p,
-            and NB-VA's, whose pressure is the law's at the points).
+            projection of :meth:`start_from_rest`: in u-p, and in NB-VA (whose
+            pressure is the law's at the points) where ``start_pressure`` asks for
+            it; else None.
+
+    Args:
+        mesh: The background grid.
+        spec: The formulation.
+        start_pressure: Whether NB-VA needs p̄ (its starting pressure taken by
+            parts, :mod:`fe_mpm.pressure_by_parts`); u-p always projects it.
     """
 
-    def __init__(self, mesh: dolfinx.mesh.Mesh, spec: FormulationSpec):
+    def __init__(
+        self, mesh: dolfinx.mesh.Mesh, spec: FormulationSpec, start_pressure: bool = False
+    ):
         self.spec = spec
         g = mesh.geometry.dim
         cell = mesh.topology.cell_name()
@@ -105,14 +114,15 @@ class GridFields:
             self.Q = None
         self.w = dolfinx.fem.Function(self.W, name="unknown")
         self._scalar_element = basix.ufl.element("Lagrange", cell, spec.u_degree)
-        self.p = self.volume_change = None
+        self.p = self.volume_change = self.p_start = None
         if spec.mixed:
             self.du, scalar_field = ufl.split(self.w)
             if spec.pressure:
                 self.p = scalar_field
             else:
                 self.volume_change = scalar_field
-            self.p_start = dolfinx.fem.Function(self.Q[0], name="p_start")
+            if spec.pressure or start_pressure:
+                self.p_start = dolfinx.fem.Function(self.Q[0], name="p_start")
         else:
             self.du = self.w
         # Scalar subspaces, each collapsed once, to pin the dofs no point reaches.
@@ -176,7 +186,7 @@ class GridFields:
             stress: Their Cauchy stresses (n, 3, 3) in Pa.
         """
         self.w.x.array[:] = 0.0
-        if self.spec.mixed:
+        if self.p_start is not None:
             p_p = -np.trace(stress, axis1=1, axis2=2) / 3.0
             nodal, _ = mass_weighted_projection(self.Q[0], cells, bary, mass, p_p[:, None])
             if self.spec.pressure:

@@ -435,7 +435,7 @@ class Simulation:
             self.tracking = PointTracking(self.tracker, self._given["points_leaving"])
         else:
             self.tracking.tracker = self.tracker
-        self.fields = GridFields(mesh, self.spec)
+        self.fields = GridFields(mesh, self.spec, start_pressure=self._pressure_by_parts)
         self.dynamics = None
         if self.dynamic:
             damping, bossak_alpha, petsc_options, passes = self._given["dynamics"]
