@@ -126,7 +126,9 @@ class Dirichlet:
     """Prescribed displacement on grid nodes.
 
     Args:
-        where: Facet tag or boundary marker.
+        where: Facet tag or boundary marker. A marker that holds no whole exterior
+            facet but some boundary vertices holds those nodes (a corner pinned
+            against rigid motion; see :func:`dirichlet_entities`).
         value: Total prescribed displacement (m) as a function of time ``t``, or
             a constant. The grid is reset every step, so the step from ``t_n`` to
             ``t_{n+1}`` imposes ``value(t_{n+1}) − value(t_n)`` on the grid nodes
@@ -241,9 +243,43 @@ def boundary_facets(
         raise ValueError(
             f"{owner}: its boundary marker selects no facet on the grid's boundary (a marker "
             "is called with the facet vertices' coordinates x, shape (3, n), and must be true "
-            "at every vertex of a facet on the grid's outer boundary)"
+            "at every vertex of a facet on the grid's outer boundary"
+            + (
+                "; a Dirichlet marker true only at some boundary vertices holds those"
+                if owner.startswith("Dirichlet")
+                else ""
+            )
+            + ")"
         )
     return np.asarray(facets, dtype=np.int32)
+
+
+def dirichlet_entities(
+    mesh: dolfinx.mesh.Mesh,
+    where: Where,
+    facet_tags: dolfinx.mesh.MeshTags | None,
+    owner: str = "Dirichlet",
+) -> tuple[int, np.ndarray]:
+    """The boundary entities a :class:`Dirichlet` condition holds: ``(dim, local indices)``.
+
+    The exterior facets selected by ``where`` (dimension tdim − 1); a marker that holds
+    no whole facet but some vertices of the boundary selects those vertices (dimension
+    0), as ``dolfinx.fem.locate_dofs_geometrical`` would: a corner pinned against
+    rigid motion, ``lambda x: np.isclose(x[0], 0) & np.isclose(x[1], 0)``.
+
+    Raises:
+        ValueError: As :func:`boundary_facets`, when neither facets nor vertices are
+            selected.
+    """
+    if callable(where):
+        fdim = mesh.topology.dim - 1
+        facets = dolfinx.mesh.locate_entities_boundary(mesh, fdim, where)
+        if not any_rank(mesh.comm, facets.size > 0):
+            vertices = dolfinx.mesh.locate_entities_boundary(mesh, 0, where)
+            if any_rank(mesh.comm, vertices.size > 0):
+                mesh.topology.create_connectivity(0, mesh.topology.dim)
+                return 0, np.asarray(vertices, dtype=np.int32)
+    return mesh.topology.dim - 1, boundary_facets(mesh, where, facet_tags, owner)
 
 
 @dataclass(frozen=True)

@@ -16,7 +16,7 @@ import ufl
 
 from fe_mpm import parallel
 from fe_mpm._dolfinx import dolfinx
-from fe_mpm.boundary import Dirichlet, Traction, boundary_facets
+from fe_mpm.boundary import Dirichlet, Traction, boundary_facets, dirichlet_entities
 from fe_mpm.checks import check_range
 from fe_mpm.errors import warn
 from fe_mpm.formulations import GridFields, constrained_space
@@ -88,14 +88,14 @@ class GridConditions:
         self.dirichlet = []  # (spec, value Function, DirichletBC)
         self.dirichlet_nodes = []  # grid nodes of each condition's facets
         for k, spec in enumerate(dirichlet):
-            facets = boundary_facets(mesh, spec.where, facet_tags, f"Dirichlet {k}")
+            dim, entities = dirichlet_entities(mesh, spec.where, facet_tags, f"Dirichlet {k}")
             if spec.component is not None:
                 check_range(f"Dirichlet {k}", "component", spec.component, lo=0, hi=g - 1)
             if spec.profile is None and not callable(spec.value):
                 _check_dirichlet_size(k, spec, spec.at(0.0).size, g)
-            self.dirichlet.append((spec, *self._dirichlet_bc(spec.component, facets)))
+            self.dirichlet.append((spec, *self._dirichlet_bc(spec.component, dim, entities)))
             self.dirichlet_nodes.append(
-                np.unique(dolfinx.mesh.entities_to_geometry(mesh, fdim, facets))
+                np.unique(dolfinx.mesh.entities_to_geometry(mesh, dim, entities))
             )
 
         self.tractions = []  # (spec, Constant)
@@ -137,17 +137,16 @@ class GridConditions:
             self.body_force = dolfinx.fem.Constant(mesh, self._body_force_value.copy())
         self._body_force_scale = body_force_scale
 
-    def _dirichlet_bc(self, component: int | None, facets: np.ndarray):
-        """The value Function of a condition and its DirichletBC on ``facets``."""
-        fdim = self.mesh.topology.dim - 1
+    def _dirichlet_bc(self, component: int | None, dim: int, entities: np.ndarray):
+        """The value Function of a condition and its DirichletBC on the ``dim``-entities."""
         target, is_sub = constrained_space(self.fields.U, component)
         if is_sub:
             collapsed, _ = target.collapse()
             value = dolfinx.fem.Function(collapsed)
-            dofs = dolfinx.fem.locate_dofs_topological((target, collapsed), fdim, facets)
+            dofs = dolfinx.fem.locate_dofs_topological((target, collapsed), dim, entities)
             return value, dolfinx.fem.dirichletbc(value, dofs, target)
         value = dolfinx.fem.Function(target)
-        dofs = dolfinx.fem.locate_dofs_topological(target, fdim, facets)
+        dofs = dolfinx.fem.locate_dofs_topological(target, dim, entities)
         return value, dolfinx.fem.dirichletbc(value, dofs)
 
     @property

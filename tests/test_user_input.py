@@ -252,3 +252,37 @@ def test_taylor_hood_warns_from_its_second_step():
     ) as record:
         sim.step(1.0)
     assert record[0].filename == __file__  # the user's line, not fe_mpm's
+
+
+def test_a_dirichlet_marker_true_only_at_a_corner_pins_that_vertex():
+    """The FEniCS idiom against rigid motion: a marker true at one corner holds that node
+    (it selects no facet; until 2026-12-05 it was refused as selecting nothing). A block
+    on an x-roller, its corner (0, 0) held in y, pulled along x by 10 kPa: uniaxial
+    stress, and the block narrows towards y = 0."""
+    mesh = _mesh()
+    points = fe_mpm.seed(mesh, per_cell=3)
+    y0 = points.x[:, 1].copy()
+    sim = fe_mpm.Simulation(
+        mesh,
+        points,
+        fe_mpm.NeoHookean(1e7, 0.3),
+        dirichlet=[
+            fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0), component=0),
+            fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0) & np.isclose(x[1], 0.0), component=1),
+        ],
+        tractions=[fe_mpm.Traction(lambda x: np.isclose(x[0], 1.0), (1e4, 0.0))],
+    )
+    sim.step(1.0)
+    # Cauchy stress on the stretched block: 1e4 Pa to the strain's order (1e-3).
+    assert np.allclose(points.stress[:, 0, 0], 1e4, rtol=2e-3)
+    assert np.abs(points.stress[:, 1, 1]).max() < 1e-6 * 1e4
+    # Plane strain, ν = 0.3: ε_yy = −ν (1 + ν) σ / E at small strain, the same everywhere.
+    strain_yy = (points.x[:, 1] - y0)[y0 > 0.1] / y0[y0 > 0.1]
+    assert np.allclose(strain_yy, -0.3 * 1.3 * 1e4 / 1e7, rtol=5e-3)
+    with pytest.raises(ValueError, match="Dirichlet 0: .* true only at some boundary vertices"):
+        fe_mpm.Simulation(
+            mesh,
+            fe_mpm.seed(mesh),
+            fe_mpm.NeoHookean(1e7, 0.3),
+            dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.5) & np.isclose(x[1], 2.0))],
+        )
