@@ -24,7 +24,8 @@ class ParticleWriter:
 
     Under MPI each rank writes its own points as a piece, ``<name>_NNNNNN_rR.vtu``,
     and rank 0 writes the ``.pvd``, which lists the pieces of a time as its parts
-    (ParaView shows them together); nothing is gathered on one rank.
+    (ParaView shows them together); nothing is gathered on one rank. A rank that
+    holds no points at a time writes no piece for it.
 
     Args:
         folder: Output folder (created).
@@ -69,17 +70,26 @@ class ParticleWriter:
         return self._write(t, xyz, cells, point_data=_point_fields(points, fields))
 
     def _write(self, t: float, xyz: np.ndarray, cells: list, **data: dict) -> Path:
-        """Write one step's piece of ``xyz`` (m, 3) and ``cells`` with ``data``; list it."""
+        """Write one step's piece of ``xyz`` (m, 3) and ``cells`` with ``data``; list it.
+
+        Under MPI a rank that holds no points writes no piece and the ``.pvd`` leaves it
+        out: an empty piece is valid VTK, but meshio cannot read one back (5.3), so a
+        script reading the pieces would stop on it. Returns the path of this rank's
+        piece, written or not.
+        """
         stem = f"{self.name}_{len(self._entries):06d}"
-        names = (
-            [f"{stem}.vtu"]
-            if self.comm.size == 1
-            else [f"{stem}_r{rank}.vtu" for rank in range(self.comm.size)]
-        )
+        if self.comm.size == 1:
+            names, writes = [f"{stem}.vtu"], True
+        else:
+            held = self.comm.allgather(len(xyz) > 0)
+            held[0] = held[0] or not any(held)  # a time with no points keeps one piece
+            names = [f"{stem}_r{rank}.vtu" for rank in range(self.comm.size) if held[rank]]
+            writes = held[self.comm.rank]
         import meshio  # here: a run that writes nothing need not import it (~60 ms)
 
-        fname = names[self.comm.rank]
-        meshio.write(self.folder / fname, meshio.Mesh(xyz, cells, **data))
+        fname = f"{stem}.vtu" if self.comm.size == 1 else f"{stem}_r{self.comm.rank}.vtu"
+        if writes:
+            meshio.write(self.folder / fname, meshio.Mesh(xyz, cells, **data))
         self._entries.append((t, names))
         if self.comm.rank == 0:
             self._write_pvd()

@@ -101,6 +101,40 @@ def test_the_collection_lists_every_frame_with_its_time_and_a_new_writer_clears_
     assert (tmp_path / "other_000000.vtu").exists()
 
 
+class _TwoRanks:
+    """A stand-in communicator: rank ``rank`` of two whose points are ``held`` by rank."""
+
+    size = 2
+
+    def __init__(self, rank: int, held: list[bool]):
+        self.rank, self._held = rank, held
+
+    def Barrier(self) -> None:
+        pass
+
+    def allgather(self, value: bool) -> list[bool]:
+        assert value == self._held[self.rank]
+        return list(self._held)
+
+
+def test_a_rank_without_points_writes_no_piece_and_every_listed_piece_reads_back(tmp_path):
+    """Found on a new user's run on two ranks (2026-12-05): the rank whose cells held no
+    points wrote an empty .vtu, valid VTK that meshio cannot read back ("need at least
+    one array to concatenate"). It now writes none, and the .pvd lists the pieces
+    written; a time with no points anywhere keeps rank 0's empty piece."""
+    points, empty = _points(2), _points(2, n=0)
+    writers = [ParticleWriter(tmp_path, comm=_TwoRanks(r, [True, False])) for r in (1, 0)]
+    writers[0].write(0.5, empty)  # rank 1 first: rank 0 then writes the .pvd
+    writers[1].write(0.5, points)
+    assert [f for _, f in _frames(tmp_path / "particles.pvd")] == ["particles_000000_r0.vtu"]
+    assert sorted(f.name for f in tmp_path.glob("*.vtu")) == ["particles_000000_r0.vtu"]
+    assert np.array_equal(meshio.read(tmp_path / "particles_000000_r0.vtu").points[:, :2], points.x)
+    nobody = ParticleWriter(tmp_path / "none", comm=_TwoRanks(0, [False, False]))
+    nobody.write(1.0, empty)
+    assert [f for _, f in _frames(nobody.pvd)] == ["particles_000000_r0.vtu"]
+    assert (tmp_path / "none" / "particles_000000_r0.vtu").exists()
+
+
 def test_a_run_writes_the_state_of_its_points_at_every_step(tmp_path):
     """Cook, J2, u-p, 3 steps with output: the frames hold t = 0 and each step's time,
     and the last frame is the points' final state (stress, F, plastic strain, position)."""
