@@ -191,6 +191,39 @@ def test_beyond_the_apex_the_pressure_is_held_by_a_soft_spring():
     assert abs(v_start - out.volumetric[0]) <= 1e-10 * abs(out.volumetric[0])
 
 
+def test_a_cohesionless_matsuoka_nakai_point_at_its_apex_takes_one_return():
+    """Mast's sand (the sand column's Matsuoka–Nakai with Drucker–Prager flow, no
+    cohesion) unstressed at p = 0: beyond the apex, its points are held from a shift
+    whose first return already lands on the target to within the resolution of δ
+    (τ_m moves in steps of about K eps). Until 2026-12-05 the law's slope there, a
+    round-off (negative), sent the search down and bisecting back: 27 returns of 7
+    points each on average here, three quarters of a u-p sand column's run time."""
+    K, G = 29.5e6, 13.6e6
+    law = fe_mpm.MatsuokaNakai(
+        9 * K * G / (3 * K + G),
+        (3 * K - 2 * G) / (2 * (3 * K + G)),
+        a0=35.0, a1=0.0, a2=0.0, a3=0.2, a4=10.0, a5=0.2,
+        potential="drucker-prager",
+    )  # fmt: skip
+    n = 400
+    dF = np.eye(2) + np.random.default_rng(5).uniform(-0.03, 0.03, (n, 2, 2))
+    history = {name: h.initial_values(n) for name, h in law.history.items()}
+    returned = []
+
+    class Counted:
+        def __getattr__(self, name):
+            return getattr(law, name)
+
+        def return_map(self, F, h):
+            returned.append(len(F))
+            return law.return_map(F, h)
+
+    out = return_at_mean_stress(Counted(), dF, np.zeros(n), history)
+    assert returned == [n]
+    assert np.all(out.region == BEYOND_APEX)
+    assert np.abs(out.deviator).max() <= 1e-9 * G  # the apex, from 1e-9 of the stresses below
+
+
 @pytest.mark.parametrize(
     "name, formulation",
     [

@@ -288,6 +288,12 @@ def _solve_shift(
         tiny = 4.0 * np.finfo(float).eps * np.maximum(1.0, np.abs(d))
         converged = (np.abs(g) <= tolerance[idx]) | (bracketed & (h - l <= tiny))
         converged |= np.abs(x - d) <= tiny
+        # Nor can δ do better than its resolution: the trial is ΔF e^{δ/3}, and e^{δ/3}
+        # resolves δ to ~eps, so τ_m moves in steps of about K eps. Where the law's
+        # slope is round-off (a Matsuoka-Nakai point at its apex: negative), the step
+        # above would not see it, and the search went down and bisected back to
+        # where it started, 15-25 returns for nothing.
+        converged |= np.abs(g) <= K * tiny
         delta[idx[~converged]] = x[~converged]
         active[idx[converged]] = False
     # Not found (a wild Newton iterate): NaN, which Newton reports with the step.
