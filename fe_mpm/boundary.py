@@ -245,8 +245,8 @@ def boundary_facets(
             "is called with the facet vertices' coordinates x, shape (3, n), and must be true "
             "at every vertex of a facet on the grid's outer boundary"
             + (
-                "; a Dirichlet marker true only at some boundary vertices holds those"
-                if owner.startswith("Dirichlet")
+                "; a Dirichlet or reaction marker true only at some boundary vertices holds those"
+                if owner.startswith(("Dirichlet", "reactions"))
                 else ""
             )
             + ")"
@@ -260,26 +260,28 @@ def dirichlet_entities(
     facet_tags: dolfinx.mesh.MeshTags | None,
     owner: str = "Dirichlet",
 ) -> tuple[int, np.ndarray]:
-    """The boundary entities a :class:`Dirichlet` condition holds: ``(dim, local indices)``.
+    """The boundary entities a :class:`Dirichlet` (or a reaction) holds: ``(dim, indices)``.
 
-    The exterior facets selected by ``where`` (dimension tdim − 1); a marker that holds
-    no whole facet but some vertices of the boundary selects those vertices (dimension
-    0), as ``dolfinx.fem.locate_dofs_geometrical`` would: a corner pinned against
-    rigid motion, ``lambda x: np.isclose(x[0], 0) & np.isclose(x[1], 0)``.
+    The exterior facets selected by ``where`` (dimension tdim − 1). A marker that
+    holds no whole facet takes the boundary entities of the highest lower dimension
+    it holds whole: in 3D the edges of a line support (so that P2's mid-edge nodes
+    are held too), else vertices, as ``dolfinx.fem.locate_dofs_geometrical`` finds
+    the nodes of a point or a line: a corner pinned against rigid motion is
+    ``lambda x: np.isclose(x[0], 0) & np.isclose(x[1], 0)``. As with facets, a marker
+    is called with entity vertices' coordinates; one that holds some whole facets
+    holds those only.
 
     Raises:
-        ValueError: As :func:`boundary_facets`, when neither facets nor vertices are
-            selected.
+        ValueError: As :func:`boundary_facets`, when nothing is selected.
     """
+    tdim = mesh.topology.dim
     if callable(where):
-        fdim = mesh.topology.dim - 1
-        facets = dolfinx.mesh.locate_entities_boundary(mesh, fdim, where)
-        if not any_rank(mesh.comm, facets.size > 0):
-            vertices = dolfinx.mesh.locate_entities_boundary(mesh, 0, where)
-            if any_rank(mesh.comm, vertices.size > 0):
-                mesh.topology.create_connectivity(0, mesh.topology.dim)
-                return 0, np.asarray(vertices, dtype=np.int32)
-    return mesh.topology.dim - 1, boundary_facets(mesh, where, facet_tags, owner)
+        for dim in range(tdim - 1, -1, -1):
+            entities = dolfinx.mesh.locate_entities_boundary(mesh, dim, where)
+            if any_rank(mesh.comm, entities.size > 0):
+                mesh.topology.create_connectivity(dim, tdim)
+                return dim, np.asarray(entities, dtype=np.int32)
+    return tdim - 1, boundary_facets(mesh, where, facet_tags, owner)
 
 
 @dataclass(frozen=True)

@@ -118,12 +118,12 @@ class GridConditions:
 
         self.reaction_dofs = {}  # name -> W dofs of each displacement component
         for name, where in (reactions or {}).items():
-            facets = boundary_facets(mesh, where, facet_tags, f"reactions[{name!r}]")
+            dim, entities = dirichlet_entities(mesh, where, facet_tags, f"reactions[{name!r}]")
             comps = []
             for c in range(g):
                 sub_c = fields.U.sub(c)
                 collapsed, _ = sub_c.collapse()
-                dofs = dolfinx.fem.locate_dofs_topological((sub_c, collapsed), fdim, facets)
+                dofs = dolfinx.fem.locate_dofs_topological((sub_c, collapsed), dim, entities)
                 comps.append(np.asarray(dofs[0], dtype=np.int32))
             self.reaction_dofs[name] = comps
 

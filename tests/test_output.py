@@ -121,7 +121,8 @@ def test_a_rank_without_points_writes_no_piece_and_every_listed_piece_reads_back
     """Found on a new user's run on two ranks (2026-12-05): the rank whose cells held no
     points wrote an empty .vtu, valid VTK that meshio cannot read back ("need at least
     one array to concatenate"). It now writes none, and the .pvd lists the pieces
-    written; a time with no points anywhere keeps rank 0's empty piece."""
+    written; a time with no points anywhere keeps rank 0's empty piece (which ParaView
+    reads and meshio does not)."""
     points, empty = _points(2), _points(2, n=0)
     writers = [ParticleWriter(tmp_path, comm=_TwoRanks(r, [True, False])) for r in (1, 0)]
     writers[0].write(0.5, empty)  # rank 1 first: rank 0 then writes the .pvd

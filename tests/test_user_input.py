@@ -3,11 +3,15 @@
 import re
 import warnings
 
+from mpi4py import MPI
+
+import dolfinx
 import numpy as np
 import pytest
 
 import fe_mpm
 from fe_mpm import scenes
+from fe_mpm.boundary import dirichlet_entities
 from fe_mpm.materials.state import HistoryField
 from fe_mpm.meshes import rectangle_mesh
 from fe_mpm.packing import PointExpression
@@ -262,17 +266,22 @@ def test_a_dirichlet_marker_true_only_at_a_corner_pins_that_vertex():
     mesh = _mesh()
     points = fe_mpm.seed(mesh, per_cell=3)
     y0 = points.x[:, 1].copy()
+    corner = lambda x: np.isclose(x[0], 0.0) & np.isclose(x[1], 0.0)  # noqa: E731
     sim = fe_mpm.Simulation(
         mesh,
         points,
         fe_mpm.NeoHookean(1e7, 0.3),
         dirichlet=[
             fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0), component=0),
-            fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0) & np.isclose(x[1], 0.0), component=1),
+            fe_mpm.Dirichlet(corner, component=1),
         ],
         tractions=[fe_mpm.Traction(lambda x: np.isclose(x[0], 1.0), (1e4, 0.0))],
+        reactions={"corner": corner, "left": lambda x: np.isclose(x[0], 0.0)},
     )
-    sim.step(1.0)
+    report = sim.step(1.0)
+    # The pin holds the block's rigid motion only; the roller takes the pull.
+    assert abs(report.reactions["corner"][1]) < 1e-9 * 1e4
+    assert report.reactions["left"][0] == pytest.approx(-1e4, rel=1e-9)
     # Cauchy stress on the stretched block: 1e4 Pa to the strain's order (1e-3).
     assert np.allclose(points.stress[:, 0, 0], 1e4, rtol=2e-3)
     assert np.abs(points.stress[:, 1, 1]).max() < 1e-6 * 1e4
@@ -286,3 +295,20 @@ def test_a_dirichlet_marker_true_only_at_a_corner_pins_that_vertex():
             fe_mpm.NeoHookean(1e7, 0.3),
             dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.5) & np.isclose(x[1], 2.0))],
         )
+
+
+def test_a_marker_of_a_line_on_a_3d_grid_holds_its_edges():
+    """In 3D a line support (x = 0, y = 0) holds no facet: it takes the line's edges, so
+    that a P2 field's mid-edge nodes are held too, not its vertices alone."""
+    mesh = dolfinx.mesh.create_box(
+        MPI.COMM_WORLD,
+        [[0.0, 0.0, 0.0], [1.0, 1.0, 1.0]],
+        [2, 2, 2],
+        dolfinx.mesh.CellType.tetrahedron,
+    )
+    line = lambda x: np.isclose(x[0], 0.0) & np.isclose(x[1], 0.0)  # noqa: E731
+    dim, edges = dirichlet_entities(mesh, line, None)
+    assert dim == 1 and len(edges) == 2
+    P2 = dolfinx.fem.functionspace(mesh, ("Lagrange", 2))
+    held = dolfinx.fem.locate_dofs_topological(P2, dim, edges)
+    assert len(held) == len(dolfinx.fem.locate_dofs_geometrical(P2, line)) == 5

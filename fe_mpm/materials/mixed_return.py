@@ -292,7 +292,9 @@ def _solve_shift(
         # resolves δ to ~eps, so τ_m moves in steps of about K eps. Where the law's
         # slope is round-off (a Matsuoka-Nakai point at its apex: negative), the step
         # above would not see it, and the search went down and bisected back to
-        # where it started, 15-25 returns for nothing.
+        # where it started, 15-25 returns for nothing. Where the slope is small but
+        # true, δ may stop K tiny / slope short of the root: measured at most 1.3e-11
+        # (Matsuoka-Nakai points held beyond the apex; other laws 1.4e-14).
         converged |= np.abs(g) <= K * tiny
         delta[idx[~converged]] = x[~converged]
         active[idx[converged]] = False
