@@ -116,7 +116,7 @@ def write(sim, directory: str | Path) -> Path:
         error = CheckpointError(f"cannot write checkpoint {final}: {err}")
     parallel.raise_together(comm, error)
     pieces = comm.gather({"file": piece, "points": len(sim.points), "sha256": digest})
-    fingerprint, dropped = scene(sim), sim.dropped  # collective: before rank 0 goes alone
+    fingerprint, dropped = scene(sim), sim.dropped  # scene is collective: before rank 0 goes alone
     resets = 0 if sim.domains is None else int(parallel.total(comm, sim.domains.resets))
     flips = 0 if sim.domains is None else int(parallel.total(comm, sim.domains.flips))
     springs = sim.walls.springs()
@@ -224,7 +224,7 @@ def read(sim, path: str | Path) -> None:
         sim._boundary._nslot = state["boundary_slots"]
     sim.t, sim.step_number = float(state["t"]), int(state["step"])
     sim.tracking._nslot = state["slots"]
-    sim.tracking.dropped = int(state["dropped"]) if comm.rank == 0 else 0
+    sim.tracking.dropped = int(state["dropped"])  # the total, on every rank
     if sim.domains is not None:
         resets = int(state.get("domain_resets", 0)) if comm.rank == 0 else 0
         flips = int(state.get("domain_flips", 0)) if comm.rank == 0 else 0

@@ -913,8 +913,13 @@ class Simulation:
 
     @property
     def dropped(self) -> int:
-        """Points removed so far because they left the grid (``points_leaving="drop"``)."""
-        return parallel.total(self.mesh.comm, int(self.tracking.dropped))
+        """Points removed so far because they left the grid (``points_leaving="drop"``).
+
+        The count over all ranks, known on each without a message, so that rank 0 alone
+        may read it (``if comm.rank == 0: print(sim.dropped)``; until 2026-12-05 the
+        other ranks then waited for it for ever).
+        """
+        return int(self.tracking.dropped)
 
     @property
     def w(self) -> dolfinx.fem.Function:

@@ -35,7 +35,7 @@ class PointTracking:
 
     Attributes:
         held_points: Points held in last step's cell at the last tracking.
-        dropped: Points removed so far (``points_leaving="drop"``).
+        dropped: Points removed so far over all ranks (``points_leaving="drop"``).
     """
 
     def __init__(self, tracker: Tracker, points_leaving: str = "raise"):
@@ -165,11 +165,14 @@ class PointTracking:
         try:
             markers.keep_hosts(keep)
         except PointsOutsideError as err:
-            error = err
+            error = PointsOutsideError(
+                f"{err} at {where}: points_leaving='drop' removes points, but a marker "
+                "moves with its host point; put markers on material that stays in the grid"
+            )
         parallel.raise_together(comm, error)
         points.keep(keep)
         self._home = None if self._home is None else self._home[keep]
-        self.dropped += outside.size
+        self.dropped += count  # every rank keeps the total: reading it needs no message
         if parallel.total(comm, len(points)) == 0:
             raise PointsOutsideError(f"all material points have left the grid at {where}")
         return cells[keep]

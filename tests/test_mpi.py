@@ -224,7 +224,9 @@ def falling_block(mass, steps, restore=None, supported=True, **options):
         "stress": total(points.stress[:, 1, 1] * points.volume),
         "seeded": seeded,
         "migrated": sum(r.migrated_points for r in reports),
-        "dropped": sim.dropped,
+        # Rank 0 alone reads the count, as a user's `if rank == 0: print(...)` does; it
+        # must need no message, or the other ranks' next collective meets it.
+        "dropped": sim.dropped if MPI.COMM_WORLD.rank == 0 else None,
         "remaining": int(parallel.total(MPI.COMM_WORLD, len(points))),
     }
 
@@ -719,12 +721,15 @@ def _check_fall(got: dict, want: dict, iterations: list, case) -> None:
 def test_points_that_fall_out_of_the_grid_are_dropped_on_every_rank_as_in_serial(tmp_path):
     """The block without its base falls out of the grid's bottom (8 steps of Newmark,
     points_leaving="drop"): the same points are dropped, and the rest fall on, as in
-    serial (iterations, count, marker and height; measured equal to 1e-15)."""
+    serial (iterations, count, marker and height; measured equal to 1e-15). Rank 0
+    reads the count alone (until 2026-12-05 that was a collective, and a user's script
+    printing it on rank 0 hung)."""
     (serial,) = _run(tmp_path, "dropping", 1)
     assert 0 < serial["dropped"] < serial["seeded"] == serial["dropped"] + serial["remaining"]
-    for got in _run(tmp_path, "dropping", 3):
+    for rank, got in enumerate(_run(tmp_path, "dropping", 3)):
         assert got["iterations"] == serial["iterations"]
-        assert (got["dropped"], got["remaining"]) == (serial["dropped"], serial["remaining"])
+        assert got["remaining"] == serial["remaining"]
+        assert got["dropped"] == (serial["dropped"] if rank == 0 else None)
         for key in ("corner", "height"):
             assert np.allclose(got[key], serial[key], rtol=1e-10, atol=0), key
 

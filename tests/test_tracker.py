@@ -130,6 +130,22 @@ def test_points_leaving_the_grid_can_be_dropped_with_a_count():
     assert np.all(points.x[:, 0] <= 2.0 + 0.6 + 1e-12)
 
 
+def test_a_marker_whose_host_is_dropped_stops_the_run_saying_when_and_why():
+    """Found on a new user's two-rank run (2026-12-05), which stopped with the bare
+    "the host point of marker 'top' left the grid": the message now names the step and
+    says that a marker needs its host."""
+    sim, points = _translating_block("drop")
+    sim.add_marker("edge", [1.9, 0.4])  # on a point that leaves in the second step
+    sim.step(1.0)
+    message = (
+        r"^the host point of marker 'edge' left the grid at step 2 \(t = 2\): "
+        r"points_leaving='drop' removes points, but a marker moves with its host point"
+    )
+    with pytest.warns(UserWarning, match="left the grid"):
+        with pytest.raises(fe_mpm.PointsOutsideError, match=message):
+            sim.step(2.0)
+
+
 def test_markers_follow_their_hosts_renumbered_after_a_drop():
     """When points are dropped, each marker's host becomes its index among the kept
     points, so the marker still moves with it (x_m += Δu of its host, ΔF = I here):
