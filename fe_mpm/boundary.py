@@ -207,10 +207,12 @@ def boundary_facets(
     where: Where,
     facet_tags: dolfinx.mesh.MeshTags | None,
     owner: str = "a boundary condition",
+    hint: str = "",
 ) -> np.ndarray:
     """Local indices of the exterior facets selected by ``where``.
 
-    ``owner`` names the condition in the messages (``"Dirichlet 1"``).
+    ``owner`` names the condition in the messages (``"Dirichlet 1"``); ``hint`` ends the
+    message of a marker that selects nothing.
 
     Raises:
         ValueError: ``facet_tags`` does not tag facets (e.g. cell tags), a tag
@@ -243,13 +245,7 @@ def boundary_facets(
         raise ValueError(
             f"{owner}: its boundary marker selects no facet on the grid's boundary (a marker "
             "is called with the facet vertices' coordinates x, shape (3, n), and must be true "
-            "at every vertex of a facet on the grid's outer boundary"
-            + (
-                "; a Dirichlet or reaction marker true only at some boundary vertices holds those"
-                if owner.startswith(("Dirichlet", "reactions"))
-                else ""
-            )
-            + ")"
+            f"at every vertex of a facet on the grid's outer boundary{hint})"
         )
     return np.asarray(facets, dtype=np.int32)
 
@@ -281,7 +277,8 @@ def dirichlet_entities(
             if any_rank(mesh.comm, entities.size > 0):
                 mesh.topology.create_connectivity(dim, tdim)
                 return dim, np.asarray(entities, dtype=np.int32)
-    return tdim - 1, boundary_facets(mesh, where, facet_tags, owner)
+    hint = "; a Dirichlet or reaction marker true only at some boundary vertices holds those"
+    return tdim - 1, boundary_facets(mesh, where, facet_tags, owner, hint)
 
 
 @dataclass(frozen=True)
