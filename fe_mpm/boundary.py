@@ -268,7 +268,9 @@ def dirichlet_entities(
     holds those only.
 
     Raises:
-        ValueError: As :func:`boundary_facets`, when nothing is selected.
+        ValueError: As :func:`boundary_facets`, when nothing is selected, and when the
+            marker holds whole entities inside the grid at the first dimension it holds
+            any (a face inside the grid, which a grid node condition cannot hold).
     """
     tdim = mesh.topology.dim
     if callable(where):
@@ -277,6 +279,18 @@ def dirichlet_entities(
             if any_rank(mesh.comm, entities.size > 0):
                 mesh.topology.create_connectivity(dim, tdim)
                 return dim, np.asarray(entities, dtype=np.int32)
+            # A line inside the grid (the top of a body seeded below the grid's top)
+            # holds no boundary facet but touches the boundary at its ends: taking
+            # those vertices alone would hold two nodes where a whole face was meant.
+            if any_rank(mesh.comm, dolfinx.mesh.locate_entities(mesh, dim, where).size > 0):
+                kind = "facets" if dim == tdim - 1 else ("edges" if dim == 1 else "vertices")
+                raise ValueError(
+                    f"{owner}: its marker is true at whole {kind} inside the grid but at none "
+                    "on its outer boundary; a grid Dirichlet holds nodes of the grid's "
+                    "boundary, which stay where they are. To hold or move a face of the "
+                    "body inside the grid, use PointDirichlet (penalty points that follow "
+                    "the body); to pin a node against rigid motion, mark a boundary vertex"
+                )
     hint = "; a Dirichlet or reaction marker true only at some boundary vertices holds those"
     return tdim - 1, boundary_facets(mesh, where, facet_tags, owner, hint)
 

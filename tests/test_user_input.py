@@ -297,6 +297,44 @@ def test_a_dirichlet_marker_true_only_at_a_corner_pins_that_vertex():
         )
 
 
+def test_a_marker_of_a_face_inside_the_grid_is_refused_not_taken_at_its_ends():
+    """Found 2026-12-05 on a new user's cyclic bar: the grid reached above the body and the
+    pull was a Dirichlet on the body's top, y = 1 inside the grid. That line holds no
+    boundary facet, and the corner-pin rule took its two ends on the grid's sides: the
+    bar was pulled by two nodes and its force came out at 44 % of the elastic one, with
+    no word. A marker that holds whole facets (2D) or edges (3D) inside the grid but none
+    on its boundary is now refused, for supports and reactions alike."""
+    mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.5), (4, 6))
+    inside = lambda x: np.isclose(x[1], 1.0)  # noqa: E731
+    base = lambda x: np.isclose(x[1], 0.0)  # noqa: E731
+    law = fe_mpm.NeoHookean(1e7, 0.3)
+    cases = [
+        (
+            dict(dirichlet=[fe_mpm.Dirichlet(base), fe_mpm.Dirichlet(inside, 0.01, component=1)]),
+            "Dirichlet 1: its marker is true at whole facets inside the grid",
+        ),
+        (
+            dict(dirichlet=[fe_mpm.Dirichlet(base)], reactions={"top": inside}),
+            r"reactions\['top'\]: its marker is true at whole facets inside the grid",
+        ),
+    ]
+    for options, message in cases:
+        with pytest.raises(ValueError, match=message + ".*use PointDirichlet"):
+            fe_mpm.Simulation(mesh, fe_mpm.seed(mesh), law, **options)
+    box = dolfinx.mesh.create_box(
+        MPI.COMM_WORLD,
+        [[0.0, 0.0, 0.0], [1.0, 1.0, 1.0]],
+        [2, 2, 2],
+        dolfinx.mesh.CellType.tetrahedron,
+    )
+    axis = lambda x: np.isclose(x[0], 0.5) & np.isclose(x[1], 0.5)  # noqa: E731
+    with pytest.raises(ValueError, match="Dirichlet: its marker is true at whole edges inside"):
+        dirichlet_entities(box, axis, None)
+    # The same line on the boundary still holds its edges (the test below).
+    dim, _ = dirichlet_entities(box, lambda x: np.isclose(x[0], 0.0) & np.isclose(x[1], 0.5), None)
+    assert dim == 1
+
+
 def test_a_marker_of_a_line_on_a_3d_grid_holds_its_edges():
     """In 3D a line support (x = 0, y = 0) holds no facet: it takes the line's edges, so
     that a P2 field's mid-edge nodes are held too, not its vertices alone."""
