@@ -126,14 +126,15 @@ class Dirichlet:
     """Prescribed displacement on grid nodes.
 
     Args:
-        where: Facet tag or boundary marker. A marker that holds no whole exterior
-            facet but some boundary vertices holds those nodes (a corner pinned
-            against rigid motion; see :func:`dirichlet_entities`).
+        where: Facet tag or marker. A marker that holds no whole exterior facet
+            holds the whole facets it is true at inside the grid, else the boundary
+            edges or vertices (a corner pinned against rigid motion; see
+            :func:`dirichlet_entities`).
         value: Total prescribed displacement (m) as a function of time ``t``, or
             a constant. The grid is reset every step, so the step from ``t_n`` to
             ``t_{n+1}`` imposes ``value(t_{n+1}) − value(t_n)`` on the grid nodes
-            (a constant therefore fixes the nodes). A vector for all components,
-            a scalar with ``component``.
+            (so a constant must be 0, which fixes the nodes; another constant is
+            refused). A vector for all components, a scalar with ``component``.
         component: Constrain only this component (0, 1 or 2), e.g. a roller.
         profile: Space- and time-dependent prescribed displacement ``(x, t) ->
             u`` with ``x`` of shape ``(3, n)`` and ``u`` of shape ``(g, n)`` (or
@@ -156,6 +157,16 @@ class Dirichlet:
             if value.ndim > 1:
                 raise ValueError(
                     f"Dirichlet: value must be a number or a vector, got shape {value.shape}"
+                )
+            if np.any(value != 0.0):
+                # value is the total displacement at t: a constant one has moved by
+                # nothing between any two times, so the nodes would just be held.
+                raise ValueError(
+                    f"Dirichlet: value={self.value!r} is a constant, so it would hold the "
+                    "nodes where they are: value is the total displacement as a function "
+                    "of time, and each step imposes value(t_new) - value(t_old) on the "
+                    "grid, which is reset. To move the nodes by d over the run, give "
+                    "value=lambda t: d * t / t_end (a constant value must be 0)"
                 )
             # object.__setattr__: the dataclass is frozen; keep floats, not what was given.
             object.__setattr__(
@@ -264,13 +275,14 @@ def dirichlet_entities(
     are held too), else vertices, as ``dolfinx.fem.locate_dofs_geometrical`` finds
     the nodes of a point or a line: a corner pinned against rigid motion is
     ``lambda x: np.isclose(x[0], 0) & np.isclose(x[1], 0)``. As with facets, a marker
-    is called with entity vertices' coordinates; one that holds some whole facets
-    holds those only.
+    is called with entity vertices' coordinates; one that holds some whole boundary
+    facets holds those only. A marker that holds no boundary entity of a dimension but
+    some inside the grid holds those (a face inside the grid, as a facet tag of its
+    facets does), before trying lower dimensions on the boundary: otherwise the line
+    y = 1 inside a taller grid would hold only its two ends on the grid's sides.
 
     Raises:
-        ValueError: As :func:`boundary_facets`, when nothing is selected, and when the
-            marker holds whole entities inside the grid at the first dimension it holds
-            any (a face inside the grid, which a grid node condition cannot hold).
+        ValueError: As :func:`boundary_facets`, when nothing is selected.
     """
     tdim = mesh.topology.dim
     if callable(where):
@@ -279,18 +291,14 @@ def dirichlet_entities(
             if any_rank(mesh.comm, entities.size > 0):
                 mesh.topology.create_connectivity(dim, tdim)
                 return dim, np.asarray(entities, dtype=np.int32)
-            # A line inside the grid (the top of a body seeded below the grid's top)
-            # holds no boundary facet but touches the boundary at its ends: taking
-            # those vertices alone would hold two nodes where a whole face was meant.
-            if any_rank(mesh.comm, dolfinx.mesh.locate_entities(mesh, dim, where).size > 0):
-                kind = "facets" if dim == tdim - 1 else ("edges" if dim == 1 else "vertices")
-                raise ValueError(
-                    f"{owner}: its marker is true at whole {kind} inside the grid but at none "
-                    "on its outer boundary; a grid Dirichlet holds nodes of the grid's "
-                    "boundary, which stay where they are. To hold or move a face of the "
-                    "body inside the grid, use PointDirichlet (penalty points that follow "
-                    "the body); to pin a node against rigid motion, mark a boundary vertex"
-                )
+            # A face inside the grid (the top of a body seeded below the grid's top)
+            # holds no boundary facet but touches the boundary at its ends: its ends
+            # alone would hold two nodes where a whole face was meant. Hold the face,
+            # as a facet tag of it would.
+            inside = dolfinx.mesh.locate_entities(mesh, dim, where)
+            if any_rank(mesh.comm, inside.size > 0):
+                mesh.topology.create_connectivity(dim, tdim)
+                return dim, np.asarray(inside, dtype=np.int32)
     hint = "; a Dirichlet or reaction marker true only at some boundary vertices holds those"
     return tdim - 1, boundary_facets(mesh, where, facet_tags, owner, hint)
 

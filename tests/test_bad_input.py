@@ -470,6 +470,19 @@ def _no_motion(t):
             ValueError,
             "Dirichlet: value must be finite; component 1 is inf",
         ),
+        # Found 2026-12-05: a new user's Dirichlet(top, -0.01, component=1), meant as a
+        # push of 1 cm, held the nodes instead (the step imposes value's change).
+        (
+            lambda: fe_mpm.Dirichlet(1, value=-0.01, component=1),
+            ValueError,
+            r"Dirichlet: value=-0.01 is a constant, so it would hold the nodes .* "
+            r"value=lambda t: d \* t / t_end",
+        ),
+        (
+            lambda: fe_mpm.Dirichlet(1, value=(0.0, 0.1)),
+            ValueError,
+            r"Dirichlet: value=\(0.0, 0.1\) is a constant",
+        ),
         (
             lambda: fe_mpm.Dirichlet(1, value="0"),
             TypeError,
@@ -609,11 +622,11 @@ def test_a_boundary_condition_that_selects_nothing_or_takes_the_wrong_size_is_na
             r"reactions\['top'\]: its",
         ),
         (
-            dict(dirichlet=[fe_mpm.Dirichlet(base, value=(0.0, 0.1, 0.0))]),
+            dict(dirichlet=[fe_mpm.Dirichlet(base, value=(0.0, 0.0, 0.0))]),
             "Dirichlet 0: value must be one number or a vector of 2 components, got 3",
         ),
         (
-            dict(dirichlet=[fe_mpm.Dirichlet(base, value=(0.0, 0.1), component=1)]),
+            dict(dirichlet=[fe_mpm.Dirichlet(base, value=(0.0, 0.0), component=1)]),
             "Dirichlet 0: value must be one number with component=1, got 2 components",
         ),
     ]

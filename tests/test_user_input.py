@@ -297,30 +297,36 @@ def test_a_dirichlet_marker_true_only_at_a_corner_pins_that_vertex():
         )
 
 
-def test_a_marker_of_a_face_inside_the_grid_is_refused_not_taken_at_its_ends():
+def test_a_marker_of_a_face_inside_the_grid_holds_the_face_not_its_ends():
     """Found 2026-12-05 on a new user's cyclic bar: the grid reached above the body and the
     pull was a Dirichlet on the body's top, y = 1 inside the grid. That line holds no
     boundary facet, and the corner-pin rule took its two ends on the grid's sides: the
     bar was pulled by two nodes and its force came out at 44 % of the elastic one, with
-    no word. A marker that holds whole facets (2D) or edges (3D) inside the grid but none
-    on its boundary is now refused, for supports and reactions alike."""
-    mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.5), (4, 6))
-    inside = lambda x: np.isclose(x[1], 1.0)  # noqa: E731
-    base = lambda x: np.isclose(x[1], 0.0)  # noqa: E731
-    law = fe_mpm.NeoHookean(1e7, 0.3)
-    cases = [
-        (
-            dict(dirichlet=[fe_mpm.Dirichlet(base), fe_mpm.Dirichlet(inside, 0.01, component=1)]),
-            "Dirichlet 1: its marker is true at whole facets inside the grid",
-        ),
-        (
-            dict(dirichlet=[fe_mpm.Dirichlet(base)], reactions={"top": inside}),
-            r"reactions\['top'\]: its marker is true at whole facets inside the grid",
-        ),
-    ]
-    for options, message in cases:
-        with pytest.raises(ValueError, match=message + ".*use PointDirichlet"):
-            fe_mpm.Simulation(mesh, fe_mpm.seed(mesh), law, **options)
+    no word. Such a marker now holds the face, as a facet tag of it does: the pull
+    gives the force of the same bar on a grid that ends at its top."""
+
+    def pulled(height, rows):
+        mesh = rectangle_mesh((0.0, 0.0), (1.0, height), (4, rows))
+        points = fe_mpm.seed(mesh, per_cell=3)
+        points.keep(points.x[:, 1] < 1.0)
+        top = lambda x: np.isclose(x[1], 1.0)  # noqa: E731
+        sim = fe_mpm.Simulation(
+            mesh,
+            points,
+            fe_mpm.NeoHookean(1e7, 0.3),
+            dirichlet=[
+                fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0), component=1),
+                fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0), component=0),
+                fe_mpm.Dirichlet(top, lambda t: 0.01 * t, component=1),
+            ],
+            reactions={"top": top},
+        )
+        return sim.step(1.0).reactions["top"][1]
+
+    on_edge = pulled(1.0, 4)
+    assert on_edge == pytest.approx(1e7 / (1 - 0.3**2) * 0.01, rel=2e-2)  # plane strain
+    assert pulled(1.5, 6) == pytest.approx(on_edge, rel=1e-12)
+    # In 3D the axis of a box holds its edges inside, and P2's mid-edge nodes with them.
     box = dolfinx.mesh.create_box(
         MPI.COMM_WORLD,
         [[0.0, 0.0, 0.0], [1.0, 1.0, 1.0]],
@@ -328,11 +334,10 @@ def test_a_marker_of_a_face_inside_the_grid_is_refused_not_taken_at_its_ends():
         dolfinx.mesh.CellType.tetrahedron,
     )
     axis = lambda x: np.isclose(x[0], 0.5) & np.isclose(x[1], 0.5)  # noqa: E731
-    with pytest.raises(ValueError, match="Dirichlet: its marker is true at whole edges inside"):
-        dirichlet_entities(box, axis, None)
-    # The same line on the boundary still holds its edges (the test below).
-    dim, _ = dirichlet_entities(box, lambda x: np.isclose(x[0], 0.0) & np.isclose(x[1], 0.5), None)
-    assert dim == 1
+    dim, edges = dirichlet_entities(box, axis, None)
+    P2 = dolfinx.fem.functionspace(box, ("Lagrange", 2))
+    held = dolfinx.fem.locate_dofs_topological(P2, dim, edges)
+    assert dim == 1 and len(held) == len(dolfinx.fem.locate_dofs_geometrical(P2, axis)) == 5
 
 
 def test_a_marker_of_a_line_on_a_3d_grid_holds_its_edges():
