@@ -15,7 +15,7 @@ from fe_mpm.errors import ConvergenceError
 from fe_mpm.force_test import NewtonResult
 from fe_mpm.io import write_csv_rows
 from fe_mpm.quadrature import SlotLayout
-from fe_mpm.tracking import hinge_diagnosis
+from fe_mpm.tracking import hinge_diagnosis, sparse_mass_diagnosis
 from fe_mpm.walls import WallForces
 
 
@@ -200,14 +200,21 @@ def newton_failure(
     mesh: dolfinx.mesh.Mesh,
     layout: SlotLayout,
     centroids: np.ndarray,
+    dynamic: bool = False,
+    consistent_mass: bool = False,
 ) -> ConvergenceError:
     """The error of a step whose Newton solves all failed.
 
-    It gives the residual history, the accepted bound, and the hinged cells that
-    explain a singular tangent, if any.
+    It gives the residual history, the accepted bound, and what may explain a
+    singular tangent: in a static run the hinged cells, if any (in a dynamic run the
+    mass holds them); in a dynamic run with the consistent mass the cells with too few
+    points to hold their nodes by it.
     """
     norms = ", ".join(f"{r:.3e}" for r in result.residual_norms)
-    hinges = hinge_diagnosis(mesh, layout, centroids)
+    if not dynamic:
+        hinges = hinge_diagnosis(mesh, layout, centroids)
+    else:
+        hinges = sparse_mass_diagnosis(mesh, layout, centroids) if consistent_mass else ""
     return ConvergenceError(
         f"Newton failed in step {step} (t = {t_old:g} -> {t_new:g}) after "
         f"{result.iterations} iterations: {result.reason}; ‖R‖ history: [{norms}] "

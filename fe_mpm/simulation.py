@@ -654,7 +654,15 @@ class Simulation:
         finite = not parallel.any_rank(self.mesh.comm, not np.all(np.isfinite(self.w.x.array)))
         if not result.converged or not finite:
             raise newton_failure(
-                result, k, self.t, t_new, self.mesh, layout, self.tracker.centroids
+                result,
+                k,
+                self.t,
+                t_new,
+                self.mesh,
+                layout,
+                self.tracker.centroids,
+                self.dynamic,
+                self._given["mass"] == "consistent",
             )
         self.refresh_material(tangent=False)  # the converged iterate's, for reactions and history
         reactions = self.conditions.reactions(self._internal_force(R))

@@ -269,6 +269,32 @@ def _too_few(counts, need, layout, spec, step_number, centroids) -> Exception:
     )
 
 
+def sparse_mass_diagnosis(
+    mesh: dolfinx.mesh.Mesh, layout: SlotLayout, centroids: np.ndarray
+) -> str:
+    """Explain a failed dynamic step with the consistent mass by its sparsely filled cells.
+
+    The consistent mass of a cell, Σ_p m_p N(x_p) N(x_p)ᵀ, has the rank of the number
+    of points it holds (at most the cell's vertex count): a cell with fewer points
+    holds its nodes only along the motions its points see. A material that carries no
+    tension (sand flying apart) adds no stiffness there, and Newton may then find no
+    solution however short the step. Returns "" when every occupied cell holds enough.
+    """
+    vertices = mesh.topology.dim + 1
+    counts = np.bincount(layout.cell, minlength=int(layout.occupied.max(initial=-1)) + 1)
+    sparse = layout.occupied[counts[layout.occupied] < vertices]
+    if sparse.size == 0:
+        return ""
+    return (
+        f"{sparse.size} occupied cell(s) hold fewer than {vertices} points (first near x = "
+        f"{centroids[sparse[0]]}); with the consistent mass (the default) such a cell holds "
+        "its nodes only along the motions its points see, and where the material carries "
+        "no tension nothing else holds them. mass='lumped' holds every node a point "
+        "touches (the granular demos take it; a user's sand column that stopped at "
+        "t = 0.19 s with the consistent mass ran to its end with the lumped one). "
+    )
+
+
 def hinge_diagnosis(mesh: dolfinx.mesh.Mesh, layout: SlotLayout, centroids: np.ndarray) -> str:
     """Explain a singular tangent by occupied cells hinged to the rest at one node.
 
@@ -287,5 +313,6 @@ def hinge_diagnosis(mesh: dolfinx.mesh.Mesh, layout: SlotLayout, centroids: np.n
         f"{hinged.size} occupied cell(s) share at most one node with the rest of the "
         f"material (first near x = {centroids[hinged[0]]}); such a cell can swing about that "
         "node, so the static tangent is singular there. This typically follows points "
-        "crossing into otherwise empty cells; a coarser grid or a dynamic analysis avoids it. "
+        "crossing into otherwise empty cells; a coarser grid, point_domains=True or a "
+        "dynamic analysis avoids it. "
     )

@@ -1,5 +1,7 @@
 """Bad input fails early with a message that names the field and the valid range."""
 
+from types import SimpleNamespace
+
 from mpi4py import MPI
 
 import basix.ufl
@@ -11,7 +13,9 @@ from fe_mpm import scenes
 from fe_mpm._dolfinx import dolfinx
 from fe_mpm.boundary import boundary_facets
 from fe_mpm.checks import check_range
+from fe_mpm.force_test import NewtonResult
 from fe_mpm.meshes import cook_membrane, rectangle_mesh
+from fe_mpm.report import newton_failure
 
 
 @pytest.mark.parametrize("nu", [0.5, 0.6, -1.0, float("nan")])
@@ -224,6 +228,35 @@ def test_singular_tangent_names_the_hinged_cells():
     hinge = r"\d+ occupied cell.* share at most one node"
     with pytest.raises(fe_mpm.ConvergenceError, match=hinge):
         sim.step(1.0)
+    # In dynamics the cell's mass holds it: the same scene steps, and a dynamic run's
+    # failure does not blame hinges (until 2026-12-05 it advised "a dynamic analysis"
+    # to a user whose granular collapse in Newmark steps had stopped); with the
+    # consistent mass it names the cells too sparse for their mass to hold their nodes.
+    points = fe_mpm.seed(mesh, per_cell=1, cells=[clamped_cell, hinged_cell])
+    dynamic = fe_mpm.Simulation(
+        mesh,
+        points,
+        fe_mpm.NeoHookean(1.0, 0.3),
+        body_force=(0.0, -1.0),
+        dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0))],
+        dynamic=True,
+    )
+    assert dynamic.step(0.01).converged_reason
+    failed = NewtonResult(False, 3, "stalled", [1.0, 0.5, 0.5], 1.0, 1e-10)
+    layout = SimpleNamespace(occupied=np.sort([clamped_cell, hinged_cell]))
+    centroids = x[nodes].mean(axis=1)
+    layout = SimpleNamespace(cell=layout.occupied, occupied=layout.occupied)  # a point each
+    for is_dynamic, consistent, hinges, sparse in (
+        (False, True, True, False),
+        (True, False, False, False),
+        (True, True, False, True),
+    ):
+        message = str(
+            newton_failure(failed, 1, 0.0, 1.0, mesh, layout, centroids, is_dynamic, consistent)
+        )
+        assert ("share at most one node" in message) is hinges
+        assert ("2 occupied cell(s) hold fewer than 3 points" in message) is sparse
+        assert ("mass='lumped' holds every node" in message) is sparse
 
 
 def test_taylor_hood_stops_when_points_move_into_too_few_per_cell():
