@@ -340,6 +340,7 @@ class Simulation:
         self._iterations_of_old_grids = 0  # Newton iterations on grids since repartitioned
         self.output = None
         self._rows_written = 0  # steps in the output's steps.csv (and walls.csv)
+        self._start_written = False  # the output's t = 0 frame
         self._shared = bool(shared_increment)
         self._shift: SharedIncrement | None = None
         self._by_parts: PressureByParts | None = None
@@ -595,8 +596,6 @@ class Simulation:
         length = StepLength(nominal, floor, advice)
         can_hold = not self.dynamic and self.domains is None  # pieces differ per attempt
         bar, reports = ProgressBar(n_steps, progress), []
-        if self.step_number == 0:
-            self._write_output(force=True)  # the initial state as the t = 0 frame
         before = self.newton_iterations_total
         try:
             while t_end - self.t > END_OF_RUN * nominal:
@@ -617,8 +616,6 @@ class Simulation:
                 report.failed_iterations = spent - report.newton_iterations
                 before += spent
                 reports.append(report)
-                if self.checkpoint_dir and self.step_number % self.checkpoint_every == 0:
-                    self.checkpoint()
                 if on_step is not None:  # on the grid of the step
                     on_step(report)
                 if self.rebalancing.on and t_end - self.t > END_OF_RUN * nominal:
@@ -636,12 +633,29 @@ class Simulation:
 
         ``rebin=False`` holds every point in the cell it was in during the last
         step while it lies within half a cell of it: the fallback of a step that
-        fails right after re-binning (see :mod:`fe_mpm.retry`).
+        fails right after re-binning (see :mod:`fe_mpm.retry`). A script may drive
+        the steps itself: the output's t = 0 frame is written before the first step
+        and the checkpoints after every ``checkpoint_every``-th, as in :meth:`run`.
         """
         if not t_new > self.t:
             raise ValueError(f"Simulation.step: t_new must exceed the current time {self.t}")
-        if self.domains is not None and not self.domains.active:
-            return step_with_domains(self, t_new, rebin)
+        if self.step_number == 0 and not self._start_written:
+            self._write_output(force=True)  # the initial state as the t = 0 frame
+            self._start_written = True
+        if self.domains is not None:
+            report = step_with_domains(self, t_new, rebin)
+        else:
+            report = self.step_points(t_new, rebin)
+        if self.checkpoint_dir and self.step_number % self.checkpoint_every == 0:
+            self.checkpoint()
+        return report
+
+    def step_points(self, t_new: float, rebin: bool = True) -> StepReport:
+        """:meth:`step` on the points as they are, without its frame and checkpoint.
+
+        The points are the sub-points of domains (:func:`~fe_mpm.domains.step_with_domains`
+        calls this) or the material points themselves.
+        """
         k, dt = self.step_number + 1, t_new - self.t
         if k == 2 and self.spec.u_degree == 2 and self.domains is None:
             warn(self.spec.multi_step_warning())

@@ -46,6 +46,26 @@ def state(sim):
     }
 
 
+def test_a_script_that_steps_itself_gets_the_runs_frames_and_checkpoints(tmp_path):
+    """Found 2026-12-05: a new user's loop ``for t in times: sim.step(t)`` wrote no t = 0
+    frame and no checkpoint, though ``checkpoint_dir`` was set; ``run`` did both itself.
+    Now ``step`` does, and restoring the script's checkpoint continues it exactly."""
+    sim = falling_block(output_dir=tmp_path / "out", checkpoint_dir=tmp_path / "ck",
+                        checkpoint_every=2)  # fmt: skip
+    times = (0.025, 0.05, 0.075, 0.1)
+    for t in times:
+        sim.step(t)
+    frames = (tmp_path / "out" / "particles.pvd").read_text().count("<DataSet")
+    assert frames == 1 + len(times)
+    assert sorted(p.name for p in (tmp_path / "ck").iterdir()) == ["step_000002", "step_000004"]
+    again = falling_block()
+    again.restore(tmp_path / "ck" / "step_000002")
+    for t in times[2:]:
+        again.step(t)
+    for name, value in state(sim).items():
+        assert np.array_equal(state(again)[name], value), name
+
+
 def test_a_restored_dynamic_plastic_run_continues_exactly(tmp_path):
     """Ten steps, a checkpoint, ten more: the restored run repeats the second ten."""
     straight = falling_block()
