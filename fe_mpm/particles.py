@@ -337,7 +337,17 @@ def _cells(cells: npt.ArrayLike, num_cells: int, num_ghosts: int = 0) -> np.ndar
 
 
 def merge(*sets: MaterialPoints) -> MaterialPoints:
-    """One set of undeformed points from several seeds (e.g. zones seeded at other densities)."""
+    """One set of points from several (e.g. zones seeded at other densities).
+
+    Every per-point field comes along, in the order of ``sets``: the velocities set on
+    each zone (two bodies thrown at each other), deformation gradients, stresses and
+    internal variables. Until 2026-12-05 only positions, volumes, masses and cells
+    did, and a zone's velocity was dropped without a word.
+
+    Raises:
+        ValueError: No sets, sets of different dimensions, some seeded with a density
+            and some without, or sets holding different internal variables.
+    """
     if not sets:
         raise ValueError("merge: no point sets given")
     given = {s.density_given for s in sets}
@@ -346,13 +356,18 @@ def merge(*sets: MaterialPoints) -> MaterialPoints:
             "merge: some sets were seeded with a density and some without; "
             "give every zone its density (seed(..., density=...))"
         )
-    return MaterialPoints(
-        x=np.vstack([s.x for s in sets]),
-        volume=np.concatenate([s.volume for s in sets]),
-        mass=np.concatenate([s.mass for s in sets]),
-        cell=np.concatenate([s.cell for s in sets]),
-        density_given=given.pop(),
-    )
+    if len({s.gdim for s in sets}) > 1:
+        raise ValueError(
+            f"merge: the sets have points of {sorted({s.gdim for s in sets})} dimensions"
+        )
+    if len({tuple(sorted(s.history)) for s in sets}) > 1:
+        raise ValueError(
+            "merge: the sets hold different internal variables "
+            f"({[sorted(s.history) for s in sets]}); merge them before a simulation fills them in"
+        )
+    history = {name: np.concatenate([s.history[name] for s in sets]) for name in sets[0].history}
+    fields = {name: np.concatenate([getattr(s, name) for s in sets]) for name in PER_POINT_FIELDS}
+    return MaterialPoints(**fields, history=history, density_given=given.pop())
 
 
 def simplex_cell_type(mesh: dolfinx.mesh.Mesh) -> basix.CellType:

@@ -60,6 +60,44 @@ def test_two_different_densities_are_refused_naming_both():
         fe_mpm.merge(fe_mpm.seed(mesh, density=RHO), fe_mpm.seed(mesh))
 
 
+def test_merge_keeps_each_zones_velocity_and_two_bodies_collide_keeping_momentum():
+    """Found 2026-12-05: a new user set each disk's velocity, merged the two and threw
+    them at each other; ``merge`` kept positions, volumes, masses and cells only, so
+    both stood still. Every per-point field now comes along. Two elastic disks of
+    different densities then collide through the grid (no walls, no gravity) and keep
+    the total momentum to round-off."""
+    mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (16, 16))
+    a = fe_mpm.seed(
+        mesh, 3, density=1000.0, level_set=lambda x: 0.2 - np.hypot(x[0] - 0.3, x[1] - 0.5)
+    )
+    b = fe_mpm.seed(
+        mesh, 3, density=3000.0, level_set=lambda x: 0.2 - np.hypot(x[0] - 0.7, x[1] - 0.5)
+    )
+    a.velocity[:, 0], b.velocity[:, 0] = 0.1, -0.05
+    b.F[:] = [[1.01, 0.0], [0.0, 1.0]]
+    points = fe_mpm.merge(a, b)
+    assert np.array_equal(points.velocity[: len(a)], a.velocity)
+    assert np.array_equal(points.velocity[len(a) :], b.velocity)
+    assert np.array_equal(points.F[len(a) :], b.F)
+    b.F[:] = np.eye(2)  # the merged set holds its own copy
+    start = points.momentum()
+    assert start[0] == pytest.approx(0.1 * a.mass.sum() - 0.05 * b.mass.sum(), rel=1e-12)
+    assert abs(start[0]) > 1.0  # not zero by symmetry
+    sim = fe_mpm.Simulation(
+        mesh, points, fe_mpm.NeoHookean(1e3, 0.3), "up", dynamic=True, mass="lumped"
+    )
+    gaps = []
+    gap = lambda: points.x[len(a) :, 0].min() - points.x[: len(a), 0].max()  # noqa: E731
+    sim.run(2.0, 40, progress=False, on_step=lambda report: gaps.append(gap()))
+    assert min(gaps) < 1 / 16  # they met (0.2 apart at the start), within a cell
+    assert np.allclose(points.momentum(), start, rtol=0, atol=1e-12 * abs(start[0]))
+    fe_mpm.merge(fe_mpm.seed(mesh), fe_mpm.seed(mesh))  # plain zones still merge
+    plastic = fe_mpm.seed(mesh)
+    plastic.history["plastic_strain"] = np.zeros(len(plastic))
+    with pytest.raises(ValueError, match="merge: the sets hold different internal variables"):
+        fe_mpm.merge(plastic, fe_mpm.seed(mesh))
+
+
 @pytest.mark.parametrize(
     ("dirichlet", "free"),
     [
