@@ -41,6 +41,33 @@ def _check_where(owner: str, where: object) -> None:
         )
 
 
+def _checked_marker(owner: str, where: Callable) -> Callable:
+    """``where`` for DOLFINx's entity search, with a clear error for a wrong result.
+
+    DOLFINx takes a marker's result as a boolean array of one entry per point; a
+    marker returning anything else (``lambda x: True``, floats) stopped with C++'s
+    bare "std::bad_cast". A sequence of booleans is taken as their array.
+    """
+
+    def marker(x: np.ndarray) -> np.ndarray:
+        value = where(x)
+        array = np.asarray(value)
+        if array.shape != (x.shape[1],) or array.dtype != np.bool_:
+            got = (
+                f"an array of shape {array.shape} and dtype {array.dtype}"
+                if isinstance(value, np.ndarray)
+                else reprlib.repr(value)
+            )
+            raise ValueError(
+                f"{owner}: its marker must return a boolean array with one entry per "
+                f"point, shape ({x.shape[1]},) for x of shape {x.shape}, as "
+                f"np.isclose(x[1], 0.0) does; got {got}"
+            )
+        return array
+
+    return marker
+
+
 def _check_callable(owner: str, field: str, value: object, kind: str) -> None:
     """Raise ``TypeError`` unless ``value`` is None or callable (``kind`` describes it)."""
     if value is not None and not callable(value):
@@ -238,7 +265,7 @@ def boundary_facets(
             f"{tdim}D mesh have dimension {fdim}; cell tags cannot select boundary facets"
         )
     if callable(where):
-        facets = dolfinx.mesh.locate_entities_boundary(mesh, fdim, where)
+        facets = dolfinx.mesh.locate_entities_boundary(mesh, fdim, _checked_marker(owner, where))
     else:
         if facet_tags is None:
             raise ValueError(
@@ -286,6 +313,7 @@ def dirichlet_entities(
     """
     tdim = mesh.topology.dim
     if callable(where):
+        where = _checked_marker(owner, where)
         for dim in range(tdim - 1, -1, -1):
             entities = dolfinx.mesh.locate_entities_boundary(mesh, dim, where)
             if any_rank(mesh.comm, entities.size > 0):

@@ -293,6 +293,8 @@ class Simulation:
             line_search = "bt" if material.history else "basic"
         self.petsc_options = {"snes_linesearch_type": line_search, **(petsc_options or {})}
         self.linear_solver = linear_solver
+        if min_step is not None:  # a step of 0 s or less would be cut to for ever
+            check_range("Simulation", "min_step", min_step, lo=0.0, lo_open=True)
         self.max_step_cells, self.min_step = max_step_cells, min_step
         self.checkpoint_dir = checkpoint_dir
         self.checkpoint_every = check_int("Simulation", "checkpoint_every", checkpoint_every, lo=1)

@@ -182,6 +182,23 @@ def test_other_bad_values():
     with pytest.raises(fe_mpm.PointsOutsideError, match="left the grid at set-up"):
         outside = fe_mpm.MaterialPoints(x=[[2.0, 2.0]], volume=[1.0], mass=[1.0])
         fe_mpm.Simulation(mesh, outside, fe_mpm.NeoHookean(1.0, 0.3))
+    # Found 2026-12-05 with a new user's bad inputs: min_step = -1 was taken, and a marker
+    # returning one bool (lambda x: True) stopped in DOLFINx with "std::bad_cast".
+    for value in (-1.0, 0.0):
+        with pytest.raises(ValueError, match=r"Simulation: min_step must lie in \(0, inf\]"):
+            fe_mpm.Simulation(mesh, points, material, min_step=value)
+    for marker, got in (
+        (lambda x: True, "got True"),
+        (lambda x: np.where(np.isclose(x[1], 0.0), 1.0, 0.0), "dtype float64"),
+    ):
+        for owner, options in (
+            ("Dirichlet 0", dict(dirichlet=[fe_mpm.Dirichlet(marker)])),
+            ("Traction 0", dict(tractions=[fe_mpm.Traction(marker, (0.0, 1.0))])),
+            ("RigidWall 'floor'", dict(walls=[fe_mpm.RigidWall("floor", marker)])),
+        ):
+            message = owner + ": its marker must return a boolean array.*" + got
+            with pytest.raises(ValueError, match=message):
+                fe_mpm.Simulation(mesh, points, material, **options)
 
 
 def test_divergence_stops_with_step_and_reason():
