@@ -26,6 +26,10 @@ ROOT = Path(__file__).resolve().parents[1]
 DEMO = ROOT / "demos" / "dam_break.py"
 
 
+#: The demo's check_passed in words (None: the run was not checked).
+VERDICTS = {True: "passes", False: "fails", None: "not checked"}
+
+
 def run(formulation: str, aspect: float, h: float) -> dict:
     """One dam break in a subprocess: the demo's JSON summary (its last line)."""
     cmd = [sys.executable, str(DEMO), "--formulation", formulation, "--aspect", f"{aspect:g}"]
@@ -63,7 +67,7 @@ def main() -> None:
                 f"| {formulation} | {aspect:g} | {span(out['front_relative_error'])} | "
                 f"{span(out['height_relative_error'])} | {out['steps']} | "
                 f"{out['newton_iterations_mean']:.2f} | {out['wall_time_s']:.1f} | "
-                f"{'passes' if out['check_passed'] else 'fails'} |",
+                f"{VERDICTS[out['check_passed']]} |",
                 flush=True,
             )
     plt = pyplot() if args.plot else None

@@ -325,7 +325,7 @@ settled = args.t_end >= 3.5
 passed = bool(PEAK_RANGE[0] <= R_pk <= PEAK_RANGE[1] and STEADY_RANGE[0] <= R_ss <= STEADY_RANGE[1])
 verdict = "PASS" if passed else "FAIL"
 if not settled:
-    passed, verdict = True, f"not checked (cut short at t = {t[-1]:.2f} s)"
+    passed, verdict = None, f"not checked (cut short at t = {t[-1]:.2f} s)"
 print(
     f"check: R_pk {R_pk:.2f} in [{PEAK_RANGE[0]:g}, {PEAK_RANGE[1]:g}] and R_ss {R_ss:.2f} in "
     f"[{STEADY_RANGE[0]:g}, {STEADY_RANGE[1]:g}] (Mast §7.4.3): {verdict}"
@@ -360,6 +360,6 @@ if args.json:
             }
         )
     )
-if not passed:
+if passed is False:
     sys.exit("column_impact.py: the forces lie outside Mast's ranges")
 # -

@@ -257,7 +257,7 @@ elif args.formulation == "up-nostab" and args.nu != 0.33:
 else:
     not_checked = None
 if not_checked:
-    passed, check_error = True, None
+    passed, check_error = None, None  # null in the JSON: nothing was checked
     print(f"check: {not_checked}: not checked")
 else:
     source, value = reference
@@ -272,6 +272,6 @@ if args.json:
     summary.update(check_error=check_error, check_passed=passed)
     sys.stdout.flush()
     print(json.dumps(summary))
-if not passed:
+if passed is False:
     sys.exit(f"cook_membrane.py: u_A,y is {100 * check_error:.2f} % from {source}")
 # -

@@ -340,7 +340,7 @@ if checked:
         f"[{100 * HEIGHT_BAND[0]:+.0f}, {100 * HEIGHT_BAND[1]:+.0f}] % of Martin & Moyce"
     )
 else:
-    passed, verdict = True, "not checked"
+    passed, verdict = None, "not checked"
     line = (
         f"h0/l0 = {args.aspect:g}: no tabulated experiment"
         if reference is None
@@ -373,6 +373,6 @@ if args.json:
             }
         )
     )
-if not passed:
+if passed is False:
     sys.exit("dam_break.py: the run lies outside the experiment's bands")
 # -

@@ -190,7 +190,7 @@ elif args.steps == 1:
 else:
     tolerance = STATIC_CROSSING
     basis = "cell crossing over several steps"
-passed = tolerance is None or error <= tolerance
+passed = None if tolerance is None else bool(error <= tolerance)  # None: not checked
 if tolerance is None:
     print("check: Tielen et al.'s series is for an undamped column: not checked")
 else:
@@ -216,6 +216,6 @@ if args.json:
             }
         )
     )
-if not passed:
+if passed is False:
     sys.exit(f"elastic_column.py: error {error:.3e} over the tolerance {tolerance:.3e}")
 # -

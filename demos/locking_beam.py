@@ -256,6 +256,6 @@ if args.json:
             }
         )
     )
-if not passed:
+if passed is False:
     sys.exit(f"locking_beam.py: a ratio is {100 * error:.2f} % from beam theory")
 # -

@@ -328,6 +328,6 @@ if args.json:
             }
         )
     )
-if not passed:
+if passed is False:
     sys.exit(f"material_paths.py: {args.law} on the {args.path} path failed its check")
 # -

@@ -180,6 +180,6 @@ if args.json:
             }
         )
     )
-if not passed:
+if passed is False:
     sys.exit(f"rolling_disk.py: the disk rolled {100 * relative:+.1f} % from ½ a t²")
 # -

@@ -276,7 +276,7 @@ passed = bool(
 )
 verdict = "PASS" if passed else "FAIL"
 if not settled.size and t_end < full_time:  # Mast's bounds are on the deposit at rest
-    passed, verdict = True, f"not checked (cut short at t = {t[-1]:.3f} s, still moving)"
+    passed, verdict = None, f"not checked (cut short at t = {t[-1]:.3f} s, still moving)"
 print(
     f"check: L_f {L_f:.3f} in [{runout_range[0]:.3f}, {runout_range[1]:.3f}] and H_f "
     f"{H_f:.3f} in [{height_range[0]:.3f}, {height_range[1]:.3f}] (Mast's Tables 7.4, 7.6, "
@@ -308,6 +308,6 @@ if args.json:
             }
         )
     )
-if not passed:
+if passed is False:
     sys.exit("sand_column.py: the deposit lies outside Mast's bounds")
 # -

@@ -218,6 +218,6 @@ if args.json:
             }
         )
     )
-if not passed:
+if passed is False:
     sys.exit(f"sliding_block.py: {verdict}")
 # -

@@ -294,6 +294,6 @@ if args.json:
             }
         )
     )
-if not passed:
+if passed is False:
     sys.exit("slope_gravity.py: the check against the slip circle failed")
 # -

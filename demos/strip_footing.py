@@ -245,7 +245,7 @@ LOWER, UPPER = -0.05, 0.15
 
 in_window = (s_over_B >= WINDOW[0] - 1e-9) & (s_over_B <= WINDOW[1] + 1e-9)
 if args.E / args.cu < 100 or not in_window.any():
-    plateau, check_error, passed = None, None, True
+    plateau, check_error, passed = None, None, None  # not checked
     print(
         f"check: 2 + π needs E/c_u ≥ 100 and steps with {WINDOW[0]} ≤ s/B ≤ {WINDOW[1]}: "
         "not checked"
@@ -285,6 +285,6 @@ if args.json:
             }
         )
     )
-if not passed:
+if passed is False:
     sys.exit(f"strip_footing.py: q/c_u over s/B = 0.1–0.15 is {100 * check_error:+.1f} % off 2 + π")
 # -
