@@ -33,6 +33,11 @@ class Markers:
         self.comm = comm
         self._entries: dict[str, tuple[np.ndarray, int]] = {}
 
+    @property
+    def names(self) -> list[str]:
+        """The markers' names, in the order they were added."""
+        return list(self._entries)
+
     def add(self, name: str, x: np.ndarray, points_x: np.ndarray) -> None:
         """Add a marker at ``x`` (g,), hosted by the nearest of the points ``points_x`` (n, g)."""
         distance = np.linalg.norm(points_x - x, axis=1)

@@ -8,6 +8,8 @@ formulation needs, one density, and supports that stop every rigid translation.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 
 from fe_mpm import parallel
@@ -398,6 +400,40 @@ def domains_would_be_taken(
     except (ValueError, NotImplementedError):
         return False
     return True
+
+
+def check_force_names(reactions: dict | None, walls: Sequence, boundary: Sequence) -> set[str]:
+    """The names under which forces are reported, refused if two conditions share one.
+
+    Reactions, rigid walls and boundary-point conditions all report their force in
+    ``StepReport.reactions`` by name (and ``steps.csv`` by column), so a name shared
+    by two would keep only one of the forces: a reaction and a wall both named
+    "base" reported the wall's force alone, without a word (until 2026-12-05).
+
+    Returns:
+        The names, which markers may not take either.
+    """
+    owners: dict[str, list[str]] = {}
+    for kind, names in (
+        ("reaction", list(reactions or {})),
+        ("RigidWall", [wall.name for wall in walls]),
+        ("boundary-point condition", [condition.name for condition in boundary]),
+    ):
+        for name in names:
+            owners.setdefault(name, []).append(kind)
+    for name, kinds in owners.items():
+        if len(kinds) > 1:
+            what = (
+                f"{len(kinds)} {kinds[0]}s"
+                if len(set(kinds)) == 1
+                else f"a {' and a '.join(kinds)}"
+            )
+            raise ValueError(
+                f"Simulation: {name!r} names {what}; reactions, rigid "
+                "walls and boundary-point conditions report their forces by name "
+                "(StepReport.reactions), so each needs its own"
+            )
+    return set(owners)
 
 
 def check_walls(walls, spec, formulation: str, point_domains: bool) -> tuple:

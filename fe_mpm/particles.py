@@ -43,6 +43,9 @@ class MaterialPoints:
         density_given: False when ``mass`` is a placeholder (ρ₀ = 1 kg/m³) that the
             law's ``density`` replaces when the simulation starts (``seed`` without
             a density).
+        simulated_to: The time (s) a :class:`~fe_mpm.Simulation` last stepped these
+            points to; None while none has. A second simulation given them starts
+            from their deformed state, and warns.
 
     Raises:
         TypeError: An array holds something other than real numbers.
@@ -62,6 +65,7 @@ class MaterialPoints:
     acceleration: np.ndarray = field(default=None)  # type: ignore[assignment]
     history: dict[str, np.ndarray] = field(default_factory=dict)
     density_given: bool = True
+    simulated_to: float | None = None
 
     def __post_init__(self) -> None:
         # Copies throughout: the points move and change in place, the caller's arrays must not.

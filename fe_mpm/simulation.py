@@ -253,6 +253,14 @@ class Simulation:
         initial_stress: np.ndarray | None = None,
     ):
         model_checks.check_grid_and_points(mesh, points)
+        if parallel.any_rank(mesh.comm, points.simulated_to is not None):
+            warn(
+                "Simulation: these points were already stepped by another Simulation (to "
+                f"t = {points.simulated_to}), so they start deformed, with their stresses "
+                "and internal variables: a staged analysis. For a fresh start, seed them "
+                "again (a sweep over E re-using one set of points measured its second run "
+                "from the first run's deformed state, 4 % off)."
+            )
         parallel.one_thread_per_rank(mesh.comm)
         model_checks.check_choices(
             formulation, mass, points_leaving, linear_solver, line_search, fallback_line_search
@@ -308,6 +316,9 @@ class Simulation:
             fallback_line_search, bool(fallback_hold_cells), bool(fallback_from_best)
         )
         walls = model_checks.check_walls(walls, self.spec, formulation, point_domains)
+        self._force_names = model_checks.check_force_names(
+            reactions, walls, [*point_dirichlet, *point_tractions]
+        )
         passes = model_checks.check_projection_passes(
             projection_passes, dynamic, mass, walls, bossak_alpha
         )
@@ -487,6 +498,10 @@ class Simulation:
         Read it from ``history[k].markers[name]`` or :meth:`marker`.
         """
         xm = check_finite("Simulation.add_marker", f"x of marker {name!r}", x).reshape(self.gdim)
+        # A marker's columns in steps.csv are its name's, as a force's are.
+        if name in self.markers.names or name in self._force_names:
+            used = "another marker" if name in self.markers.names else "a force"
+            raise ValueError(f"Simulation.add_marker: {name!r} already names {used}")
         if not parallel.any_rank(self.mesh.comm, self.tracker.locate(xm[None, :])[0] >= 0):
             raise PointsOutsideError(f"marker {name!r} at {xm} is outside the grid")
         self.markers.add(name, xm, self.points.x)
@@ -648,6 +663,7 @@ class Simulation:
             report = step_with_domains(self, t_new, rebin)
         else:
             report = self.step_points(t_new, rebin)
+        self.points.simulated_to = self.t
         if self.checkpoint_dir and self.step_number % self.checkpoint_every == 0:
             self.checkpoint()
         return report

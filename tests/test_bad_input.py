@@ -652,6 +652,35 @@ def test_more_points_in_a_cell_than_the_slots_hold_names_the_cell_count_and_when
         fe_mpm.Simulation(mesh, piled, fe_mpm.NeoHookean(1.0, 0.3))
 
 
+def test_forces_and_markers_need_names_of_their_own():
+    """Found 2026-12-05: a reaction and a rigid wall both named "base" reported the
+    wall's force alone under that name, and a PointDirichlet named as a reaction hid
+    the reaction, without a word; a marker named as a force or another marker doubled
+    the columns of steps.csv."""
+    mesh, points = _scene()
+    law = fe_mpm.NeoHookean(1.0, 0.3)
+    base = lambda x: np.isclose(x[1], 0.0)  # noqa: E731
+    side = lambda x: np.isclose(x[0], 0.0)  # noqa: E731
+    pin = fe_mpm.PointDirichlet("base", np.array([[0.5, 0.0]]), np.ones(1), lambda t: (0, 0), 1e3)
+    wall = fe_mpm.RigidWall("base", base)
+    for options, message in (
+        (dict(walls=[wall], reactions={"base": side}), "a reaction and a RigidWall"),
+        (
+            dict(point_dirichlet=[pin], reactions={"base": base}),
+            "a reaction and a boundary-point condition",
+        ),
+    ):
+        with pytest.raises(ValueError, match=f"Simulation: 'base' names {message}; reactions"):
+            fe_mpm.Simulation(mesh, points, law, dirichlet=[fe_mpm.Dirichlet(base)], **options)
+    sim = fe_mpm.Simulation(
+        mesh, points, law, dirichlet=[fe_mpm.Dirichlet(base)], reactions={"base": base}
+    )
+    sim.add_marker("tip", (0.5, 0.5))
+    for name, used in (("tip", "another marker"), ("base", "a force")):
+        with pytest.raises(ValueError, match=f"add_marker: '{name}' already names {used}"):
+            sim.add_marker(name, (0.25, 0.25))
+
+
 def test_a_boundary_condition_that_selects_nothing_or_takes_the_wrong_size_is_named():
     """Found 2026-12-05 trying a new user's scene: a marker that missed the boundary
     said only "boundary marker selects no exterior facets" (which of several?), and a

@@ -98,6 +98,26 @@ def test_merge_keeps_each_zones_velocity_and_two_bodies_collide_keeping_momentum
         fe_mpm.merge(plastic, fe_mpm.seed(mesh))
 
 
+def test_points_stepped_by_one_simulation_warn_when_given_to_another():
+    """Found 2026-12-05: a new user's sweep over E re-used one set of seeded points; the
+    second Simulation started from the first one's deformed state (its settlement 4 %
+    off) without a word. Handing stepped points to a new Simulation is a staged
+    analysis and may be meant, so it warns; fresh points and a restored run do not."""
+    mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (4, 4))
+    points = fe_mpm.seed(mesh, per_cell=3, density=1000.0)
+    options = dict(
+        dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))], body_force=(0, -9.81)
+    )
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # fresh points: no warning
+        first = fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1e5, 0.3), **options)
+        fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1e5, 0.3), **options)  # not stepped
+    first.run(1.0, 2, progress=False)
+    assert points.simulated_to == 1.0
+    with pytest.warns(UserWarning, match=r"already stepped by another Simulation \(to t = 1.0\)"):
+        fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(2e5, 0.3), **options)
+
+
 @pytest.mark.parametrize(
     ("dirichlet", "free"),
     [

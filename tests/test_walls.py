@@ -215,7 +215,7 @@ def test_wall_bad_input_names_the_field():
         fe_mpm.Simulation(grid, points, law, walls=[fe_mpm.RigidWall("far", outside)])
     with pytest.raises(NotImplementedError, match="P1 displacements"):
         fe_mpm.Simulation(grid, points, law, "up-p2p1", walls=[fe_mpm.RigidWall("base", on_base)])
-    with pytest.raises(ValueError, match="distinct names"):
+    with pytest.raises(ValueError, match="'w' names 2 RigidWalls"):
         fe_mpm.Simulation(
             grid,
             points,
