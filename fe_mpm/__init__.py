@@ -9,8 +9,8 @@ Typical use::
     from fe_mpm import meshes
     from fe_mpm.materials import NeoHookean
 
-    scene = meshes.cook_membrane(n=32)
-    points = fe_mpm.seed(scene.mesh, per_cell=1)
+    scene = meshes.cook_membrane(n=16, margin=1)  # an empty row for the body to move into
+    points = fe_mpm.seed(scene.mesh, per_cell=1, cells=meshes.body_cells(scene))
     sim = fe_mpm.Simulation(scene.mesh, points, NeoHookean(E=70.0, nu=0.33),
                             facet_tags=scene.facet_tags, ...)
 """

@@ -35,7 +35,10 @@ class SimulationOutput:
     def __init__(
         self, folder: str | Path, fields: GridFields, every: int = 1, domains: bool = False
     ):
-        self.folder, self.fields, self.every = Path(folder), fields, int(every)
+        # Absolute: the grid's writers close at the end of the run or of the process,
+        # and a relative path read then against another working directory (a script or
+        # a test that changed it) aborted the process in ADIOS2 ("iostream error").
+        self.folder, self.fields, self.every = Path(folder).resolve(), fields, int(every)
         self._written_step = -1
         comm = fields.W.mesh.comm
         self._points = ParticleWriter(self.folder, comm=comm)
