@@ -234,31 +234,25 @@ def test_singular_tangent_names_the_hinged_cells():
     shared = np.array([np.intersect1d(nodes[clamped_cell], row).size for row in nodes])
     away = ~(np.isclose(x[nodes][:, :, 0], 0.0).any(axis=1))
     hinged_cell = np.flatnonzero((shared == 1) & away)[0]
-    points = fe_mpm.seed(mesh, per_cell=1, cells=[clamped_cell, hinged_cell])
-    sim = fe_mpm.Simulation(
-        mesh,
-        points,
-        fe_mpm.NeoHookean(1.0, 0.3),
-        body_force=(0.0, -1.0),
-        dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0))],
-    )
+
+    def two_cells(**options):
+        return fe_mpm.Simulation(
+            mesh,
+            fe_mpm.seed(mesh, per_cell=1, cells=[clamped_cell, hinged_cell]),
+            fe_mpm.NeoHookean(1.0, 0.3),
+            body_force=(0.0, -1.0),
+            dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0))],
+            **options,
+        )
+
     hinge = r"\d+ occupied cell.* share at most one node"
     with pytest.raises(fe_mpm.ConvergenceError, match=hinge):
-        sim.step(1.0)
+        two_cells().step(1.0)
     # In dynamics the cell's mass holds it: the same scene steps, and a dynamic run's
     # failure does not blame hinges (until 2026-12-05 it advised "a dynamic analysis"
     # to a user whose granular collapse in Newmark steps had stopped); with the
     # consistent mass it names the cells too sparse for their mass to hold their nodes.
-    points = fe_mpm.seed(mesh, per_cell=1, cells=[clamped_cell, hinged_cell])
-    dynamic = fe_mpm.Simulation(
-        mesh,
-        points,
-        fe_mpm.NeoHookean(1.0, 0.3),
-        body_force=(0.0, -1.0),
-        dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0))],
-        dynamic=True,
-    )
-    assert dynamic.step(0.01).converged_reason
+    assert two_cells(dynamic=True).step(0.01).converged_reason
     failed = NewtonResult(False, 3, "stalled", [1.0, 0.5, 0.5], 1.0, 1e-10)
     layout = SimpleNamespace(occupied=np.sort([clamped_cell, hinged_cell]))
     centroids = x[nodes].mean(axis=1)

@@ -385,31 +385,27 @@ def test_a_marker_of_a_face_inside_the_grid_holds_the_face_not_its_ends():
     assert on_edge == pytest.approx(1e7 / (1 - 0.3**2) * 0.01, rel=2e-2)  # plane strain
     assert pulled(1.5, 6) == pytest.approx(on_edge, rel=1e-12)
     # In 3D the axis of a box holds its edges inside, and P2's mid-edge nodes with them.
+    axis = lambda x: np.isclose(x[0], 0.5) & np.isclose(x[1], 0.5)  # noqa: E731
+    assert _p2_nodes_held(axis) == (1, 2, 5, 5)
+
+
+def _p2_nodes_held(marker) -> tuple[int, int, int, int]:
+    """On a box of 2 × 2 × 2 cubes: the dimension and number of the entities a
+    Dirichlet marker holds, the P2 nodes on them, and the P2 nodes the marker is true at."""
     box = dolfinx.mesh.create_box(
         MPI.COMM_WORLD,
         [[0.0, 0.0, 0.0], [1.0, 1.0, 1.0]],
         [2, 2, 2],
         dolfinx.mesh.CellType.tetrahedron,
     )
-    axis = lambda x: np.isclose(x[0], 0.5) & np.isclose(x[1], 0.5)  # noqa: E731
-    dim, edges = dirichlet_entities(box, axis, None)
+    dim, entities = dirichlet_entities(box, marker, None)
     P2 = dolfinx.fem.functionspace(box, ("Lagrange", 2))
-    held = dolfinx.fem.locate_dofs_topological(P2, dim, edges)
-    assert dim == 1 and len(held) == len(dolfinx.fem.locate_dofs_geometrical(P2, axis)) == 5
+    held = dolfinx.fem.locate_dofs_topological(P2, dim, entities)
+    return dim, len(entities), len(held), len(dolfinx.fem.locate_dofs_geometrical(P2, marker))
 
 
 def test_a_marker_of_a_line_on_a_3d_grid_holds_its_edges():
     """In 3D a line support (x = 0, y = 0) holds no facet: it takes the line's edges, so
     that a P2 field's mid-edge nodes are held too, not its vertices alone."""
-    mesh = dolfinx.mesh.create_box(
-        MPI.COMM_WORLD,
-        [[0.0, 0.0, 0.0], [1.0, 1.0, 1.0]],
-        [2, 2, 2],
-        dolfinx.mesh.CellType.tetrahedron,
-    )
     line = lambda x: np.isclose(x[0], 0.0) & np.isclose(x[1], 0.0)  # noqa: E731
-    dim, edges = dirichlet_entities(mesh, line, None)
-    assert dim == 1 and len(edges) == 2
-    P2 = dolfinx.fem.functionspace(mesh, ("Lagrange", 2))
-    held = dolfinx.fem.locate_dofs_topological(P2, dim, edges)
-    assert len(held) == len(dolfinx.fem.locate_dofs_geometrical(P2, line)) == 5
+    assert _p2_nodes_held(line) == (1, 2, 5, 5)
