@@ -52,6 +52,10 @@ def _checked_marker(owner: str, where: Callable) -> Callable:
     def marker(x: np.ndarray) -> np.ndarray:
         value = where(x)
         array = np.asarray(value)
+        if x.shape[1] == 0 and array.size == 0:
+            # A rank with no entities of the kind asked: an empty list is no error there
+            # (np.asarray([]) is float), or that rank alone would stop.
+            return np.zeros(0, dtype=bool)
         if array.shape != (x.shape[1],) or array.dtype != np.bool_:
             got = (
                 f"an array of shape {array.shape} and dtype {array.dtype}"
@@ -154,9 +158,9 @@ class Dirichlet:
 
     Args:
         where: Facet tag or marker. A marker that holds no whole exterior facet
-            holds the whole facets it is true at inside the grid, else the boundary
-            edges or vertices (a corner pinned against rigid motion; see
-            :func:`dirichlet_entities`).
+            holds the whole facets (in 3D, else edges) it is true at inside the grid,
+            else the boundary edges or vertices (a corner pinned against rigid
+            motion; see :func:`dirichlet_entities`); never a lone node inside.
         value: Total prescribed displacement (m) as a function of time ``t``, or
             a constant. The grid is reset every step, so the step from ``t_n`` to
             ``t_{n+1}`` imposes ``value(t_{n+1}) − value(t_n)`` on the grid nodes
@@ -305,8 +309,9 @@ def dirichlet_entities(
     is called with entity vertices' coordinates; one that holds some whole boundary
     facets holds those only. A marker that holds no boundary entity of a dimension but
     some inside the grid holds those (a face inside the grid, as a facet tag of its
-    facets does), before trying lower dimensions on the boundary: otherwise the line
-    y = 1 inside a taller grid would hold only its two ends on the grid's sides.
+    facets does; in 3D also edges inside), before trying lower dimensions on the
+    boundary: otherwise the line y = 1 inside a taller grid would hold only its two
+    ends on the grid's sides. A marker true only at nodes inside the grid is refused.
 
     Raises:
         ValueError: As :func:`boundary_facets`, when nothing is selected.
@@ -322,9 +327,10 @@ def dirichlet_entities(
             # A face inside the grid (the top of a body seeded below the grid's top)
             # holds no boundary facet but touches the boundary at its ends: its ends
             # alone would hold two nodes where a whole face was meant. Hold the face,
-            # as a facet tag of it would.
-            inside = dolfinx.mesh.locate_entities(mesh, dim, where)
-            if any_rank(mesh.comm, inside.size > 0):
+            # as a facet tag of it would; not a lone node inside the grid (dim 0),
+            # which is more likely a pin whose coordinates missed the boundary.
+            inside = dolfinx.mesh.locate_entities(mesh, dim, where) if dim > 0 else []
+            if any_rank(mesh.comm, len(inside) > 0):
                 mesh.topology.create_connectivity(dim, tdim)
                 return dim, np.asarray(inside, dtype=np.int32)
     hint = "; a Dirichlet or reaction marker true only at some boundary vertices holds those"

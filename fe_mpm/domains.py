@@ -667,7 +667,7 @@ def step_with_domains(sim, t_new: float, rebin: bool):
     sim.points, sim.markers, sim.output, domains.active = sub, Markers(), None, True
     sim.tracker = sim.domain_tracker  # the pieces' cells include this rank's ghosts
     try:
-        report = sim.step_points(t_new, True)  # never held: the pieces differ per attempt
+        report = sim._step_points(t_new, True)  # never held: the pieces differ per attempt
     finally:
         sim.points, sim.markers, sim.output, domains.active = points, markers, output, False
         sim.tracker = tracker

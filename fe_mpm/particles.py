@@ -371,7 +371,13 @@ def merge(*sets: MaterialPoints) -> MaterialPoints:
         )
     history = {name: np.concatenate([s.history[name] for s in sets]) for name in sets[0].history}
     fields = {name: np.concatenate([getattr(s, name) for s in sets]) for name in PER_POINT_FIELDS}
-    return MaterialPoints(**fields, history=history, density_given=given.pop())
+    stepped = [s.simulated_to for s in sets if s.simulated_to is not None]
+    return MaterialPoints(
+        **fields,
+        history=history,
+        density_given=given.pop(),
+        simulated_to=max(stepped) if stepped else None,
+    )
 
 
 def simplex_cell_type(mesh: dolfinx.mesh.Mesh) -> basix.CellType:

@@ -258,8 +258,7 @@ class Simulation:
                 "Simulation: these points were already stepped by another Simulation (to "
                 f"t = {points.simulated_to}), so they start deformed, with their stresses "
                 "and internal variables: a staged analysis. For a fresh start, seed them "
-                "again (a sweep over E re-using one set of points measured its second run "
-                "from the first run's deformed state, 4 % off)."
+                "again."
             )
         parallel.one_thread_per_rank(mesh.comm)
         model_checks.check_choices(
@@ -662,13 +661,13 @@ class Simulation:
         if self.domains is not None:
             report = step_with_domains(self, t_new, rebin)
         else:
-            report = self.step_points(t_new, rebin)
+            report = self._step_points(t_new, rebin)
         self.points.simulated_to = self.t
         if self.checkpoint_dir and self.step_number % self.checkpoint_every == 0:
             self.checkpoint()
         return report
 
-    def step_points(self, t_new: float, rebin: bool = True) -> StepReport:
+    def _step_points(self, t_new: float, rebin: bool = True) -> StepReport:
         """:meth:`step` on the points as they are, without its frame and checkpoint.
 
         The points are the sub-points of domains (:func:`~fe_mpm.domains.step_with_domains`

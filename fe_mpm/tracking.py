@@ -290,8 +290,7 @@ def sparse_mass_diagnosis(
         f"{centroids[sparse[0]]}); with the consistent mass (the default) such a cell holds "
         "its nodes only along the motions its points see, and where the material carries "
         "no tension nothing else holds them. mass='lumped' holds every node a point "
-        "touches (the granular demos take it; a user's sand column that stopped at "
-        "t = 0.19 s with the consistent mass ran to its end with the lumped one). "
+        "touches (the granular demos take it; docs/dynamics.md). "
     )
 
 
@@ -313,6 +312,6 @@ def hinge_diagnosis(mesh: dolfinx.mesh.Mesh, layout: SlotLayout, centroids: np.n
         f"{hinged.size} occupied cell(s) share at most one node with the rest of the "
         f"material (first near x = {centroids[hinged[0]]}); such a cell can swing about that "
         "node, so the static tangent is singular there. This typically follows points "
-        "crossing into otherwise empty cells; a coarser grid, point_domains=True or a "
-        "dynamic analysis avoids it. "
+        "crossing into otherwise empty cells; a coarser grid or a dynamic analysis "
+        "avoids it. "
     )

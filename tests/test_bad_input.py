@@ -11,7 +11,7 @@ import pytest
 import fe_mpm
 from fe_mpm import scenes
 from fe_mpm._dolfinx import dolfinx
-from fe_mpm.boundary import boundary_facets
+from fe_mpm.boundary import _checked_marker, boundary_facets
 from fe_mpm.checks import check_range
 from fe_mpm.force_test import NewtonResult
 from fe_mpm.meshes import cook_membrane, rectangle_mesh
@@ -199,6 +199,11 @@ def test_other_bad_values():
             message = owner + ": its marker must return a boolean array.*" + got
             with pytest.raises(ValueError, match=message):
                 fe_mpm.Simulation(mesh, points, material, **options)
+    # A list is taken, also an empty one from a rank that holds no entity of the kind
+    # searched (np.asarray([]) is float: that rank alone stopped, the others waited).
+    as_list = _checked_marker("Dirichlet 0", lambda x: list(np.isclose(x[1], 0.0)))
+    assert as_list(np.zeros((3, 0))).dtype == bool
+    assert as_list(np.array([[0.0, 1.0], [0.0, 1.0], [0.0, 0.0]])).tolist() == [True, False]
 
 
 def test_divergence_stops_with_step_and_reason():

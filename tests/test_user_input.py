@@ -387,6 +387,9 @@ def test_a_marker_of_a_face_inside_the_grid_holds_the_face_not_its_ends():
     # In 3D the axis of a box holds its edges inside, and P2's mid-edge nodes with them.
     axis = lambda x: np.isclose(x[0], 0.5) & np.isclose(x[1], 0.5)  # noqa: E731
     assert _p2_nodes_held(axis) == (1, 2, 5, 5)
+    # A lone node inside the grid is more likely a pin that missed the boundary.
+    with pytest.raises(ValueError, match="Dirichlet: its boundary marker selects no facet"):
+        dirichlet_entities(rectangle_mesh((0.0, 0.0), (1.0, 1.0), (4, 4)), axis, None)
 
 
 def _p2_nodes_held(marker) -> tuple[int, int, int, int]:
