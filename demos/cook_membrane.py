@@ -242,7 +242,7 @@ summary = {
 # a grid traction stays on the grid) and −1.9 % at n = 64 (2026-12-06; at ν = 0.499
 # and n = 32, 0.02 %). With a `PointTraction`, which follows the body, the same runs
 # give +0.81 % and +0.93 %: the steps' own cell-crossing error
-# ([Cell crossing](../docs/cell_crossing.md)). A value exists only for Kratos's
+# (`docs/cell_crossing.md`). A value exists only for Kratos's
 # set-up (above) at a tabulated n and ν. The thesis's quasi-incompressible "UP no
 # stab" column is not checked: it lies 0.3–2.9 % from ν = 0.499 and seems to have
 # been run at another ν.
