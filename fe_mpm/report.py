@@ -202,19 +202,21 @@ def newton_failure(
     centroids: np.ndarray,
     dynamic: bool = False,
     consistent_mass: bool = False,
+    degree: int = 1,
 ) -> ConvergenceError:
     """The error of a step whose Newton solves all failed.
 
     It gives the residual history, the accepted bound, and what may explain a
     singular tangent: in a static run the hinged cells, if any (in a dynamic run the
     mass holds them); in a dynamic run with the consistent mass the cells with too few
-    points to hold their nodes by it.
+    points to hold their nodes by it (``degree``: the displacement's, 1 or 2).
     """
     norms = ", ".join(f"{r:.3e}" for r in result.residual_norms)
     if not dynamic:
         hinges = hinge_diagnosis(mesh, layout, centroids)
     else:
-        hinges = sparse_mass_diagnosis(mesh, layout, centroids) if consistent_mass else ""
+        sparse = consistent_mass and sparse_mass_diagnosis(mesh, layout, centroids, degree)
+        hinges = sparse or ""
     return ConvergenceError(
         f"Newton failed in step {step} (t = {t_old:g} -> {t_new:g}) after "
         f"{result.iterations} iterations: {result.reason}; ‖R‖ history: [{norms}] "

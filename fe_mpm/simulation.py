@@ -694,6 +694,7 @@ class Simulation:
                 self.tracker.centroids,
                 self.dynamic,
                 self._given["mass"] == "consistent",
+                self.spec.u_degree,
             )
         self.refresh_material(tangent=False)  # the converged iterate's, for reactions and history
         reactions = self.conditions.reactions(self._internal_force(R))

@@ -9,6 +9,8 @@ points per cell for P2/P1, and occupied cells hinged to the rest at one node.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from fe_mpm import parallel
@@ -270,23 +272,24 @@ def _too_few(counts, need, layout, spec, step_number, centroids) -> Exception:
 
 
 def sparse_mass_diagnosis(
-    mesh: dolfinx.mesh.Mesh, layout: SlotLayout, centroids: np.ndarray
+    mesh: dolfinx.mesh.Mesh, layout: SlotLayout, centroids: np.ndarray, degree: int = 1
 ) -> str:
     """Explain a failed dynamic step with the consistent mass by its sparsely filled cells.
 
     The consistent mass of a cell, Σ_p m_p N(x_p) N(x_p)ᵀ, has the rank of the number
-    of points it holds (at most the cell's vertex count): a cell with fewer points
-    holds its nodes only along the motions its points see. A material that carries no
-    tension (sand flying apart) adds no stiffness there, and Newton may then find no
-    solution however short the step. Returns "" when every occupied cell holds enough.
+    of points it holds (at most the cell's node count: 3 or 4 for P1, 6 or 10 for the
+    P2 displacement of ``degree`` 2): a cell with fewer points holds its nodes only
+    along the motions its points see. A material that carries no tension (sand flying
+    apart) adds no stiffness there, and Newton may then find no solution however short
+    the step. Returns "" when every occupied cell holds enough.
     """
-    vertices = mesh.topology.dim + 1
+    nodes = math.comb(mesh.topology.dim + degree, degree)
     counts = np.bincount(layout.cell, minlength=int(layout.occupied.max(initial=-1)) + 1)
-    sparse = layout.occupied[counts[layout.occupied] < vertices]
+    sparse = layout.occupied[counts[layout.occupied] < nodes]
     if sparse.size == 0:
         return ""
     return (
-        f"{sparse.size} occupied cell(s) hold fewer than {vertices} points (first near x = "
+        f"{sparse.size} occupied cell(s) hold fewer than {nodes} points (first near x = "
         f"{centroids[sparse[0]]}); with the consistent mass (the default) such a cell holds "
         "its nodes only along the motions its points see, and where the material carries "
         "no tension nothing else holds them. mass='lumped' holds every node a point "

@@ -273,6 +273,14 @@ def test_singular_tangent_names_the_hinged_cells():
         assert ("share at most one node" in message) is hinges
         assert ("2 occupied cell(s) hold fewer than 3 points" in message) is sparse
         assert ("mass='lumped' holds every node" in message) is sparse
+    # Three points a cell give P1's consistent mass its full rank, not P2's (6 nodes).
+    three = SimpleNamespace(cell=np.repeat(layout.occupied, 3), occupied=layout.occupied)
+    for degree, sparse in ((1, False), (2, True)):
+        message = str(
+            newton_failure(failed, 1, 0.0, 1.0, mesh, three, centroids, True, True, degree)
+        )
+        assert ("2 occupied cell(s) hold fewer than 6 points" in message) is sparse
+        assert ("mass='lumped'" in message) is sparse
 
 
 def test_taylor_hood_stops_when_points_move_into_too_few_per_cell():
