@@ -318,21 +318,19 @@ def dirichlet_entities(
     """
     tdim = mesh.topology.dim
     if callable(where):
-        where = _checked_marker(owner, where)
+        marker = _checked_marker(owner, where)
         for dim in range(tdim - 1, -1, -1):
-            entities = dolfinx.mesh.locate_entities_boundary(mesh, dim, where)
+            entities = dolfinx.mesh.locate_entities_boundary(mesh, dim, marker)
+            if dim > 0 and not any_rank(mesh.comm, entities.size > 0):
+                # A face inside the grid (the top of a body seeded below the grid's
+                # top) holds no boundary facet but touches the boundary at its ends:
+                # its ends alone would hold two nodes where a whole face was meant.
+                # Hold the face, as a facet tag of it would; not a lone node inside
+                # the grid (dim 0), more likely a pin that missed the boundary.
+                entities = dolfinx.mesh.locate_entities(mesh, dim, marker)
             if any_rank(mesh.comm, entities.size > 0):
                 mesh.topology.create_connectivity(dim, tdim)
                 return dim, np.asarray(entities, dtype=np.int32)
-            # A face inside the grid (the top of a body seeded below the grid's top)
-            # holds no boundary facet but touches the boundary at its ends: its ends
-            # alone would hold two nodes where a whole face was meant. Hold the face,
-            # as a facet tag of it would; not a lone node inside the grid (dim 0),
-            # which is more likely a pin whose coordinates missed the boundary.
-            inside = dolfinx.mesh.locate_entities(mesh, dim, where) if dim > 0 else []
-            if any_rank(mesh.comm, len(inside) > 0):
-                mesh.topology.create_connectivity(dim, tdim)
-                return dim, np.asarray(inside, dtype=np.int32)
     hint = "; a Dirichlet or reaction marker true only at some boundary vertices holds those"
     return tdim - 1, boundary_facets(mesh, where, facet_tags, owner, hint)
 

@@ -213,15 +213,16 @@ def newton_failure(
     """
     norms = ", ".join(f"{r:.3e}" for r in result.residual_norms)
     if not dynamic:
-        hinges = hinge_diagnosis(mesh, layout, centroids)
+        diagnosis = hinge_diagnosis(mesh, layout, centroids)
+    elif consistent_mass:
+        diagnosis = sparse_mass_diagnosis(mesh, layout, centroids, degree)
     else:
-        sparse = consistent_mass and sparse_mass_diagnosis(mesh, layout, centroids, degree)
-        hinges = sparse or ""
+        diagnosis = ""
     return ConvergenceError(
         f"Newton failed in step {step} (t = {t_old:g} -> {t_new:g}) after "
         f"{result.iterations} iterations: {result.reason}; ‖R‖ history: [{norms}] "
         f"against the force scale {result.force_scale:.3e} (accepted: ‖R‖ <= "
-        f"{result.tolerance:.3e}). {hinges}"
+        f"{result.tolerance:.3e}). {diagnosis}"
         "Points were not updated and nothing was written for this step."
     )
 

@@ -352,7 +352,6 @@ class Simulation:
         self._iterations_of_old_grids = 0  # Newton iterations on grids since repartitioned
         self.output = None
         self._rows_written = 0  # steps in the output's steps.csv (and walls.csv)
-        self._start_written = False  # the output's t = 0 frame
         self._shared = bool(shared_increment)
         self._shift: SharedIncrement | None = None
         self._by_parts: PressureByParts | None = None
@@ -655,9 +654,8 @@ class Simulation:
         """
         if not t_new > self.t:
             raise ValueError(f"Simulation.step: t_new must exceed the current time {self.t}")
-        if self.step_number == 0 and not self._start_written:
+        if self.step_number == 0:  # written once: the output skips a step it has written
             self._write_output(force=True)  # the initial state as the t = 0 frame
-            self._start_written = True
         if self.domains is not None:
             report = step_with_domains(self, t_new, rebin)
         else:

@@ -179,9 +179,6 @@ class RigidWalls:
         facet_tags: dolfinx.mesh.MeshTags | None,
         material,
     ):
-        names = [w.name for w in walls]
-        if len(set(names)) != len(names):
-            raise ValueError(f"Simulation: walls need distinct names, got {names}")
         g = mesh.geometry.dim
         self.mesh, self.du = mesh, du
         self.space = dolfinx.fem.functionspace(mesh, ("Lagrange", 1, (g,)))
