@@ -331,7 +331,11 @@ def dirichlet_entities(
             if any_rank(mesh.comm, entities.size > 0):
                 mesh.topology.create_connectivity(dim, tdim)
                 return dim, np.asarray(entities, dtype=np.int32)
-    hint = "; a Dirichlet or reaction marker true only at some boundary vertices holds those"
+    hint = (
+        "; a Dirichlet or reaction marker may also hold whole facets (3D: edges) inside "
+        "the grid, which a grid has only where its cells are aligned with them, or "
+        "boundary edges or vertices"
+    )
     return tdim - 1, boundary_facets(mesh, where, facet_tags, owner, hint)
 
 
