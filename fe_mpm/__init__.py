@@ -18,7 +18,15 @@ Typical use::
 # dolfinx must be imported through fe_mpm._dolfinx first: the PyPI wheel needs
 # `import dolfinx_solver` before dolfinx, petsc4py and mpi4py.
 from fe_mpm import _dolfinx  # noqa: F401, I001
-from fe_mpm.boundary import STICKING, Dirichlet, PointDirichlet, PointTraction, RigidWall, Traction
+from fe_mpm.boundary import (
+    STICKING,
+    Dirichlet,
+    PointDirichlet,
+    PointTraction,
+    Pressure,
+    RigidWall,
+    Traction,
+)
 from fe_mpm.checkpoint import CheckpointError
 from fe_mpm.errors import ConvergenceError, PointsOutsideError
 from fe_mpm.initial_stress import geostatic_stress
@@ -56,6 +64,7 @@ __all__ = [
     "PointDirichlet",
     "PointTraction",
     "PointsOutsideError",
+    "Pressure",
     "RigidWall",
     "STICKING",
     "Simulation",

@@ -244,6 +244,41 @@ class Traction:
         return _scale_at("Traction", self.scale, t) * np.asarray(self.value, dtype=np.float64)
 
 
+@dataclass(frozen=True)
+class Pressure:
+    """Normal pressure on grid facets (Pa): the traction −p n, n the grid's outward normal.
+
+    A positive pressure pushes into the grid on every facet, whatever its
+    orientation: the inner face of a pressurised ring or a borehole, a curved face
+    that a :class:`Traction` (one vector for all facets) cannot load. Like a
+    :class:`Traction` it stays on its grid facets (the normal is theirs, not the
+    body's, and does not follow the body), and its share on nodes that no material
+    reaches is lost (``StepReport.lost_load``).
+
+    Args:
+        where: Facet tag or boundary marker of exterior grid facets.
+        value: Pressure p (Pa), finite; negative pulls (a suction).
+        scale: Load factor as a function of time, ``t -> float``; constant 1 if None.
+    """
+
+    where: Where
+    value: float
+    scale: Callable[[float], float] | None = None
+
+    def __post_init__(self) -> None:
+        _check_where("Pressure", self.where)
+        object.__setattr__(self, "value", check_range("Pressure", "value", self.value))
+        _check_callable("Pressure", "scale", self.scale, "a function t -> float")
+
+    def at(self, t: float) -> float:
+        """Pressure at time ``t`` (Pa).
+
+        Raises:
+            ValueError: ``scale`` returned a non-finite value at ``t``.
+        """
+        return _scale_at("Pressure", self.scale, t) * self.value
+
+
 def boundary_facets(
     mesh: dolfinx.mesh.Mesh,
     where: Where,

@@ -16,7 +16,7 @@ import ufl
 
 from fe_mpm import parallel
 from fe_mpm._dolfinx import dolfinx
-from fe_mpm.boundary import Dirichlet, Traction, boundary_facets, dirichlet_entities
+from fe_mpm.boundary import Dirichlet, Pressure, Traction, boundary_facets, dirichlet_entities
 from fe_mpm.checks import check_range
 from fe_mpm.errors import warn
 from fe_mpm.formulations import GridFields, constrained_space
@@ -24,6 +24,30 @@ from fe_mpm.transfer import summed_over_ranks
 
 #: A traction's lost share is warned about again when it grows by this much.
 LOST_LOAD_WARNING_STEP = 0.005
+
+
+def _check_exterior(mesh: dolfinx.mesh.Mesh, facets: np.ndarray, owner: str) -> None:
+    """Refuse facets inside the grid: a pressure needs the one outward normal of a facet.
+
+    Args:
+        mesh: The grid.
+        facets: The rank's facets of the load (local indices, ghosts included).
+        owner: The load's name in the message (``"Pressure 0"``).
+
+    Raises:
+        ValueError: On every rank, when some rank owns a facet that is not exterior.
+    """
+    exterior = dolfinx.mesh.exterior_facet_indices(mesh.topology)  # owned ones only
+    owned = facets[facets < mesh.topology.index_map(mesh.topology.dim - 1).size_local]
+    inside = np.setdiff1d(owned, exterior)
+    if parallel.any_rank(mesh.comm, inside.size > 0):
+        count = parallel.total(mesh.comm, int(inside.size))
+        raise ValueError(
+            f"{owner}: {count} of its facets lie inside the grid, where a facet has no "
+            "outward normal to push along; a Pressure acts on the grid's outer boundary, "
+            "so make the loaded face a boundary of the grid (a hole in it, as "
+            "meshes.quarter_ring does)"
+        )
 
 
 def facet_node_weights(
@@ -37,6 +61,8 @@ def facet_node_weights(
         ``(nodes, weights)``: geometry node indices (k,) and their shares (k,), summing to 1.
     """
     g = mesh.geometry.dim
+    # A rank's facets by tag include its ghosts, which their owner counts too.
+    facets = facets[facets < mesh.topology.index_map(g - 1).size_local]
     nodes_of = dolfinx.mesh.entities_to_geometry(mesh, g - 1, facets)  # (nf, g)
     X = mesh.geometry.x[:, :g][nodes_of]
     edges = X[:, 1:] - X[:, :1]
@@ -46,7 +72,7 @@ def facet_node_weights(
         measure = 0.5 * np.linalg.norm(np.cross(edges[:, 0], edges[:, 1]), axis=1)
     nodes, index = np.unique(nodes_of, return_inverse=True)
     weights = np.bincount(index.ravel(), weights=np.repeat(measure / g, g), minlength=nodes.size)
-    # Over every rank's facets (an exterior facet lies on one rank only).
+    # Over every rank's owned facets.
     return nodes, weights / parallel.total(mesh.comm, float(weights.sum()))
 
 
@@ -56,15 +82,17 @@ class GridConditions:
     Args:
         fields: The grid unknowns.
         dirichlet: Prescribed grid displacements.
-        tractions: Surface tractions on grid facets.
+        tractions: Surface tractions and pressures on grid facets.
         body_force: Body force per unit mass (m/s², length g), or None.
         body_force_scale: Its load factor ``t -> float``; constant 1 if None.
         reactions: Boundaries whose reaction force is wanted, name -> tag or marker.
         facet_tags: Facet tags for conditions given by tag.
 
     Attributes:
-        traction_terms: ``(value, ds(i))`` pairs for the weak forms (Pa).
-        traction_facets: Subdomain id i -> the exterior facets of traction i − 1.
+        traction_terms: ``(t̄, ds(i))`` pairs for the weak forms (Pa): the traction,
+            or −p n for a :class:`Pressure`.
+        traction_facets: Subdomain id i -> the exterior facets of ``tractions[i − 1]``.
+        traction_labels: Subdomain id i -> its name in messages (``"Pressure 1"``).
         body_force: The body force as a Constant the forms read, or None.
         lost_load: Traction id -> the share of its load whose nodes carried no
             material at the last step.
@@ -74,7 +102,7 @@ class GridConditions:
         self,
         fields: GridFields,
         dirichlet: Sequence[Dirichlet] = (),
-        tractions: Sequence[Traction] = (),
+        tractions: Sequence[Traction | Pressure] = (),
         body_force: Sequence[float] | None = None,
         body_force_scale: Callable[[float], float] | None = None,
         reactions: dict[str, int | Callable] | None = None,
@@ -101,19 +129,32 @@ class GridConditions:
         self.tractions = []  # (spec, Constant)
         self.traction_terms = []
         self.traction_facets: dict[int, np.ndarray] = {}
+        self.traction_labels: dict[int, str] = {}
         self._traction_nodes: dict[int, tuple[np.ndarray, np.ndarray]] = {}
         self.lost_load: dict[int, float] = {}
         self._warned_share: dict[int, float] = {}  # the largest share warned about so far
         ds = ufl.Measure("ds", domain=mesh)
         for i, spec in enumerate(tractions, start=1):
-            if len(spec.value) != g:
-                raise ValueError(f"Traction: value must have {g} components, got {len(spec.value)}")
-            value = dolfinx.fem.Constant(mesh, np.zeros(g))
-            self.traction_facets[i] = boundary_facets(
-                mesh, spec.where, facet_tags, f"Traction {i - 1}"
-            )
-            self._traction_nodes[i] = facet_node_weights(mesh, self.traction_facets[i])
-            self.traction_terms.append((value, ds(i)))
+            label = f"{type(spec).__name__} {i - 1}"
+            if not isinstance(spec, Traction | Pressure):
+                raise TypeError(
+                    f"Simulation: tractions[{i - 1}] must be a Traction or a Pressure, "
+                    f"got {type(spec).__name__}"
+                )
+            facets = boundary_facets(mesh, spec.where, facet_tags, label)
+            if isinstance(spec, Pressure):
+                _check_exterior(mesh, facets, label)
+                value = dolfinx.fem.Constant(mesh, 0.0)
+                term = -value * ufl.FacetNormal(mesh)
+            else:
+                if len(spec.value) != g:
+                    raise ValueError(
+                        f"{label}: value must have {g} components, got {len(spec.value)}"
+                    )
+                value = term = dolfinx.fem.Constant(mesh, np.zeros(g))
+            self.traction_facets[i], self.traction_labels[i] = facets, label
+            self._traction_nodes[i] = facet_node_weights(mesh, facets)
+            self.traction_terms.append((term, ds(i)))
             self.tractions.append((spec, value))
 
         self.reaction_dofs = {}  # name -> W dofs of each displacement component
@@ -227,10 +268,10 @@ class GridConditions:
                     parallel.total(self.mesh.comm, int(k)) for k in (idle[owned].sum(), owned.sum())
                 )
                 warn(
-                    f"Traction {i - 1}: {n_idle} of its {n_nodes} grid nodes carry no "
-                    f"material at the step to t = {t_new:g}, so {100 * share:.1f} % of its "
-                    "load is lost (StepReport.lost_load). A grid traction stays on the grid; "
-                    "use PointTraction for a load that follows the body."
+                    f"{self.traction_labels[i]}: {n_idle} of its {n_nodes} grid nodes carry "
+                    f"no material at the step to t = {t_new:g}, so {100 * share:.1f} % of its "
+                    "load is lost (StepReport.lost_load). A grid load stays on the grid; "
+                    "PointTraction carries a fixed traction on points that follow the body."
                 )
 
     def reactions(self, residual: Callable[[], np.ndarray]) -> dict[str, np.ndarray]:

@@ -49,9 +49,9 @@ class StepReport:
         force_scale: The forces in play at the last iterate, S = max(‖f_ext‖,
             ‖f_int‖) (N; N/m in 2D).
         relative_residual: The last ‖R‖ over ``force_scale``.
-        lost_load: Share of each grid ``Traction``'s load that acts on nodes with
-            no material, so it is lost (``"Traction 0"`` -> share in [0, 1]);
-            only tractions that lose some.
+        lost_load: Share of each grid ``Traction``'s or ``Pressure``'s load that acts
+            on nodes with no material, so it is lost (``"Traction 0"`` -> share in
+            [0, 1], named by its place in ``tractions=``); only loads that lose some.
         failed_iterations: Newton iterations spent since the last accepted step on
             set-ups that failed (a placement of the points whose Newton solves all
             failed, or a step length that was then cut, see :mod:`fe_mpm.retry`);
@@ -105,11 +105,14 @@ class StepReport:
             markers: The :class:`~fe_mpm.markers.Markers`, moved.
             tracking: The :class:`~fe_mpm.tracking.PointTracking` (held points).
             conditions: The :class:`~fe_mpm.grid_conditions.GridConditions`, whose
-                ``lost_load`` is keyed by the tractions' tags, i + 1 for ``Traction i``.
+                ``lost_load`` is keyed by the tractions' tags, i + 1 for ``tractions[i]``,
+                and ``traction_labels`` names them (``"Traction i"``, ``"Pressure i"``).
         """
         comm = markers.comm  # counts are over every rank
         lost = {
-            f"Traction {i - 1}": share for i, share in conditions.lost_load.items() if share > 0
+            conditions.traction_labels[i]: share
+            for i, share in conditions.lost_load.items()
+            if share > 0
         }
         return cls(
             step=step,

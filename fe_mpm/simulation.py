@@ -24,7 +24,14 @@ import numpy as np
 
 from fe_mpm import balance, checkpoint, model_checks, parallel
 from fe_mpm._dolfinx import dolfinx
-from fe_mpm.boundary import Dirichlet, PointDirichlet, PointTraction, RigidWall, Traction
+from fe_mpm.boundary import (
+    Dirichlet,
+    PointDirichlet,
+    PointTraction,
+    Pressure,
+    RigidWall,
+    Traction,
+)
 from fe_mpm.boundary_points import BoundaryPointStep
 from fe_mpm.checks import check_finite, check_int, check_range
 from fe_mpm.domains import (
@@ -105,7 +112,8 @@ class Simulation:
             ``"up-nostab"`` (mixed P1/P1) or ``"up-p2p1"`` (mixed Taylor–Hood);
             see :mod:`fe_mpm.formulations`.
         dirichlet: Prescribed grid displacements.
-        tractions: Surface tractions on grid facets.
+        tractions: Loads on grid facets: tractions (one vector, :class:`~fe_mpm.Traction`)
+            and normal pressures (:class:`~fe_mpm.Pressure`, along each facet's normal).
         point_dirichlet: Displacements prescribed by a penalty at boundary points the
             grid does not follow (a rigid footing); forces in ``StepReport.reactions``.
         point_tractions: Tractions on boundary points that move with the body (a grid
@@ -116,7 +124,7 @@ class Simulation:
         body_force: Body force per unit mass (m/s², length g), e.g. gravity.
         body_force_scale: Load factor of the body force, ``t -> float``; 1 if None
             (``lambda t: t`` ramps self-weight over static load steps).
-        facet_tags: Facet tags for ``Dirichlet``/``Traction`` given by tag.
+        facet_tags: Facet tags for ``Dirichlet``, ``Traction`` and ``Pressure`` given by tag.
         petsc_options: Overrides of the Newton options (:data:`fe_mpm.newton.NEWTON_OPTIONS`)
             and of the linear solver's (:data:`fe_mpm.newton.LINEAR_SOLVERS`).
         points_leaving: ``"raise"`` (default) stops when points leave the grid; ``"drop"``
@@ -218,7 +226,7 @@ class Simulation:
         formulation: str = "u",
         *,
         dirichlet: Sequence[Dirichlet] = (),
-        tractions: Sequence[Traction] = (),
+        tractions: Sequence[Traction | Pressure] = (),
         point_dirichlet: Sequence[PointDirichlet] = (),
         point_tractions: Sequence[PointTraction] = (),
         walls: Sequence[RigidWall] = (),

@@ -485,6 +485,24 @@ def test_material_paths_loose_sand_does_not_soften(tmp_path):
     assert summary["checks"]["peak / end of the driven stress"] < 1.01
 
 
+def test_thick_cylinder_follows_hills_plastic_expansion_to_near_its_limit_pressure(tmp_path):
+    """J2, u-p, ν = 0.4999, pressure on the inner arc (``fe_mpm.Pressure``) raised to
+    0.95 p_lim in 10 steps: every step's u(a) within 1 % of Hill's closed form
+    (measured 0.74 %, the u form 65 %), the reaction on y = 0 equal to p a to
+    round-off, and the pressure–expansion curve written."""
+    out = tmp_path / "out"
+    stdout = run_demo(
+        "thick_cylinder.py", "--steps", "10", "--json", "--output", str(out), cwd=tmp_path
+    )
+    summary = _last_json(stdout)
+    assert summary["check_passed"] is True
+    assert summary["largest_relative_error"] < 0.01
+    assert summary["reaction_balance"] < 1e-9
+    assert summary["last_pressure"] == pytest.approx(0.95 * summary["limit_pressure"])
+    curve = np.loadtxt(out / "pressure_expansion.csv", delimiter=",", skiprows=1)
+    assert curve.shape == (10, 3) and np.all(np.diff(curve[:, 1]) > 0)
+
+
 def test_a_demo_whose_result_is_off_its_reference_exits_non_zero(tmp_path):
     """Every demo ends by checking its headline result against its reference. The
     tension test in the irreducible form at ν = 0.4999 locks: its limit load

@@ -471,6 +471,25 @@ try:
         }
     elif case == "nbva slosh":
         result = nbva_slosh(10)
+    elif case == "pressure":
+        scene = meshes.quarter_ring(1.0, 2.0, 0.2)
+        centre = meshes.cell_centroids(scene.mesh)
+        r, angle = np.hypot(centre[:, 0], centre[:, 1]), np.arctan2(centre[:, 1], centre[:, 0])
+        ring = scene.cell_tags.find(meshes.RING_BODY)
+        ring = ring[ring < centre.shape[0]]  # owned cells, whose centroids these are
+        # No material on the inner arc's lower half: that share of its pressure is lost.
+        body = ring[(r[ring] > 1.2) | (angle[ring] > np.pi / 4)]
+        points = fe_mpm.seed(scene.mesh, per_cell=3, cells=body)
+        sim = fe_mpm.Simulation(
+            scene.mesh, points, fe_mpm.NeoHookean(1e7, 0.3), "up", facet_tags=scene.facet_tags,
+            tractions=[fe_mpm.Pressure(meshes.RING_INNER, 1e3)],
+            dirichlet=[fe_mpm.Dirichlet(meshes.RING_X_AXIS, component=1),
+                       fe_mpm.Dirichlet(meshes.RING_Y_AXIS, component=0)],
+            reactions={"x_axis": meshes.RING_X_AXIS})
+        sim.add_marker("inner", (np.cos(1.2), np.sin(1.2)))
+        report = sim.run(1.0, 1, progress=False)[-1]
+        result = {"inner": report.markers["inner"].tolist(),
+                  "reaction": report.reactions["x_axis"].tolist(), "lost": report.lost_load}
     elif case in ("geostatic", "geostatic refused"):
         mesh = dolfinx.mesh.create_box(MPI.COMM_WORLD, [[0, 0, 0], [2, 1, 1]], [4, 2, 2],
                                        dolfinx.mesh.CellType.tetrahedron)
@@ -660,6 +679,20 @@ def test_a_block_sliding_on_a_frictional_wall_gives_the_serial_answer_on_two_ran
             assert got["slide"] == pytest.approx(want["slide"], rel=1e-10), case
             np.testing.assert_allclose(got["force"], want["force"], rtol=1e-10, atol=1e-6)
             np.testing.assert_allclose(got["normal"], want["normal"], rtol=1e-10)
+
+
+def test_a_pressure_on_a_curved_face_and_its_lost_share_are_serial_on_two_ranks(tmp_path):
+    """A quarter ring pressurised inside, seeded but for the cells on the lower half
+    of its inner arc, so that part of the pressure loads grid nodes with no material:
+    u(a) and the reaction as serial to 1e-10, and the same lost share. The arc's
+    facets by tag include a rank's ghosts; counted on both ranks, they gave a share
+    that depends on the partition."""
+    (serial,) = _run(tmp_path, "pressure", 1)
+    assert set(serial["lost"]) == {"Pressure 0"} and 0.2 < serial["lost"]["Pressure 0"] < 0.6
+    for result in _run(tmp_path, "pressure", 2):
+        np.testing.assert_allclose(result["inner"], serial["inner"], rtol=1e-10)
+        np.testing.assert_allclose(result["reaction"], serial["reaction"], rtol=1e-10, atol=1e-6)
+        assert result["lost"]["Pressure 0"] == pytest.approx(serial["lost"]["Pressure 0"], 1e-12)
 
 
 def test_the_grid_is_repartitioned_by_its_points_and_the_answer_stays_serial(tmp_path):

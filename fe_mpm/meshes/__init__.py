@@ -47,6 +47,14 @@ from fe_mpm.meshes.footing import (
 )
 from fe_mpm.meshes.gmsh_session import gmsh_session
 from fe_mpm.meshes.rectangle import rectangle_mesh
+from fe_mpm.meshes.ring import (
+    RING_BODY,
+    RING_INNER,
+    RING_MARGIN,
+    RING_X_AXIS,
+    RING_Y_AXIS,
+    quarter_ring,
+)
 from fe_mpm.meshes.tension import (
     TENSION_BOTTOM,
     TENSION_SIDES,
@@ -90,6 +98,12 @@ __all__ = [
     "strip_footing",
     "gmsh_session",
     "rectangle_mesh",
+    "RING_BODY",
+    "RING_INNER",
+    "RING_MARGIN",
+    "RING_X_AXIS",
+    "RING_Y_AXIS",
+    "quarter_ring",
     "TENSION_BOTTOM",
     "TENSION_SIDES",
     "TENSION_TOP",
