@@ -261,3 +261,38 @@ def test_a_quarter_cylinder_fills_its_sector():
 def test_a_cylinder_with_bad_sizes_is_refused_by_name(bad, match):
     with pytest.raises(ValueError, match=match):
         meshes.cylinder(**{**dict(radius=0.1, length=1.0, h=0.05), **bad})
+
+
+@pytest.mark.parametrize(
+    "inner, outer, h, margin", [(1.0, 2.0, 0.2, None), (0.1, 0.15, 0.01, 0.05)]
+)
+def test_the_quarter_ring_tags_its_ring_margin_arc_and_axes(inner, outer, h, margin):
+    """The ring's and the margin's cells fill their quarter annuli (to the polygon's
+    chord error, measured under 0.3 %), the inner arc's facets lie on r = a, and the
+    axes' facets on y = 0 and x = 0, each reaching out to the margin's edge."""
+    scene = meshes.quarter_ring(inner, outer, h, margin)
+    width = 2 * h if margin is None else margin
+    mesh = scene.mesh
+    x = mesh.geometry.x[:, :2]
+    cells = mesh.geometry.dofmaps[0]
+
+    def area(tag):
+        p = x[cells[scene.cell_tags.find(tag)]]
+        e1, e2 = p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]
+        return 0.5 * np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]).sum()
+
+    quarter = lambda r0, r1: math.pi / 4 * (r1**2 - r0**2)  # noqa: E731
+    assert area(meshes.RING_BODY) == pytest.approx(quarter(inner, outer), rel=3e-3)
+    assert area(meshes.RING_MARGIN) == pytest.approx(quarter(outer, outer + width), rel=3e-3)
+    mesh.topology.create_connectivity(1, 0)
+
+    def vertices(tag):
+        return x[dolfinx.mesh.entities_to_geometry(mesh, 1, scene.facet_tags.find(tag)).ravel()]
+
+    np.testing.assert_allclose(np.hypot(*vertices(meshes.RING_INNER).T), inner, rtol=1e-12)
+    for tag, c in ((meshes.RING_X_AXIS, 1), (meshes.RING_Y_AXIS, 0)):
+        on = vertices(tag)
+        np.testing.assert_allclose(on[:, c], 0.0, atol=1e-12 * outer)
+        assert on[:, 1 - c].min() == pytest.approx(inner) and on[:, 1 - c].max() == pytest.approx(
+            outer + width
+        )
