@@ -31,15 +31,14 @@ def _check_exterior(mesh: dolfinx.mesh.Mesh, facets: np.ndarray, owner: str) -> 
 
     Args:
         mesh: The grid.
-        facets: The rank's facets of the load (local indices, ghosts included).
+        facets: The load's facets this rank owns (local indices).
         owner: The load's name in the message (``"Pressure 0"``).
 
     Raises:
         ValueError: On every rank, when some rank owns a facet that is not exterior.
     """
     exterior = dolfinx.mesh.exterior_facet_indices(mesh.topology)  # owned ones only
-    owned = facets[facets < mesh.topology.index_map(mesh.topology.dim - 1).size_local]
-    inside = np.setdiff1d(owned, exterior)
+    inside = np.setdiff1d(facets, exterior)
     if parallel.any_rank(mesh.comm, inside.size > 0):
         count = parallel.total(mesh.comm, int(inside.size))
         raise ValueError(
@@ -55,14 +54,13 @@ def facet_node_weights(
 ) -> tuple[np.ndarray, np.ndarray]:
     """The grid nodes of ``facets`` and each one's share of a uniform load on them.
 
-    A P1 node of a simplex facet carries 1/g of the facet's measure.
+    A P1 node of a simplex facet carries 1/g of the facet's measure. ``facets`` are
+    the ones this rank owns, so that the shares over all ranks count each facet once.
 
     Returns:
         ``(nodes, weights)``: geometry node indices (k,) and their shares (k,), summing to 1.
     """
     g = mesh.geometry.dim
-    # A rank's facets by tag include its ghosts, which their owner counts too.
-    facets = facets[facets < mesh.topology.index_map(g - 1).size_local]
     nodes_of = dolfinx.mesh.entities_to_geometry(mesh, g - 1, facets)  # (nf, g)
     X = mesh.geometry.x[:, :g][nodes_of]
     edges = X[:, 1:] - X[:, :1]
@@ -72,7 +70,6 @@ def facet_node_weights(
         measure = 0.5 * np.linalg.norm(np.cross(edges[:, 0], edges[:, 1]), axis=1)
     nodes, index = np.unique(nodes_of, return_inverse=True)
     weights = np.bincount(index.ravel(), weights=np.repeat(measure / g, g), minlength=nodes.size)
-    # Over every rank's owned facets.
     return nodes, weights / parallel.total(mesh.comm, float(weights.sum()))
 
 
@@ -142,8 +139,10 @@ class GridConditions:
                     f"got {type(spec).__name__}"
                 )
             facets = boundary_facets(mesh, spec.where, facet_tags, label)
+            # A rank's facets by tag include its ghosts, which their owner counts.
+            owned = facets[facets < mesh.topology.index_map(fdim).size_local]
             if isinstance(spec, Pressure):
-                _check_exterior(mesh, facets, label)
+                _check_exterior(mesh, owned, label)
                 value = dolfinx.fem.Constant(mesh, 0.0)
                 term = -value * ufl.FacetNormal(mesh)
             else:
@@ -153,7 +152,7 @@ class GridConditions:
                     )
                 value = term = dolfinx.fem.Constant(mesh, np.zeros(g))
             self.traction_facets[i], self.traction_labels[i] = facets, label
-            self._traction_nodes[i] = facet_node_weights(mesh, facets)
+            self._traction_nodes[i] = facet_node_weights(mesh, owned)
             self.traction_terms.append((term, ds(i)))
             self.tractions.append((spec, value))
 
