@@ -51,6 +51,8 @@ STATE_KEYS = frozenset(
     {"scene", "t", "step", "dropped", "slots", "boundary_slots", "pieces", "shared_sha256"}
 )
 PIECE_KEYS = frozenset({"file", "points", "sha256"})
+#: Fields that checkpoints written before them lack, and their value there, by count.
+OPTIONAL_FIELDS = {"material": lambda n: np.zeros(n, dtype=np.int32)}
 #: How far the grid's extent may differ (relative to its size) and still be the same grid.
 EXTENT_TOLERANCE = 1e-9
 
@@ -269,6 +271,9 @@ def scene(sim) -> dict:
 def _parameters(material) -> dict:
     """The law's parameters by name (numbers and names), for the fingerprint."""
     kind = f"{type(material).__module__}.{type(material).__qualname__}"
+    laws = getattr(material, "laws", None)
+    if laws is not None:  # several laws (fe_mpm.materials.zones): each one's
+        return {"type": kind, "laws": [_parameters(law) for law in laws]}
     if not dataclasses.is_dataclass(material):
         return {"type": kind}  # a repr may hold a memory address, which never matches
     out = {}
@@ -345,7 +350,7 @@ def _load(file: Path, sha256: str, count: int | None) -> dict:
     with np.load(io.BytesIO(data)) as npz:
         arrays = {name: npz[name] for name in npz.files}
     if count is not None:
-        missing = [n for n in SAVED_FIELDS if n not in arrays]
+        missing = [n for n in SAVED_FIELDS if n not in arrays and n not in OPTIONAL_FIELDS]
         if missing or len(arrays["x"]) != count:
             raise CheckpointError(f"checkpoint file {file} lacks {missing or 'points'}")
     return arrays
@@ -374,7 +379,7 @@ def _joined(pieces: list[dict], sim) -> MaterialPoints:
     """One point set from this rank's pieces, checked as any new points are."""
 
     def stacked(name: str) -> np.ndarray:
-        parts = [p[name] for p in pieces]
+        parts = [p[name] if name in p else OPTIONAL_FIELDS[name](len(p["x"])) for p in pieces]
         # No pieces on this rank: no points, in the shape the simulation's have.
         return np.concatenate(parts) if parts else getattr(sim.points, name)[:0]
 

@@ -39,6 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from fe_mpm import parallel
+from fe_mpm.materials.zones import MATERIAL
 from fe_mpm.particles import MaterialPoints
 from fe_mpm.tilings import shape_quality
 from fe_mpm.tracker import Tracker
@@ -136,7 +137,12 @@ def _flipped(corners: np.ndarray, d: int, k: int, e: int, j: int):
 
 
 def choose_flips(
-    corners: np.ndarray, quality: np.ndarray, limit: np.ndarray, bad: np.ndarray, scale: float
+    corners: np.ndarray,
+    quality: np.ndarray,
+    limit: np.ndarray,
+    bad: np.ndarray,
+    scale: float,
+    zone: np.ndarray | None = None,
 ) -> list[Flip]:
     """The flips that re-tile the distorted domains ``bad``, taken in that order.
 
@@ -146,6 +152,8 @@ def choose_flips(
         limit: The quality below which each counts as distorted (n,).
         bad: The distorted ones, in the order to treat them.
         scale: The grid's extent (m), for telling corners apart (:data:`CORNER_TOL`).
+        zone: Each domain's law (n,), where the body has several: two domains of
+            different laws are not flipped (a remap would mix their states).
 
     Returns:
         The flips (:class:`Flip`); a domain takes part in one at most. A distorted
@@ -166,7 +174,7 @@ def choose_flips(
             if partner[3 * d + k] < 0:
                 continue
             e, j = divmod(int(partner[3 * d + k]), 3)
-            if used[e]:
+            if used[e] or (zone is not None and zone[e] != zone[d]):
                 continue
             flipped = _flipped(corners, d, k, e, j)
             if flipped is None:
@@ -214,6 +222,19 @@ def _set_state(points: MaterialPoints, row: int, by_volume: np.ndarray, by_mass:
         start += size
     g = points.velocity.shape[1]
     points.velocity[row], points.acceleration[row] = by_mass[:g], by_mass[g:]
+
+
+def _zones(points: MaterialPoints, rows: _Rows) -> np.ndarray | None:
+    """Each row's law where the body has several (its ``"material"`` column), else None."""
+    if MATERIAL not in points.history:
+        return None
+    g = points.gdim
+    start = g * g + 9  # F, then the stress, then the history by name (:func:`_state`)
+    for name in sorted(points.history):
+        if name == MATERIAL:
+            return np.rint(rows.by_volume[:, start]).astype(np.int64)
+        start += int(np.prod(points.history[name].shape[1:]))
+    raise AssertionError("unreachable")
 
 
 @dataclass
@@ -323,7 +344,8 @@ def flip_distorted(
     bad = np.flatnonzero(rows.quality < rows.limit)
     bad = bad[np.argsort(np.round(rows.quality[bad], QUALITY_DIGITS), kind="stable")]
     new = corners.copy()
-    for flip in choose_flips(rows.corners, rows.quality, rows.limit, bad, scale):
+    zone = _zones(points, rows)
+    for flip in choose_flips(rows.corners, rows.quality, rows.limit, bad, scale, zone):
         volume, mass, by_volume, by_mass, keeps_volume = _remapped(flip, rows, g)
         if not keeps_volume:
             continue  # the same on every rank: its domains are redrawn instead

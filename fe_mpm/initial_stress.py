@@ -81,20 +81,20 @@ def geostatic_stress(
 
 
 def elastic_left_cauchy_green(
-    kirchhoff: npt.ArrayLike, bulk_modulus: float, shear_modulus: float
+    kirchhoff: npt.ArrayLike, bulk_modulus: float | np.ndarray, shear_modulus: float | np.ndarray
 ) -> np.ndarray:
     """bᵉ = exp(2εᵉ) whose Hencky stress is ``kirchhoff``, shape ``(n, 3, 3)``.
 
     Args:
         kirchhoff: Symmetric Kirchhoff stresses τ (Pa), shape ``(n, 3, 3)``.
-        bulk_modulus: K (Pa).
-        shear_modulus: G (Pa).
+        bulk_modulus: K (Pa), one or each point's (n,).
+        shear_modulus: G (Pa), one or each point's (n,).
     """
     tau = np.asarray(kirchhoff, dtype=np.float64)
     mean = np.trace(tau, axis1=1, axis2=2) / 3.0
-    strain = (mean / (3.0 * bulk_modulus))[:, None, None] * np.eye(3) + deviator(tau) / (
-        2.0 * shear_modulus
-    )
+    K = np.asarray(bulk_modulus, dtype=np.float64)
+    G = np.asarray(shear_modulus, dtype=np.float64)[..., None, None]
+    strain = (mean / (3.0 * K))[:, None, None] * np.eye(3) + deviator(tau) / (2.0 * G)
     values, vectors = spectral_decomposition(strain)
     return from_principal(np.exp(2.0 * values), vectors)
 
@@ -143,19 +143,25 @@ def start_stressed(
             "Simulation: initial_stress needs undeformed points (F = I); these carry "
             "a deformation already"
         )
-    kept = getattr(law, "history", {}).get("be")
-    if kept is None or kept.shape != (3, 3):
-        raise ValueError(
-            "Simulation: initial_stress needs a law that keeps the elastic left "
-            "Cauchy-Green tensor 'be' (MohrCoulomb, the Drucker-Prager family, "
-            f"HenckyJ2); {type(law).__name__} does not"
-        )
-    K, G = law.bulk_modulus, law.mu
+    for one in getattr(law, "laws", [law]):  # several laws: each must keep be
+        kept = getattr(one, "history", {}).get("be")
+        if kept is None or kept.shape != (3, 3):
+            raise ValueError(
+                "Simulation: initial_stress needs a law that keeps the elastic left "
+                "Cauchy-Green tensor 'be' (MohrCoulomb, the Drucker-Prager family, "
+                f"HenckyJ2); {type(one).__name__} does not"
+            )
+    if hasattr(law, "point_bulk_moduli"):  # several laws: each point's own moduli
+        labels = {"material": points.material}
+        K, G = law.point_bulk_moduli(labels), law.point_shear_moduli(labels)
+    else:
+        K, G = np.full(n, float(law.bulk_modulus)), np.full(n, float(law.mu))
     J0 = 1.0 + np.trace(sigma, axis1=1, axis2=2) / (3.0 * K) if pressure_field else np.ones(n)
     if J0.min(initial=1.0) <= 0.0:
+        p = int(np.argmin(J0))
         raise ValueError(
-            "Simulation: initial_stress compresses a point past J = 0 at the law's "
-            f"bulk modulus {K:g} Pa"
+            f"Simulation: initial_stress compresses point {p} past J = 0 at its law's "
+            f"bulk modulus {K[p]:g} Pa"
         )
     points.history["be"] = elastic_left_cauchy_green(J0[:, None, None] * sigma, K, G)
     points.stress[:] = sigma

@@ -19,6 +19,7 @@ from fe_mpm.checks import check_choice, check_int, check_range
 from fe_mpm.formulations import FORMULATIONS, FormulationSpec
 from fe_mpm.ghost import WITH_DOMAINS, WITH_DOMAINS_DYNAMIC
 from fe_mpm.materials.protocol import Law, MixedLaw, missing_members
+from fe_mpm.materials.zones import material_zones
 from fe_mpm.particles import MaterialPoints, simplex_cell_type
 
 #: Relative mismatch between the law's density and the points' that counts as a conflict.
@@ -308,30 +309,65 @@ def check_law(material, spec: FormulationSpec, formulation: str) -> None:
         check_formulation(spec.pressure)
 
 
+def laws_of_zones(material, points: MaterialPoints, comm) -> object:
+    """The simulation's law: ``material`` itself, or the zones of a list of laws.
+
+    Every point's ``material`` label must name one of the laws: 0 where one law is
+    given, an index into the list where several are
+    (:mod:`fe_mpm.materials.zones`). Collective: every rank refuses alike.
+    """
+    several = isinstance(material, list | tuple)
+    if several and len(material) == 0:
+        raise ValueError("Simulation: material is an empty list; give a law or a list of laws")
+    laws = list(material) if several else [material]
+    highest = parallel.largest(comm, int(points.material.max(initial=0)))
+    if highest >= len(laws):
+        given = f"{len(laws)} laws" if several else "one law"
+        raise ValueError(
+            f"Simulation: points are seeded with material={highest} (seed(..., material=k)), "
+            f"but Simulation was given {given}; material k names the k-th of a list of "
+            "laws, 0 to len(laws) - 1"
+        )
+    if len(laws) == 1:
+        return laws[0]
+    return material_zones(laws)
+
+
 def take_density(material, points: MaterialPoints) -> None:
-    """Give the points the law's density, or check that theirs agrees with it.
+    """Give the points their law's density, or check that theirs agrees with it.
 
     The mass of a point is what body forces and inertia use; the law's
-    ``density`` only fills it in when :func:`~fe_mpm.seed` was given none.
+    ``density`` only fills it in when :func:`~fe_mpm.seed` was given none. With
+    several laws (:mod:`fe_mpm.materials.zones`) each law does so at its own points.
     """
-    rho = material.density
-    if rho is None:
-        return
+    densities = getattr(material, "densities", None)
+    if densities is None:
+        zones = [(material.density, np.ones(len(points), dtype=bool), "the material's")]
+    else:
+        zones = [
+            (rho, points.material == k, f"material {k}'s") for k, rho in enumerate(densities())
+        ]
     reference_volume = points.volume / np.linalg.det(points.F)
     if not points.density_given:
-        points.mass = rho * reference_volume
-        points.density_given = True
+        for rho, zone, _ in zones:
+            if rho is not None:
+                points.mass[zone] = rho * reference_volume[zone]
+        # A zone whose law has no density keeps ρ₀ = 1 kg/m³ (seed's placeholder).
+        points.density_given = all(rho is not None for rho, _, _ in zones)
         return
     rho_points = points.mass / reference_volume
-    off = np.abs(rho_points - rho) > DENSITY_RTOL * rho
-    if np.any(off):
-        first = np.flatnonzero(off)[0]
-        raise ValueError(
-            f"Simulation: the material's density {rho:g} kg/m³ differs from the points' "
-            f"{rho_points[first]:g} kg/m³ (point {first}; from seed(..., density=...) or "
-            "their masses). Give the density in one place: seed(..., density=...) for "
-            "zones of different densities, or the law's density alone."
-        )
+    for rho, zone, whose in zones:
+        if rho is None:
+            continue
+        off = zone & (np.abs(rho_points - rho) > DENSITY_RTOL * rho)
+        if np.any(off):
+            first = np.flatnonzero(off)[0]
+            raise ValueError(
+                f"Simulation: {whose} density {rho:g} kg/m³ differs from the points' "
+                f"{rho_points[first]:g} kg/m³ (point {first}; from seed(..., density=...) or "
+                "their masses). Give the density in one place: seed(..., density=...) for "
+                "zones of different densities, or the law's density alone."
+            )
 
 
 def check_supports(conditions, boundary, occupied: np.ndarray, walls=None) -> None:

@@ -20,7 +20,18 @@ from fe_mpm.checks import check_choice, check_finite, check_int, check_range
 from fe_mpm.cut_cells import inside_simplices
 
 #: The per-point arrays of :class:`MaterialPoints` (all indexed by point first).
-PER_POINT_FIELDS = ("x", "volume", "mass", "F", "stress", "cell", "x0", "velocity", "acceleration")
+PER_POINT_FIELDS = (
+    "x",
+    "volume",
+    "mass",
+    "F",
+    "stress",
+    "cell",
+    "x0",
+    "velocity",
+    "acceleration",
+    "material",
+)
 
 
 @dataclass
@@ -38,6 +49,9 @@ class MaterialPoints:
         x0: Initial positions, shape ``(n, g)`` (m), for displacement output.
         velocity: Velocities ``v_p``, shape ``(n, g)`` (m/s); used by dynamic runs.
         acceleration: Accelerations ``a_p``, shape ``(n, g)`` (m/s²); used by dynamic runs.
+        material: Each point's law, shape ``(n,)``: its index in the list of laws
+            given to :class:`~fe_mpm.Simulation` (0, the only one, when it is given
+            one law); set by ``seed(..., material=k)``.
         history: The material's internal variables by name, each ``(n, *shape)``
             (e.g. ``plastic_strain`` for J2); filled in by the simulation.
         density_given: False when ``mass`` is a placeholder (ρ₀ = 1 kg/m³) that the
@@ -63,6 +77,7 @@ class MaterialPoints:
     x0: np.ndarray = field(default=None)  # type: ignore[assignment]
     velocity: np.ndarray = field(default=None)  # type: ignore[assignment]
     acceleration: np.ndarray = field(default=None)  # type: ignore[assignment]
+    material: np.ndarray = field(default=None)  # type: ignore[assignment]
     history: dict[str, np.ndarray] = field(default_factory=dict)
     density_given: bool = True
     simulated_to: float | None = None
@@ -108,6 +123,25 @@ class MaterialPoints:
                     f"MaterialPoints: {name} must have shape {(n, g)}, got {value.shape}"
                 )
             setattr(self, name, value)
+        self.material = self._checked_material(n)
+
+    def _checked_material(self, n: int) -> np.ndarray:
+        """The laws' indices as a (n,) int array, each ≥ 0."""
+        if self.material is None:
+            return np.zeros(n, dtype=np.int32)
+        labels = np.asarray(self.material)
+        if labels.dtype.kind not in "iu" and not (
+            labels.dtype.kind == "f" and np.all(np.isfinite(labels) & (labels == np.rint(labels)))
+        ):
+            raise TypeError(
+                "MaterialPoints: material must hold whole numbers (each point's law: its "
+                f"index in Simulation's list of laws), got {labels.dtype}"
+            )
+        labels = np.broadcast_to(labels, (n,)) if labels.ndim == 0 else labels.reshape(-1)
+        if labels.shape != (n,):
+            raise ValueError(f"MaterialPoints: material must have shape ({n},), got {labels.shape}")
+        _refuse_points("material", labels < 0, ">= 0", labels)
+        return labels.astype(np.int32)
 
     def _checked_F(self, n: int, g: int) -> np.ndarray:
         """The given deformation gradients as a (n, g, g) float array with det F > 0."""
@@ -188,6 +222,7 @@ def seed(
     cells: npt.ArrayLike | None = None,
     volumes: str = "gauss",
     level_set: Callable[[np.ndarray], np.ndarray] | None = None,
+    material: int = 0,
 ) -> MaterialPoints:
     """Place material points at the Gauss points of the cells of ``mesh``.
 
@@ -222,6 +257,9 @@ def seed(
             planar surface), so the points integrate the body to the rule's degree
             and a fluid at rest stands in equilibrium; cells wholly outside get
             none. Combines with ``cells``, which then names the cells to consider.
+        material: The points' law, ≥ 0: its index in the list of laws given to
+            :class:`~fe_mpm.Simulation`, for a body of several materials (seed each
+            zone with its index and :func:`merge` them). 0 for a body of one law.
 
     Returns:
         The material points, undeformed (``F = I``).
@@ -238,6 +276,7 @@ def seed(
         check_range("seed", "density", density, lo=0.0, lo_open=True)
     check_choice("seed", "volumes", volumes, ("gauss", "equal"))
     per_cell = check_int("seed", "per_cell", per_cell, lo=1)
+    material = check_int("seed", "material", material, lo=0)
     tdim = mesh.topology.dim
     cell_map = mesh.topology.index_map(tdim)
     num_cells = cell_map.size_local
@@ -277,6 +316,7 @@ def seed(
         volume=vol.reshape(-1),
         mass=(1.0 if density is None else float(density)) * vol.reshape(-1),
         cell=np.repeat(cells, per_cell),
+        material=np.full(x.shape[0] * per_cell, material, dtype=np.int32),
         density_given=density is not None,
     )
 
@@ -341,7 +381,7 @@ def _cells(cells: npt.ArrayLike, num_cells: int, num_ghosts: int = 0) -> np.ndar
 
 
 def merge(*sets: MaterialPoints) -> MaterialPoints:
-    """One set of points from several (e.g. zones seeded at other densities).
+    """One set of points from several (zones seeded with other laws or densities).
 
     Every per-point field comes along, in the order of ``sets``: the velocities set on
     each zone (two bodies thrown at each other), deformation gradients, stresses and

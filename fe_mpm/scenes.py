@@ -5,6 +5,8 @@ The demos spell these set-ups out step by step; tests and benchmarks call them.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 from mpi4py import MPI
 
 import numpy as np
@@ -329,6 +331,7 @@ def platen_compression(
     formulation: str = "u",
     compression: float = 0.5,
     platen_points_per_cell: int = 6,
+    layers: Sequence | None = None,
     **options,
 ) -> Simulation:
     """A unit block squeezed between smooth platens to ``1 − compression`` of its length.
@@ -357,6 +360,10 @@ def platen_compression(
             length, and P2 needs two per facet: with two per cell P2/P1 Neo-Hookean
             with domains was 4.3 % low at half the length and the J2 block stopped
             at 42 %; with six both are within 0.05 % (P1 moves by 0.02 %).
+        layers: Laws in place of ``law``, for a block of several materials: equal
+            bands across the platen (side by side along y, the first at y = 0), each
+            squeezed alike, so the platen carries the sum of their forces where
+            their laws keep the bands' widening alike (the same ν, or all plastic).
         options: Passed on to :class:`~fe_mpm.simulation.Simulation`.
     """
     n = check_int("platen_compression", "n", n, lo=2)
@@ -367,7 +374,7 @@ def platen_compression(
     platen_points_per_cell = check_int(
         "platen_compression", "platen_points_per_cell", platen_points_per_cell, lo=1
     )
-    material = _platen_law(law)
+    material = _platen_law(law) if layers is None else list(layers)
     # The widest the block gets: incompressible, its side grows by λ^(−1/(dim − 1)).
     side = (1.0 - compression) ** (-1.0 / (dim - 1)) + 2.0 / n
     extent = [1.0 + 2.0 / n] + [side] * (dim - 1)
@@ -378,6 +385,9 @@ def platen_compression(
     mesh = create(MPI.COMM_WORLD, [[0.0] * dim, top], cells, kind)
     points = seed(mesh, per_cell=per_cell, density=1.0)
     points.keep(np.all(points.x < 1.0, axis=1))
+    if layers is not None:
+        band = np.floor(points.x[:, 1] * len(material)).astype(np.int32)
+        points.material = np.minimum(band, len(material) - 1)
     # The platen's points over the grid's side, less a margin of a cell.
     m = platen_points_per_cell * (cells[1] - 1)
     spacing = (top[1] - 1.0 / n) / m

@@ -50,6 +50,7 @@ from fe_mpm.initial_stress import start_stressed
 from fe_mpm.markers import Markers
 from fe_mpm.materials import ReturnMapResult
 from fe_mpm.materials.mixed_return import MixedReturnResult
+from fe_mpm.materials.zones import MATERIAL
 from fe_mpm.newton import NewtonResult, NewtonSolver
 from fe_mpm.output import SimulationOutput
 from fe_mpm.particles import MaterialPoints
@@ -105,8 +106,11 @@ class Simulation:
             ghost penalty, a fluid's pressure by parts), ``sim.mesh`` is the same grid
             rebuilt with them.
         points: The material points (moved and updated in place).
-        material: Constitutive law (see :mod:`fe_mpm.materials`); its internal
-            variables are added to ``points.history`` if missing.
+        material: Constitutive law (see :mod:`fe_mpm.materials`), or a list of laws
+            for a body of several materials: a point seeded with ``material=k``
+            follows the k-th (:mod:`fe_mpm.materials.zones`). The internal variables
+            are added to ``points.history`` if missing (with several laws, also
+            ``"material"``, each point's law).
         formulation: ``"u"`` (irreducible), ``"u-nbva"`` (irreducible with
             node-based volumetric averaging), ``"up"`` (mixed P1/P1 with PPP),
             ``"up-nostab"`` (mixed P1/P1) or ``"up-p2p1"`` (mixed Taylor–Hood);
@@ -261,6 +265,7 @@ class Simulation:
         initial_stress: np.ndarray | None = None,
     ):
         model_checks.check_grid_and_points(mesh, points)
+        material = model_checks.laws_of_zones(material, points, mesh.comm)
         if parallel.any_rank(mesh.comm, points.simulated_to is not None):
             warn(
                 "Simulation: these points were already stepped by another Simulation (to "
@@ -302,10 +307,14 @@ class Simulation:
             parallel.raise_together(mesh.comm, refused)
         for name, h in material.history.items():
             points.history.setdefault(name, h.initial_values(len(points)))
+        if MATERIAL in material.history:  # several laws: the label reaches the slots
+            points.history[MATERIAL] = points.material.astype(np.float64)
+        #: Whether the law keeps internal variables (plasticity), besides a point's law.
+        self._plastic = bool(set(material.history) - {MATERIAL})
         self.mesh, self.points, self.material = mesh, points, material
         self.formulation, self.gdim, self.dynamic = formulation, mesh.geometry.dim, bool(dynamic)
         if line_search == "auto":
-            line_search = "bt" if material.history else "basic"
+            line_search = "bt" if self._plastic else "basic"
         self.petsc_options = {"snes_linesearch_type": line_search, **(petsc_options or {})}
         self.linear_solver = linear_solver
         if min_step is not None:  # a step of 0 s or less would be cut to for ever
@@ -614,7 +623,7 @@ class Simulation:
             self.domains is not None,
             self._ghost_factor,
             self._domains_would_do,
-            static_plastic=not self.dynamic and bool(self.material.history),
+            static_plastic=not self.dynamic and self._plastic,
         )
         length = StepLength(nominal, floor, advice)
         can_hold = not self.dynamic and self.domains is None  # pieces differ per attempt

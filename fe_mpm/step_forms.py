@@ -238,7 +238,11 @@ class StepForms:
             vertices = self.mesh.geometry.x[self.mesh.geometry.dofmaps[0][layout.cell], :g]
             q.pack(self.second_moment, layout, second_moments(vertices, points.x, bary))
         if self.ppp is not None:
-            volume = np.bincount(layout.cell, weights=points.volume, minlength=tracker.num_cells)
+            weights = points.volume
+            point_mu = getattr(self.material, "point_shear_moduli", None)
+            if point_mu is not None:  # several laws: PPP's 1/μ is each point's own
+                weights = points.volume * (self.material.mu / point_mu(points.history))
+            volume = np.bincount(layout.cell, weights=weights, minlength=tracker.num_cells)
             q.pack_cell_field(self.ppp.fill, layout, volume / tracker.volumes)
         if self.dF_shift is not None:  # until the first iterate's (SharedIncrement)
             q.pack(self.dF_shift, layout, np.zeros((len(points), g, g)))

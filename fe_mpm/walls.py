@@ -64,6 +64,8 @@ class WallForces:
 
 def young_modulus(material) -> float:
     """Young's modulus E = 9Kμ / (3K + μ) of a law with ``mu`` and ``bulk_modulus`` (Pa)."""
+    if hasattr(material, "young_modulus"):  # several laws: the stiffest
+        return float(material.young_modulus)
     K, mu = float(material.bulk_modulus), float(material.mu)
     return 9.0 * K * mu / (3.0 * K + mu)
 

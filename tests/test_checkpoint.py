@@ -227,3 +227,30 @@ def test_a_malformed_state_is_refused(written, key):
 def test_checkpoint_every_must_be_a_positive_count():
     with pytest.raises(ValueError, match="checkpoint_every"):
         falling_block(checkpoint_every=0)
+
+
+def test_a_restored_body_of_two_laws_continues_exactly_and_another_pair_is_refused(tmp_path):
+    """Each point's law is state: restored with the points, the layered block (a
+    principal-space J2 band beside a Tresca band, u-p with point domains) repeats the
+    uninterrupted run, and a simulation whose second law differs refuses the
+    checkpoint, naming the laws' parameters."""
+    from fe_mpm.materials import HenckyJ2
+
+    def block(cohesion=1.5, **options):
+        laws = [HenckyJ2(1000.0, 0.3, 1.0), fe_mpm.MohrCoulomb.tresca(1000.0, 0.3, cohesion)]
+        return scenes.platen_compression(
+            6, 3, layers=laws, formulation="up", point_domains=True, **options
+        )
+
+    straight = block(checkpoint_dir=tmp_path, checkpoint_every=3)
+    straight.run(0.3, 3, progress=False)
+    expected = straight.run(0.6, 3, progress=False)
+    again = block()
+    again.restore(tmp_path / "step_000003")
+    np.testing.assert_array_equal(again.points.material, (again.points.x0[:, 1] > 0.5))
+    reports = again.run(0.6, 3, progress=False)
+    assert [scenes.platen_force(r) for r in reports] == [scenes.platen_force(r) for r in expected]
+    np.testing.assert_array_equal(again.points.x, straight.points.x)
+    other = block(cohesion=2.0)
+    with pytest.raises(fe_mpm.CheckpointError, match="law_parameters"):
+        other.restore(tmp_path / "step_000003")

@@ -490,6 +490,19 @@ try:
         report = sim.run(1.0, 1, progress=False)[-1]
         result = {"inner": report.markers["inner"].tolist(),
                   "reaction": report.reactions["x_axis"].tolist(), "lost": report.lost_load}
+    elif case == "zones":
+        from fe_mpm import scenes
+        from fe_mpm.materials import HenckyJ2
+        laws = [HenckyJ2(1000.0, 0.3, 1.0), fe_mpm.MohrCoulomb.tresca(1000.0, 0.3, 1.5)]
+        sim = scenes.platen_compression(6, 3, layers=laws, formulation="up", point_domains=True)
+        reports = sim.run(0.6, 6, progress=False)
+        pts = sim.points
+        agree = bool(np.all(np.rint(pts.history["material"]) == pts.material))
+        strain = [float(parallel.total(MPI.COMM_WORLD, pts.history["plastic_strain"][
+            pts.material == k].sum())) for k in (0, 1)]
+        result = {"force": [scenes.platen_force(r) for r in reports], "strain": strain,
+                  "agree": parallel.total(MPI.COMM_WORLD, int(not agree)) == 0,
+                  "migrated": sum(r.migrated_points for r in reports)}
     elif case in ("geostatic", "geostatic refused"):
         mesh = dolfinx.mesh.create_box(MPI.COMM_WORLD, [[0, 0, 0], [2, 1, 1]], [4, 2, 2],
                                        dolfinx.mesh.CellType.tetrahedron)
@@ -693,6 +706,19 @@ def test_a_pressure_on_a_curved_face_and_its_lost_share_are_serial_on_two_ranks(
         np.testing.assert_allclose(result["inner"], serial["inner"], rtol=1e-10)
         np.testing.assert_allclose(result["reaction"], serial["reaction"], rtol=1e-10, atol=1e-6)
         assert result["lost"]["Pressure 0"] == pytest.approx(serial["lost"]["Pressure 0"], 1e-12)
+
+
+def test_a_body_of_two_laws_gives_the_serial_answer_on_two_ranks(tmp_path):
+    """Two plastic bands side by side (a principal-space J2 and Tresca, point domains,
+    u-p) squeezed by a platen: the force at every step and each band's plastic strain
+    as serial to 1e-9, and every point keeps its law as it moves to another rank."""
+    (serial,) = _run(tmp_path, "zones", 1)
+    assert min(serial["strain"]) > 0.0  # both bands yield
+    for result in _run(tmp_path, "zones", 2):
+        assert result["agree"]
+        np.testing.assert_allclose(result["force"], serial["force"], rtol=1e-9)
+        np.testing.assert_allclose(result["strain"], serial["strain"], rtol=1e-9)
+    assert result["migrated"] > 0  # points did cross to the other rank
 
 
 def test_the_grid_is_repartitioned_by_its_points_and_the_answer_stays_serial(tmp_path):

@@ -117,6 +117,12 @@ def point_terms(material, dF, F_n, p_p, state=None, p_stress=None):
     ``p_stress``: the pressure in τ, if not ``p_p`` (the part of it not integrated by
     parts, :mod:`fe_mpm.pressure_by_parts`); the volumetric equation keeps ``p_p``.
     """
+    zones = getattr(material, "zones", None)
+    if zones is not None:  # several laws (fe_mpm.materials.zones): each at its own points
+        terms = [
+            (chi, point_terms(law, dF, F_n, p_p, own, p_stress)) for chi, law, own in zones(state)
+        ]
+        return sum(chi * t[0] for chi, t in terms), sum(chi * t[1] for chi, t in terms)
     F = dF * F_n
     tau, J = stress_parts(material, F, p_p if p_stress is None else p_stress, state)
     volumetric = getattr(material, "volumetric_equation", lambda state: None)(state)

@@ -30,6 +30,7 @@ from fe_mpm.materials.matsuoka_nakai import MatsuokaNakai
 from fe_mpm.materials.mohr_coulomb import MohrCoulomb
 from fe_mpm.materials.protocol import Law, MixedLaw, PointwiseLaw
 from fe_mpm.materials.state import HistoryField, PointState
+from fe_mpm.materials.zones import MaterialZones
 
 __all__ = [
     "DruckerPrager",
@@ -38,6 +39,7 @@ __all__ = [
     "J2Plasticity",
     "Law",
     "Linearisation",
+    "MaterialZones",
     "MatsuokaNakai",
     "MixedLaw",
     "ModifiedDruckerPrager",

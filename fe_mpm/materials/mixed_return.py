@@ -308,9 +308,11 @@ def spring_start(top: np.ndarray, mu: float) -> np.ndarray:
 
     1e-9 of the stress scale below the law's largest mean stress ``top`` (Pa), so
     that the apex's derivative is taken on the cone's side; ``mu`` is the shear
-    modulus (Pa).
+    modulus (Pa). A law without an apex (Tresca: ``top`` = inf) has no spring.
     """
-    return top - 1e-9 * (np.abs(top) + mu * 1e-3)
+    with np.errstate(invalid="ignore"):  # inf − inf where top is inf; kept inf below
+        start = top - 1e-9 * (np.abs(top) + mu * 1e-3)
+    return np.where(np.isfinite(top), start, top)
 
 
 def _largest_mean_stress(law, shifted: _Shifted, start: np.ndarray) -> np.ndarray:

@@ -68,6 +68,9 @@ def with_runtime_parameters(law, mesh):
     A law that is not a dataclass (a user's own class) is returned as it is,
     and its numbers are compiled into the forms.
     """
+    in_forms = getattr(law, "in_forms", None)
+    if in_forms is not None:  # several laws (fe_mpm.materials.zones): each its own view
+        return in_forms(lambda one: with_runtime_parameters(one, mesh))
     if not dataclasses.is_dataclass(law) or isinstance(law, type):
         return law
     return RuntimeParameters(law, mesh)
