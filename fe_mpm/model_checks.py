@@ -8,7 +8,7 @@ formulation needs, one density, and supports that stop every rigid translation.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 
 import numpy as np
 
@@ -316,13 +316,20 @@ def laws_of_zones(material, points: MaterialPoints, comm) -> object:
     given, an index into the list where several are
     (:mod:`fe_mpm.materials.zones`). Collective: every rank refuses alike.
     """
-    several = isinstance(material, list | tuple)
-    if several and len(material) == 0:
-        raise ValueError("Simulation: material is an empty list; give a law or a list of laws")
+    # A list, tuple or array of laws; a law itself is not iterable.
+    several = not hasattr(material, "kirchhoff") and isinstance(material, Iterable)
     laws = list(material) if several else [material]
+    if several and len(laws) == 0:
+        raise ValueError("Simulation: material is an empty list; give a law or a list of laws")
+    error = None
+    try:  # set after seeding too (points.material = ...): checked again here
+        points.material = points._checked_material(len(points))
+    except (TypeError, ValueError) as err:
+        error = err
+    parallel.raise_together(comm, error)
     highest = parallel.largest(comm, int(points.material.max(initial=0)))
     if highest >= len(laws):
-        given = f"{len(laws)} laws" if several else "one law"
+        given = f"{len(laws)} laws" if several else f"one law ({type(material).__name__})"
         raise ValueError(
             f"Simulation: points are seeded with material={highest} (seed(..., material=k)), "
             f"but Simulation was given {given}; material k names the k-th of a list of "

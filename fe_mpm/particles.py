@@ -130,6 +130,11 @@ class MaterialPoints:
         if self.material is None:
             return np.zeros(n, dtype=np.int32)
         labels = np.asarray(self.material)
+        if labels.dtype == object or labels.dtype.kind == "b":
+            raise TypeError(
+                "MaterialPoints: material must hold whole numbers (each point's law), got "
+                f"{labels.dtype}"
+            )
         if labels.dtype.kind not in "iu" and not (
             labels.dtype.kind == "f" and np.all(np.isfinite(labels) & (labels == np.rint(labels)))
         ):
@@ -141,6 +146,7 @@ class MaterialPoints:
         if labels.shape != (n,):
             raise ValueError(f"MaterialPoints: material must have shape ({n},), got {labels.shape}")
         _refuse_points("material", labels < 0, ">= 0", labels)
+        _refuse_points("material", labels > np.iinfo(np.int32).max, "< 2**31", labels)
         return labels.astype(np.int32)
 
     def _checked_F(self, n: int, g: int) -> np.ndarray:

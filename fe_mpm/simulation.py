@@ -309,6 +309,8 @@ class Simulation:
             points.history.setdefault(name, h.initial_values(len(points)))
         if MATERIAL in material.history:  # several laws: the label reaches the slots
             points.history[MATERIAL] = points.material.astype(np.float64)
+        else:  # one law after a stage of several: no stale labels in the output
+            points.history.pop(MATERIAL, None)
         #: Whether the law keeps internal variables (plasticity), besides a point's law.
         self._plastic = bool(set(material.history) - {MATERIAL})
         self.mesh, self.points, self.material = mesh, points, material

@@ -230,6 +230,19 @@ def test_several_laws_are_refused_with_the_field_named():
         simulation([J2Plasticity(1e6, 0.3, 1e3), HenckyJ2(1e6, 0.3, 1e3)])
     with pytest.raises(ValueError, match=r"material 0 \(_NoDeviator\) has no deviatoric"):
         MaterialZones([_NoDeviator(), law]).check_formulation(True)
+    for bad, error, match in [
+        (-1, ValueError, "material must be >= 0 at every point; point 0 has -1"),
+        (0.5, TypeError, "material must hold whole numbers"),
+        (np.zeros(3), ValueError, r"material must have shape \(8,\), got \(3,\)"),
+    ]:  # set after seeding: checked again, or a point would follow no law
+        points = fe_mpm.seed(mesh, 1)
+        if np.isscalar(bad):
+            points.material = np.zeros(len(points))
+            points.material[0] = bad
+        else:
+            points.material = bad
+        with pytest.raises(error, match=match):
+            fe_mpm.Simulation(mesh, points, [law, law])
     with pytest.raises(ValueError, match=r"seed: material must lie in \[0, inf\], got -1"):
         fe_mpm.seed(mesh, 1, material=-1)
     with pytest.raises(TypeError, match="seed: material must be an int"):
@@ -249,3 +262,25 @@ class _NoDeviator:
 
     def updated_history(self, F, state):
         return {}
+
+
+def test_a_later_stage_with_one_law_keeps_no_labels_of_the_earlier_zones():
+    """A staged analysis: a step with two laws, then one with one law on the same
+    points (a warning says they start deformed). The second stage's output and flips
+    must not see the first stage's zones: the labels' internal variable is gone, and
+    the second stage runs as one law."""
+    mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (2, 2))
+    points = fe_mpm.merge(
+        fe_mpm.seed(mesh, 1, cells=[0, 1, 2, 3]),
+        fe_mpm.seed(mesh, 1, cells=[4, 5, 6, 7], material=1),
+    )
+    hold = [fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))]
+    laws = [fe_mpm.NeoHookean(1e6, 0.3), fe_mpm.NeoHookean(2e6, 0.3)]
+    first = fe_mpm.Simulation(mesh, points, laws, dirichlet=hold, body_force=(0.0, -10.0))
+    first.run(1.0, 1, progress=False)
+    assert "material" in points.history
+    points.material[:] = 0
+    with pytest.warns(UserWarning, match="already stepped"):
+        second = fe_mpm.Simulation(mesh, points, laws[0], dirichlet=hold, body_force=(0.0, -10.0))
+    assert "material" not in points.history
+    second.run(2.0, 1, progress=False)

@@ -171,7 +171,9 @@ class MaterialZones:
         zones = self.zones(state)
         updates = [law.updated_history(F, sub) for _, law, sub in zones]
         out = {}
-        for name in {name for update in updates for name in update}:
+        # In the history's order, not a set's: the compiled form must not vary from
+        # one run (or rank) to the next with Python's hash seed.
+        for name in [name for name in self.history if any(name in u for u in updates)]:
             kept = state.history[name]
             out[name] = sum(
                 chi * (update[name] if name in update else kept)
@@ -323,6 +325,7 @@ def _check_laws(laws: tuple) -> None:
                 "fluid); a fluid cannot share a simulation with other laws yet"
             )
     shapes: dict[str, tuple] = {}
+    initial: dict[str, np.ndarray] = {}
     kinds: dict[str, bool] = {}
     for k, law in enumerate(laws):
         pointwise = isinstance(law, PointwiseLaw)
@@ -332,10 +335,16 @@ def _check_laws(laws: tuple) -> None:
                     f"Simulation: material {k} ({type(law).__name__}) keeps an internal "
                     f"variable named {MATERIAL!r}, the name that says which law a point follows"
                 )
+            first = initial.setdefault(name, np.broadcast_to(field.initial, field.shape))
             if shapes.setdefault(name, field.shape) != field.shape:
                 raise ValueError(
                     f"Simulation: materials keep {name!r} in different shapes "
                     f"({shapes[name]} and {field.shape}, material {k}); one name is one field"
+                )
+            if not np.array_equal(first, np.broadcast_to(field.initial, field.shape)):
+                raise ValueError(
+                    f"Simulation: materials start {name!r} at different values (material "
+                    f"{k}); one name is one field, with one starting value"
                 )
             if kinds.setdefault(name, pointwise) != pointwise:
                 raise ValueError(
