@@ -517,6 +517,73 @@ class PointTraction:
         return factor * np.asarray(self.value, dtype=np.float64)
 
 
+@dataclass(frozen=True)
+class PointPressure:
+    """A normal pressure carried by boundary points that move with the body (a follower load).
+
+    A :class:`Pressure` stays on its grid facets, along their normals; once the body
+    moves off them, or its face turns or stretches, it loads the wrong place or
+    nothing. These points are convected with the grid solution like a
+    :class:`PointTraction`'s, and each also carries its piece of the body's face as
+    an area vector ``a = weight · normal``, which deforms with the body by Nanson's
+    rule, ``a ← cof(ΔF) a`` (ΔF the grid's increment at the point). The step adds
+    ``Σ_b p cof(ΔF_b) a_b · δu(x_b)`` to the residual, with ΔF_b the unknown's, so the
+    load follows the face within the step too and Newton sees its tangent: a
+    pressurised cavity that expands to twice its radius is pushed along its current
+    normals over its current length.
+
+    Args:
+        name: Name of the load; the force it applies is reported in
+            ``StepReport.reactions[name]`` (N, per unit thickness in 2D).
+        x: Initial positions of the points (n, g), m, on the body's boundary; under
+            MPI every rank gives all of them (:func:`~fe_mpm.meshes.facet_points`).
+        weight: Boundary measure each point represents (n,): length (m) in 2D, area in 3D.
+        normal: The body's outward normal at each point (n, g), or one for all; made
+            unit here.
+        value: Pressure p (Pa), finite: positive pushes into the body, negative pulls.
+        scale: Load factor as a function of time, ``t -> float``; constant 1 if None.
+    """
+
+    name: str
+    x: np.ndarray
+    weight: np.ndarray
+    normal: np.ndarray
+    value: float
+    scale: Callable[[float], float] | None = None
+
+    def __post_init__(self) -> None:
+        owner = f"PointPressure {self.name!r}"
+        x, weight = _points(owner, self.x, self.weight)
+        normal = check_finite(owner, "normal", self.normal, what="point")
+        if normal.shape == (x.shape[1],):
+            normal = np.tile(normal, (x.shape[0], 1))
+        if normal.shape != x.shape:
+            raise ValueError(
+                f"{owner}: normal must have shape {x.shape} (one per point) or "
+                f"({x.shape[1]},), got {normal.shape}"
+            )
+        length = np.linalg.norm(normal, axis=1)
+        if np.any(length <= 0.0):
+            first = int(np.flatnonzero(length <= 0.0)[0])
+            raise ValueError(f"{owner}: normal of point {first} is zero; give the outward normal")
+        _check_callable(owner, "scale", self.scale, "a function t -> float")
+        for name, value in (
+            ("x", x),
+            ("weight", weight),
+            ("normal", normal / length[:, None]),
+            ("value", check_range(owner, "value", self.value)),
+        ):
+            object.__setattr__(self, name, value)
+
+    def at(self, t: float) -> float:
+        """Pressure at time ``t`` (Pa).
+
+        Raises:
+            ValueError: ``scale`` returned a non-finite value at ``t``.
+        """
+        return _scale_at(f"PointPressure {self.name!r}", self.scale, t) * self.value
+
+
 #: ``RigidWall(friction=STICKING)``: the wall does not let the body slip while they touch.
 STICKING = math.inf
 

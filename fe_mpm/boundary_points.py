@@ -1,4 +1,4 @@
-"""Every PointDirichlet and PointTraction point, all together, and their part in a step."""
+"""The points of every PointDirichlet, PointTraction and PointPressure, and their part in a step."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from fe_mpm import parallel
-from fe_mpm.boundary import SNAP_REACH, PointDirichlet, PointTraction
+from fe_mpm.boundary import SNAP_REACH, PointDirichlet, PointPressure, PointTraction
 from fe_mpm.checks import check_range
 from fe_mpm.errors import PointsOutsideError, warn
 from fe_mpm.quadrature import SlotLayout, slot_count
@@ -49,13 +49,18 @@ class BoundaryPoints:
         weight: Boundary measure of each point (N,).
         stiffness: β on the constrained components, 0 on the free ones and on
             traction points (N, g), Pa/m.
-        loaded: Whether each point carries a traction (N,), bool; the others are
-            penalty points.
+        loaded: Whether each point carries a traction or a pressure (N,), bool; the
+            others are penalty points.
+        pressed: Whether each point carries a pressure (N,), bool.
+        area: The body's face each pressure point carries, ``weight · normal``, as it
+            is now (N, g), m (2D) or m² (3D); 0 on the other points.
     """
 
-    def __init__(self, conditions: Sequence[PointDirichlet | PointTraction], gdim: int):
+    def __init__(
+        self, conditions: Sequence[PointDirichlet | PointTraction | PointPressure], gdim: int
+    ):
         self.conditions = list(conditions)
-        xs, weights, owners, stiffness, reaches = [], [], [], [], []
+        xs, weights, owners, stiffness, reaches, areas = [], [], [], [], [], []
         for i, c in enumerate(self.conditions):
             kind = type(c).__name__
             x = np.asarray(c.x, dtype=np.float64)
@@ -66,12 +71,14 @@ class BoundaryPoints:
             w = np.broadcast_to(np.asarray(c.weight, dtype=np.float64), (x.shape[0],))
             if not np.all(w > 0) or not np.all(np.isfinite(w)):
                 raise ValueError(f"{kind} {c.name!r}: every weight must be > 0")
-            if np.asarray(c.at(0.0)).shape != (gdim,):
+            pressure = isinstance(c, PointPressure)
+            if not pressure and np.asarray(c.at(0.0)).shape != (gdim,):
                 raise ValueError(f"{kind} {c.name!r}: value must have {gdim} components")
             xs.append(x)
             weights.append(w)
             owners.append(np.full(x.shape[0], i))
-            if isinstance(c, PointTraction):
+            areas.append(w[:, None] * c.normal if pressure else np.zeros((x.shape[0], gdim)))
+            if isinstance(c, PointTraction | PointPressure):
                 stiffness.append(np.zeros((x.shape[0], gdim)))
                 reaches.append(np.full(x.shape[0], SNAP_REACH))
                 continue
@@ -88,14 +95,26 @@ class BoundaryPoints:
         self.owner = np.concatenate(owners)
         self.stiffness = np.vstack(stiffness)
         self.reach = np.concatenate(reaches)
-        self.loaded = np.array([isinstance(c, PointTraction) for c in self.conditions])[self.owner]
+        kinds = [
+            (isinstance(c, PointTraction), isinstance(c, PointPressure)) for c in self.conditions
+        ]
+        self.pressed = np.array([pressure for _, pressure in kinds])[self.owner]
+        self.loaded = np.array([traction or pressure for traction, pressure in kinds])[self.owner]
+        self.area = np.vstack(areas)
 
     def __len__(self) -> int:
         return self.x.shape[0]
 
     def _values(self, t: float) -> np.ndarray:
-        """Each point's condition value at time ``t`` (N, g): a displacement or a traction."""
-        return np.array([c.at(t) for c in self.conditions])[self.owner]
+        """Each point's displacement or traction at time ``t`` (N, g); 0 at a pressure point."""
+        g = self.x.shape[1]
+        values = [np.zeros(g) if isinstance(c, PointPressure) else c.at(t) for c in self.conditions]
+        return np.array(values)[self.owner]
+
+    def pressures(self, t: float) -> np.ndarray:
+        """Pressure at each point at time ``t`` (N,), Pa; zero on the other points."""
+        values = [c.at(t) if isinstance(c, PointPressure) else 0.0 for c in self.conditions]
+        return np.array(values)[self.owner]
 
     def targets(self, t: float) -> np.ndarray:
         """Where the points should be at time ``t`` (N, g).
@@ -113,7 +132,8 @@ class BoundaryPoints:
         """Force of each condition on the body (g,).
 
         ``−Σ_b w_b β P_b (x_b − x_b^target)`` for a prescribed displacement,
-        ``Σ_b w_b t_b`` for a traction.
+        ``Σ_b w_b t_b`` for a traction, ``−Σ_b p a_b`` for a pressure (on the face
+        as it is at the end of the step: call it after :attr:`area` is updated).
 
         Args:
             mismatch: End-of-step gap of the active points (n_active, g), m.
@@ -123,6 +143,7 @@ class BoundaryPoints:
         per_point = self.weight[active, None] * (
             self.tractions(t)[active] - self.stiffness[active] * mismatch
         )
+        per_point -= self.pressures(t)[active, None] * self.area[active]
         return {
             c.name: per_point[self.owner[active] == i].sum(axis=0)
             for i, c in enumerate(self.conditions)
@@ -207,9 +228,10 @@ class BoundaryPointStep:
         if np.any(idle) and not self._warned:
             self._warned = True
             first = np.flatnonzero(idle)[0]
+            condition = pp.conditions[pp.owner[first]]
             warn(
-                f"{idle.sum()} point(s) of PointTraction "
-                f"{pp.conditions[pp.owner[first]].name!r} lie in no occupied cell at the step "
+                f"{idle.sum()} point(s) of {type(condition).__name__} "
+                f"{condition.name!r} lie in no occupied cell at the step "
                 f"to t = {t_new:g} (first at x = {pp.x[first]}); their load is not applied."
             )
         cells = cells[self._active]
@@ -261,11 +283,16 @@ class BoundaryPointStep:
         qb.pack(forms.gap, layout, self._gap)
         qb.pack(forms.penalty_stiffness, layout, pp.stiffness[active])
         qb.pack(forms.boundary_traction, layout, pp.tractions(t_new)[active])
+        if forms.boundary_pressure is not None:  # p a / w: the form's sum weighs by w
+            pressure_area = pp.pressures(t_new)[active, None] * pp.area[active]
+            qb.pack(forms.boundary_pressure, layout, pressure_area / pp.weight[active, None])
 
     def convect(self, forms, t_new: float) -> dict[str, np.ndarray]:
         """Move the points with the grid solution; return each condition's force (g,)."""
         pp, active, comm = self.points, self._active, self.tracker.mesh.comm
         du = forms.du_at_boundary.evaluate(self.layout)
+        if forms.boundary_pressure is not None:
+            self._deform_faces(forms)
         forces = pp.forces(self._gap + du, active, t_new)
         # Each point moves on the rank where it took part; every rank keeps them all.
         moved = np.zeros_like(pp.x)
@@ -275,6 +302,30 @@ class BoundaryPointStep:
         pp.x[anywhere] += moved[anywhere]
         pp.x[~anywhere] = pp.targets(t_new)[~anywhere]  # outside the material: follow the target
         return {name: parallel.total(comm, force) for name, force in forces.items()}
+
+    def _deform_faces(self, forms) -> None:
+        """Each pressure point's face by Nanson's rule, ``a ← cof(ΔF) a``, on every rank."""
+        pp, active, comm = self.points, self._active, self.tracker.mesh.comm
+        g = pp.x.shape[1]
+        dF = forms.dF_at_boundary.evaluate(self.layout).reshape(-1, g, g)
+        # cof(ΔF) = det(ΔF) ΔF⁻ᵀ, written out for 2x2 and 3x3 (no inverse of a singular one).
+        if g == 2:
+            cof = np.stack(
+                [
+                    np.stack([dF[:, 1, 1], -dF[:, 1, 0]], 1),
+                    np.stack([-dF[:, 0, 1], dF[:, 0, 0]], 1),
+                ],
+                1,
+            )
+        else:
+            cof = np.stack(
+                [np.cross(dF[:, :, (i + 1) % 3], dF[:, :, (i + 2) % 3]) for i in range(3)], 2
+            )
+        change = np.zeros_like(pp.area)
+        rows = np.flatnonzero(active)
+        new = np.einsum("nij,nj->ni", cof, pp.area[rows])
+        change[rows] = np.where(pp.pressed[rows, None], new - pp.area[rows], 0.0)
+        pp.area += parallel.total(comm, change)
 
 
 def _check_same_on_every_rank(comm, points: BoundaryPoints) -> None:

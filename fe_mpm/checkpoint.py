@@ -6,8 +6,9 @@ A checkpoint is a folder ``step_NNNNNN`` holding
   :class:`~fe_mpm.particles.MaterialPoints` and the law's history, the markers
   these points host, and with point domains each point's domain (its corners and
   the shape quality it was drawn with, :mod:`fe_mpm.domains`);
-- ``shared.npz``: the boundary points' positions, the markers' positions and the
-  rigid walls' springs (their extension at each node, by the node's grid input index);
+- ``shared.npz``: the boundary points' positions (and a PointPressure's faces), the
+  markers' positions and the rigid walls' springs (their extension at each node, by
+  the node's grid input index);
 - ``state.json``: what the run is (fe-mpm version, formulation, law and its
   parameters, the grid's size and extent) and where it stands (time, step, slot
   counts), with the SHA-256 of every file.
@@ -130,6 +131,7 @@ def write(sim, directory: str | Path) -> Path:
                 shared[f"wall.{name}.extension"] = extension
             if sim._boundary is not None:
                 shared["boundary_x"] = sim._boundary.points.x
+                shared["boundary_area"] = sim._boundary.points.area
             state = {
                 "format": FORMAT,
                 "scene": fingerprint,
@@ -223,6 +225,8 @@ def read(sim, path: str | Path) -> None:
     sim.walls.set_springs(springs)
     if sim._boundary is not None:
         sim._boundary.points.x[:] = shared["boundary_x"]
+        if "boundary_area" in shared:  # the faces of PointPressure (absent before them)
+            sim._boundary.points.area[:] = shared["boundary_area"]
         sim._boundary._nslot = state["boundary_slots"]
     sim.t, sim.step_number = float(state["t"]), int(state["step"])
     sim.tracking._nslot = state["slots"]

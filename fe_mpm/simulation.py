@@ -27,6 +27,7 @@ from fe_mpm._dolfinx import dolfinx
 from fe_mpm.boundary import (
     Dirichlet,
     PointDirichlet,
+    PointPressure,
     PointTraction,
     Pressure,
     RigidWall,
@@ -120,8 +121,11 @@ class Simulation:
             and normal pressures (:class:`~fe_mpm.Pressure`, along each facet's normal).
         point_dirichlet: Displacements prescribed by a penalty at boundary points the
             grid does not follow (a rigid footing); forces in ``StepReport.reactions``.
-        point_tractions: Tractions on boundary points that move with the body (a grid
-            ``Traction`` stays on its facets); forces in ``StepReport.reactions``.
+        point_tractions: Loads on boundary points that move with the body (a grid
+            ``Traction`` or ``Pressure`` stays on its facets): tractions
+            (:class:`~fe_mpm.PointTraction`, a dead load) and pressures on the body's
+            face as it deforms (:class:`~fe_mpm.PointPressure`, a follower load);
+            forces in ``StepReport.reactions``.
         walls: Fixed rigid faces of the grid's boundary that the body presses on,
             slides along with Coulomb friction, or leaves (:class:`~fe_mpm.RigidWall`);
             their forces in ``StepReport.reactions`` and ``StepReport.walls``.
@@ -232,7 +236,7 @@ class Simulation:
         dirichlet: Sequence[Dirichlet] = (),
         tractions: Sequence[Traction | Pressure] = (),
         point_dirichlet: Sequence[PointDirichlet] = (),
-        point_tractions: Sequence[PointTraction] = (),
+        point_tractions: Sequence[PointTraction | PointPressure] = (),
         walls: Sequence[RigidWall] = (),
         body_force: Sequence[float] | None = None,
         body_force_scale: Callable[[float], float] | None = None,
@@ -498,6 +502,7 @@ class Simulation:
             self.walls,
             shared_increment=self._shared,
             pressure_by_parts=self._pressure_by_parts,
+            point_pressure=any(isinstance(c, PointPressure) for c in self._given["boundary"]),
         )
         if self._by_parts is not None:
             self._by_parts.destroy()

@@ -119,6 +119,8 @@ class StepForms:
         shared_increment: Whether a point domain's pieces share its increment.
         pressure_by_parts: Whether the starting pressure is integrated by parts in
             the cells of χ = 1 (:mod:`fe_mpm.pressure_by_parts`; u-p and NB-VA).
+        point_pressure: Whether boundary points carry a follower pressure
+            (:class:`~fe_mpm.boundary.PointPressure`).
     """
 
     def __init__(
@@ -137,6 +139,7 @@ class StepForms:
         step_length: ufl.Constant | None = None,
         shared_increment: bool = False,
         pressure_by_parts: bool = False,
+        point_pressure: bool = False,
     ):
         mesh, g = fields.W.mesh, fields.W.mesh.geometry.dim
         self.mesh, self.spec, self.material, self.newmark = mesh, spec, material, newmark
@@ -190,6 +193,8 @@ class StepForms:
         self.interior = q.function((), "interior") if pressure_by_parts else None
         R = self._residual(fields, conditions, ppp)
         self.q_boundary = None
+        self.point_pressure = point_pressure
+        self.boundary_pressure = self.dF_at_boundary = None
         if nslot_boundary:
             R += self._boundary_points(fields, w, nslot_boundary)
         facets = dict(conditions.traction_facets)
@@ -346,9 +351,15 @@ class StepForms:
         self.penalty_stiffness = qb.function((g,), "penalty")
         self.boundary_traction = qb.function((g,), "boundary_traction")
         self.du_at_boundary = PointExpression(qb.at_points(fields.du, deg), qb)
-        return penalty.penalty(
+        R = penalty.penalty(
             fields.du, w, qb, self.gap, self.penalty_stiffness, self.boundary_traction, deg
         )
+        if self.point_pressure:  # a follower load: its face deforms with ΔF in the step
+            self.boundary_pressure = qb.function((g,), "boundary_pressure")
+            dF = ufl.Identity(g) + qb.grad_at_points(fields.du, deg)
+            self.dF_at_boundary = PointExpression(dF, qb)
+            R += penalty.follower_pressure(dF, w, qb, self.boundary_pressure, deg)
+        return R
 
     def _loads(self, w, conditions: GridConditions) -> ufl.Form | None:
         """The external work of the body force, the tractions and the point loads."""
@@ -395,7 +406,7 @@ class FormsBySlotCount:
         dynamics: Newmark's rule, or None (static).
         mass: ``"consistent"`` or ``"lumped"`` (dynamics).
         walls: The rigid walls of the grid, or None.
-        shared_increment, pressure_by_parts: As for :class:`StepForms`.
+        shared_increment, pressure_by_parts, point_pressure: As for :class:`StepForms`.
     """
 
     def __init__(
@@ -410,6 +421,7 @@ class FormsBySlotCount:
         walls: RigidWalls | None = None,
         shared_increment: bool = False,
         pressure_by_parts: bool = False,
+        point_pressure: bool = False,
     ):
         self.fields, self.spec, self.material = fields, spec, material
         #: The step's length Δt (s), set before each step (:meth:`set_step_length`).
@@ -417,6 +429,7 @@ class FormsBySlotCount:
         self.options = dict(
             shared_increment=shared_increment,
             pressure_by_parts=pressure_by_parts,
+            point_pressure=point_pressure,
             walls=walls,
             conditions=conditions,
             ppp=ppp,

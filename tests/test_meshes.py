@@ -296,3 +296,29 @@ def test_the_quarter_ring_tags_its_ring_margin_arc_and_axes(inner, outer, h, mar
         assert on[:, 1 - c].min() == pytest.approx(inner) and on[:, 1 - c].max() == pytest.approx(
             outer + width
         )
+
+
+def test_a_graded_quarter_ring_is_fine_at_its_inner_arc_and_coarse_at_its_outer():
+    """With ``h_outer`` the cells grow with r from h at r = a: the inner arc's facets
+    are about h long, those on the axes near r = b about h_outer, and the ring still
+    fills its quarter annulus (a cavity's grid, ``demos/cavity_expansion.py``)."""
+    scene = meshes.quarter_ring(1.0, 20.0, 0.1, 2.0, h_outer=2.0)
+    mesh = scene.mesh
+    x = mesh.geometry.x[:, :2]
+    mesh.topology.create_connectivity(1, 0)
+
+    def lengths(tag):
+        ends = x[dolfinx.mesh.entities_to_geometry(mesh, 1, scene.facet_tags.find(tag))]
+        return np.linalg.norm(ends[:, 1] - ends[:, 0], axis=1), ends.mean(axis=1)
+
+    inner, _ = lengths(meshes.RING_INNER)
+    assert 0.07 < inner.mean() < 0.13
+    axis, middle = lengths(meshes.RING_X_AXIS)
+    far = np.hypot(*middle.T) > 15.0
+    assert 1.2 < axis[far].mean() < 2.6
+    cells = mesh.geometry.dofmaps[0][scene.cell_tags.find(meshes.RING_BODY)]
+    p = x[cells]
+    e1, e2 = p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]
+    area = 0.5 * np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]).sum()
+    assert area == pytest.approx(math.pi / 4 * (20.0**2 - 1.0), rel=3e-3)
+    assert mesh.topology.index_map(2).size_local < 3000  # uniform h = 0.1: about 70 000

@@ -490,6 +490,20 @@ try:
         report = sim.run(1.0, 1, progress=False)[-1]
         result = {"inner": report.markers["inner"].tolist(),
                   "reaction": report.reactions["x_axis"].tolist(), "lost": report.lost_load}
+    elif case == "point pressure":
+        scene = meshes.quarter_ring(1.0, 10.0, 0.2, 2.0, h_outer=1.0)
+        points = fe_mpm.seed(scene.mesh, per_cell=3, cells=scene.cell_tags.find(meshes.RING_BODY))
+        x, w = meshes.facet_points(scene.mesh, scene.facet_tags.find(meshes.RING_INNER))
+        sim = fe_mpm.Simulation(
+            scene.mesh, points, fe_mpm.MohrCoulomb.tresca(3e6, 0.4999, 1e4), "up",
+            facet_tags=scene.facet_tags, point_domains=True,
+            point_tractions=[fe_mpm.PointPressure("cavity", x, w, -x, 4e4, lambda t: t)],
+            dirichlet=[fe_mpm.Dirichlet(meshes.RING_X_AXIS, component=1),
+                       fe_mpm.Dirichlet(meshes.RING_Y_AXIS, component=0)])
+        sim.add_marker("face", (np.cos(0.7), np.sin(0.7)))
+        reports = sim.run(1.0, 6, progress=False)
+        result = {"face": [r.markers["face"].tolist() for r in reports],
+                  "force": [r.reactions["cavity"].tolist() for r in reports]}
     elif case == "zones":
         from fe_mpm import scenes
         from fe_mpm.materials import HenckyJ2
@@ -706,6 +720,18 @@ def test_a_pressure_on_a_curved_face_and_its_lost_share_are_serial_on_two_ranks(
         np.testing.assert_allclose(result["inner"], serial["inner"], rtol=1e-10)
         np.testing.assert_allclose(result["reaction"], serial["reaction"], rtol=1e-10, atol=1e-6)
         assert result["lost"]["Pressure 0"] == pytest.approx(serial["lost"]["Pressure 0"], 1e-12)
+
+
+def test_a_pressure_that_follows_a_cavitys_face_gives_the_serial_answer_on_two_ranks(tmp_path):
+    """A cavity in Tresca clay expanded by a PointPressure to 4 c_u (its face moving
+    through cells, point domains): the face's motion and the load's force at every
+    step as serial to 1e-9. Each rank deforms the faces of the points it holds and
+    every rank adds them up."""
+    (serial,) = _run(tmp_path, "point pressure", 1)
+    assert np.linalg.norm(serial["face"][-1]) > 1.02  # the face moved out
+    for result in _run(tmp_path, "point pressure", 2):
+        np.testing.assert_allclose(result["face"], serial["face"], rtol=1e-9)
+        np.testing.assert_allclose(result["force"], serial["force"], rtol=1e-9)
 
 
 def test_a_body_of_two_laws_gives_the_serial_answer_on_two_ranks(tmp_path):

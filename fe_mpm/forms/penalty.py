@@ -9,7 +9,12 @@ area each represents), penalty stiffness :math:`\beta` and the gap
 where :math:`P_b` keeps the constrained components. It is linear in
 :math:`\Delta u`, so its tangent is the constant :math:`\sum_b w_b \beta\, N^T P_b N`.
 Boundary points that carry a traction :math:`t_b` (and no penalty) add
-:math:`-\sum_b w_b\, t_b \cdot \delta u(x_b)`.
+:math:`-\sum_b w_b\, t_b \cdot \delta u(x_b)`, and those that carry a pressure
+:math:`p` on their piece :math:`a_b` of the body's face (an area vector at the
+step's start) add the follower load
+:math:`\sum_b p\, \mathrm{cof}(\Delta F_b)\, a_b \cdot \delta u(x_b)`, the face
+moved by the step's :math:`\Delta F_b` (Nanson's rule): its tangent has the load's
+stiffness, :math:`p\, \partial\,\mathrm{cof}(\Delta F)/\partial \Delta F`.
 """
 
 from __future__ import annotations
@@ -41,3 +46,24 @@ def penalty(
     """
     mismatch = gap + q.at_points(du, u_degree)
     return q.sum(ufl.dot(ufl.elem_mult(stiffness, mismatch) - traction, q.at_points(w, u_degree)))
+
+
+def follower_pressure(
+    dF: ufl.core.expr.Expr,
+    w: ufl.core.expr.Expr,
+    q: MaterialPointQuadrature,
+    pressure_area: ufl.Coefficient,
+    u_degree: int = 1,
+) -> ufl.Form:
+    """The residual of a pressure that follows the body's face: Σ_b p cof(ΔF_b) a_b · δu.
+
+    Args:
+        dF: The grid's increment ΔF = I + ∇Δu at the boundary points (g x g).
+        w: Displacement test function.
+        q: Quadrature of the boundary points (its scale carries w_b).
+        pressure_area: Slot field p a_b / w_b (g,), Pa: the pressure times the point's
+            face at the step's start, over its weight.
+        u_degree: Polynomial degree of the displacement (1, or 2 for Taylor–Hood).
+    """
+    cofactor = ufl.det(dF) * ufl.inv(dF).T
+    return q.sum(ufl.dot(ufl.dot(cofactor, pressure_area), q.at_points(w, u_degree)))

@@ -6,6 +6,8 @@ import math
 
 from mpi4py import MPI
 
+import gmsh
+
 from fe_mpm._dolfinx import dolfinx
 from fe_mpm.checks import check_range
 from fe_mpm.meshes.gmsh_session import gmsh_session, to_dolfinx
@@ -28,6 +30,8 @@ def quarter_ring(
     h: float,
     margin: float | None = None,
     comm: MPI.Comm = MPI.COMM_WORLD,
+    *,
+    h_outer: float | None = None,
 ) -> dolfinx.io.gmsh.MeshData:
     """Triangles on the quarter x, y ≥ 0 of the annulus ``inner`` ≤ r ≤ ``outer`` + margin.
 
@@ -38,9 +42,12 @@ def quarter_ring(
     Args:
         inner: Inner radius a (m), > 0.
         outer: Outer radius b (m), > a.
-        h: Cell size (m), in (0, b − a].
+        h: Cell size (m), in (0, b − a]: at r = a where ``h_outer`` is given.
         margin: Width of the empty margin (m), > 0; None: 2 h.
         comm: MPI communicator of the grid.
+        h_outer: Cell size at r = b (m), > 0, the size growing linearly with r from
+            ``h`` (a cavity in a wide body: fine at its face, coarse far off); None:
+            ``h`` throughout.
 
     Returns:
         ``dolfinx.io.gmsh.MeshData`` with the tags of this module.
@@ -50,6 +57,8 @@ def quarter_ring(
     h = check_range("quarter_ring", "h", h, lo=0.0, hi=outer - inner, lo_open=True)
     margin = 2.0 * h if margin is None else margin
     margin = check_range("quarter_ring", "margin", margin, lo=0.0, lo_open=True)
+    if h_outer is not None:
+        h_outer = check_range("quarter_ring", "h_outer", h_outer, lo=0.0, lo_open=True)
     with gmsh_session("quarter_ring") as model:
         if comm.rank == 0:
             occ = model.occ
@@ -82,5 +91,19 @@ def quarter_ring(
             for kind, tags in faces.items():
                 model.addPhysicalGroup(1, tags, kind)
             model.mesh.setSize(model.getEntities(0), h)
-            model.mesh.generate(2)
+            if h_outer is not None:
+                slope = (h_outer - h) / (outer - inner)
+
+                def size(dim, tag, x, y, z, lc):
+                    return h + slope * max(0.0, min(math.hypot(x, y), outer) - inner)
+
+                model.mesh.setSizeCallback(size)
+                from_points = gmsh.option.getNumber("Mesh.MeshSizeFromPoints")
+                gmsh.option.setNumber("Mesh.MeshSizeFromPoints", 0)
+            try:
+                model.mesh.generate(2)
+            finally:  # a session the caller opened keeps its own settings
+                if h_outer is not None:
+                    model.mesh.removeSizeCallback()
+                    gmsh.option.setNumber("Mesh.MeshSizeFromPoints", from_points)
         return to_dolfinx(model, gdim=2, comm=comm)
