@@ -8,8 +8,8 @@
 # # A cylindrical cavity expanded in clay: the pressuremeter test
 #
 # A borehole of radius a₀ in undrained clay is expanded by an inner pressure p, as a
-# pressuremeter does, until it has grown by half its radius. The face moves through
-# twenty cells of the grid and stretches by half its length, so a pressure on the
+# pressuremeter does, until it has grown by half its radius. The face moves out
+# through about seven layers of cells and stretches by half its length, so a pressure on the
 # grid's facets (`fe_mpm.Pressure`), which stays where the face was, would be left
 # behind: the load must follow the body. This demo illustrates how to:
 #

@@ -529,8 +529,8 @@ class PointPressure:
     rule, ``a ← cof(ΔF) a`` (ΔF the grid's increment at the point). The step adds
     ``Σ_b p cof(ΔF_b) a_b · δu(x_b)`` to the residual, with ΔF_b the unknown's, so the
     load follows the face within the step too and Newton sees its tangent: a
-    pressurised cavity that expands to twice its radius is pushed along its current
-    normals over its current length.
+    pressurised cavity that expands to 1.5 times its radius is pushed along its
+    current normals over its current length (``demos/cavity_expansion.py``).
 
     Args:
         name: Name of the load; the force it applies is reported in

@@ -332,11 +332,12 @@ def _check_same_on_every_rank(comm, points: BoundaryPoints) -> None:
     """Raise on every rank unless every rank was given the same boundary points."""
     if comm.size == 1:
         return
-    mine = (len(points), points.x0.tobytes(), points.weight.tobytes())
+    mine = (len(points), points.x0.tobytes(), points.weight.tobytes(), points.area.tobytes())
     differ = [rank for rank, theirs in enumerate(comm.allgather(mine)) if theirs != mine]
     if differ:
         raise ValueError(
-            f"PointDirichlet/PointTraction: rank {comm.rank} holds {len(points)} boundary "
+            f"PointDirichlet/PointTraction/PointPressure: rank {comm.rank} holds "
+            f"{len(points)} boundary "
             f"points and rank {differ[0]} other ones; under MPI every rank must hold every "
             "boundary point (build them from geometry, or with meshes.facet_points, which "
             "gathers them from all ranks)"

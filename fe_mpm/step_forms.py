@@ -370,6 +370,8 @@ class StepForms:
         if self.q_boundary is not None:
             qb = self.q_boundary
             point_loads = qb.sum(ufl.dot(self.boundary_traction, qb.at_points(w, deg)))
+            if self.boundary_pressure is not None:  # the pressure on the face at the start
+                point_loads -= qb.sum(ufl.dot(self.boundary_pressure, qb.at_points(w, deg)))
             loads = point_loads if loads is None else loads + point_loads
         return loads
 

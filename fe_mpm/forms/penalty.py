@@ -65,5 +65,5 @@ def follower_pressure(
             face at the step's start, over its weight.
         u_degree: Polynomial degree of the displacement (1, or 2 for Taylor–Hood).
     """
-    cofactor = ufl.det(dF) * ufl.inv(dF).T
-    return q.sum(ufl.dot(ufl.dot(cofactor, pressure_area), q.at_points(w, u_degree)))
+    # cof, not det ΔF ΔF⁻ᵀ: UFL's inverse divides by det ΔF, 0/0 on a flattened iterate.
+    return q.sum(ufl.dot(ufl.dot(ufl.cofac(dF), pressure_area), q.at_points(w, u_degree)))
