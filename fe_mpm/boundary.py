@@ -536,7 +536,8 @@ class PointPressure:
         name: Name of the load; the force it applies is reported in
             ``StepReport.reactions[name]`` (N, per unit thickness in 2D).
         x: Initial positions of the points (n, g), m, on the body's boundary; under
-            MPI every rank gives all of them (:func:`~fe_mpm.meshes.facet_points`).
+            MPI every rank gives all of them (:func:`~fe_mpm.meshes.facet_points`,
+            with ``degree=2`` for P2 displacements: two points per facet).
         weight: Boundary measure each point represents (n,): length (m) in 2D, area in 3D.
         normal: The body's outward normal at each point (n, g), or one for all; made
             unit here.
