@@ -56,6 +56,7 @@ from fe_mpm.plotting import pyplot
 def parse_args(argv=None):
     """The command-line contract of the demo."""
     p = argparse.ArgumentParser(description="Cylindrical cavity expansion in Tresca clay")
+    p.add_argument("--formulation", choices=("up", "u-nbva", "up-p2p1"), default="up")
     p.add_argument("--radius", type=float, default=0.05, help="cavity radius a₀ (m)")
     p.add_argument("--outer", type=float, default=50.0, help="body's radius b over a₀")
     p.add_argument("--strength", type=float, default=20e3, help="undrained strength c_u (Pa)")
@@ -133,7 +134,10 @@ try:
     scene = meshes.quarter_ring(a0, b, args.h * a0, 6.0 * a0, h_outer=5.0 * a0)
     points = fe_mpm.seed(scene.mesh, 3, cells=scene.cell_tags.find(meshes.RING_BODY))
     if args.load == "points":
-        x, weight = meshes.facet_points(scene.mesh, scene.facet_tags.find(meshes.RING_INNER))
+        # P2 needs two points per facet: the midpoint alone loads its middle node only.
+        degree = 2 if args.formulation == "up-p2p1" else 1
+        cavity = scene.facet_tags.find(meshes.RING_INNER)
+        x, weight = meshes.facet_points(scene.mesh, cavity, degree)
         normal = -x / np.linalg.norm(x, axis=1)[:, None]
         load = {
             "point_tractions": [
@@ -146,7 +150,7 @@ try:
         scene.mesh,
         points,
         fe_mpm.MohrCoulomb.tresca(E, args.nu, c_u, density=1800.0),
-        "up",
+        args.formulation,
         facet_tags=scene.facet_tags,
         dirichlet=[
             fe_mpm.Dirichlet(meshes.RING_X_AXIS, component=1),
@@ -181,7 +185,7 @@ radius_error = (radius[-1] - a0) / (expected_radius[-1] - a0) - 1.0
 iterations = [r.newton_iterations for r in reports]
 wall = time.perf_counter() - START
 print(
-    f"Cavity expansion, Tresca, G/c_u = {args.stiffness:g}, {args.load} load, "
+    f"Cavity expansion, Tresca, G/c_u = {args.stiffness:g}, {args.formulation}, {args.load} load, "
     f"{'standard MPM' if args.standard else 'point domains'}: "
     f"{parallel.total(scene.mesh.comm, len(points))} points, {len(reports)} steps"
 )
@@ -232,7 +236,10 @@ if not args.no_output and rank0:
 # measured radius. Measured with the defaults (cells of a₀/20 at the cavity, 20
 # steps; 2026-12-06): 0.42 % (the cavity at 1.491 a₀ where the reference puts it at
 # 1.5 a₀: 1.8 % short in a − a₀), 15 s; on cells of a₀/10 1.04 % (9.9 % short), on
-# a₀/5 2.5 %: first order. The same pressure on the grid's facets (`--load grid`)
+# a₀/5 2.5 %: first order. `--formulation u-nbva` 0.46 % (1.525 a₀, 16 s) and
+# `up-p2p1` 0.84 % (1.548 a₀, 157 s; its points two per facet); in P2/P1 on cells of
+# a₀/10 in 10 steps Newton stalls at t = 0.975, near the limit. The same pressure on
+# the grid's facets (`--load grid`)
 # stays where the face was and ends 54 % off; standard MPM (`--standard`) stops at
 # t = 0.9, Newton failing however short the step.
 
@@ -260,6 +267,7 @@ if args.json:
                 "steps": len(reports),
                 "n_particles": parallel.total(scene.mesh.comm, len(points)),
                 "load": args.load,
+                "formulation": args.formulation,
                 "point_domains": not args.standard,
                 "check_passed": passed,
             }
