@@ -33,6 +33,7 @@ import numpy as np
 import numpy.typing as npt
 
 from fe_mpm.materials.spectral import deviator, from_principal, spectral_decomposition
+from fe_mpm.materials.zones import MATERIAL
 from fe_mpm.particles import MaterialPoints
 
 
@@ -152,7 +153,7 @@ def start_stressed(
                 f"HenckyJ2); {type(one).__name__} does not"
             )
     if hasattr(law, "point_bulk_moduli"):  # several laws: each point's own moduli
-        labels = {"material": points.material}
+        labels = {MATERIAL: points.material}
         K, G = law.point_bulk_moduli(labels), law.point_shear_moduli(labels)
     else:
         K, G = np.full(n, float(law.bulk_modulus)), np.full(n, float(law.mu))

@@ -130,14 +130,10 @@ class MaterialPoints:
         if self.material is None:
             return np.zeros(n, dtype=np.int32)
         labels = np.asarray(self.material)
-        if labels.dtype == object or labels.dtype.kind == "b":
-            raise TypeError(
-                "MaterialPoints: material must hold whole numbers (each point's law), got "
-                f"{labels.dtype}"
-            )
-        if labels.dtype.kind not in "iu" and not (
+        whole = labels.dtype.kind in "iu" or (
             labels.dtype.kind == "f" and np.all(np.isfinite(labels) & (labels == np.rint(labels)))
-        ):
+        )
+        if not whole:  # bools, objects and fractions alike
             raise TypeError(
                 "MaterialPoints: material must hold whole numbers (each point's law: its "
                 f"index in Simulation's list of laws), got {labels.dtype}"

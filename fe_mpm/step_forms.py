@@ -193,10 +193,9 @@ class StepForms:
         self.interior = q.function((), "interior") if pressure_by_parts else None
         R = self._residual(fields, conditions, ppp)
         self.q_boundary = None
-        self.point_pressure = point_pressure
         self.boundary_pressure = self.dF_at_boundary = None
         if nslot_boundary:
-            R += self._boundary_points(fields, w, nslot_boundary)
+            R += self._boundary_points(fields, w, nslot_boundary, point_pressure)
         facets = dict(conditions.traction_facets)
         if walls:
             R += walls.residual(w)
@@ -342,7 +341,9 @@ class StepForms:
             values += [a[idx] for idx in np.ndindex(g, g)]
         return PointExpression(ufl.as_vector(values), q)
 
-    def _boundary_points(self, fields: GridFields, w, nslot: int) -> ufl.Form:
+    def _boundary_points(
+        self, fields: GridFields, w, nslot: int, point_pressure: bool = False
+    ) -> ufl.Form:
         """The penalty and point loads of the boundary points, on their own rule."""
         mesh, deg = fields.W.mesh, self.spec.u_degree
         g = mesh.geometry.dim
@@ -354,7 +355,7 @@ class StepForms:
         R = penalty.penalty(
             fields.du, w, qb, self.gap, self.penalty_stiffness, self.boundary_traction, deg
         )
-        if self.point_pressure:  # a follower load: its face deforms with ΔF in the step
+        if point_pressure:  # a follower load: its face deforms with ΔF in the step
             self.boundary_pressure = qb.function((g,), "boundary_pressure")
             dF = ufl.Identity(g) + qb.grad_at_points(fields.du, deg)
             self.dF_at_boundary = PointExpression(dF, qb)

@@ -23,6 +23,7 @@ from fe_mpm._dolfinx import dolfinx
 from fe_mpm.boundary import RigidWall, boundary_facets
 from fe_mpm.forms import contact
 from fe_mpm.io import write_csv_rows
+from fe_mpm.materials.elastic import young_modulus
 from fe_mpm.transfer import touched_nodes
 
 #: The default penalty is this many times E / h (E the law's Young's modulus, h the
@@ -60,14 +61,6 @@ class WallForces:
     nodes: np.ndarray
     nodal: np.ndarray
     direction: np.ndarray
-
-
-def young_modulus(material) -> float:
-    """Young's modulus E = 9Kμ / (3K + μ) of a law with ``mu`` and ``bulk_modulus`` (Pa)."""
-    if hasattr(material, "young_modulus"):  # several laws: the stiffest
-        return float(material.young_modulus)
-    K, mu = float(material.bulk_modulus), float(material.mu)
-    return 9.0 * K * mu / (3.0 * K + mu)
 
 
 def wall_plane(mesh: dolfinx.mesh.Mesh, facets: np.ndarray, owner: str) -> tuple[np.ndarray, float]:

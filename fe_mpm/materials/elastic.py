@@ -28,6 +28,18 @@ class CheckedFields:
             self._check("density", lo=0.0, lo_open=True)
 
 
+def young_modulus(law) -> float:
+    """Young's modulus E = 9Kμ / (3K + μ) (Pa) of a law with ``mu`` and ``bulk_modulus``.
+
+    For several laws in one body (:mod:`fe_mpm.materials.zones`), the stiffest's.
+    """
+    laws = getattr(law, "laws", None)
+    if laws is not None:
+        return max(young_modulus(one) for one in laws)
+    K, mu = float(law.bulk_modulus), float(law.mu)
+    return 9.0 * K * mu / (3.0 * K + mu)
+
+
 class IsotropicModuli(CheckedFields):
     """Shear and bulk moduli of a law with fields ``E`` (Pa) and ``nu``."""
 

@@ -21,7 +21,8 @@ What the laws share: an internal variable that two laws keep under one name (``b
 of two Mohr–Coulomb soils) is one field; each law updates it at its own points.
 Where a single number stands for the body (the ghost penalty's shear modulus, a
 rigid wall's default penalty) the zones give the one that errs on the safe side,
-and say which (:attr:`MaterialZones.mu`, :attr:`MaterialZones.young_modulus`).
+and say which (:attr:`MaterialZones.mu`; :func:`~fe_mpm.materials.elastic.young_modulus`
+takes the stiffest law's).
 PPP scales each cell by its own points' shear moduli (:meth:`point_shear_moduli`).
 
 Not in zones: a fluid (:class:`~fe_mpm.NewtonianFluid` keeps no shape, and its
@@ -89,14 +90,6 @@ class MaterialZones:
     def bulk_modulus(self) -> float:
         """The largest bulk modulus K of the laws (Pa)."""
         return max(float(law.bulk_modulus) for law in self._numeric)
-
-    @property
-    def young_modulus(self) -> float:
-        """The largest Young's modulus E = 9Kμ/(3K + μ) of the laws (Pa).
-
-        A rigid wall's default penalty is a multiple of it, stiff enough for every zone.
-        """
-        return max(_young(law) for law in self._numeric)
 
     @property
     def density(self) -> None:
@@ -297,16 +290,10 @@ class PointwiseZones(MaterialZones):
 
 def material_zones(laws: Sequence) -> MaterialZones:
     """The zones of ``laws``: :class:`PointwiseZones` if any law's return runs in numpy."""
-    laws = tuple(laws)
-    _check_laws(laws)
+    laws = tuple(laws)  # checked by the zones it builds
     if any(isinstance(law, PointwiseLaw) for law in laws):
         return PointwiseZones(laws)
     return MaterialZones(laws)
-
-
-def _young(law) -> float:
-    K, mu = float(law.bulk_modulus), float(law.mu)
-    return 9.0 * K * mu / (3.0 * K + mu)
 
 
 def _check_laws(laws: tuple) -> None:
