@@ -424,21 +424,17 @@ def check_supports(conditions, boundary, occupied: np.ndarray, walls=None) -> No
 def domains_would_be_taken(
     points: MaterialPoints,
     points_leaving: str,
-    walls: tuple,
-    formulation: str,
     spec: FormulationSpec,
     pressure_by_parts_given: bool | None,
     keeps_shape: bool,
 ) -> bool:
     """Whether these options would take ``point_domains=True``: no check refuses them.
 
-    Asks the checks themselves (:func:`check_domains`, :func:`check_walls`,
-    :func:`pressure_by_parts`), so that advice to turn domains on follows their
-    refusals as they change.
+    Asks the checks themselves (:func:`check_domains`, :func:`pressure_by_parts`), so
+    that advice to turn domains on follows their refusals as they change.
     """
     try:
         check_domains(True, None, points, points_leaving, spec)
-        check_walls(walls, spec, formulation, True)
         pressure_by_parts(pressure_by_parts_given, keeps_shape, True, spec)
     except (ValueError, NotImplementedError):
         return False
@@ -479,13 +475,13 @@ def check_force_names(reactions: dict | None, walls: Sequence, boundary: Sequenc
     return set(owners)
 
 
-def check_walls(walls, spec, formulation: str, point_domains: bool) -> tuple:
+def check_walls(walls, spec, formulation: str) -> tuple:
     """The rigid walls as a tuple, or raise where they cannot act yet.
 
     Raises:
         TypeError: An entry is not a :class:`~fe_mpm.boundary.RigidWall`.
         NotImplementedError: P2 displacements (the walls' springs sit on the
-            vertices only) or point domains (their steps do not carry the springs).
+            vertices only).
     """
     walls = tuple(walls)
     for wall in walls:
@@ -494,11 +490,7 @@ def check_walls(walls, spec, formulation: str, point_domains: bool) -> tuple:
     if walls and spec.u_degree != 1:
         raise NotImplementedError(
             f"Simulation: walls with formulation={formulation!r}: a wall's springs sit on "
-            "the grid's vertices, so they need P1 displacements ('u', 'up' or 'up-nostab')"
-        )
-    if walls and point_domains:
-        raise NotImplementedError(
-            "Simulation: walls with point_domains=True: the steps of point domains do "
-            "not carry the walls' springs yet; run one without the other"
+            "the grid's vertices, so they need P1 displacements "
+            "('u', 'u-nbva', 'up' or 'up-nostab')"
         )
     return walls

@@ -337,7 +337,7 @@ class Simulation:
         self.ladder = RetryLadder(
             fallback_line_search, bool(fallback_hold_cells), bool(fallback_from_best)
         )
-        walls = model_checks.check_walls(walls, self.spec, formulation, point_domains)
+        walls = model_checks.check_walls(walls, self.spec, formulation)
         self._force_names = model_checks.check_force_names(
             reactions, walls, [*point_dirichlet, *point_tractions]
         )
@@ -360,13 +360,7 @@ class Simulation:
             not point_domains
             and not dynamic
             and model_checks.domains_would_be_taken(
-                points,
-                points_leaving,
-                walls,
-                formulation,
-                self.spec,
-                pressure_by_parts,
-                keeps_shape,
+                points, points_leaving, self.spec, pressure_by_parts, keeps_shape
             )
         )
         self.tracking: PointTracking | None = None

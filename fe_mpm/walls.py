@@ -253,7 +253,8 @@ class RigidWalls:
 
         Args:
             occupied: The cells that hold points: nodes no such cell touches are released.
-            x: The points' positions (n, g) at the start of the step (m).
+            x: The points' positions (n, g) at the start of the step (m); with
+                point domains the pieces' (their centroids).
             volume: Their volumes (n,) (m³; m² in 2D).
         """
         if not self.walls:

@@ -279,7 +279,7 @@ def nbva_slosh(steps):
             "kinetic": total(points.mass * np.sum(points.velocity**2, axis=1)),
             "migrated": sum(r.migrated_points for r in reports)}
 
-def wall_block(steps, repartition=False):
+def wall_block(steps, repartition=False, **options):
     # An elastic block sliding on a frictional rigid wall down a 30-degree slope.
     mesh = meshes.rectangle_mesh((0, 0), (3, 1), (30, 10))
     centre = meshes.cell_centroids(mesh)
@@ -287,7 +287,8 @@ def wall_block(steps, repartition=False):
     points = fe_mpm.seed(mesh, per_cell=3, density=7800.0, cells=np.flatnonzero(block))
     wall = fe_mpm.RigidWall("base", lambda x: np.isclose(x[1], 0.0), friction=0.1)
     sim = fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(2e8, 0.3, 7800.0), dynamic=True,
-                            walls=[wall], body_force=(9.81 * 0.5, -9.81 * 0.75**0.5))
+                            walls=[wall], body_force=(9.81 * 0.5, -9.81 * 0.75**0.5),
+                            **options)
     after = (lambda report: sim.rebalance()) if repartition else None  # after every step
     reports = sim.run(0.01 * steps, steps, progress=False, on_step=after)
     total = lambda a: float(parallel.total(MPI.COMM_WORLD, float(np.sum(a))))
@@ -329,7 +330,8 @@ try:
     elif case == "on facets":
         result = facet_block(2)
     elif case == "wall":
-        result = {"plain": wall_block(12), "repartitioned": wall_block(12, repartition=True)}
+        result = {"plain": wall_block(12), "repartitioned": wall_block(12, repartition=True),
+                  "domains": wall_block(12, point_domains=True)}
     elif case == "falling":
         result = {m: falling_block(m, k) for m, k in (("consistent", 4), ("lumped", 10))}
         result["projected"] = falling_block("consistent", 4, projection_passes=8)
@@ -695,10 +697,11 @@ def test_a_block_sliding_on_a_frictional_wall_gives_the_serial_answer_on_two_ran
     force is summed over owned nodes once, and its node-by-node distribution is gathered whole. Same
     Newton iterations; slide and forces as serial to 1e-10 (measured 4e-16 and 1e-13).
     The same with the grid repartitioned after every step: the springs' extensions go
-    with their nodes to the new grid (without them the slide differs by about 4e-8)."""
+    with their nodes to the new grid (without them the slide differs by about 4e-8), and
+    with point domains (each node's gap read from the pieces of every rank)."""
     (serial,) = _run(tmp_path, "wall", 1)
     for result in _run(tmp_path, "wall", 2):
-        for case in ("plain", "repartitioned"):
+        for case in ("plain", "repartitioned", "domains"):
             got, want = result[case], serial[case]
             assert got["iterations"] == want["iterations"], case
             assert got["nodes"] == want["nodes"], case
