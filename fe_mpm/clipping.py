@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from fe_mpm.materials.route import compiled_module
 from fe_mpm.tet_clipping import clip_to_reference_tet, tet_volumes
 
 
@@ -86,10 +87,19 @@ def area_and_centroid(polygon: np.ndarray, count: np.ndarray) -> tuple[np.ndarra
 def _pieces_in_reference_cell(xi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The overlaps of triangles ``xi`` (n, 3, 2) with the reference cell, as polygons.
 
+    Sutherland–Hodgman against the cell's three edges, one :func:`clip_half_plane`
+    pass each; compiled loops do the same arithmetic pair by pair
+    (:func:`fe_mpm.clip_kernels.clip_triangles`, the same polygons to the bit, ten
+    times faster), unless numba is missing or ``FE_MPM_COMPILED=0``. Triangles wholly
+    inside the cell or wholly beyond one of its edges are not clipped.
+
     Returns:
         Their vertices (n, 6, 2) in order, and their counts (n,): 0 where there is no
         overlap.
     """
+    kernels = compiled_module("fe_mpm.clip_kernels", "cutting point domains by cells")
+    if kernels is not None:
+        return kernels.clip_triangles(np.ascontiguousarray(xi, dtype=np.float64))
     half_planes = (
         lambda p: p[..., 0],
         lambda p: p[..., 1],

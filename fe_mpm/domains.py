@@ -62,6 +62,7 @@ from fe_mpm.clipping import piece_rule, simplex_volumes
 from fe_mpm.domain_flips import flip_distorted
 from fe_mpm.errors import ConvergenceError, PointsOutsideError
 from fe_mpm.markers import Markers
+from fe_mpm.materials.route import compiled_module
 from fe_mpm.migration import migrate
 from fe_mpm.particles import MaterialPoints
 from fe_mpm.point_update import apply_update
@@ -393,13 +394,11 @@ class PointDomains:
         being cut. ``bounds``: the domains' lower and upper corners.
         """
         n, v, g = corners.shape
-        (low, high), (box_low, box_high) = bounds, self._boxes
         # Only the cells whose bounding boxes meet the domain's can overlap it, and
         # not a cell whose vertices all lie beyond one face of the domain (most of the
         # rest in 3D, where cutting is dear; a cell beyond one of its own faces is cut
         # away at once).
-        meets = np.all((box_low[cell] <= high[owner]) & (box_high[cell] >= low[owner]), axis=1)
-        meets[meets] = _may_overlap(corners, tracker.cell_vertices, owner[meets], cell[meets])
+        meets = _may_overlap(corners, bounds, tracker.cell_vertices, self._boxes, owner, cell)
         o, c = owner[meets], cell[meets]
         xi = tracker.barycentric(corners[o].reshape(-1, g), np.repeat(c, v))
         met_area, met_rule = piece_rule(xi.reshape(-1, v, v)[..., 1:], self.degree)
@@ -768,15 +767,39 @@ def _replaced(
 
 
 def _may_overlap(
-    corners: np.ndarray, cell_vertices: np.ndarray, owner: np.ndarray, cell: np.ndarray
+    corners: np.ndarray,
+    bounds: tuple[np.ndarray, np.ndarray],
+    cell_vertices: np.ndarray,
+    boxes: tuple[np.ndarray, np.ndarray],
+    owner: np.ndarray,
+    cell: np.ndarray,
 ) -> np.ndarray:
-    """False for the (domain, cell) pairs whose cell lies wholly beyond a face of the domain."""
+    """False for the (domain, cell) pairs that cannot overlap (m,).
+
+    Those whose bounding boxes (``bounds`` of the domains, ``boxes`` of the cells: lower
+    and upper corners) miss each other, and those whose cell lies wholly beyond a face
+    of the domain; in compiled loops (:func:`fe_mpm.clip_kernels.may_meet`) unless
+    numba is missing or ``FE_MPM_COMPILED=0``.
+    """
     origin, edges = corners[:, 0], corners[:, 1:] - corners[:, :1]  # (n, d), (n, d, d)
     # x = origin + ξ · edges, so ξ = (x − origin) · edges⁻¹ for each domain.
     inverse = np.linalg.inv(edges)
-    xi = np.einsum("kvg,kgh->kvh", cell_vertices[cell] - origin[owner, None], inverse[owner])
     # A cell touching the domain at a face, edge or vertex (ξ = 0 there up to
     # round-off) meets it in nothing: the tolerance drops those too.
     tol = 1e-12
+    kernels = compiled_module("fe_mpm.clip_kernels", "cutting point domains by cells")
+    if kernels is not None:
+        return kernels.may_meet(
+            *(np.ascontiguousarray(a, dtype=np.float64) for a in (corners, inverse, *bounds)),
+            *(np.ascontiguousarray(a, dtype=np.float64) for a in (cell_vertices, *boxes)),
+            np.ascontiguousarray(owner, dtype=np.int64),
+            np.ascontiguousarray(cell, dtype=np.int64),
+            tol,
+        )
+    (low, high), (box_low, box_high) = bounds, boxes
+    meets = np.all((box_low[cell] <= high[owner]) & (box_high[cell] >= low[owner]), axis=1)
+    o, c = owner[meets], cell[meets]
+    xi = np.einsum("kvg,kgh->kvh", cell_vertices[c] - origin[o, None], inverse[o])
     beyond = np.any(np.all(xi < tol, axis=1), axis=1) | np.all(xi.sum(axis=2) > 1.0 - tol, axis=1)
-    return ~beyond
+    meets[meets] = ~beyond
+    return meets
