@@ -58,17 +58,22 @@ TARGET = 0.1  # largest exponent difference from Mast's best fit counted as agre
 FLOOR = 0.05  # the plot draws smaller values (a column that did not collapse) at this floor
 
 
-def demo_bounds() -> tuple[dict, dict]:
-    """The demo's ``RUNOUT_BOUNDS`` and ``HEIGHT_BOUNDS`` (Mast's Tables 7.4, 7.6), unexecuted."""
+def demo_bounds() -> tuple[dict, dict, float]:
+    """The demo's bounds, read from its source unexecuted.
+
+    ``RUNOUT_BOUNDS`` and ``HEIGHT_BOUNDS`` (Mast's Tables 7.4, 7.6), and
+    ``HEIGHT_TOLERANCE`` (on H_f = a for a ≤ 1).
+    """
     found = {}
+    names = ("RUNOUT_BOUNDS", "HEIGHT_BOUNDS", "HEIGHT_TOLERANCE")
     for node in ast.parse(DEMO.read_text()).body:
         if isinstance(node, ast.Assign) and isinstance(node.targets[0], ast.Name):
-            if node.targets[0].id in ("RUNOUT_BOUNDS", "HEIGHT_BOUNDS"):
+            if node.targets[0].id in names:
                 found[node.targets[0].id] = ast.literal_eval(node.value)
-    return found["RUNOUT_BOUNDS"], found["HEIGHT_BOUNDS"]
+    return tuple(found[name] for name in names)
 
 
-RUNOUT_BOUNDS, HEIGHT_BOUNDS = demo_bounds()
+RUNOUT_BOUNDS, HEIGHT_BOUNDS, HEIGHT_TOLERANCE = demo_bounds()
 
 
 def power(coefficients: tuple[float, float], a: float | np.ndarray) -> float | np.ndarray:
@@ -79,7 +84,10 @@ def power(coefficients: tuple[float, float], a: float | np.ndarray) -> float | n
 def mast_ranges(law: str, a: float) -> tuple[list[float], list[float]]:
     """Mast's [lower, upper] bounds on L_f and H_f at aspect ratio ``a``, as the demo takes them."""
     runout = [float(power(c, a)) for c in RUNOUT_BOUNDS[law]["short" if a <= 1.5 else "tall"]]
-    height = [a, a] if a <= 1.0 else [float(power(c, a)) for c in HEIGHT_BOUNDS[law]]
+    if a <= 1.0:
+        height = [a * (1.0 - HEIGHT_TOLERANCE), a * (1.0 + HEIGHT_TOLERANCE)]
+    else:
+        height = [float(power(c, a)) for c in HEIGHT_BOUNDS[law]]
     return runout, height
 
 
@@ -292,7 +300,12 @@ def main() -> None:
     p.add_argument("--h", type=float, default=None, help="cell size (m), passed to the demo")
     p.add_argument("--points-per-cell", type=int, default=3, help="passed to the demo")
     p.add_argument("--timeout", type=float, default=None, help="stop a run after this many s")
-    p.add_argument("--height-tol", type=float, default=0.02, help="relative, on H_f = a, a <= 1")
+    p.add_argument(
+        "--height-tol",
+        type=float,
+        default=HEIGHT_TOLERANCE,
+        help="relative, on H_f = a, a <= 1 (the demo's check)",
+    )
     p.add_argument("--json-out", default=None, help="write all results here (JSON)")
     p.add_argument("--plot", default=None, help="write the log-log plot here (PNG)")
     p.add_argument("--from-json", nargs="+", default=None, help="redraw from saved results")

@@ -63,6 +63,10 @@ RUNOUT_BOUNDS = {
     "mn-dp": {"short": ((0.851, 1.471), (1.165, 1.551)), "tall": ((1.089, 0.742), (1.518, 0.760))},
 }
 HEIGHT_BOUNDS = {"dp": ((0.820, 0.381), (0.911, 0.461)), "mn-dp": ((0.741, 0.353), (0.860, 0.450))}
+#: Below a ≈ 1 Mast's columns keep their height (H_f = a); this much either side
+#: allows for the seeded top, ragged by a point spacing (H = 0.507 after the first
+#: step at a = 0.5 on 1 cm cells).
+HEIGHT_TOLERANCE = 0.02
 
 
 def parse_args(argv=None):
@@ -105,7 +109,10 @@ def bound(coefficients: tuple[float, float]) -> float:
 
 
 runout_range = [bound(c) for c in RUNOUT_BOUNDS[args.law]["short" if a <= 1.5 else "tall"]]
-height_range = [a, a] if a <= 1.0 else [bound(c) for c in HEIGHT_BOUNDS[args.law]]
+if a <= 1.0:
+    height_range = [a * (1.0 - HEIGHT_TOLERANCE), a * (1.0 + HEIGHT_TOLERANCE)]
+else:
+    height_range = [bound(c) for c in HEIGHT_BOUNDS[args.law]]
 # -
 
 # ## Scene

@@ -213,7 +213,12 @@ class StepForms:
             self.mass_matrix = StepForm(
                 inertia.mass_product(a, v, q, self.density, self.lumping), mesh, quadratures=rules
             )
-        J = ufl.derivative(R, fields.w, ufl.TrialFunction(fields.W))
+        trial = ufl.TrialFunction(fields.W)
+        J = ufl.derivative(R, fields.w, trial)
+        if walls and newmark is None:  # unloaded springs' friction holds the first iterate
+            unloaded = walls.unloaded_tangent(ufl.split(trial)[0] if spec.mixed else trial, w)
+            if unloaded is not None:
+                J += unloaded
         self.residual = StepForm(R, mesh, facets, rules, dynamic)
         self.jacobian = StepForm(J, mesh, facets, rules, dynamic)
         self.update_layout, self.update = self._update(fields)

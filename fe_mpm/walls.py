@@ -226,6 +226,19 @@ class RigidWalls:
         ]
         return sum(terms[1:], terms[0]) if terms else None
 
+    def unloaded_tangent(self, trial: ufl.core.expr.Expr, w: ufl.core.expr.Expr) -> ufl.Form | None:
+        """The Jacobian's term for nodes touching a frictional wall unloaded, or None.
+
+        See :func:`fe_mpm.forms.contact.unloaded_tangent`; ``trial`` is the
+        displacement part of the Jacobian's trial function, ``w`` the test function.
+        """
+        terms = [
+            contact.unloaded_tangent(self.du, trial, w, wall.extension, wall.law, wall.ds)
+            for wall in self.walls
+        ]
+        terms = [t for t in terms if t is not None]
+        return sum(terms[1:], terms[0]) if terms else None
+
     def held_directions(self, occupied: np.ndarray) -> list[np.ndarray]:
         """Directions (g,) the walls hold the material in: the normal, with friction the plane.
 

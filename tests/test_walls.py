@@ -181,6 +181,29 @@ def test_walls_hold_point_domains_as_they_hold_points():
         assert np.linalg.norm(wall.tangential) == pytest.approx(mu * wall.normal, rel=1e-9)
 
 
+@pytest.mark.parametrize("formulation", ["u", "up"])
+def test_a_block_rests_on_a_frictional_slope_in_a_static_run(formulation):
+    """Static, gravity ramped, the slope at 20° below the friction angle (μ = 0.6 > tan
+    20°): only friction holds the block along the wall. At the first iterate the
+    springs carry nothing, so the friction (μ p_N / s) has no stiffness, and without
+    the unloaded springs' tangent (:func:`fe_mpm.forms.contact.unloaded_tangent`) the
+    Jacobian was singular along the wall: the linear solve failed in step 1, in u and
+    in u-p (measured). The wall's force is the weight, along the slope and across it,
+    to Newton's tolerance; the block slips about one slip scale (1.05e-4 m for s =
+    1e-4 m, measured), bounded by 3 s."""
+    theta = math.radians(20.0)
+    sim, points = _block(
+        20.0, 0.6, dynamic=False, body_force_scale=lambda t: t, formulation=formulation
+    )
+    reports = sim.run(t_end=1.0, n_steps=3, progress=False)
+    weight = G * points.mass.sum()
+    force = reports[-1].walls["base"].total
+    np.testing.assert_allclose(
+        force, weight * np.array([-math.sin(theta), math.cos(theta)]), rtol=1e-9
+    )
+    assert abs(_slide(points)) < 3.0 * SLIP_SCALE_FACTOR * H
+
+
 def test_a_body_leaves_a_wall_and_the_wall_lets_go():
     """Gravity turned upward: the block lifts off, and the wall pulls on nothing.
 

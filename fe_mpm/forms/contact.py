@@ -60,6 +60,10 @@ KEPT_SLIP = 3.0
 #: Below this x = ``|d_T| / s``, tanh(x)/x is its series 1 − x²/3 (to round-off).
 SMALL_X = 1e-4
 
+#: :func:`unloaded_tangent` holds an unloaded node along the wall with this share of
+#: μβ: μE/h at the default penalty (1000 E/h), of the order of the body's own stiffness.
+UNLOADED_SHARE = 1e-3
+
 
 @dataclass(frozen=True)
 class WallLaw:
@@ -153,3 +157,44 @@ def residual(
         ds: The wall's facets, with :data:`VERTEX_RULE` as metadata.
     """
     return -ufl.dot(wall_traction(extension + du, law), w) * ds
+
+
+def unloaded_tangent(
+    du: ufl.core.expr.Expr,
+    trial: ufl.core.expr.Expr,
+    w: ufl.core.expr.Expr,
+    extension: ufl.Coefficient,
+    law: WallLaw,
+    ds: ufl.Measure,
+) -> ufl.Form | None:
+    r"""A Jacobian term for the nodes that touch a frictional wall with no pressure yet.
+
+    The friction's tangent :math:`\mu\,p_N/s` vanishes with :math:`p_N`: at the first
+    iterate of a static step on springs that carry nothing yet (the first step of a
+    body seeded on its wall), nothing holds the body along a wall that only friction
+    holds, the Jacobian is singular there, and the linear solve fails (a block at
+    rest on a frictional slope stopped in its first step). Where the entry
+    :math:`d_N` is exactly 0, this adds a spring along the wall, of stiffness
+    :data:`UNLOADED_SHARE` × μβ: a predictor for the first iterate, after which the
+    springs carry the body and the term is 0. It is in the Jacobian only, so the
+    answer is the residual's; None for a smooth or a sticking wall. Static steps
+    only: in dynamics the mass holds the first iterate, and a body sliding onto new
+    nodes met the predictor there at every step (Newton stalled on a sliding block).
+
+    Args:
+        du: Grid displacement increment Δu (P1), the iterate.
+        trial: The displacement part of the Jacobian's trial function.
+        w: Displacement test function.
+        extension: The springs' extension at the end of the last step (P1 vector).
+        law: The wall's springs.
+        ds: The wall's facets, with :data:`VERTEX_RULE` as metadata.
+    """
+    if _smooth(law.friction) or _sticking(law.friction):
+        return None
+    entry, _, _, _, _ = _parts(extension + du, law)
+    n = law.normal
+    along = trial - ufl.dot(trial, n) * n
+    stiffness = ufl.conditional(
+        ufl.eq(entry, 0.0), UNLOADED_SHARE * law.friction * law.stiffness, 0.0
+    )
+    return stiffness * ufl.dot(along, w) * ds
