@@ -8,6 +8,7 @@ formulation needs, one density, and supports that stop every rigid translation.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable, Sequence
 
 import numpy as np
@@ -246,11 +247,44 @@ LIMIT_LOAD_ADVICE = (
 )
 
 
+def sliding_on_walls(walls, body_force: np.ndarray | None) -> str:
+    """Advice for a static run that the body force pushes along a frictional wall (or "").
+
+    Friction holds a body on a wall only while the load along the wall is at most μ
+    times the load against it: past that a static run has no solution (a block on a
+    20° slope with μ = 0.3 stopped in its first step, and the advice about cell
+    crossing misled). Named for each wall the body force presses on (b·n > 0) along
+    which it pushes with |b_T| / (b·n) > μ.
+
+    Args:
+        walls: The simulation's :class:`~fe_mpm.walls.RigidWalls`.
+        body_force: The body force per unit mass (g,), or None.
+    """
+    if body_force is None or not walls:
+        return ""
+    b = np.asarray(body_force, dtype=float)
+    sliding = []
+    for wall in walls.walls:
+        mu, n = wall.spec.friction, wall.normal
+        against = float(b @ n)
+        along = float(np.linalg.norm(b - against * n))
+        if against > 0.0 and math.isfinite(mu) and along > mu * against:
+            sliding.append(f"{wall.spec.name!r} (along/against {along / against:.3g} > μ = {mu:g})")
+    if not sliding:
+        return ""
+    return (
+        "The body force pushes along RigidWall " + ", ".join(sliding) + " harder than its "
+        "friction can hold: unless something else holds the body there, it slides, and a "
+        "static run has no solution; dynamic=True follows the slide."
+    )
+
+
 def failure_advice(
     point_domains: bool,
     ghost_factor: float,
     domains_would_do: bool = False,
     static_plastic: bool = False,
+    sliding: str = "",
 ) -> str:
     """What a run's stop message adds about its options (empty if nothing).
 
@@ -265,8 +299,9 @@ def failure_advice(
     A static run of a law that yields (``static_plastic``) may have passed its limit
     load (:data:`LIMIT_LOAD_ADVICE`): a J2 block standing free under rising gravity
     stops so once its base yields, and the advice about domains alone misled there.
+    ``sliding`` (:func:`sliding_on_walls`) comes first where given.
     """
-    advice = []
+    advice = [sliding] if sliding else []
     if point_domains and ghost_factor == 0.0:
         advice.append(
             "This run has point domains without a ghost penalty (ghost_penalty=0): a "
@@ -274,7 +309,7 @@ def failure_advice(
             "leave Newton without a solution; a penalty ties them (ghost_penalty=γ, the "
             "default of static runs; on the strip footing 0.001 was enough)."
         )
-    elif domains_would_do:
+    elif domains_would_do and not sliding:  # a sliding body is reason enough
         advice.append(
             "Its points cross cells with their whole volume (standard MPM), so the "
             "cells they enter and leave fill and empty at once, which can leave Newton "

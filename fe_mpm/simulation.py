@@ -625,6 +625,11 @@ class Simulation:
             self._ghost_factor,
             self._domains_would_do,
             static_plastic=not self.dynamic and self._plastic,
+            sliding=""
+            if self.dynamic
+            else model_checks.sliding_on_walls(
+                self.walls, getattr(self.conditions, "_body_force_value", None)
+            ),
         )
         length = StepLength(nominal, floor, advice)
         can_hold = not self.dynamic and self.domains is None  # pieces differ per attempt

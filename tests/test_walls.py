@@ -204,6 +204,19 @@ def test_a_block_rests_on_a_frictional_slope_in_a_static_run(formulation):
     assert abs(_slide(points)) < 3.0 * SLIP_SCALE_FACTOR * H
 
 
+def test_a_static_run_says_when_friction_cannot_hold_the_body():
+    """The same block on the 20° slope with μ = 0.3 < tan 20°: it slides, so a static
+    run has no solution. It stops in its first step, and the message names the wall
+    and the ratio of the body force along it to against it (0.364 > μ), where it
+    blamed the points crossing cells and advised point domains before."""
+    sim, _ = _block(20.0, 0.3, dynamic=False, body_force_scale=lambda t: t)
+    with pytest.raises(fe_mpm.ConvergenceError) as failure:
+        sim.run(t_end=1.0, n_steps=3, progress=False)
+    message = str(failure.value)
+    assert "pushes along RigidWall 'base' (along/against 0.364 > μ = 0.3)" in message
+    assert "point_domains=True" not in message
+
+
 def test_a_body_leaves_a_wall_and_the_wall_lets_go():
     """Gravity turned upward: the block lifts off, and the wall pulls on nothing.
 
