@@ -81,14 +81,20 @@ def power(coefficients: tuple[float, float], a: float | np.ndarray) -> float | n
     return coefficients[0] * np.asarray(a, dtype=float) ** coefficients[1]
 
 
-def mast_ranges(law: str, a: float) -> tuple[list[float], list[float]]:
-    """Mast's [lower, upper] bounds on L_f and H_f at aspect ratio ``a``, as the demo takes them."""
+def mast_ranges(
+    law: str, a: float, height_tol: float = HEIGHT_TOLERANCE
+) -> tuple[list[float], list[float]]:
+    """Mast's [lower, upper] bounds on L_f and H_f at aspect ratio ``a``, as the demo takes them.
+
+    H_f = a within ``height_tol`` below a = 1, his fit's bounds above, and at a = 1,
+    where both hold, the range that spans both.
+    """
     runout = [float(power(c, a)) for c in RUNOUT_BOUNDS[law]["short" if a <= 1.5 else "tall"]]
-    if a <= 1.0:
-        height = [a * (1.0 - HEIGHT_TOLERANCE), a * (1.0 + HEIGHT_TOLERANCE)]
-    else:
-        height = [float(power(c, a)) for c in HEIGHT_BOUNDS[law]]
-    return runout, height
+    short = [a * (1.0 - height_tol), a * (1.0 + height_tol)]
+    tall = [float(power(c, a)) for c in HEIGHT_BOUNDS[law]]
+    if math.isclose(a, 1.0):
+        return runout, [min(short[0], tall[0]), max(short[1], tall[1])]
+    return runout, short if a < 1.0 else tall
 
 
 def run_demo(law: str, a: float, h: float | None, per_cell: int, timeout: float | None) -> dict:
@@ -154,9 +160,7 @@ def fits(runs: list[dict], law: str) -> dict:
 
 def compare(run: dict, height_tol: float) -> dict:
     """Mast's bounds at the run's aspect ratio, and whether L_f and H_f lie inside."""
-    runout, height = mast_ranges(run["law"], run["aspect"])
-    if run["aspect"] <= 1.0:
-        height = [run["aspect"] * (1 - height_tol), run["aspect"] * (1 + height_tol)]
+    runout, height = mast_ranges(run["law"], run["aspect"], height_tol)
     return {
         "mast_L_f": runout,
         "mast_H_f": height,

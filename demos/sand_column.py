@@ -109,10 +109,15 @@ def bound(coefficients: tuple[float, float]) -> float:
 
 
 runout_range = [bound(c) for c in RUNOUT_BOUNDS[args.law]["short" if a <= 1.5 else "tall"]]
-if a <= 1.0:
-    height_range = [a * (1.0 - HEIGHT_TOLERANCE), a * (1.0 + HEIGHT_TOLERANCE)]
+# Mast's Table 7.6 bounds H_f for a ≲ 1 (H_f = a) and for a ≳ 1 (C a^D): at a = 1,
+# where his two fits meet (0.82–0.91 and 1.0 for dp), the check takes the range
+# that spans both.
+short_height = [a * (1.0 - HEIGHT_TOLERANCE), a * (1.0 + HEIGHT_TOLERANCE)]
+tall_height = [bound(c) for c in HEIGHT_BOUNDS[args.law]]
+if math.isclose(a, 1.0):
+    height_range = [min(short_height[0], tall_height[0]), max(short_height[1], tall_height[1])]
 else:
-    height_range = [bound(c) for c in HEIGHT_BOUNDS[args.law]]
+    height_range = short_height if a < 1.0 else tall_height
 # -
 
 # ## Scene

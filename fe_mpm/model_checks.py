@@ -254,7 +254,7 @@ def sliding_on_walls(walls, body_force: np.ndarray | None) -> str:
     times the load against it: past that a static run has no solution (a block on a
     20° slope with μ = 0.3 stopped in its first step, and the advice about cell
     crossing misled). Named for each wall the body force presses on (b·n > 0) along
-    which it pushes with |b_T| / (b·n) > μ.
+    which it pushes with ‖b_T‖ / (b·n) > μ.
 
     Args:
         walls: The simulation's :class:`~fe_mpm.walls.RigidWalls`.
