@@ -9,8 +9,7 @@ The loops keep numpy's operations and their order, so the pieces come out the sa
 to the last bit (``tests/test_domains_3d.py`` and ``tests/test_clipping.py`` compare
 them with the vectorised cuts).
 
-Imported when domains are first cut, so that scenes without them start without
-numba.
+Imported when domains are first cut.
 """
 
 from __future__ import annotations
@@ -134,9 +133,10 @@ def clip_triangles(xi):
             for a in range(3):
                 x, y = xi[p, a, 0], xi[p, a, 1]
                 dist = _reference_distance(face, x, y, 1.0 - x - y)
-                if dist < 0.0:
+                # As numpy's all(d >= 0) and all(d < 0): a NaN is neither.
+                if not dist >= 0.0:
                     inside = False
-                else:
+                if not dist < 0.0:
                     every_out = False
             if every_out:
                 beyond = True
@@ -313,10 +313,10 @@ def clip_tetrahedra(xi):
         for face in range(4):
             _tet_distance(face, xi[p], d)
             every_out = True
-            for a in range(4):
-                if d[a] < 0.0:
+            for a in range(4):  # as numpy's all(d >= 0) and all(d < 0): a NaN is neither
+                if not d[a] >= 0.0:
                     inside = False
-                else:
+                if not d[a] < 0.0:
                     every_out = False
             if every_out:
                 beyond = True

@@ -53,7 +53,7 @@ def clip_half_plane(polygon: np.ndarray, count: np.ndarray, distance: np.ndarray
     target = np.minimum(target, size - 1)
     out = np.zeros((n, size, 2))
     out[row, target] = emitted[row, slot]
-    return out, keep.sum(axis=1)
+    return out, np.minimum(keep.sum(axis=1), size)
 
 
 def simplex_volumes(corners: np.ndarray) -> np.ndarray:
@@ -97,7 +97,7 @@ def _pieces_in_reference_cell(xi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         Their vertices (n, 6, 2) in order, and their counts (n,): 0 where there is no
         overlap.
     """
-    kernels = compiled_module("fe_mpm.clip_kernels", "cutting point domains by cells")
+    kernels = compiled_module("fe_mpm.clip_kernels", "the compiled cuts of point domains")
     if kernels is not None:
         return kernels.clip_triangles(np.ascontiguousarray(xi, dtype=np.float64))
     half_planes = (

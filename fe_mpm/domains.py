@@ -787,7 +787,7 @@ def _may_overlap(
     # A cell touching the domain at a face, edge or vertex (ξ = 0 there up to
     # round-off) meets it in nothing: the tolerance drops those too.
     tol = 1e-12
-    kernels = compiled_module("fe_mpm.clip_kernels", "cutting point domains by cells")
+    kernels = compiled_module("fe_mpm.clip_kernels", "the compiled cuts of point domains")
     if kernels is not None:
         return kernels.may_meet(
             *(np.ascontiguousarray(a, dtype=np.float64) for a in (corners, inverse, *bounds)),

@@ -22,6 +22,7 @@ from fe_mpm.ghost import WITH_DOMAINS, WITH_DOMAINS_DYNAMIC
 from fe_mpm.materials.protocol import Law, MixedLaw, missing_members
 from fe_mpm.materials.zones import material_zones
 from fe_mpm.particles import MaterialPoints, simplex_cell_type
+from fe_mpm.transfer import touched_nodes
 
 #: Relative mismatch between the law's density and the points' that counts as a conflict.
 DENSITY_RTOL = 1e-9
@@ -247,28 +248,32 @@ LIMIT_LOAD_ADVICE = (
 )
 
 
-def sliding_on_walls(walls, body_force: np.ndarray | None) -> str:
+def sliding_on_walls(walls, body_force: np.ndarray | None, occupied: np.ndarray) -> str:
     """Advice for a static run that the body force pushes along a frictional wall (or "").
 
     Friction holds a body on a wall only while the load along the wall is at most μ
-    times the load against it: past that a static run has no solution (a block on a
-    20° slope with μ = 0.3 stopped in its first step, and the advice about cell
-    crossing misled). Named for each wall the body force presses on (b·n > 0) along
-    which it pushes with ‖b_T‖ / (b·n) > μ.
+    times the load against it: past that a static run has no solution, unless
+    something else holds the body (a block on a 20° slope with μ = 0.3 stopped in its
+    first step, and the advice about cell crossing alone misled). Named for each wall
+    that touches a node of an ``occupied`` cell (on some rank) and that the body
+    force presses on (b·n > 0) and pushes along with ‖b_T‖ / (b·n) > μ.
 
     Args:
         walls: The simulation's :class:`~fe_mpm.walls.RigidWalls`.
         body_force: The body force per unit mass (g,), or None.
+        occupied: The cells that hold points.
     """
     if body_force is None or not walls:
         return ""
     b = np.asarray(body_force, dtype=float)
+    touched = touched_nodes(walls.space, occupied)
     sliding = []
     for wall in walls.walls:
         mu, n = wall.spec.friction, wall.normal
         against = float(b @ n)
         along = float(np.linalg.norm(b - against * n))
-        if against > 0.0 and math.isfinite(mu) and along > mu * against:
+        pushes = against > 0.0 and math.isfinite(mu) and along > mu * against
+        if pushes and parallel.any_rank(walls.mesh.comm, bool(touched[wall.dofs].any())):
             sliding.append(f"{wall.spec.name!r} (along/against {along / against:.3g} > μ = {mu:g})")
     if not sliding:
         return ""
@@ -309,7 +314,7 @@ def failure_advice(
             "leave Newton without a solution; a penalty ties them (ghost_penalty=γ, the "
             "default of static runs; on the strip footing 0.001 was enough)."
         )
-    elif domains_would_do and not sliding:  # a sliding body is reason enough
+    elif domains_would_do:
         advice.append(
             "Its points cross cells with their whole volume (standard MPM), so the "
             "cells they enter and leave fill and empty at once, which can leave Newton "

@@ -628,7 +628,9 @@ class Simulation:
             sliding=""
             if self.dynamic
             else model_checks.sliding_on_walls(
-                self.walls, getattr(self.conditions, "_body_force_value", None)
+                self.walls,
+                getattr(self.conditions, "_body_force_value", None),
+                np.unique(self.points.cell[self.points.cell >= 0]),
             ),
         )
         length = StepLength(nominal, floor, advice)

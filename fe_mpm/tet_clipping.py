@@ -122,7 +122,7 @@ def clip_to_reference_tet(xi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """
     from fe_mpm.materials.route import compiled_module
 
-    kernels = compiled_module("fe_mpm.clip_kernels", "cutting point domains by cells")
+    kernels = compiled_module("fe_mpm.clip_kernels", "the compiled cuts of point domains")
     if kernels is not None:
         return kernels.clip_tetrahedra(np.ascontiguousarray(xi, dtype=np.float64))
     n = len(xi)

@@ -69,12 +69,19 @@ def _random_triangles_on_the_cell(rng, n: int) -> np.ndarray:
     return t
 
 
+def _compiled_route(monkeypatch) -> None:
+    """Take the compiled route, whatever the environment says, and check that it is taken."""
+    monkeypatch.delenv(route.ENVIRONMENT_VARIABLE, raising=False)
+    assert route.compiled_module("fe_mpm.clip_kernels", "the cuts") is not None
+
+
 def test_the_compiled_clipping_gives_the_numpy_route_to_the_bit(monkeypatch):
     """20 000 triangles clipped by the compiled loops and by the numpy route's three
     vectorised Sutherland–Hodgman passes (``FE_MPM_COMPILED=0``): the same polygons,
     vertex by vertex and bit for bit, including triangles with vertices and edges on
     the cell's edges. A loop that emitted a crossing before its vertex would reorder
     the vertices; one that computed a crossing otherwise would move them by round-off."""
+    _compiled_route(monkeypatch)
     rng = np.random.default_rng(20261206)
     t = _random_triangles_on_the_cell(rng, 20_000)
     polygons, counts = _pieces_in_reference_cell(t)
@@ -90,6 +97,7 @@ def test_the_compiled_overlap_test_gives_the_numpy_route(monkeypatch, g):
     """Which (domain, cell) pairs may meet (their bounding boxes do, and the cell does
     not lie beyond a face of the domain), in compiled loops and by the numpy route,
     on 100 000 random pairs: the same answer for every pair, with pairs of each kind."""
+    _compiled_route(monkeypatch)
     rng = np.random.default_rng(g)
     corners = rng.uniform(0.0, 1.0, (5_000, g + 1, g))
     cells = rng.uniform(0.0, 1.0, (3_000, g + 1, g))

@@ -61,12 +61,19 @@ def test_the_pieces_of_a_tetrahedron_add_up_to_it():
     assert np.mean(np.count_nonzero(volume, axis=0) > 1) > 0.9  # most cross facets
 
 
+def _compiled_route(monkeypatch) -> None:
+    """Take the compiled route, whatever the environment says, and check that it is taken."""
+    monkeypatch.delenv(route.ENVIRONMENT_VARIABLE, raising=False)
+    assert route.compiled_module("fe_mpm.clip_kernels", "the cuts") is not None
+
+
 def test_the_compiled_cut_gives_the_numpy_route_to_the_bit(monkeypatch):
     """20 000 tetrahedra about the reference cell, a tenth with corners or faces on
     its faces, clipped by the compiled loops and by the numpy route's four
     vectorised cuts (``FE_MPM_COMPILED=0``): the same volumes and centroids, bit for
     bit. The pieces must be summed in the numpy route's order: another order moves
     half of the volumes by round-off (reversed: up to 7e-17), which this sees."""
+    _compiled_route(monkeypatch)
     rng = np.random.default_rng(20261206)
     tets = rng.uniform(-0.5, 1.1, (20_000, 4, 3))
     tets[:1_000, 0, 0] = 0.0  # a corner on ξ₁ = 0

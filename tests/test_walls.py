@@ -12,9 +12,10 @@ import numpy as np
 import pytest
 
 import fe_mpm
+from fe_mpm import model_checks
 from fe_mpm.meshes import cell_centroids, rectangle_mesh
 from fe_mpm.verification import rates, taylor_remainders
-from fe_mpm.walls import PENALTY_FACTOR, SLIP_SCALE_FACTOR
+from fe_mpm.walls import PENALTY_FACTOR, SLIP_SCALE_FACTOR, RigidWalls
 
 G = 9.81
 E, NU, RHO = 2e8, 0.3, 7800.0  # the thesis's steel disk, as demos/sliding_block.py
@@ -163,8 +164,7 @@ def test_walls_hold_point_domains_as_they_hold_points():
     Newton's tolerance (measured 4e-16). Dynamic, μ = 0.1 on the 30° slope: the slide
     after 0.5 s is within 2e-3 of ½ g (sin θ − μ cos θ) t², as without domains
     (measured 6.22e-4 with and without), and the friction is μ times the push once
-    the block slides. Without the wall nothing holds the block: the static run stops
-    and the dynamic block falls through the grid's base.
+    the block slides.
     """
     sim, points = _block(0.0, 0.5, dynamic=False, body_force_scale=lambda t: t, point_domains=True)
     reports = sim.run(t_end=1.0, n_steps=3, progress=False)
@@ -189,8 +189,8 @@ def test_a_block_rests_on_a_frictional_slope_in_a_static_run(formulation):
     the unloaded springs' tangent (:func:`fe_mpm.forms.contact.unloaded_tangent`) the
     Jacobian was singular along the wall: the linear solve failed in step 1, in u and
     in u-p (measured). The wall's force is the weight, along the slope and across it,
-    to Newton's tolerance; the block slips about one slip scale (1.05e-4 m for s =
-    1e-4 m, measured), bounded by 3 s."""
+    to Newton's tolerance; the block slips about one slip scale (1.03e-4 m in u,
+    1.05e-4 m in u-p for s = 1e-4 m, measured), bounded by 3 s."""
     theta = math.radians(20.0)
     sim, points = _block(
         20.0, 0.6, dynamic=False, body_force_scale=lambda t: t, formulation=formulation
@@ -207,14 +207,26 @@ def test_a_block_rests_on_a_frictional_slope_in_a_static_run(formulation):
 def test_a_static_run_says_when_friction_cannot_hold_the_body():
     """The same block on the 20° slope with μ = 0.3 < tan 20°: it slides, so a static
     run has no solution. It stops in its first step, and the message names the wall
-    and the ratio of the body force along it to against it (0.364 > μ), where it
-    blamed the points crossing cells and advised point domains before."""
+    and the ratio of the body force along it to against it (0.364 > μ), first, where
+    it blamed only the points crossing cells before. A wall the body does not touch
+    is not named: with μ = 0.6 on the base, which holds the block, and a wall of μ =
+    0.3 at the grid's far end x = 3 (that the body force presses on), nothing is."""
     sim, _ = _block(20.0, 0.3, dynamic=False, body_force_scale=lambda t: t)
     with pytest.raises(fe_mpm.ConvergenceError) as failure:
         sim.run(t_end=1.0, n_steps=3, progress=False)
     message = str(failure.value)
     assert "pushes along RigidWall 'base' (along/against 0.364 > μ = 0.3)" in message
-    assert "point_domains=True" not in message
+    assert message.index("pushes along") < message.index("point_domains=True")
+
+    holding, points = _block(20.0, 0.6, dynamic=False)
+    far = fe_mpm.RigidWall("far", lambda x: np.isclose(x[0], 3.0), friction=0.3)
+    walls = RigidWalls(holding.fields.du, [far], holding.mesh, None, holding.material)
+    b = (G * math.sin(math.radians(20.0)), -G * math.cos(math.radians(20.0)))
+    occupied = np.unique(points.cell)
+    assert model_checks.sliding_on_walls(walls, b, occupied) == ""
+    assert "'far'" in model_checks.sliding_on_walls(
+        walls, b, np.arange(len(holding.tracker.volumes))
+    )
 
 
 def test_a_body_leaves_a_wall_and_the_wall_lets_go():

@@ -31,7 +31,9 @@ def compiled_module(name: str, purpose: str) -> ModuleType | None:
         return None
     try:
         return importlib.import_module(name)
-    except ImportError as error:  # numba is a dependency, but an environment may lack it
+    # numba is a dependency, but an environment may lack it, or a place to cache
+    # compiled code (a RuntimeError when the kernels are decorated).
+    except (ImportError, RuntimeError) as error:
         _missing[name] = str(error)
         warn(
             f"fe_mpm: {purpose} need numba ({error}); taking the numpy route, several "
