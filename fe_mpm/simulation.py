@@ -629,7 +629,7 @@ class Simulation:
             if self.dynamic
             else model_checks.sliding_on_walls(
                 self.walls,
-                getattr(self.conditions, "_body_force_value", None),
+                self._given["conditions"][2],  # the body force as given
                 np.unique(self.points.cell[self.points.cell >= 0]),
             ),
         )
