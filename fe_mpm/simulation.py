@@ -206,9 +206,9 @@ class Simulation:
         ghost_penalty: γ ≥ 0 of the ghost penalty on the facets of poorly filled
             cells (:mod:`fe_mpm.ghost`); 0: none. Default:
             :data:`fe_mpm.ghost.WITH_DOMAINS` with point domains in a static run (0.1
-            for P1, 0.01 for P2), else 0 (in dynamics the penalty, which acts on each
-            step's increment, damps the motion like a dashpot:
-            :data:`fe_mpm.ghost.WITH_DOMAINS_DYNAMIC`).
+            for P1, 0.01 for P2), :data:`fe_mpm.ghost.WITH_DOMAINS_DYNAMIC` (0.001)
+            with point domains in a dynamic run (there the penalty, which acts on
+            each step's increment, damps the motion like a dashpot), else 0.
         checkpoint_dir: Folder for a checkpoint every ``checkpoint_every`` steps
             (:mod:`fe_mpm.checkpoint`; :meth:`restore` continues from one); None
             (default): none.
