@@ -123,6 +123,7 @@ class NewmarkDynamics:
         layout,
         constrained: np.ndarray,
         bary: np.ndarray,
+        preload: Callable[[np.ndarray], bool] | None = None,
     ) -> np.ndarray:
         """Point accelerations in equilibrium at the start: ``M a₀ = f_ext − f_int − α_R M v₀``.
 
@@ -141,6 +142,10 @@ class NewmarkDynamics:
             constrained: Which dofs of ``w`` the step's conditions fix (bool): they
                 get a₀ = 0.
             bary: The points' barycentric coordinates in their cells (n, g + 1).
+            preload: Given the residual's displacement part at rest (on :attr:`space`),
+                may set what carries it (the walls' springs,
+                :meth:`fe_mpm.walls.RigidWalls.preload`) and says whether it did; the
+                residual is then assembled again.
 
         Returns:
             The points' accelerations (n, g) in m/s².
@@ -155,6 +160,8 @@ class NewmarkDynamics:
         nm.a_n.x.array[:] = 0.0
         try:
             b = residual_at_rest()
+            if preload is not None and preload(b[self.u_dofs]):
+                b = residual_at_rest()
         finally:
             for c, value in zip(coefficients, saved, strict=True):
                 c.value = value
@@ -208,6 +215,7 @@ class NewmarkDynamics:
         bary: np.ndarray,
         points,
         dt: float,
+        preload: Callable[[np.ndarray], bool] | None = None,
     ) -> None:
         """Give the points accelerations in equilibrium with the loads and project them.
 
@@ -219,7 +227,7 @@ class NewmarkDynamics:
         for bc in bcs:
             constrained[bc.dof_indices()[0]] = True
         points.acceleration = self.initial_acceleration(
-            residual_at_rest, mass_matrix, layout, constrained, bary
+            residual_at_rest, mass_matrix, layout, constrained, bary, preload
         )
         self.project(layout.cell, bary, points.mass, points.velocity, points.acceleration, dt)
 

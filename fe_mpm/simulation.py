@@ -302,6 +302,7 @@ class Simulation:
         )
         model_checks.check_law(material, self.spec, formulation)
         model_checks.take_density(material, points)
+        self._started_stressed = initial_stress is not None
         if initial_stress is not None:  # refused on every rank if on one
             refused = None
             try:
@@ -924,8 +925,19 @@ class Simulation:
             self.refresh_material(tangent=False)
             return internal_force()
 
+        preload = None
+        if self.walls and self._started_stressed:  # springs that carry the stress at rest
+            space = self.dynamics.space
+            preload = lambda residual: self.walls.preload(residual, space)  # noqa: E731
         self.dynamics.start(
-            residual_at_rest, forms.mass_matrix, layout, bcs, self._current.bary, self.points, dt
+            residual_at_rest,
+            forms.mass_matrix,
+            layout,
+            bcs,
+            self._current.bary,
+            self.points,
+            dt,
+            preload,
         )
 
     def _update_points(

@@ -205,6 +205,10 @@ class RigidWalls:
         v = ufl.TestFunction(self.space)
         points = self.space.element.interpolation_points
         self._kept, self._traction, self._forces = [], [], []
+        # Each node's share of a wall's area by the vertex rule (for preload).
+        self._areas = [
+            dolfinx.fem.form(ufl.TestFunction(gaps) * wall.ds_tagged) for wall in self.walls
+        ]
         self._next = dolfinx.fem.Function(self.space)
         self._converged = dolfinx.fem.Function(self.space)  # a wall's traction at the end
         for wall in self.walls:
@@ -286,6 +290,45 @@ class RigidWalls:
             )
             wall.extension.x.array.reshape(-1, g)[idle] = 0.0
 
+    def preload(self, residual: np.ndarray, space) -> bool:
+        """Load the springs of the nodes that touch a wall with the body's push on them.
+
+        For a body started with its stress at rest in a dynamic run: without it the
+        springs start unloaded, the nodes on the wall carry the body's weight against
+        nothing at t = 0, and the first steps ring (a layer's base carried 1.7 times
+        its weight after its first step). Each node that touches a wall (gap 0)
+        and that ``residual`` pushes into it takes the entry p/β that balances the
+        push: p = −R·n / a, with a the node's share of the wall's area (the vertex
+        rule's weight); along the wall nothing. Collective.
+
+        Args:
+            residual: The residual's displacement part at rest, f_int − f_ext (N), on
+                the P1 vector ``space`` (its local array, owned and ghost).
+            space: Its function space: a P1 vector space on this grid.
+
+        Returns:
+            Whether any spring was loaded, on any rank.
+        """
+        g = self.mesh.geometry.dim
+        force = residual.reshape(-1, g)[_same_nodes(self.coordinates, space)]
+        owned = self.space.dofmap.index_map.size_local
+        loaded = False
+        for wall, area_form in zip(self.walls, self._areas, strict=True):
+            area = dolfinx.fem.assemble_vector(area_form)
+            area.scatter_reverse(dolfinx.la.InsertMode.add)
+            area.scatter_forward()
+            nodes = wall.dofs[wall.dofs < owned]
+            push = -force[nodes] @ wall.normal
+            a = area.array[nodes]
+            touching = (wall.gap.x.array[nodes] == 0.0) & (push > 0.0) & (a > 0.0)
+            entry = np.zeros(nodes.size)
+            entry[touching] = push[touching] / a[touching] / wall.law.stiffness.value
+            e = wall.extension.x.array.reshape(-1, g)
+            e[nodes] = entry[:, None] * wall.normal
+            wall.extension.x.scatter_forward()
+            loaded = loaded or bool(np.any(touching))
+        return parallel.any_rank(self.mesh.comm, loaded)
+
     def springs(self) -> dict[str, tuple[np.ndarray, np.ndarray]]:
         """Each wall's spring extensions (m) by node, gathered on every rank; collective.
 
@@ -356,6 +399,22 @@ class RigidWalls:
                 direction=wall.normal.copy(),
             )
         return forces
+
+
+def _same_nodes(coordinates: np.ndarray, space) -> np.ndarray:
+    """For each node at ``coordinates`` (k, g), its node in the P1 ``space`` (k,).
+
+    The walls' spaces and the step's displacement space share the grid's nodes but
+    may number them apart (a collapsed sub-space); matched by position.
+    """
+    g = coordinates.shape[1]
+    other = space.tabulate_dof_coordinates()[:, :g]
+    mine, theirs = np.lexsort(coordinates.T[::-1]), np.lexsort(other.T[::-1])
+    if not np.array_equal(coordinates[mine], other[theirs]):
+        raise RuntimeError("RigidWalls: the displacement space's nodes are not the walls'")
+    found = np.empty(len(coordinates), dtype=np.int64)
+    found[mine] = theirs
+    return found
 
 
 #: At most this many (node, point) pairs at a time in :func:`_least_distances`.

@@ -229,6 +229,39 @@ def test_a_static_run_says_when_friction_cannot_hold_the_body():
     )
 
 
+@pytest.mark.parametrize("domains", [False, True], ids=["points", "point domains"])
+def test_a_layer_started_at_rest_on_a_wall_stays_at_rest_in_dynamics(domains):
+    """A Mohr–Coulomb layer 1 m deep started with its stress at rest
+    (``geostatic_stress``) on a frictional wall, rollers at its sides, u-nbva, five
+    steps of 20 ms. Its springs are preloaded with the layer's push on them
+    (:meth:`fe_mpm.walls.RigidWalls.preload`), so it starts in balance: the wall
+    carries the weight to 1e-9 and nothing moves (measured 5e-15 m/s, 4e-15 with
+    domains). With unloaded springs the base carried 1.68 times the weight after a
+    first step of 2 ms and the fastest point moved at 7 cm/s (measured)."""
+    grid = rectangle_mesh((0.0, 0.0), (4.0, 2.0), (20, 10))
+    cells = np.flatnonzero(cell_centroids(grid)[:, 1] < 1.0)
+    points = fe_mpm.seed(grid, 3, density=2000.0, cells=cells)
+    law = fe_mpm.MohrCoulomb(E=2e7, nu=0.3, cohesion=1e3, friction_angle=30.0, density=2000.0)
+    sim = fe_mpm.Simulation(
+        grid,
+        points,
+        law,
+        "u-nbva",
+        walls=[fe_mpm.RigidWall("base", on_base, friction=0.5)],
+        dirichlet=[
+            fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0) | np.isclose(x[0], 4.0), component=0)
+        ],
+        body_force=(0.0, -G),
+        initial_stress=fe_mpm.geostatic_stress(points, 1.0, G, 0.5),
+        dynamic=True,
+        point_domains=domains,
+    )
+    reports = sim.run(0.1, 5, progress=False)
+    weight = G * points.mass.sum()
+    assert all(r.walls["base"].normal == pytest.approx(weight, rel=1e-9) for r in reports)
+    assert np.abs(points.velocity).max() < 1e-10
+
+
 def test_a_body_leaves_a_wall_and_the_wall_lets_go():
     """Gravity turned upward: the block lifts off, and the wall pulls on nothing.
 
