@@ -123,7 +123,7 @@ class NewmarkDynamics:
         layout,
         constrained: np.ndarray,
         bary: np.ndarray,
-        preload: Callable[[np.ndarray], bool] | None = None,
+        preload: Callable[[np.ndarray, np.ndarray], bool] | None = None,
     ) -> np.ndarray:
         """Point accelerations in equilibrium at the start: ``M a₀ = f_ext − f_int − α_R M v₀``.
 
@@ -142,10 +142,10 @@ class NewmarkDynamics:
             constrained: Which dofs of ``w`` the step's conditions fix (bool): they
                 get a₀ = 0.
             bary: The points' barycentric coordinates in their cells (n, g + 1).
-            preload: Given the residual's displacement part at rest (on :attr:`space`),
-                may set what carries it (the walls' springs,
-                :meth:`fe_mpm.walls.RigidWalls.preload`) and says whether it did; the
-                residual is then assembled again.
+            preload: Given the residual's displacement part at rest (on :attr:`space`)
+                and which of its entries are constrained, may set what carries it (the
+                walls' springs, :meth:`fe_mpm.walls.RigidWalls.preload`) and says
+                whether it did; the residual is then assembled again.
 
         Returns:
             The points' accelerations (n, g) in m/s².
@@ -160,7 +160,7 @@ class NewmarkDynamics:
         nm.a_n.x.array[:] = 0.0
         try:
             b = residual_at_rest()
-            if preload is not None and preload(b[self.u_dofs]):
+            if preload is not None and preload(b[self.u_dofs], constrained[self.u_dofs]):
                 b = residual_at_rest()
         finally:
             for c, value in zip(coefficients, saved, strict=True):
@@ -215,7 +215,7 @@ class NewmarkDynamics:
         bary: np.ndarray,
         points,
         dt: float,
-        preload: Callable[[np.ndarray], bool] | None = None,
+        preload: Callable[[np.ndarray, np.ndarray], bool] | None = None,
     ) -> None:
         """Give the points accelerations in equilibrium with the loads and project them.
 

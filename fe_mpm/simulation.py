@@ -928,7 +928,7 @@ class Simulation:
         preload = None
         if self.walls and self._started_stressed:  # springs that carry the stress at rest
             space = self.dynamics.space
-            preload = lambda residual: self.walls.preload(residual, space)  # noqa: E731
+            preload = lambda residual, fixed: self.walls.preload(residual, fixed, space)  # noqa: E731
         self.dynamics.start(
             residual_at_rest,
             forms.mass_matrix,

@@ -290,44 +290,54 @@ class RigidWalls:
             )
             wall.extension.x.array.reshape(-1, g)[idle] = 0.0
 
-    def preload(self, residual: np.ndarray, space) -> bool:
+    def preload(self, residual: np.ndarray, constrained: np.ndarray, space) -> bool:
         """Load the springs of the nodes that touch a wall with the body's push on them.
 
         For a body started with its stress at rest in a dynamic run: without it the
         springs start unloaded, the nodes on the wall carry the body's weight against
         nothing at t = 0, and the first steps ring (a layer's base carried 1.7 times
-        its weight after its first step). Each node that touches a wall (gap 0)
-        and that ``residual`` pushes into it takes the entry p/β that balances the
-        push: p = −R·n / a, with a the node's share of the wall's area (the vertex
-        rule's weight); along the wall nothing. Collective.
+        its weight after its first step). Each node that touches a wall (gap 0) takes
+        the entry that balances what ``residual`` still pushes into the wall with:
+        its entry grows by −R·n / (a β), a the node's share of the wall's area (the
+        vertex rule's weight), and stays ≥ 0; along the wall nothing. The residual
+        includes the springs' own force, so a second call (a retried first step)
+        changes nothing. Nodes where a Dirichlet condition holds a component along
+        the wall's normal are left alone: the condition carries the push there.
+        Collective. Where two walls meet at a node each takes its own normal's share,
+        which balances the push only where their normals are orthogonal.
 
         Args:
             residual: The residual's displacement part at rest, f_int − f_ext (N), on
                 the P1 vector ``space`` (its local array, owned and ghost).
+            constrained: Which entries of ``residual`` a condition fixes (bool).
             space: Its function space: a P1 vector space on this grid.
 
         Returns:
-            Whether any spring was loaded, on any rank.
+            Whether any spring changed, on any rank.
         """
         g = self.mesh.geometry.dim
-        force = residual.reshape(-1, g)[_same_nodes(self.coordinates, space)]
+        same = _same_nodes(self.coordinates, space)
+        force = residual.reshape(-1, g)[same]
+        fixed = constrained.reshape(-1, g)[same]
         owned = self.space.dofmap.index_map.size_local
-        loaded = False
+        changed = False
         for wall, area_form in zip(self.walls, self._areas, strict=True):
             area = dolfinx.fem.assemble_vector(area_form)
             area.scatter_reverse(dolfinx.la.InsertMode.add)
             area.scatter_forward()
             nodes = wall.dofs[wall.dofs < owned]
-            push = -force[nodes] @ wall.normal
             a = area.array[nodes]
-            touching = (wall.gap.x.array[nodes] == 0.0) & (push > 0.0) & (a > 0.0)
-            entry = np.zeros(nodes.size)
-            entry[touching] = push[touching] / a[touching] / wall.law.stiffness.value
+            held = np.any(fixed[nodes][:, np.abs(wall.normal) > 0.0], axis=1)
+            touching = (wall.gap.x.array[nodes] == 0.0) & (a > 0.0) & ~held
+            nodes, a = nodes[touching], a[touching]
             e = wall.extension.x.array.reshape(-1, g)
-            e[nodes] = entry[:, None] * wall.normal
+            entry = e[nodes] @ wall.normal
+            push = -force[nodes] @ wall.normal
+            new = np.maximum(entry + push / (a * wall.law.stiffness.value), 0.0)
+            changed = changed or bool(np.any(new != entry))
+            e[nodes] = new[:, None] * wall.normal
             wall.extension.x.scatter_forward()
-            loaded = loaded or bool(np.any(touching))
-        return parallel.any_rank(self.mesh.comm, loaded)
+        return parallel.any_rank(self.mesh.comm, changed)
 
     def springs(self) -> dict[str, tuple[np.ndarray, np.ndarray]]:
         """Each wall's spring extensions (m) by node, gathered on every rank; collective.
