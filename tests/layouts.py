@@ -37,3 +37,20 @@ def embed_3d(F):
     F3 = np.broadcast_to(np.eye(3), (*F.shape[:-2], 3, 3)).copy()
     F3[..., : F.shape[-2], : F.shape[-1]] = F
     return F3
+
+
+def geostatic_layer(gravity: float = 9.81):
+    """A Mohr–Coulomb layer 1 m deep in a 4 m × 2 m grid of 0.2 m cells, at rest.
+
+    Returns the grid, the points (three per triangle below y = 1 m), the law
+    (E = 20 MPa, ν = 0.3, c = 1 kPa, φ = 30°, 2000 kg/m³) and the points' stress at
+    rest (K₀ = 0.5), for ``Simulation(..., initial_stress=)``.
+    """
+    import fe_mpm
+    from fe_mpm.meshes import cell_centroids, rectangle_mesh
+
+    grid = rectangle_mesh((0.0, 0.0), (4.0, 2.0), (20, 10))
+    cells = np.flatnonzero(cell_centroids(grid)[:, 1] < 1.0)
+    points = fe_mpm.seed(grid, 3, density=2000.0, cells=cells)
+    law = fe_mpm.MohrCoulomb(E=2e7, nu=0.3, cohesion=1e3, friction_angle=30.0, density=2000.0)
+    return grid, points, law, fe_mpm.geostatic_stress(points, 1.0, gravity, 0.5)

@@ -7,6 +7,7 @@ import meshio
 import numpy as np
 import pytest
 from dolfinx.mesh import CellType, create_box, create_submesh
+from layouts import geostatic_layer
 
 import fe_mpm
 from fe_mpm import domain_flips, meshes, scenes
@@ -543,10 +544,7 @@ def test_a_geostatic_layer_under_empty_cells_runs_in_dynamics_with_domains():
     2026-12-06) the run stopped in its third step on a NaN residual (measured); with
     the dynamic default γ = 0.001 it runs its five steps and stays near rest (fastest
     point 4.6e-3 m/s, the PPP's stir; bound 2e-2)."""
-    grid = meshes.rectangle_mesh((0.0, 0.0), (4.0, 2.0), (20, 10))
-    cells = np.flatnonzero(meshes.cell_centroids(grid)[:, 1] < 1.0)
-    points = fe_mpm.seed(grid, 3, density=2000.0, cells=cells)
-    law = fe_mpm.MohrCoulomb(E=2e7, nu=0.3, cohesion=1e3, friction_angle=30.0, density=2000.0)
+    grid, points, law, at_rest = geostatic_layer()
     sim = fe_mpm.Simulation(
         grid,
         points,
@@ -557,7 +555,7 @@ def test_a_geostatic_layer_under_empty_cells_runs_in_dynamics_with_domains():
             fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0) | np.isclose(x[0], 4.0), component=0),
         ],
         body_force=(0.0, -9.81),
-        initial_stress=fe_mpm.geostatic_stress(points, 1.0, 9.81, 0.5),
+        initial_stress=at_rest,
         dynamic=True,
         point_domains=True,
     )

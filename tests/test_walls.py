@@ -10,6 +10,7 @@ import math
 
 import numpy as np
 import pytest
+from layouts import geostatic_layer
 
 import fe_mpm
 from fe_mpm import model_checks
@@ -245,10 +246,7 @@ def test_a_layer_started_at_rest_on_a_wall_stays_at_rest_in_dynamics(domains, re
     whose Newton solve fails after the preload (made to) is retried from preloaded
     springs, which the retry's preload keeps: it unloaded them once (a review found
     the base at 1.90, 0.49, 1.20 times the weight, points at 6.2 cm/s)."""
-    grid = rectangle_mesh((0.0, 0.0), (4.0, 2.0), (20, 10))
-    cells = np.flatnonzero(cell_centroids(grid)[:, 1] < 1.0)
-    points = fe_mpm.seed(grid, 3, density=2000.0, cells=cells)
-    law = fe_mpm.MohrCoulomb(E=2e7, nu=0.3, cohesion=1e3, friction_angle=30.0, density=2000.0)
+    grid, points, law, at_rest = geostatic_layer(G)
     sim = fe_mpm.Simulation(
         grid,
         points,
@@ -259,7 +257,7 @@ def test_a_layer_started_at_rest_on_a_wall_stays_at_rest_in_dynamics(domains, re
             fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0) | np.isclose(x[0], 4.0), component=0)
         ],
         body_force=(0.0, -G),
-        initial_stress=fe_mpm.geostatic_stress(points, 1.0, G, 0.5),
+        initial_stress=at_rest,
         dynamic=True,
         point_domains=domains,
     )
