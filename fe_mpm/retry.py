@@ -156,11 +156,12 @@ class StepLength:
     Args:
         nominal: The run's step length (s or pseudo-time), > 0.
         floor: The shortest step allowed (same unit).
-        advice: What the message of a run that stops adds, if anything (what in the
-            run's set-up may have left Newton without a solution).
+        advice: Gives what the message of a run that stops adds, if anything (what in
+            the run's set-up may have left Newton without a solution); called only
+            then, on every rank (it may be collective).
     """
 
-    def __init__(self, nominal: float, floor: float, advice: str = ""):
+    def __init__(self, nominal: float, floor: float, advice: Callable[[], str] | None = None):
         self.nominal, self.floor, self.advice = nominal, floor, advice
         self.dt, self._successes = nominal, 0
 
@@ -178,10 +179,10 @@ class StepLength:
                 the failure's, and says so.
         """
         if not self.cut():
+            advice = self.advice() if self.advice is not None else ""
             raise ConvergenceError(
                 f"{failure} The step was cut to {2 * self.dt:.3g} without success, "
-                f"and the floor is min_step = {self.floor:.3g}."
-                + (f" {self.advice}" if self.advice else "")
+                f"and the floor is min_step = {self.floor:.3g}." + (f" {advice}" if advice else "")
             ) from None
 
     def accepted(self) -> None:

@@ -621,20 +621,7 @@ class Simulation:
         check_range("Simulation.run", "t_end", t_end, lo=self.t, lo_open=True)
         nominal = (t_end - self.t) / n_steps
         floor = DEFAULT_MIN_STEP * nominal if self.min_step is None else self.min_step
-        advice = model_checks.failure_advice(
-            self.domains is not None,
-            self._ghost_factor,
-            self._domains_would_do,
-            static_plastic=not self.dynamic and self._plastic,
-            sliding=""
-            if self.dynamic
-            else model_checks.sliding_on_walls(
-                self.walls,
-                self._given["conditions"][2],  # the body force as given
-                np.unique(self.points.cell[self.points.cell >= 0]),
-            ),
-        )
-        length = StepLength(nominal, floor, advice)
+        length = StepLength(nominal, floor, self._failure_advice)
         can_hold = not self.dynamic and self.domains is None  # pieces differ per attempt
         bar, reports = ProgressBar(n_steps, progress), []
         before = self.newton_iterations_total
@@ -668,6 +655,22 @@ class Simulation:
             bar.close()
         self._write_output(force=True)
         return reports
+
+    def _failure_advice(self) -> str:
+        """What the message of a run that stops adds about its set-up (collective)."""
+        return model_checks.failure_advice(
+            self.domains is not None,
+            self._ghost_factor,
+            self._domains_would_do,
+            static_plastic=not self.dynamic and self._plastic,
+            sliding=""
+            if self.dynamic
+            else model_checks.sliding_on_walls(
+                self.walls,
+                self._given["conditions"][2],  # the body force as given
+                np.unique(self.points.cell[self.points.cell >= 0]),
+            ),
+        )
 
     def step(self, t_new: float, rebin: bool = True) -> StepReport:
         """Take one implicit step from the current time to ``t_new`` (Algorithm 1).
