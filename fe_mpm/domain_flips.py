@@ -196,27 +196,35 @@ def choose_flips(
     return flips
 
 
+def _remapped_arrays(points: MaterialPoints) -> list[tuple[str, np.ndarray]]:
+    """The volume-weighted state a flip remaps, by name, in its columns' order.
+
+    F first (so that :func:`_remapped` finds it), then the stress and the history by
+    name in sorted order: :func:`_state`, :func:`_set_state` and :func:`_zones` read
+    the columns in this order.
+    """
+    history = [(name, points.history[name]) for name in sorted(points.history)]
+    return [("F", points.F), ("stress", points.stress), *history]
+
+
 def _state(points: MaterialPoints, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The state that a flip remaps, of the points ``rows`` (k,).
 
-    Returns (k, w) volume-weighted rows: F first (g², so that :func:`_remapped` finds
-    it), then stress and the history by name in sorted order; and (k, 2g)
+    Returns (k, w) volume-weighted rows (:func:`_remapped_arrays`), and (k, 2g)
     mass-weighted rows: velocity and acceleration.
     """
 
     def flat(values: np.ndarray) -> np.ndarray:  # (k, size), also for k = 0
         return values[rows].reshape(len(rows), int(np.prod(values.shape[1:])))
 
-    by_volume = [flat(points.F), flat(points.stress)]
-    by_volume += [flat(points.history[name]) for name in sorted(points.history)]
+    by_volume = [flat(array) for _, array in _remapped_arrays(points)]
     return np.hstack(by_volume), np.hstack([points.velocity[rows], points.acceleration[rows]])
 
 
 def _set_state(points: MaterialPoints, row: int, by_volume: np.ndarray, by_mass: np.ndarray):
     """Write one point's remapped state (one row of each of :func:`_state`'s)."""
     start = 0
-    arrays = [points.F, points.stress] + [points.history[name] for name in sorted(points.history)]
-    for array in arrays:
+    for _, array in _remapped_arrays(points):
         size = int(np.prod(array.shape[1:]))
         array[row] = by_volume[start : start + size].reshape(array.shape[1:])
         start += size
@@ -228,13 +236,12 @@ def _zones(points: MaterialPoints, rows: _Rows) -> np.ndarray | None:
     """Each row's law where the body has several (its ``"material"`` column), else None."""
     if MATERIAL not in points.history:
         return None
-    g = points.gdim
-    start = g * g + 9  # F, then the stress, then the history by name (:func:`_state`)
-    for name in sorted(points.history):
+    start = 0
+    for name, array in _remapped_arrays(points):
         if name == MATERIAL:
             return np.rint(rows.by_volume[:, start]).astype(np.int64)
-        start += int(np.prod(points.history[name].shape[1:]))
-    raise AssertionError("unreachable")
+        start += int(np.prod(array.shape[1:]))
+    raise AssertionError("unreachable: MATERIAL is in the history")
 
 
 @dataclass
