@@ -226,6 +226,31 @@ class PointwiseZones(MaterialZones):
             if rows.size and isinstance(law, PointwiseLaw):
                 yield rows, law
 
+    def _at_own_points(self, history: dict[str, np.ndarray], call) -> tuple[dict, np.ndarray, list]:
+        """Each pointwise law's return at its own points, and what they share.
+
+        Args:
+            history: The internal variables at t_n, by name, ``"material"`` included.
+            call: ``call(law, rows, own)`` returns law's result at the points ``rows``
+                (k,), ``own`` being their history in that law's variables.
+
+        Returns:
+            The updated history (the others' values kept), the return's region of
+            each point (0 where none), and the (rows, result) of each law.
+        """
+        n = len(history[MATERIAL])
+        updated = {name: np.array(history[name], copy=True) for name in self._returned_names()}
+        region = np.zeros(n, dtype=np.int8)
+        parts = []
+        for rows, law in self._split(history):
+            result = call(law, rows, {name: history[name][rows] for name in law.history})
+            for name, value in result.history.items():
+                updated[name][rows] = value
+            if result.region is not None:
+                region[rows] = result.region
+            parts.append((rows, result))
+        return updated, region, parts
+
     def return_map(self, dF: np.ndarray, history: dict[str, np.ndarray]) -> ReturnMapResult:
         """Each pointwise law's return at its own points; 0 stress at the others'.
 
@@ -234,18 +259,12 @@ class PointwiseZones(MaterialZones):
             history: The internal variables at t_n, by name, ``"material"`` included.
         """
         n, g = dF.shape[0], dF.shape[1]
+        updated, region, parts = self._at_own_points(
+            history, lambda law, rows, own: law.return_map(dF[rows], own)
+        )
         tau = np.zeros((n, 3, 3))
-        updated = {name: np.array(history[name], copy=True) for name in self._returned_names()}
-        region = np.zeros(n, dtype=np.int8)
-        parts = []
-        for rows, law in self._split(history):
-            result = law.return_map(dF[rows], {name: history[name][rows] for name in law.history})
+        for rows, result in parts:
             tau[rows] = result.tau
-            for name, value in result.history.items():
-                updated[name][rows] = value
-            if result.region is not None:
-                region[rows] = result.region
-            parts.append((rows, result))
 
         def derivative() -> np.ndarray:
             D = np.zeros((n, 3, 3, g, g))
@@ -260,18 +279,13 @@ class PointwiseZones(MaterialZones):
         from fe_mpm.materials.mixed_return import MixedReturnResult
 
         n, g = dF.shape[0], dF.shape[1]
+        updated, region, parts = self._at_own_points(
+            history,
+            lambda law, rows, own: law.return_at_pressure(dF[rows], mean_stress[rows], own),
+        )
         deviator, volumetric = np.zeros((n, 3, 3)), np.zeros(n)
-        updated = {name: np.array(history[name], copy=True) for name in self._returned_names()}
-        region = np.zeros(n, dtype=np.int8)
-        parts = []
-        for rows, law in self._split(history):
-            own = {name: history[name][rows] for name in law.history}
-            result = law.return_at_pressure(dF[rows], mean_stress[rows], own)
+        for rows, result in parts:
             deviator[rows], volumetric[rows] = result.deviator, result.volumetric
-            for name, value in result.history.items():
-                updated[name][rows] = value
-            region[rows] = result.region
-            parts.append((rows, result))
 
         def derivative():
             blocks = (
