@@ -197,13 +197,14 @@ def _on_edge(t, d, i, j, out, row, corner):
 
 
 @jit
-def _cut_by_face(tets, count, face, out, order, kept, dist, d, v, prism):
+def _cut_by_face(tets, count, face, out, order, kept, dist, d, v, prisms):
     """Keep the parts of ``tets[:count]`` inside ``face``, written to ``out``; their number.
 
     The order is that of :func:`fe_mpm.tet_clipping.cut` for one owner: the whole
     tetrahedra, those with one corner kept, then the prisms' first, second and third
     tetrahedra, those with two corners kept before those with three. ``order`` (≥ count, 4),
-    ``kept``, ``dist``, ``d`` (4,), ``v`` (4, 3) and ``prism`` (6, 3) are work arrays.
+    ``kept``, ``dist``, ``d`` (4,), ``v`` (4, 3) and ``prisms`` (≥ count, 6, 3) are work
+    arrays.
     """
     # Each tetrahedron's corners, kept first (a stable order), and how many are kept.
     for k in range(count):
@@ -228,54 +229,52 @@ def _cut_by_face(tets, count, face, out, order, kept, dist, d, v, prism):
                 for h in range(3):
                     out[m, a, h] = tets[k, a, h]
             m += 1
-    for k in range(count):  # one corner kept: a tetrahedron
+    for k in range(count):  # one corner kept: a tetrahedron; two or three: a prism
+        if kept[k] == 0 or kept[k] == 4:
+            continue
+        for a in range(4):
+            for h in range(3):
+                v[a, h] = tets[k, order[k, a], h]
         if kept[k] == 1:
-            for a in range(4):
-                for h in range(3):
-                    v[a, h] = tets[k, order[k, a], h]
             for h in range(3):
                 out[m, 0, h] = v[0, h]
             _on_edge(v, dist[k], 0, 1, out, m, 1)
             _on_edge(v, dist[k], 0, 2, out, m, 2)
             _on_edge(v, dist[k], 0, 3, out, m, 3)
             m += 1
+            continue
+        # The prism: bottom p0 p1 p2, top q0 q1 q2 (as fe_mpm.tet_clipping.cut builds it).
+        if kept[k] == 2:
+            for h in range(3):
+                prisms[k, 0, h], prisms[k, 3, h] = v[0, h], v[1, h]
+            _on_edge(v, dist[k], 0, 2, prisms, k, 1)
+            _on_edge(v, dist[k], 0, 3, prisms, k, 2)
+            _on_edge(v, dist[k], 1, 2, prisms, k, 4)
+            _on_edge(v, dist[k], 1, 3, prisms, k, 5)
+        else:
+            for h in range(3):
+                prisms[k, 0, h], prisms[k, 1, h], prisms[k, 2, h] = v[0, h], v[1, h], v[2, h]
+            _on_edge(v, dist[k], 0, 3, prisms, k, 3)
+            _on_edge(v, dist[k], 1, 3, prisms, k, 4)
+            _on_edge(v, dist[k], 2, 3, prisms, k, 5)
     for n_kept in (2, 3):
         for part in range(3):
+            # The prism's three tetrahedra, as fe_mpm.tet_clipping._prism splits it:
+            # (p0 p1 p2 q2), (p0 p1 q1 q2), (p0 q0 q1 q2).
+            if part == 0:
+                a0, a1, a2, a3 = 0, 1, 2, 5
+            elif part == 1:
+                a0, a1, a2, a3 = 0, 1, 4, 5
+            else:
+                a0, a1, a2, a3 = 0, 3, 4, 5
             for k in range(count):
                 if kept[k] != n_kept:
                     continue
-                for a in range(4):
-                    for h in range(3):
-                        v[a, h] = tets[k, order[k, a], h]
-                e = dist[k]
-                for h in range(3):  # the prism: bottom p0 p1 p2, top q0 q1 q2
-                    if n_kept == 2:
-                        prism[0, h] = v[0, h]
-                        prism[1, h] = v[0, h] + e[0] / (e[0] - e[2]) * (v[2, h] - v[0, h])
-                        prism[2, h] = v[0, h] + e[0] / (e[0] - e[3]) * (v[3, h] - v[0, h])
-                        prism[3, h] = v[1, h]
-                        prism[4, h] = v[1, h] + e[1] / (e[1] - e[2]) * (v[2, h] - v[1, h])
-                        prism[5, h] = v[1, h] + e[1] / (e[1] - e[3]) * (v[3, h] - v[1, h])
-                    else:
-                        prism[0, h] = v[0, h]
-                        prism[1, h] = v[1, h]
-                        prism[2, h] = v[2, h]
-                        prism[3, h] = v[0, h] + e[0] / (e[0] - e[3]) * (v[3, h] - v[0, h])
-                        prism[4, h] = v[1, h] + e[1] / (e[1] - e[3]) * (v[3, h] - v[1, h])
-                        prism[5, h] = v[2, h] + e[2] / (e[2] - e[3]) * (v[3, h] - v[2, h])
-                # The prism's three tetrahedra, as fe_mpm.tet_clipping._prism splits it:
-                # (p0 p1 p2 q2), (p0 p1 q1 q2), (p0 q0 q1 q2).
-                if part == 0:
-                    a0, a1, a2, a3 = 0, 1, 2, 5
-                elif part == 1:
-                    a0, a1, a2, a3 = 0, 1, 4, 5
-                else:
-                    a0, a1, a2, a3 = 0, 3, 4, 5
                 for h in range(3):
-                    out[m, 0, h] = prism[a0, h]
-                    out[m, 1, h] = prism[a1, h]
-                    out[m, 2, h] = prism[a2, h]
-                    out[m, 3, h] = prism[a3, h]
+                    out[m, 0, h] = prisms[k, a0, h]
+                    out[m, 1, h] = prisms[k, a1, h]
+                    out[m, 2, h] = prisms[k, a2, h]
+                    out[m, 3, h] = prisms[k, a3, h]
                 m += 1
     return m
 
@@ -307,7 +306,7 @@ def clip_tetrahedra(xi):
     dist = np.empty((MAX_TETS, 4))
     d = np.empty(4)
     v = np.empty((4, 3))
-    prism = np.empty((6, 3))
+    prisms = np.empty((MAX_TETS, 6, 3))
     for p in range(n):
         inside, beyond = True, False
         for face in range(4):
@@ -329,7 +328,7 @@ def clip_tetrahedra(xi):
         if not inside:
             source, target = one, two
             for face in range(4):
-                count = _cut_by_face(source, count, face, target, order, kept, dist, d, v, prism)
+                count = _cut_by_face(source, count, face, target, order, kept, dist, d, v, prisms)
                 source, target = target, source
             tets = source
         else:
