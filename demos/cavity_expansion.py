@@ -235,8 +235,11 @@ if not args.no_output and rank0:
 # Every step's pressure must lie within `TOLERANCE` of the reference's at the
 # measured radius. Measured with the defaults (cells of a₀/20 at the cavity, 20
 # steps; 2026-12-06): 0.42 % (the cavity at 1.491 a₀ where the reference puts it at
-# 1.5 a₀: 1.8 % short in a − a₀), 15 s; on cells of a₀/10 1.04 % (9.9 % short), on
-# a₀/5 2.5 %: first order. `--formulation u-nbva` 0.46 % (1.525 a₀, 16 s) and
+# 1.5 a₀: 1.8 % short in a − a₀), 15 s; on cells of a₀/10 0.83 % (8.0 % short), on
+# a₀/5 1.41 % (1.1 % long): first order. (Until 2026-12-06 a₀/10 gave 1.04 % and
+# 9.9 % short, a₀/5 2.5 %: where the face had moved a sliver into the cells beyond,
+# its pressure points loaded the filled cells behind it; in 10 steps on a₀/10 the
+# cavity then grew 11.7 % short, now 0.6 % long.) `--formulation u-nbva` 0.46 % (1.525 a₀, 16 s) and
 # `up-p2p1` 0.84 % (1.548 a₀, 157 s; its points two per facet); in P2/P1 on cells of
 # a₀/10 in 10 steps Newton stalls at t = 0.975, near the limit. The same pressure on
 # the grid's facets (`--load grid`)

@@ -67,8 +67,9 @@ def check_range(
     below = v <= lo if lo_open else v < lo
     above = v >= hi if hi_open else v > hi
     if not math.isfinite(v) or below or above:
-        left = "(" if lo_open else "["
-        right = ")" if hi_open else "]"
+        # Infinite bounds are never reached: a value must be finite.
+        left = "(" if lo_open or lo == -math.inf else "["
+        right = ")" if hi_open or hi == math.inf else "]"
         raise ValueError(f"{owner}: {field} must lie in {left}{lo:g}, {hi:g}{right}, got {v:g}")
     return v
 
@@ -86,9 +87,9 @@ def check_int(
         raise TypeError(f"{owner}: {field} must be an int, got {reprlib.repr(value)}")
     v = int(value)
     if (lo is not None and v < lo) or (hi is not None and v > hi):
-        left = "-inf" if lo is None else lo
-        right = "inf" if hi is None else hi
-        raise ValueError(f"{owner}: {field} must lie in [{left}, {right}], got {v}")
+        left = "(-inf" if lo is None else f"[{lo}"
+        right = "inf)" if hi is None else f"{hi}]"
+        raise ValueError(f"{owner}: {field} must lie in {left}, {right}, got {v}")
     return v
 
 

@@ -45,7 +45,8 @@ def _check_exterior(mesh: dolfinx.mesh.Mesh, facets: np.ndarray, owner: str) -> 
             f"{owner}: {count} of its facets lie inside the grid, where a facet has no "
             "outward normal to push along; a Pressure acts on the grid's outer boundary, "
             "so make the loaded face a boundary of the grid (a hole in it, as "
-            "meshes.quarter_ring does)"
+            "meshes.quarter_ring does), or load it with a PointPressure on points along "
+            "the face (meshes.facet_points)"
         )
 
 
@@ -138,7 +139,12 @@ class GridConditions:
                     f"Simulation: tractions[{i - 1}] must be a Traction or a Pressure, "
                     f"got {type(spec).__name__}"
                 )
-            facets = boundary_facets(mesh, spec.where, facet_tags, label)
+            hint = (
+                "; a load on a face inside the grid, where the body's edge lies between "
+                "grid lines or moves, is a PointTraction or PointPressure on points along "
+                "it (meshes.facet_points gives them for grid facets)"
+            )
+            facets = boundary_facets(mesh, spec.where, facet_tags, label, hint)
             # A rank's facets by tag include its ghosts, which their owner counts.
             owned = facets[facets < mesh.topology.index_map(fdim).size_local]
             if isinstance(spec, Pressure):

@@ -112,18 +112,34 @@ class MaterialPoints:
             self.cell = np.array(self.cell, dtype=np.int32).reshape(n)
         self.x0 = self.x.copy() if self.x0 is None else np.array(self.x0, dtype=np.float64)
         for name in ("velocity", "acceleration"):
-            value = getattr(self, name)
-            value = (
-                np.zeros((n, g))
-                if value is None
-                else check_finite("MaterialPoints", name, value, what="point").copy()
-            )
-            if value.shape != (n, g):
-                raise ValueError(
-                    f"MaterialPoints: {name} must have shape {(n, g)}, got {value.shape}"
-                )
-            setattr(self, name, value)
+            if getattr(self, name) is None:
+                setattr(self, name, np.zeros((n, g)))
+        self.check_motion()
         self.material = self._checked_material(n)
+
+    def check_motion(self, owner: str = "MaterialPoints", prefix: str = "") -> None:
+        """Check the velocity and acceleration, which scripts often set after seeding.
+
+        Each becomes a float array of shape (n, g), checked finite.
+
+        Args:
+            owner: Who asks, for the message.
+            prefix: Put before the field's name in the message (``"points."``).
+
+        Raises:
+            ValueError: A value is not finite or the shape is not (n, g); the message
+                names the field.
+        """
+        n, g = self.x.shape
+        for name in ("velocity", "acceleration"):
+            value = getattr(self, name)
+            if np.shape(value) != (n, g):
+                raise ValueError(
+                    f"{owner}: {prefix}{name} must have shape {(n, g)} (one row per point), "
+                    f"got {np.shape(value)}"
+                )
+            value = check_finite(owner, prefix + name, value, what="point")
+            setattr(self, name, np.array(value, dtype=np.float64))
 
     def _checked_material(self, n: int) -> np.ndarray:
         """The laws' indices as a (n,) int array, each ≥ 0."""

@@ -683,6 +683,10 @@ class Simulation:
         """
         if not t_new > self.t:
             raise ValueError(f"Simulation.step: t_new must exceed the current time {self.t}")
+        if self.dynamic and self.step_number == 0:
+            # A script gives a body its velocity by setting points.velocity after seeding.
+            error = _refused(self.points.check_motion, "Simulation", "points.")
+            parallel.raise_together(self.mesh.comm, error)
         if self.step_number == 0:  # written once: the output skips a step it has written
             self._write_output(force=True)  # the initial state as the t = 0 frame
         if self.domains is not None:
@@ -779,7 +783,7 @@ class Simulation:
             fill = cell_fill_anywhere(
                 self.mesh, layout.cell, self.points.volume, owners.volumes, owners.num_cells
             )
-            boundary = self._boundary.locate(np.flatnonzero(fill > 0.0), t_new, fill)
+            boundary = self._boundary.locate(np.flatnonzero(fill > 0.0), t_new, fill, tied)
         nslot_b = 0 if boundary is None else boundary.nslot
         forms = self._forms.get(layout.nslot, nslot_b)
         self._forms.set_step_length(t_new - self.t)
@@ -1018,3 +1022,12 @@ class Simulation:
             self._by_parts = None
         if self._shift is not None:
             self._shift.destroy()
+
+
+def _refused(check: Callable[..., None], *args) -> Exception | None:
+    """What ``check(*args)`` raises (ValueError, TypeError), or None: to raise on every rank."""
+    try:
+        check(*args)
+    except (ValueError, TypeError) as err:
+        return err
+    return None

@@ -138,6 +138,20 @@ class Tracker:
         xi = np.einsum("ng,ngk->nk", x - self._x0[cells], self._jac_inv[cells])
         return np.concatenate([1.0 - xi.sum(axis=1, keepdims=True), xi], axis=1)
 
+    def pulled_into(self, x: np.ndarray, cells: np.ndarray, tol: float = ON_FACET) -> np.ndarray:
+        """Points ``x`` (n, g) moved to the nearest point of ``cells`` (n,) where outside them (m).
+
+        A point whose smallest barycentric coordinate in its cell is below ``-tol``
+        goes to the cell's nearest point (on a facet, an edge or a vertex: the
+        nearest of their nearest points); the others are returned as they are, to
+        the bit.
+        """
+        moved = np.array(x, dtype=np.float64, copy=True)
+        out = np.flatnonzero(self.barycentric(x, cells).min(axis=1) < -tol)
+        if out.size:
+            moved[out] = nearest_in_simplices(x[out], self.cell_vertices[cells[out]])
+        return moved
+
     def locate(self, x: np.ndarray, guess: np.ndarray | None = None) -> np.ndarray:
         """Return the cell of each point in ``x`` (n, g), or -1 for points outside the grid.
 
@@ -446,3 +460,33 @@ def _facet_neighbours(nodes_of: np.ndarray) -> np.ndarray:
     neighbours[a] = b // nv
     neighbours[b] = a // nv
     return neighbours.reshape(nc, nv)
+
+
+def nearest_in_simplices(x: np.ndarray, vertices: np.ndarray) -> np.ndarray:
+    """The nearest point to each ``x`` (n, g) of its simplex ``vertices`` (n, k, g), k ≤ 4.
+
+    The nearest of the nearest points of every face of the simplex (vertices,
+    edges, triangles, and the simplex itself): each is the orthogonal projection
+    onto the face's span, kept where its barycentric coordinates there are all ≥ 0.
+    """
+    n, k, _ = vertices.shape
+    best = np.full(n, np.inf)
+    nearest = np.array(vertices[:, 0], copy=True)
+    for size in range(1, k + 1):
+        for face in itertools.combinations(range(k), size):
+            corners = vertices[:, face]  # (n, size, g)
+            origin = corners[:, 0]
+            if size == 1:
+                lam = np.ones((n, 1))
+                point = origin
+            else:
+                edges = corners[:, 1:] - origin[:, None]  # (n, size - 1, g)
+                gram = np.einsum("nig,njg->nij", edges, edges)
+                rhs = np.einsum("nig,ng->ni", edges, x - origin)
+                xi = np.linalg.solve(gram, rhs[..., None])[..., 0]
+                lam = np.concatenate([1.0 - xi.sum(axis=1, keepdims=True), xi], axis=1)
+                point = origin + np.einsum("ni,nig->ng", xi, edges)
+            distance = np.linalg.norm(point - x, axis=1)
+            better = (lam.min(axis=1) >= 0.0) & (distance < best)
+            best[better], nearest[better] = distance[better], point[better]
+    return nearest

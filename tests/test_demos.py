@@ -506,15 +506,19 @@ def test_thick_cylinder_follows_hills_plastic_expansion_to_near_its_limit_pressu
 def test_cavity_expansion_follows_gibson_and_andersons_pressuremeter_curve(tmp_path):
     """A cavity in Tresca clay (G/c_u = 100) expanded by a PointPressure towards 1.5
     times its radius, on cells of a₀/10 in 10 steps: every step's pressure within 2 %
-    of the reference's at the measured radius (measured 1.26 %; 0.42 % on a₀/20, the
-    demo's default). The same pressure on the grid's facets (``fe_mpm.Pressure``)
-    stays where the face was and is 24 % off; standard MPM stops in step 11."""
+    of the reference's at the measured radius (measured 0.60 %; 0.42 % on a₀/20, the
+    demo's default), and the cavity's growth a − a₀ within 2 % of the reference's for
+    the last pressure (measured +0.6 %; −11.7 % until 2026-12-06, when the pressure's
+    points on the face moved into the cells beyond it loaded the filled cells behind
+    the face instead of the face itself). The same pressure on the grid's facets
+    (``fe_mpm.Pressure``) stays where the face was and is 24 % off; standard MPM stops
+    in step 11."""
     out = tmp_path / "out"
     args = ("--h", "0.1", "--steps", "10", "--json")
     summary = _last_json(run_demo("cavity_expansion.py", *args, "--output", str(out), cwd=tmp_path))
     assert summary["check_passed"] is True
     assert summary["largest_relative_error"] < 0.02
-    assert 1.4 < summary["cavity_radius_ratio"] < 1.5
+    assert abs(summary["expansion_error"]) < 0.02
     curve = np.loadtxt(out / "pressure_expansion.csv", delimiter=",", skiprows=1)
     assert curve.shape[1] == 3 and np.all(np.diff(curve[:, 1]) > 0)
     stdout = run_demo(

@@ -264,8 +264,8 @@ def test_mixed_formulation_refuses_the_smooth_cap():
         (dict(friction_angle=90.0), r"DruckerPrager: friction_angle must lie in \[0, 90\)"),
         (dict(friction_angle=-1.0), r"DruckerPrager: friction_angle must lie in \[0, 90\)"),
         (dict(dilatancy_angle=31.0), r"DruckerPrager: dilatancy_angle must lie in \[0, 30\]"),
-        (dict(cohesion=-1.0), r"DruckerPrager: cohesion must lie in \[0, inf\]"),
-        (dict(hardening=-1.0), r"DruckerPrager: hardening must lie in \[0, inf\]"),
+        (dict(cohesion=-1.0), r"DruckerPrager: cohesion must lie in \[0, inf\)"),
+        (dict(hardening=-1.0), r"DruckerPrager: hardening must lie in \[0, inf\)"),
         (dict(friction_angle=0.0, dilatancy_angle=0.0, cohesion=0.0), "cohesion must be > 0"),
     ],
 )
@@ -281,10 +281,10 @@ def test_bad_drucker_prager_parameters_are_named(bad, match):
         (dict(a4=25.0), r"ModifiedDruckerPrager: a0 must lie in \[25, 90\)"),
         (dict(a0=95.0), r"ModifiedDruckerPrager: a0 must lie in \[20, 90\)"),
         (dict(a3=0.0), "a3 must be > 0 when a1 > 0"),
-        (dict(a1=-1.0), r"ModifiedDruckerPrager: a1 must lie in \[0, inf\]"),
-        (dict(a5=-1.0), r"ModifiedDruckerPrager: a5 must lie in \[0, inf\]"),
+        (dict(a1=-1.0), r"ModifiedDruckerPrager: a1 must lie in \[0, inf\)"),
+        (dict(a5=-1.0), r"ModifiedDruckerPrager: a5 must lie in \[0, inf\)"),
         (dict(a1=1e6), "must stay below 90°"),
-        (dict(apex_stress=-1.0), r"apex_stress must lie in \[0, inf\]"),
+        (dict(apex_stress=-1.0), r"apex_stress must lie in \[0, inf\)"),
     ],
 )
 def test_bad_modified_parameters_are_named(bad, match):
@@ -409,7 +409,7 @@ def test_smooth_cap_step_residual_and_jacobian_are_consistent(dim, formulation):
     "bad, match",
     [
         (dict(friction_angle=0.0), r"friction_angle must lie in \(0, 90\)"),
-        (dict(deviatoric_strength=0.0), r"deviatoric_strength must lie in \(0, inf\]"),
+        (dict(deviatoric_strength=0.0), r"deviatoric_strength must lie in \(0, inf\)"),
         (dict(associativity=1.5), r"associativity must lie in \[0, 1\]"),
     ],
 )

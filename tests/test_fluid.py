@@ -78,11 +78,11 @@ def test_the_fluid_steps_residual_and_jacobian_are_consistent(dim, formulation):
 
 
 def test_bad_fluid_parameters_are_refused_by_name():
-    with pytest.raises(ValueError, match=r"NewtonianFluid: viscosity must lie in \[0, inf\]"):
+    with pytest.raises(ValueError, match=r"NewtonianFluid: viscosity must lie in \[0, inf\)"):
         fe_mpm.NewtonianFluid(2e9, -1.0, shear_scale=1.0)
-    with pytest.raises(ValueError, match=r"NewtonianFluid: bulk_modulus must lie in \(0, inf\]"):
+    with pytest.raises(ValueError, match=r"NewtonianFluid: bulk_modulus must lie in \(0, inf\)"):
         fe_mpm.NewtonianFluid(0.0, 1e-3, shear_scale=1.0)
-    with pytest.raises(ValueError, match=r"NewtonianFluid: shear_scale must lie in \(0, inf\]"):
+    with pytest.raises(ValueError, match=r"NewtonianFluid: shear_scale must lie in \(0, inf\)"):
         fe_mpm.NewtonianFluid(2e9, 1e-3, shear_scale=0.0)
 
 

@@ -132,9 +132,9 @@ def test_step_residual_and_jacobian_are_consistent(dim, formulation):
 @pytest.mark.parametrize(
     "bad, match",
     [
-        (dict(yield_stress=0.0), r"HenckyJ2: yield_stress must lie in \(0, inf\]"),
-        (dict(hardening=-1.0), r"HenckyJ2: hardening must lie in \[0, inf\]"),
-        (dict(kinematic_hardening=-1.0), r"HenckyJ2: kinematic_hardening must lie in \[0, inf\]"),
+        (dict(yield_stress=0.0), r"HenckyJ2: yield_stress must lie in \(0, inf\)"),
+        (dict(hardening=-1.0), r"HenckyJ2: hardening must lie in \[0, inf\)"),
+        (dict(kinematic_hardening=-1.0), r"HenckyJ2: kinematic_hardening must lie in \[0, inf\)"),
         (dict(nu=0.5), r"HenckyJ2: nu must lie in \(-1, 0.5\)"),
     ],
 )

@@ -243,7 +243,7 @@ def test_several_laws_are_refused_with_the_field_named():
             points.material = bad
         with pytest.raises(error, match=match):
             fe_mpm.Simulation(mesh, points, [law, law])
-    with pytest.raises(ValueError, match=r"seed: material must lie in \[0, inf\], got -1"):
+    with pytest.raises(ValueError, match=r"seed: material must lie in \[0, inf\), got -1"):
         fe_mpm.seed(mesh, 1, material=-1)
     with pytest.raises(TypeError, match="seed: material must be an int"):
         fe_mpm.seed(mesh, 1, material=1.5)

@@ -132,7 +132,7 @@ def test_bad_point_pressures_are_refused_with_the_field_named():
     with pytest.raises(ValueError, match=r"normal must have shape \(2, 2\)"):
         fe_mpm.PointPressure("top", x, 0.1, [[0.0, 1.0, 0.0]] * 2, P)
     with pytest.raises(
-        ValueError, match=r"PointPressure 'top': value must lie in \[-inf, inf\], got inf"
+        ValueError, match=r"PointPressure 'top': value must lie in \(-inf, inf\), got inf"
     ):
         fe_mpm.PointPressure("top", x, 0.1, (0.0, 1.0), np.inf)
     with pytest.raises(ValueError, match="every weight must be > 0"):

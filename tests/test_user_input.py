@@ -152,7 +152,7 @@ def test_a_static_model_that_nothing_holds_is_refused(dirichlet, free):
     [
         ({"body_force": (0.0, np.nan)}, r"body_force\[1\] must lie in"),
         ({"body_force": (0.0, "9.81")}, r"body_force\[1\] must be a number"),
-        ({"max_step_cells": 0.0}, r"max_step_cells must lie in \(0, inf\]"),
+        ({"max_step_cells": 0.0}, r"max_step_cells must lie in \(0, inf\)"),
     ],
 )
 def test_bad_simulation_options_are_refused(options, match):
