@@ -69,9 +69,11 @@ def test_a_plate_pulled_by_points_on_its_face_stays_in_uniform_stress_with_domai
 def test_a_load_past_the_filled_cells_acts_on_their_face_in_standard_mpm():
     """Without domains the plate's points stay in its cells and its face's load points,
     moved past x = 1 into the empty cells, read the filled cells behind them: at the
-    nearest point of that cell (its face), σ_xx stays within 0.57 % of uniform (what is
-    left is the load points sliding along the facets as the plate narrows); read on the
-    field extended past the cell, whose far nodes take negative shares, 1.40 %."""
+    nearest point of that cell (its face), σ_xx stays within 0.57 % of uniform; read on
+    the field extended past the cell, whose far nodes take negative shares, 1.40 %. (What
+    is left is standard MPM's: the points beside the face still weigh their cells' nodes
+    with the volume that has moved past the face. 1, 4 or 16 load points per facet give
+    the same 0.57 %; with domains, 4e-5.)"""
     sim = _pulled_plate("traction")
     points = sim.points
     expected = LOAD / points.F[:, 1, 1].mean()
