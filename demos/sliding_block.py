@@ -61,7 +61,14 @@ def parse_args(argv=None):
         "--friction",
         type=float,
         default=None,
-        help="Coulomb's μ of a rigid wall as the base (default: the slip condition)",
+        help="Coulomb's μ of a rigid wall as the base (default: the slip condition); "
+        "checked against the rigid block for μ ≤ 0.1 and μ ≥ 0.8 at θ = 30°",
+    )
+    p.add_argument(
+        "--bossak-alpha",
+        type=float,
+        default=None,
+        help="Bossak's α_B (default: 0 on the slip condition, −0.3 on a rigid wall)",
     )
     p.add_argument("--output", default="sliding_block_output", help="output folder (walls)")
     p.add_argument("--json", action="store_true", help="print a JSON summary as the last line")
@@ -89,6 +96,12 @@ if args.friction is None:  # slip: the normal displacement only, and its reactio
     base = dict(dirichlet=[fe_mpm.Dirichlet(on_plane, component=1)], reactions={"plane": on_plane})
 else:  # a rigid wall the block presses on and slides along, against friction
     base = dict(walls=[fe_mpm.RigidWall("plane", on_plane, friction=args.friction)])
+# Released unstressed, the block lands on the wall's springs and rings at a frequency
+# no step resolves; Bossak's α_B damps that ringing (see the check below).
+if args.bossak_alpha is not None:
+    bossak_alpha = args.bossak_alpha
+else:
+    bossak_alpha = 0.0 if args.friction is None else -0.3
 try:
     sim = fe_mpm.Simulation(
         grid,
@@ -96,11 +109,13 @@ try:
         fe_mpm.NeoHookean(2e8, 0.3, 7800.0),
         dynamic=True,
         body_force=(g * np.sin(θ), -g * np.cos(θ)),
+        bossak_alpha=bossak_alpha,
         **base,
     )
 
     # Step by hand to record the centre of mass after every step (a sum over the
-    # ranks: each holds the points of its cells).
+    # ranks: each holds the points of its cells). run() to each output instant cuts a
+    # step that Newton fails and retries it, where step() would stop.
     def slide() -> float:
         """Horizontal motion of the centre of mass (m)."""
         moment = points.mass @ (points.x - points.x0)[:, 0]
@@ -109,7 +124,7 @@ try:
     com = [(0.0, 0.0)]
     reports = []
     for k in range(1, round(args.t_end / args.dt) + 1):
-        reports.append(sim.step(k * args.dt))
+        reports.extend(sim.run(k * args.dt, 1, progress=False))
         com.append((reports[-1].t, slide()))
 except (ValueError, fe_mpm.ConvergenceError, fe_mpm.PointsOutsideError) as err:
     sys.exit(f"sliding_block.py: {err}")
@@ -169,6 +184,19 @@ print(
 # pushes hardest then, while the block has slipped less than the slip scale and the
 # friction is not yet mobilised (it takes about √(2 s / a) = 9 ms). With a slip scale
 # of 0.03 mm instead of 0.1 mm the error falls to 0.86 %. μ = 0.1 and below pass.
+#
+# Measured 2026-12-06 with the wall's default Bossak α_B = −0.3 (until then 0) and the
+# steps taken by `run` (a step Newton fails is cut and retried; `step` had stopped the
+# run at μ = 0.7 in step 54), θ = 30°, Δt = 0.01 s, 1 s: μ = 0 round-off (4.6e-15 m),
+# μ = 0.1 +2.3e-4 (3.1e-4 with α_B = 0), μ = 0.3 +5.1e-3 (5.9e-3), μ = 0.5 +6.3 %
+# (+7.5 %), at rest μ = 0.7 5.1 slip scales (4.9 cm with α_B = 0) and μ = 0.8 3.2 (9.1
+# mm). At μ = 0.5 the net acceleration is a seventh of the sliding one at μ = 0.1, and
+# the first step, in which the block slides about one slip scale and gets two thirds
+# of its friction, gives it a head start that the slow slide does not outgrow (its
+# slide is 3.5 times the exact one after that step, 1.06 times after 1 s); with a
+# slip scale of 1e-5 m, 1.7 %. So the check passes for μ ≤ 0.1 and for μ = 0.8; in
+# between the rigid block's slide is not this block's, released unstressed on
+# regularised friction, to 2e-3 (`docs/limitations.md`, rigid walls).
 
 # +
 #: Largest Eq. 4.44 error that passes without friction (m): round-off with four
@@ -219,5 +247,12 @@ if args.json:
         )
     )
 if passed is False:
-    sys.exit(f"sliding_block.py: {verdict}")
+    note = ""
+    if 0.1 < μ < 0.8:
+        note = (
+            " (the reference is a rigid block; this block, released unstressed on "
+            "regularised friction, is checked to it for μ ≤ 0.1 and μ ≥ 0.8 at θ = 30°: "
+            "see the demo's notes)"
+        )
+    sys.exit(f"sliding_block.py: {verdict}{note}")
 # -
