@@ -33,7 +33,6 @@ def _pulled_plate(kind: str, steps: int = 8, **options) -> fe_mpm.Simulation:
     mesh = rectangle_mesh((0.0, 0.0), (1.3, 1.0), (13, 10))
     plate = cell_centroids(mesh)[:, 0] < 1.0
     points = fe_mpm.seed(mesh, 3, cells=np.flatnonzero(plate))
-    mesh.topology.create_connectivity(1, 2)
     face = dolfinx.mesh.locate_entities(mesh, 1, lambda x: np.isclose(x[0], 1.0))
     x, w = facet_points(mesh, face)
     load = {
