@@ -47,6 +47,10 @@ from fe_mpm.report import StepReport
 from fe_mpm.simulation import Simulation
 from fe_mpm.walls import WallForces
 
+# The scene builders and ready-made scenes are public too: ``fe_mpm.meshes.…`` works
+# after ``import fe_mpm``, as ``dolfinx.mesh`` does after ``import dolfinx``.
+from fe_mpm import meshes, scenes  # noqa: E402
+
 __version__ = "0.1.0"
 
 __all__ = [
@@ -76,5 +80,7 @@ __all__ = [
     "WallForces",
     "geostatic_stress",
     "merge",
+    "meshes",
+    "scenes",
     "seed",
 ]

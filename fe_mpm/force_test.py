@@ -176,6 +176,12 @@ class ForceTest:
         if self.displacement_norm <= self.tolerance and pressure_ok:
             ratio = self.displacement_norm / self.scale if self.scale > 0 else 0.0
             self.verdict = f"‖R‖ = {ratio:.2e} of the force scale {self.scale:.3e}"
+            if self.rtol * self.scale < max(self.atol, self.round_off):
+                # Forces so small (a body in free flight) that the floor decided.
+                self.verdict += (
+                    f", within the floor {max(self.atol, self.round_off):.3e} N "
+                    "(snes_atol, or the round-off of the internal forces)"
+                )
             self.passed = True
             return Reason.CONVERGED_FNORM_ABS
         if it >= self.max_it:

@@ -239,7 +239,14 @@ class ProgressBar:
         if enabled:
             from tqdm.auto import tqdm
 
-            self._bar = tqdm(total=n_steps, desc="fe-mpm", unit="step", leave=False)
+            # Cut steps count as fractions of a nominal one: show the count rounded.
+            self._bar = tqdm(
+                total=n_steps,
+                desc="fe-mpm",
+                unit="step",
+                leave=False,
+                bar_format="{l_bar}{bar}| {n:.0f}/{total_fmt} [{elapsed}<{remaining}{postfix}]",
+            )
 
     def update(self, report: StepReport, nominal: float) -> None:
         """Count ``report``'s step as its share of the nominal step length ``nominal``."""

@@ -598,10 +598,14 @@ class Simulation:
         """:meth:`rebalance` if :class:`~fe_mpm.balance.RebalanceRule` says so; whether it did."""
         if not self.rebalancing.due(point_imbalance, step_time):
             return False
+        self._rebalance_now()
+        return True
+
+    def _rebalance_now(self) -> None:
+        """:meth:`rebalance`, and tell the rule what it cost (collective)."""
         t0 = time.perf_counter()
         self.rebalance()
         self.rebalancing.paid(parallel.largest(self.mesh.comm, time.perf_counter() - t0))
-        return True
 
     def marker(self, name: str) -> np.ndarray:
         """Current position of a marker, shape (g,)."""
@@ -649,11 +653,13 @@ class Simulation:
                 report.failed_iterations = spent - report.newton_iterations
                 before += spent
                 reports.append(report)
-                if on_step is not None:  # on the grid of the step
-                    on_step(report)
                 if self.rebalancing.on and t_end - self.t > END_OF_RUN * nominal:
                     took = parallel.largest(self.mesh.comm, took)  # the same on every rank
-                    report.repartitioned = self._rebalance_if_due(report.point_imbalance, took)
+                    report.repartitioned = self.rebalancing.due(report.point_imbalance, took)
+                if on_step is not None:  # on the grid of the step, told if it is replaced
+                    on_step(report)
+                if report.repartitioned:
+                    self._rebalance_now()
                 length.accepted()
                 bar.update(report, nominal)
         finally:
@@ -743,6 +749,7 @@ class Simulation:
         reactions.update({name: force.total for name, force in walls.items()})
         self._add_time("update", t0)
         self.tracking.remember(layout.cell)
+        self.tracking.drop_outside(self.points, self.markers, k, t_new)
         self.t, self.step_number = t_new, k
         report = StepReport.of_step(
             k, t_new, result, self._current, reactions, self.markers, self.tracking, self.conditions

@@ -123,3 +123,16 @@ def test_a_repartition_is_due_past_the_imbalance_once_the_imbalance_has_paid_for
     rule.restart()
     assert rule.due(1.5, 0.0)
     assert not balance.RebalanceRule(None).due(10.0, 100.0)
+
+
+def test_on_step_is_told_whether_its_step_repartitions_the_grid():
+    """``on_step`` runs on the grid of its step and is told, in ``report.repartitioned``,
+    whether the grid is repartitioned after it (until 2026-12-06 the flag was set after
+    on_step had run, so a script logging from it never saw a repartition; a helper's
+    two-rank run repartitioned 9 times in 50 steps). One rank never repartitions, so
+    the rule is made due at every step here; the last steps of a run are left out."""
+    sim = _block(rebalance_above=1.5)
+    sim.rebalancing.due = lambda imbalance, step_time: True
+    seen = []
+    reports = sim.run(1.0, 3, progress=False, on_step=lambda r: seen.append(r.repartitioned))
+    assert seen == [r.repartitioned for r in reports] == [True, True, False]

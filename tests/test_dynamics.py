@@ -89,10 +89,13 @@ def test_free_flight_through_several_cells_in_one_step():
     points.velocity[:] = (2.5, 0.0)  # cell size 0.1, Δt 0.1: 2.5 cells per step
     sim = fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1e3, 0.3), dynamic=True)
     x0 = points.x.copy()
-    sim.run(t_end=0.3, n_steps=3, progress=False)
+    reports = sim.run(t_end=0.3, n_steps=3, progress=False)
     assert np.allclose(points.x - x0, (0.75, 0.0), atol=1e-12)
     found = sim.tracker.locate(points.x)
     assert np.all(sim.tracker.barycentric(points.x, found).min(axis=1) > -1e-12)
+    # With no forces the floor accepts the steps, and the report says so (a relative
+    # residual of 1 read as a failure where it stood alone).
+    assert all("within the floor" in r.converged_reason for r in reports)
 
 
 def test_a_block_of_a_law_with_history_falls_freely():

@@ -412,3 +412,13 @@ def test_a_marker_of_a_line_on_a_3d_grid_holds_its_edges():
     that a P2 field's mid-edge nodes are held too, not its vertices alone."""
     line = lambda x: np.isclose(x[0], 0.0) & np.isclose(x[1], 0.0)  # noqa: E731
     assert _p2_nodes_held(line) == (1, 2, 5, 5)
+
+
+def test_the_scene_builders_are_reached_from_the_package():
+    """``import fe_mpm`` gives ``fe_mpm.meshes`` and ``fe_mpm.scenes``, as docs/api.md lists
+    them (a new user's ``fe_mpm.meshes.rectangle_mesh`` raised AttributeError until
+    2026-12-06)."""
+    import fe_mpm as package
+
+    assert package.meshes.rectangle_mesh is not None
+    assert package.scenes.cook_membrane is not None
