@@ -742,14 +742,14 @@ class Simulation:
         reactions = self.conditions.reactions(self._internal_force(R))
         # Update the points (the last check may still reject the step); the grid is reset.
         t0 = time.perf_counter()
-        self._update_points(forms, layout, k, t_new, dt)
+        leaving = self._update_points(forms, layout, k, t_new, dt)
         if self._boundary is not None:
             reactions.update(self._boundary.convect(forms, t_new))
         walls = self.walls.finish_step()
         reactions.update({name: force.total for name, force in walls.items()})
         self._add_time("update", t0)
         self.tracking.remember(layout.cell)
-        self.tracking.drop_outside(self.points, self.markers, k, t_new)
+        self.tracking.drop(self.points, self.markers, leaving, k, t_new)
         self.t, self.step_number = t_new, k
         report = StepReport.of_step(
             k, t_new, result, self._current, reactions, self.markers, self.tracking, self.conditions
@@ -961,8 +961,13 @@ class Simulation:
 
     def _update_points(
         self, forms: StepForms, layout: SlotLayout, step: int, t: float, dt: float
-    ) -> None:
-        """The points take the converged state (:mod:`fe_mpm.point_update`)."""
+    ) -> np.ndarray:
+        """The points take the converged state (:mod:`fe_mpm.point_update`).
+
+        Returns:
+            With ``points_leaving="drop"``, the points the step carried out of the grid
+            (indices, to drop once the step is done); else none.
+        """
         if self.domains is not None:  # the sub-points' step: check their domains first
             self.domains.move_corners(self.fields.displacement_at, self.tracker, step, t)
         values, pts, rm = forms.update.evaluate(layout), self.points, self._current.return_map
@@ -979,9 +984,12 @@ class Simulation:
             own = np.linalg.det(new.dF) * np.linalg.det(pts.F)
             bary = self._current.bary
             J = volume_of_average(self.fields.Q[0], layout.cell, bary, pts.mass, own, step, t)
+        # With points_leaving="drop": found before anything moves, dropped once it has.
+        leaving = self.tracking.leaving(pts, self.markers, pts.x + new.du, step, t)
         apply_update(pts, new, self.markers, self.dynamics, dt, rm and rm.result.history)
         if self._volume_of_pressure or self._volume_of_average:
             keep_volume_of_pressure(pts, J)
+        return leaving
 
     def _write_output(self, force: bool = False) -> None:
         t0, out = time.perf_counter(), self.output

@@ -102,33 +102,69 @@ class PointTracking:
         points.cell = cells
         return self.lay_out(cells, step, t)
 
-    def drop_outside(self, points: MaterialPoints, markers: Markers, step: int, t: float) -> None:
-        """With ``points_leaving="drop"``, remove now the points a step carried out of the grid.
+    def leaving(
+        self, points: MaterialPoints, markers: Markers, moved: np.ndarray, step: int, t: float
+    ) -> np.ndarray:
+        """With ``points_leaving="drop"``, the points a step is about to carry out of the grid.
 
-        Left to the next step's tracking, the points that the last step of a run carried
-        out stayed among the points, in the output and in every total taken after the
-        run (found 2026-12-06 by a helper: a block thrown out of its grid ended with 12
-        of its 48 leavers kept). Points in another rank's cells stay for that tracking
-        to send. Collective; with ``"raise"`` it does nothing (the next tracking stops
-        the run).
+        Called before the step's update, so that a marker whose host would leave stops
+        the run with nothing updated. Points that land in another rank's cells are not
+        leaving (the next tracking sends them). Collective.
+
+        Args:
+            points: The points, not yet updated (their cells the step's).
+            markers: Their markers.
+            moved: Their positions after the step (n, g), m.
+            step: The step, for the message.
+            t: Its end time, for the message.
+
+        Returns:
+            This rank's leaving points (indices); none with ``"raise"``, where the next
+            tracking stops the run.
+
+        Raises:
+            PointsOutsideError: A marker's host would leave.
+        """
+        if self.points_leaving != "drop":
+            return np.zeros(0, dtype=np.int64)
+        comm = self.tracker.mesh.comm
+        lost = np.flatnonzero(self.tracker.locate(moved, points.cell) < 0)
+        if comm.size > 1 and parallel.any_rank(comm, lost.size > 0):
+            x3 = np.zeros((lost.size, 3))
+            x3[:, : points.gdim] = moved[lost]
+            padding = PADDING * parallel.largest(comm, float(self.tracker.sizes.max(initial=0.0)))
+            owner = dolfinx.geometry.determine_point_ownership(self.tracker.mesh, x3, padding)
+            lost = lost[owner.src_owner < 0]
+        hosts = markers.hosts()
+        gone = [name for name, host in hosts.items() if host in set(lost.tolist())]
+        error = None
+        if gone:
+            error = PointsOutsideError(
+                f"the host point of marker {gone[0]!r} left the grid at {_when(step, t)}: "
+                "points_leaving='drop' removes points, but a marker moves with its host "
+                "point; put markers on material that stays in the grid"
+            )
+        parallel.raise_together(comm, error)
+        return lost
+
+    def drop(self, points: MaterialPoints, markers: Markers, lost: np.ndarray, step: int, t: float):
+        """Remove the points :meth:`leaving` found, now that the step has moved them out.
+
+        Left to the next step's tracking, the points that the last step of a run
+        carried out stayed among the points, in the output and in every total taken
+        after the run (found 2026-12-06 by a helper: a block thrown out of its grid
+        ended with 12 of its 48 leavers kept). Collective.
 
         Args:
             points: The points, updated by the step (their cells still the step's).
-            markers: Their markers.
+            markers: Their markers (none hosted by a leaving point).
+            lost: This rank's leaving points, from :meth:`leaving`.
             step: The step, for the warning.
             t: Its end time, for the warning.
         """
         if self.points_leaving != "drop":
             return
-        comm = self.tracker.mesh.comm
-        lost = np.flatnonzero(self.tracker.locate(points.x, points.cell) < 0)
-        if comm.size > 1 and parallel.any_rank(comm, lost.size > 0):
-            x3 = np.zeros((lost.size, 3))
-            x3[:, : points.gdim] = points.x[lost]
-            padding = PADDING * parallel.largest(comm, float(self.tracker.sizes.max(initial=0.0)))
-            owner = dolfinx.geometry.determine_point_ownership(self.tracker.mesh, x3, padding)
-            lost = lost[owner.src_owner < 0]
-        if parallel.any_rank(comm, lost.size > 0):
+        if parallel.any_rank(self.tracker.mesh.comm, lost.size > 0):
             cells = np.array(points.cell, copy=True)  # the step's, for those kept
             cells[lost] = -1
             points.cell = self._drop(points, markers, cells, lost, _when(step, t))
