@@ -22,8 +22,8 @@ from fe_mpm.tracker import Tracker
 #: the run took 4–5 Newton iterations a step to a tip deflection of 40 % of the
 #: length (3 a step at the test's smaller load). Cells filled more than a tenth
 #: (the tip's others: 0.13–0.74) are not passed over, nor, since 2026-12-06, cells
-#: that the ghost penalty ties to their neighbours (on by default with point
-#: domains in static runs): there the sliver is the body's face, moved into the next
+#: that the ghost penalty ties to their neighbours in a static run (on by default
+#: with point domains there): the sliver is then the body's face, moved into the next
 #: cell by the step before, and a load moved off it left it unloaded (a plate pulled
 #: on its face drifted from uniform stress by 1.9 % in 8 steps; ``tests/test_point_loads.py``).
 LOAD_MIN_FILL = 0.1
@@ -312,7 +312,9 @@ class BoundaryPointStep:
         take a share of the load against its direction. On a plate pulled by a
         ``PointTraction`` whose face had moved a thousandth of a cell past them a
         step, σ_xx beside the face stayed within 0.57 % of uniform after 8 steps,
-        against 1.40 % with the field extended (``tests/test_point_loads.py``).
+        against 1.40 % with the field extended (``tests/test_point_loads.py``). The
+        point then also moves with the field read there (1.4e-6 m apart on that
+        plate after 8 steps).
         """
         pp, active = self.points, self._active
         x = pp.x[active]

@@ -176,10 +176,11 @@ class ForceTest:
         if self.displacement_norm <= self.tolerance and pressure_ok:
             ratio = self.displacement_norm / self.scale if self.scale > 0 else 0.0
             self.verdict = f"‖R‖ = {ratio:.2e} of the force scale {self.scale:.3e}"
-            if self.rtol * self.scale < max(self.atol, self.round_off):
+            floor = max(self.atol, self.round_off)
+            if self.rtol * self.scale < floor:
                 # Forces so small (a body in free flight) that the floor decided.
                 self.verdict += (
-                    f", within the floor {max(self.atol, self.round_off):.3e} N "
+                    f", within the floor {floor:.3e} N "
                     "(snes_atol, or the round-off of the internal forces)"
                 )
             self.passed = True

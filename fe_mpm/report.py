@@ -43,7 +43,8 @@ class StepReport:
             each rank packs and integrates its own points.
         repartitioned: Whether the grid was repartitioned by its points after this
             step (``Simulation(rebalance_above=)``), so that the next step starts
-            balanced.
+            balanced; read in ``run(on_step=)``, which runs on the step's grid
+            first, whether it will be.
         converged_reason: Why Newton stopped, e.g. ``"‖R‖ = 2.1e-13 of the force
             scale 1.962e+04"`` (see :class:`fe_mpm.newton.ForceTest`).
         force_scale: The forces in play at the last iterate, S = max(‖f_ext‖,

@@ -134,7 +134,10 @@ class PointTracking:
             x3[:, : points.gdim] = moved[lost]
             padding = PADDING * parallel.largest(comm, float(self.tracker.sizes.max(initial=0.0)))
             owner = dolfinx.geometry.determine_point_ownership(self.tracker.mesh, x3, padding)
-            lost = lost[owner.src_owner < 0]
+            # A point just past the grid's edge is owned within the padding; owned by this
+            # rank, whose cells do not hold it, it has left, as migrate() finds it.
+            owner = owner.src_owner
+            lost = lost[(owner < 0) | (owner == comm.rank)]
         hosts = markers.hosts()
         gone = [name for name, host in hosts.items() if host in set(lost.tolist())]
         error = None

@@ -509,8 +509,12 @@ def test_a_velocity_set_after_seeding_is_checked_before_the_first_step(velocity,
     2026-12-06 by trying scenes nobody had built)."""
     mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (2, 2))
     points = fe_mpm.seed(mesh, 1)
-    points.velocity = velocity
+    points.velocity = velocity  # before the Simulation: refused at its set-up
+    with pytest.raises(ValueError, match=match):
+        fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1e6, 0.3), dynamic=True)
+    points = fe_mpm.seed(mesh, 1)
     sim = fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1e6, 0.3), dynamic=True)
+    points.velocity = velocity  # after it: refused before the first step
     with pytest.raises(ValueError, match=match):
         sim.run(0.01, 1, progress=False)
     assert sim.step_number == 0

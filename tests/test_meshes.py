@@ -178,11 +178,11 @@ def test_facet_points_cut_each_facet_into_equal_pieces(dim, degree):
     n = (2, 2) if dim == 2 else (1, 1, 1)
     mesh = meshes.rectangle_mesh(np.zeros(dim), np.ones(dim), n)
     top = dolfinx.mesh.locate_entities(mesh, dim - 1, lambda x: np.isclose(x[dim - 1], 1.0))
-    pieces_per_point = 1 if degree == 1 else dim  # 2 Gauss points on a segment, 3 on a triangle
+    points_per_piece = 1 if degree == 1 else dim  # 2 Gauss points on a segment, 3 on a triangle
     misses = []
     for k in (1, 2, 3):
         x, w = meshes.facet_points(mesh, top, degree, subdivisions=k)
-        assert x.shape == (top.size * k ** (dim - 1) * pieces_per_point, dim)
+        assert x.shape == (top.size * k ** (dim - 1) * points_per_piece, dim)
         assert np.allclose(w, w[0]) and np.isclose(w.sum(), 1.0, rtol=1e-14)
         assert np.allclose(x[:, dim - 1], 1.0, rtol=0, atol=1e-15)
         quadratic = (w * x[:, 0] * x[:, dim - 2] if dim == 3 else w * x[:, 0] ** 2).sum()
