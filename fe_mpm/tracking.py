@@ -138,8 +138,8 @@ class PointTracking:
             # rank, whose cells do not hold it, it has left, as migrate() finds it.
             owner = owner.src_owner
             lost = lost[(owner < 0) | (owner == comm.rank)]
-        hosts = markers.hosts()
-        gone = [name for name, host in hosts.items() if host in set(lost.tolist())]
+        lost_set = set(lost.tolist())
+        gone = [name for name, host in markers.hosts().items() if host in lost_set]
         error = None
         if gone:
             error = PointsOutsideError(
