@@ -32,13 +32,14 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
+from fe_mpm.checks import check_range
 from fe_mpm.materials.spectral import deviator, from_principal, spectral_decomposition
 from fe_mpm.materials.zones import MATERIAL
 from fe_mpm.particles import MaterialPoints
 
 
 def geostatic_stress(
-    points: MaterialPoints, surface: float, gravity: float, K0: float
+    points: MaterialPoints, surface: float, gravity: float, K0: float, density: float | None = None
 ) -> np.ndarray:
     r"""The stress at rest of a level layer: σ_v = −ρ_p g (surface − z), σ_h = K₀ σ_v.
 
@@ -52,13 +53,19 @@ def geostatic_stress(
         surface: Height of the layer's free surface (m); no point may lie above it.
         gravity: Magnitude g > 0 of gravity (m/s²), acting along −z (−y in 2D).
         K0: Ratio K₀ ≥ 0 of horizontal to vertical stress at rest.
+        density: The layer's density ρ (kg/m³), > 0. None takes each point's own,
+            which points seeded without a density do not have yet: the law's is
+            given to them when the Simulation starts, after this is called (until
+            2026-12-06 such points gave a stress of ρ = 1 kg/m³ without a word, and
+            the layer sank as if unstressed; found by a helper typing the docs'
+            example with the density on the law).
 
     Returns:
         Cauchy stresses (Pa), shape ``(n, 3, 3)``, compression negative.
 
     Raises:
-        ValueError: ``gravity`` ≤ 0, ``K0`` < 0, ``surface`` not finite, or a point
-            above it.
+        ValueError: ``gravity`` ≤ 0, ``K0`` < 0, ``surface`` not finite, a point
+            above it, ``density`` ≤ 0, or no density to take.
     """
     if not (np.isfinite(gravity) and gravity > 0.0):
         raise ValueError(f"geostatic_stress: gravity must be > 0 (m/s²), got {gravity!r}")
@@ -73,7 +80,17 @@ def geostatic_stress(
             f"geostatic_stress: point {p} lies {-depth[p]:.3g} m above the surface "
             f"{surface:g} m; surface must be >= every point's height"
         )
-    vertical = -points.mass / points.volume * gravity * np.maximum(depth, 0.0)
+    if density is not None:
+        rho = check_range("geostatic_stress", "density", density, lo=0.0, lo_open=True)
+    elif not points.density_given:
+        raise ValueError(
+            "geostatic_stress: the points were seeded without a density (the law's "
+            "reaches them only when the Simulation starts): pass density=ρ (kg/m³), or "
+            "seed them with seed(..., density=ρ)"
+        )
+    else:
+        rho = points.mass / points.volume
+    vertical = -rho * gravity * np.maximum(depth, 0.0)
     stress = np.zeros((len(points), 3, 3))
     g = points.gdim
     for axis in range(3):

@@ -134,6 +134,38 @@ def test_geostatic_stress_in_3d_is_vertical_along_z():
     assert np.allclose(stress[1], 0.0)
 
 
+def test_points_seeded_without_a_density_need_one_for_their_geostatic_stress():
+    """Points seeded without a density carry ρ = 1 kg/m³ until the Simulation gives them
+    the law's, after ``geostatic_stress`` has been called: a layer whose law carried its
+    density (as the docs advise) got a stress 2000 times too small, took 3 Newton
+    iterations and sank as if unstressed (a helper's scene, 2026-12-06). Now they are
+    refused unless the density is given, and with it the layer is at rest."""
+    grid = rectangle_mesh((0.0, 0.0), (W, H), (2, 1))
+    points = fe_mpm.seed(grid, per_cell=3)
+    with pytest.raises(ValueError, match=r"seeded without a density .* pass density="):
+        fe_mpm.geostatic_stress(points, H, G, K0)
+    with pytest.raises(ValueError, match=r"density must lie in \(0, inf\)"):
+        fe_mpm.geostatic_stress(points, H, G, K0, density=0.0)
+    given = fe_mpm.geostatic_stress(points, H, G, K0, density=RHO)
+    seeded = fe_mpm.seed(grid, per_cell=3, density=RHO)
+    assert np.allclose(given, fe_mpm.geostatic_stress(seeded, H, G, K0), rtol=1e-14, atol=0)
+    law = fe_mpm.DruckerPrager(E, NU, cohesion=1e4, friction_angle=30.0, density=RHO)
+    sim = fe_mpm.Simulation(
+        grid,
+        points,
+        law,
+        body_force=(0.0, -G),
+        initial_stress=given,
+        dirichlet=[
+            fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0)),
+            fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0) | np.isclose(x[0], W), component=0),
+        ],
+    )
+    (report,) = sim.run(1.0, 1, progress=False)
+    assert report.newton_iterations <= 1
+    assert np.abs(points.x - points.x0).max() < 1e-12 * H
+
+
 def test_bad_initial_stress_is_refused_with_the_field_named():
     grid = rectangle_mesh((0.0, 0.0), (W, H), (2, 1))
     points = fe_mpm.seed(grid, per_cell=1, density=RHO)
