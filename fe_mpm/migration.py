@@ -62,11 +62,7 @@ def migrate(
         return cells, 0, carried
     moved = 0
     if parallel.any_rank(comm, lost.size > 0):
-        g = points.gdim
-        x3 = np.zeros((lost.size, 3))
-        x3[:, :g] = points.x[lost]
-        padding = PADDING * parallel.largest(comm, float(tracker.sizes.max(initial=0.0)))
-        owner = dolfinx.geometry.determine_point_ownership(tracker.mesh, x3, padding).src_owner
+        owner = owning_ranks(tracker, points.x[lost])
         # A point owned here after all (on a facet the walk missed) is not sent.
         leaving = (owner >= 0) & (owner != comm.rank)
         sent = lost[leaving]
@@ -85,6 +81,20 @@ def migrate(
         )
         moved += more
     return cells, moved, carried
+
+
+def owning_ranks(tracker: Tracker, x: np.ndarray) -> np.ndarray:
+    """The rank whose cell holds each of this rank's points ``x`` (n, g), or −1 (n,).
+
+    DOLFINx's ownership search with cells padded by :data:`PADDING` of the largest cell,
+    so a point on a facet between ranks finds a candidate; a point just past the grid's
+    edge may then be owned too. Collective.
+    """
+    comm = tracker.mesh.comm
+    x3 = np.zeros((x.shape[0], 3))
+    x3[:, : x.shape[1]] = x
+    padding = PADDING * parallel.largest(comm, float(tracker.sizes.max(initial=0.0)))
+    return dolfinx.geometry.determine_point_ownership(tracker.mesh, x3, padding).src_owner
 
 
 def _holders(tracker: Tracker, x: np.ndarray) -> np.ndarray:

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import os
 import sys
+from collections.abc import Callable
 
 from mpi4py import MPI
 
@@ -89,6 +90,25 @@ def raise_together(comm: MPI.Comm, error: Exception | None) -> None:
     if rank == comm.rank:
         raise error
     raise kind(f"(on rank {rank}) {message}")
+
+
+def check_together(
+    comm: MPI.Comm,
+    check: Callable[..., object],
+    *args,
+    kinds: tuple[type[Exception], ...] = (ValueError,),
+) -> None:
+    """Run ``check(*args)`` and raise what it raised on some rank on every rank.
+
+    Errors of ``kinds`` only (:func:`raise_together`): no rank then waits in a
+    collective for one that has stopped. Collective.
+    """
+    error = None
+    try:
+        check(*args)
+    except kinds as err:
+        error = err
+    raise_together(comm, error)
 
 
 def one_thread_per_rank(comm: MPI.Comm) -> None:

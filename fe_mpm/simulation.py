@@ -294,9 +294,7 @@ class Simulation:
         model_checks.check_ranges(max_step_cells, ppp_alpha, damping, output_every)
         model_checks.check_dynamics(dynamic, formulation, damping, mass, bossak_alpha)
         if dynamic:  # before any point migrates; step() checks again (set after this)
-            parallel.raise_together(
-                mesh.comm, _refused(points.check_motion, "Simulation", "points.")
-            )
+            _check_motion(mesh.comm, points)
         self.spec = FORMULATIONS[formulation]
         self._volume_of_pressure = self.spec.pressure and not keeps_shape
         self._volume_of_average = self.spec.volume_average and not keeps_shape
@@ -313,12 +311,9 @@ class Simulation:
         model_checks.take_density(material, points)
         self._started_stressed = initial_stress is not None
         if initial_stress is not None:  # refused on every rank if on one
-            refused = None
-            try:
-                start_stressed(points, material, initial_stress, self.spec.pressure)
-            except ValueError as err:
-                refused = err
-            parallel.raise_together(mesh.comm, refused)
+            parallel.check_together(
+                mesh.comm, start_stressed, points, material, initial_stress, self.spec.pressure
+            )
         for name, h in material.history.items():
             points.history.setdefault(name, h.initial_values(len(points)))
         if MATERIAL in material.history:  # several laws: the label reaches the slots
@@ -700,8 +695,7 @@ class Simulation:
             raise ValueError(f"Simulation.step: t_new must exceed the current time {self.t}")
         if self.dynamic and self.step_number == 0:
             # A script gives a body its velocity by setting points.velocity after seeding.
-            error = _refused(self.points.check_motion, "Simulation", "points.")
-            parallel.raise_together(self.mesh.comm, error)
+            _check_motion(self.mesh.comm, self.points)
         if self.step_number == 0:  # written once: the output skips a step it has written
             self._write_output(force=True)  # the initial state as the t = 0 frame
         if self.domains is not None:
@@ -1051,10 +1045,8 @@ class Simulation:
             self._shift.destroy()
 
 
-def _refused(check: Callable[..., None], *args) -> Exception | None:
-    """What ``check(*args)`` raises (ValueError, TypeError), or None: to raise on every rank."""
-    try:
-        check(*args)
-    except (ValueError, TypeError) as err:
-        return err
-    return None
+def _check_motion(comm, points: MaterialPoints) -> None:
+    """Refuse, on every rank, a velocity or acceleration that is not finite or of shape (n, g)."""
+    parallel.check_together(
+        comm, points.check_motion, "Simulation", "points.", kinds=(ValueError, TypeError)
+    )

@@ -18,7 +18,7 @@ from fe_mpm._dolfinx import dolfinx
 from fe_mpm.errors import ConvergenceError, PointsOutsideError, warn
 from fe_mpm.formulations import FormulationSpec
 from fe_mpm.markers import Markers
-from fe_mpm.migration import PADDING, migrate, send
+from fe_mpm.migration import migrate, owning_ranks, send
 from fe_mpm.particles import MaterialPoints
 from fe_mpm.quadrature import SlotLayout, slot_count
 from fe_mpm.tracker import Tracker
@@ -130,13 +130,9 @@ class PointTracking:
         comm = self.tracker.mesh.comm
         lost = np.flatnonzero(self.tracker.locate(moved, points.cell) < 0)
         if comm.size > 1 and parallel.any_rank(comm, lost.size > 0):
-            x3 = np.zeros((lost.size, 3))
-            x3[:, : points.gdim] = moved[lost]
-            padding = PADDING * parallel.largest(comm, float(self.tracker.sizes.max(initial=0.0)))
-            owner = dolfinx.geometry.determine_point_ownership(self.tracker.mesh, x3, padding)
             # A point just past the grid's edge is owned within the padding; owned by this
             # rank, whose cells do not hold it, it has left, as migrate() finds it.
-            owner = owner.src_owner
+            owner = owning_ranks(self.tracker, moved[lost])
             lost = lost[(owner < 0) | (owner == comm.rank)]
         lost_set = set(lost.tolist())
         gone = [name for name, host in markers.hosts().items() if host in lost_set]
