@@ -3,7 +3,8 @@
 :class:`~fe_mpm.Simulation` runs these at set-up (and :func:`check_supports` at the
 first static step, once it knows which cells hold material): the options in their
 ranges, a grid and points that fit each other, a law that provides what the
-formulation needs, one density, and supports that stop every rigid translation.
+formulation needs, one density, and supports that stop every rigid translation and
+rotation.
 """
 
 from __future__ import annotations
@@ -417,8 +418,15 @@ def take_density(material, points: MaterialPoints) -> None:
             )
 
 
+#: A rigid mode whose stiffness from the supports is below this share of the largest
+#: is free: the supports' rows are O(1) (unit directions, rotations scaled by the
+#: material's size), so a held mode's share is at least ~1/(held rows), and round-off
+#: leaves a free one's near 1e-16.
+FREE_MODE_RTOL = 1e-10
+
+
 def check_supports(conditions, boundary, occupied: np.ndarray, walls=None) -> None:
-    """Refuse a static model whose supports leave a rigid translation free.
+    """Refuse a static model whose supports leave a rigid translation or rotation free.
 
     Without inertia, a body that nothing holds in some direction has a singular
     tangent (a rigid-body mode): Newton would fail with no hint. Supports count
@@ -459,6 +467,91 @@ def check_supports(conditions, boundary, occupied: np.ndarray, walls=None) -> No
             "of an occupied cell. The tangent would be singular (a rigid-body mode). Add a "
             "support, or pass dynamic=True."
         )
+    _check_rotations(conditions, point_conditions, occupied, walls)
+
+
+def _check_rotations(conditions, point_conditions, occupied: np.ndarray, walls) -> None:
+    """Refuse supports that stop every rigid translation but leave a rotation free.
+
+    Each support is a row ``d · m_k(x)`` over the rigid modes m_k (translations, and
+    rotations about the material's centre scaled by its size) at the place x it holds
+    in direction d; the modes that no row reaches are free. Found 2026-12-06 by a
+    helper: a cube on a frictionless base, held across it at one node only, failed
+    Newton in its second step with advice about cell crossing.
+    """
+    mesh = conditions.mesh
+    g = mesh.geometry.dim
+    x = mesh.geometry.x[:, :g]
+    occupied_nodes = np.zeros(x.shape[0], dtype=bool)
+    occupied_nodes[mesh.geometry.dofmaps[0][occupied]] = True
+    places, ways = [], []  # where each support holds, and in which direction
+    for (spec, _, _), nodes in zip(conditions.dirichlet, conditions.dirichlet_nodes, strict=True):
+        nodes = nodes[occupied_nodes[nodes]]
+        comps = range(g) if spec.component is None else [spec.component]
+        for c in comps:
+            places.append(x[nodes])
+            ways.append(np.tile(np.eye(g)[c], (nodes.size, 1)))
+    for condition in point_conditions:
+        if isinstance(condition, PointDirichlet):
+            at = np.asarray(condition.x, dtype=np.float64).reshape(-1, g)
+            for c in range(g) if condition.components is None else condition.components:
+                places.append(at)
+                ways.append(np.tile(np.eye(g)[int(c)], (at.shape[0], 1)))
+    if walls is not None:
+        for at, direction in walls.held_places(occupied):
+            places.append(at)
+            ways.append(np.tile(direction, (at.shape[0], 1)))
+    comm = mesh.comm
+    material = x[occupied_nodes]
+    lo = parallel.smallest(comm, material.min(axis=0, initial=np.inf))
+    hi = parallel.largest(comm, material.max(axis=0, initial=-np.inf))
+    centre, size = (lo + hi) / 2, max(float(np.max(hi - lo)), np.finfo(float).tiny)
+    at = np.vstack(places or [np.zeros((0, g))])
+    way = np.vstack(ways or [np.zeros((0, g))])
+    rows = support_rows(at, way, centre, size)
+    gram = parallel.total(comm, rows.T @ rows)
+    stiffness, modes = np.linalg.eigh(gram)
+    free = modes[:, stiffness <= FREE_MODE_RTOL * max(stiffness.max(), 1.0)]
+    if free.shape[1] == 0:
+        return
+    axis = free[g:, 0]  # the rotation in the first free mode (its translations are held)
+    about = "z" if g == 2 else _axis_name(axis / np.linalg.norm(axis))
+    raise ValueError(
+        f"Simulation: a static model needs supports that stop every rigid rotation, but "
+        f"nothing stops the material turning about {about}: the supports that touch "
+        "occupied cells (Dirichlet, PointDirichlet, RigidWall) hold it at too few places "
+        "(e.g. one node, or one line through the axis). The tangent would be singular "
+        "(a rigid-body mode). Hold a second place across that axis, or pass dynamic=True."
+    )
+
+
+def support_rows(at: np.ndarray, way: np.ndarray, centre: np.ndarray, size: float) -> np.ndarray:
+    """How much each support resists each rigid mode, ``d · m_k(x)`` (n, g + r).
+
+    Args:
+        at: Where each support holds (n, g), m.
+        way: The direction it holds in (n, g), unit.
+        centre: The centre of the rotations (g,), m.
+        size: The length that scales a rotation to a displacement (m).
+
+    Returns:
+        Columns: the g translations, then the rotations (r = 1 in 2D, about z;
+        r = 3 in 3D, about x, y, z), each moving a place at ``size`` from the centre by 1.
+    """
+    arm = (at - centre) / size
+    if at.shape[1] == 2:  # the rotation about z moves x by (−y, x)
+        turn = way[:, 1] * arm[:, 0] - way[:, 0] * arm[:, 1]
+        return np.column_stack([way, turn])
+    # about axis e_k, x moves by e_k × arm, and d · (e_k × arm) = (arm × d)_k
+    return np.column_stack([way, np.cross(arm, way)])
+
+
+def _axis_name(axis: np.ndarray) -> str:
+    """``x``, ``y`` or ``z`` for a coordinate axis, the rounded vector otherwise."""
+    k = int(np.argmax(np.abs(axis)))
+    if np.isclose(abs(axis[k]), 1.0, atol=1e-6):
+        return "the " + "xyz"[k] + " axis"
+    return f"the axis {axis.round(3)}"
 
 
 def domains_would_be_taken(

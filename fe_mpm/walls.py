@@ -248,14 +248,22 @@ class RigidWalls:
 
         A wall counts where it touches a node of an ``occupied`` cell (on some rank).
         """
+        comm = self.mesh.comm
+        return [d for at, d in self.held_places(occupied) if parallel.any_rank(comm, at.size > 0)]
+
+    def held_places(self, occupied: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Where and in which direction the walls hold the material, on this rank.
+
+        Each item: the wall's nodes that an ``occupied`` cell touches (n, g), m, and a
+        direction (g,) they hold: the normal, and with friction each of the plane's.
+        """
         held = []
         touched = touched_nodes(self.space, occupied)
         for wall in self.walls:
-            if not parallel.any_rank(self.mesh.comm, bool(touched[wall.dofs].any())):
-                continue
-            held.append(wall.normal)
+            at = self.coordinates[wall.dofs[touched[wall.dofs]]]
+            held.append((at, wall.normal))
             if wall.spec.friction > 0.0:
-                held.extend(np.linalg.svd(wall.normal[None, :])[2][1:])
+                held.extend((at, t) for t in np.linalg.svd(wall.normal[None, :])[2][1:])
         return held
 
     def start_step(self, occupied: np.ndarray, x: np.ndarray, volume: np.ndarray) -> None:

@@ -147,6 +147,49 @@ def test_a_static_model_that_nothing_holds_is_refused(dirichlet, free):
     dynamic.step(1e-3)  # inertia holds a free body: falling is an answer
 
 
+def _pin(*at):
+    """A Dirichlet on the grid node at ``at`` (one component, or all)."""
+    return lambda x: np.all([np.isclose(x[i], c) for i, c in enumerate(at)], axis=0)
+
+
+@pytest.mark.parametrize("fixed", [False, True])
+def test_a_static_model_held_at_one_node_is_refused_until_held_across(fixed):
+    """Found 2026-12-06 by a helper: a cube on a frictionless base, held across it at
+    one node only, passed the check on translations and failed Newton in its second step
+    with advice about cell crossing; a 2D plate pinned at one corner turns the same way."""
+    mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (2, 2))
+    dirichlet = [fe_mpm.Dirichlet(_pin(0.0, 0.0))]
+    if fixed:
+        dirichlet.append(fe_mpm.Dirichlet(_pin(1.0, 0.0), component=1))
+    sim = fe_mpm.Simulation(
+        mesh,
+        fe_mpm.seed(mesh, density=RHO),
+        fe_mpm.NeoHookean(1e7, 0.3),
+        body_force=(0.0, -G),
+        dirichlet=dirichlet,
+    )
+    box = rectangle_mesh((0.0, 0.0, 0.0), (1.0, 1.0, 1.0), (2, 1, 2))
+    base = [fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0), component=1)]
+    base += [fe_mpm.Dirichlet(_pin(0.5, 0.0, 0.5), component=c) for c in (0, 2)]
+    if fixed:
+        base.append(fe_mpm.Dirichlet(_pin(0.5, 0.0, 0.0), component=0))
+    cube = fe_mpm.Simulation(
+        box,
+        fe_mpm.seed(box, density=RHO),
+        fe_mpm.NeoHookean(1e7, 0.3),
+        body_force=(0.0, -G, 0.0),
+        dirichlet=base,
+    )
+    if fixed:
+        assert sim.step(1.0).newton_iterations <= 6
+        assert cube.step(1.0).newton_iterations <= 6
+        return
+    with pytest.raises(ValueError, match="nothing stops the material turning about z"):
+        sim.step(1.0)
+    with pytest.raises(ValueError, match="turning about the y axis: .*rigid-body mode"):
+        cube.step(1.0)
+
+
 @pytest.mark.parametrize(
     ("options", "match"),
     [
