@@ -228,6 +228,28 @@ def test_divergence_stops_with_step_and_reason():
     assert "after 7 iterations: stalled" in str(err.value)
 
 
+def test_projection_passes_between_bodies_apart_need_bossak():
+    """Found 2026-12-06 by a helper: two blocks thrown at each other with eight passes
+    and the trapezoidal rule gained 3104 times their energy. Bodies apart at the start
+    are refused as walls are; touching ones are one body, and Bossak's α_B lets them."""
+    mesh = rectangle_mesh((0.0, 0.0), (1.0, 0.5), (8, 4))
+    x = mesh.geometry.x[mesh.geometry.dofmaps[0]][:, :, 0]
+
+    def blocks(gap=True, **options):
+        right = x.min(axis=1) >= (0.75 if gap else 0.25)
+        cells = np.flatnonzero((x.max(axis=1) <= 0.25) | right)
+        points = fe_mpm.seed(mesh, per_cell=3, density=1000.0, cells=cells)
+        points.velocity[:, 0] = np.where(points.x[:, 0] < 0.5, 1.0, -1.0)
+        options = {"projection_passes": 4, **options}
+        return fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1e6, 0.3), dynamic=True, **options)
+
+    with pytest.raises(ValueError, match="forms 2 bodies apart .* bossak_alpha in"):
+        blocks()
+    blocks(bossak_alpha=-0.3)
+    blocks(projection_passes=1)
+    blocks(gap=False)  # the blocks share a row of nodes: one body
+
+
 def test_singular_tangent_names_the_hinged_cells():
     """Two occupied cells meeting at one node, the first clamped, under gravity: the
     second can only swing about the shared node (no static equilibrium)."""
