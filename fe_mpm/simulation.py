@@ -194,9 +194,12 @@ class Simulation:
             a nearly unsupported node (:func:`fe_mpm.point_update.checked_update`).
         point_domains: True: each point's volume is spread over the cells its
             convected domain covers (:mod:`fe_mpm.domains`; P2 in 2D only), against the
-            cell-crossing error; False (default): standard MPM. Under MPI the grid is
-            then rebuilt at set-up with the ghost cells the domains need
-            (:data:`fe_mpm.domains.DOMAIN_GHOST_LAYERS`).
+            cell-crossing error; False (default): standard MPM. At set-up the domains
+            tile the cells their points fill, and each point there moves to its tile's
+            centroid (its ``x`` and ``x0`` change by up to a point spacing: take
+            positions after ``Simulation(...)``; ``docs/cell_crossing.md``). Under
+            MPI the grid is then rebuilt at set-up with the ghost cells the domains
+            need (:data:`fe_mpm.domains.DOMAIN_GHOST_LAYERS`).
         shared_increment: With point domains, whether every piece of a domain takes
             its point's increment, the mean of the grid's over the pieces, with the
             exact Jacobian (:mod:`fe_mpm.shared_increment`; P1 only); False
