@@ -16,6 +16,7 @@ from fe_mpm.force_test import NewtonResult
 from fe_mpm.io import write_csv_rows
 from fe_mpm.quadrature import SlotLayout
 from fe_mpm.tracking import hinge_diagnosis, sparse_mass_diagnosis
+from fe_mpm.transfer import summed_over_ranks
 from fe_mpm.walls import WallForces
 
 
@@ -40,7 +41,8 @@ class StepReport:
             step and were sent there (all ranks together; 0 on one rank).
         point_imbalance: The most points a rank held in the step over the mean per
             rank (1 on one rank): how far the ranks' work is from even, since
-            each rank packs and integrates its own points.
+            each rank packs and integrates its own points (with point domains, its
+            pieces).
         repartitioned: Whether the grid was repartitioned by its points after this
             step (``Simulation(rebalance_above=)``), so that the next step starts
             balanced; read in ``run(on_step=)``, which runs on the step's grid
@@ -109,7 +111,9 @@ class StepReport:
                 ``lost_load`` is keyed by the tractions' tags, i + 1 for ``tractions[i]``,
                 and ``traction_labels`` names them (``"Traction i"``, ``"Pressure i"``).
         """
-        comm = markers.comm  # counts are over every rank
+        # Counts are over every rank: the grid's communicator, not the markers' (a
+        # domain step's pieces carry markers of their own, on no communicator).
+        comm = conditions.mesh.comm
         lost = {
             conditions.traction_labels[i]: share
             for i, share in conditions.lost_load.items()
@@ -122,7 +126,7 @@ class StepReport:
             residual_norms=result.residual_norms,
             markers=markers.positions(),
             nslot=current.forms.q.nslot,
-            occupied_cells=parallel.total(comm, int(current.layout.occupied.size)),
+            occupied_cells=occupied_cells(conditions.mesh, current.layout.occupied),
             dt=current.dt,
             reactions=reactions,
             held_points=parallel.total(comm, int(tracking.held_points)),
@@ -186,6 +190,23 @@ def write_steps(history: list[StepReport], path: str | Path, first: int = 0) -> 
             values += [repr(float(v)) for v in np.ravel(vector)]
         lines.append(",".join(values))
     return write_csv_rows(path, header, lines, first)
+
+
+def occupied_cells(mesh, occupied: np.ndarray) -> int:
+    """How many cells of the grid hold points on some rank, each counted once.
+
+    With point domains a rank's pieces also lie in its ghost cells, which another
+    rank owns and may fill too (before 2026-12-06 each rank reported its own count).
+
+    Args:
+        mesh: The grid.
+        occupied: This rank's occupied cells, owned and ghost (local indices).
+    """
+    cells = mesh.topology.index_map(mesh.topology.dim)
+    used = np.zeros(cells.size_local + cells.num_ghosts)
+    used[occupied] = 1.0
+    owned = summed_over_ranks(cells, used)[: cells.size_local]
+    return int(parallel.total(mesh.comm, int(np.count_nonzero(owned))))
 
 
 def imbalance(comm, count: int) -> float:

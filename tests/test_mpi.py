@@ -902,8 +902,9 @@ def test_point_domains_give_the_serial_answer_on_three_ranks_and_restart_across_
     caught: the footing's redrawn domains used the pieces of their old shapes for a
     step in serial, which 2 ranks did not (q moved by 3 %); a corner past the grid's
     edge took the cell of the lower local number among equally good ones, which
-    differs between partitions (the block's mass centre moved by 7e-7); and a rank
-    without points failed to cut its (no) domains."""
+    differs between partitions (the block's mass centre moved by 7e-7); a rank
+    without points failed to cut its (no) domains; and the step's counts were each
+    rank's own (found by a helper, 2026-12-06)."""
     (serial,) = _run(tmp_path, "domains", 1)
     redrawn, flipped = np.array(serial["footing"]["resets"]).T  # totals after each step
     assert redrawn[3] > 0 and flipped[-1] > flipped[3]  # redrawn by step 4, flipped after
@@ -914,6 +915,10 @@ def test_point_domains_give_the_serial_answer_on_three_ranks_and_restart_across_
                 assert got["iterations"] == want["iterations"], case
                 np.testing.assert_allclose(got["tip"], want["tip"], rtol=1e-9, atol=0)
                 assert case == "corner" or got["migrated"] > 0, case
+                # Counted over the ranks, each cell once (until 2026-12-06 each rank
+                # reported its own pieces' cells, and an imbalance of 1).
+                assert got.get("occupied") == want.get("occupied"), case
+            assert result["up 16 8"]["imbalance"] > 1.0
             assert result["footing"]["resets"] == serial["footing"]["resets"]
             # Three points per P2 cell: every rank keeps the pieces' mean increment.
             assert result["up-p2p1 8 4"]["mean increment"]
