@@ -90,12 +90,15 @@ class SimulationOutput:
         points: MaterialPoints,
         force: bool = False,
         corners: np.ndarray | None = None,
+        grid: bool = True,
     ) -> bool:
         """Write the state after ``step`` at time ``t`` if it is due; True if written.
 
         A step is written once, when it is a multiple of ``every`` or ``force`` is set
         (the first and the last frame of a run). ``corners``: the points' domains
         (n, g + 1, g) in m, written when the output was opened with ``domains``.
+        ``grid=False`` writes the points alone: after a step that failed, the grid's
+        fields hold its last attempt, not the step the points are at.
         """
         if step == self._written_step or (not force and step % self.every):
             return False
@@ -103,6 +106,8 @@ class SimulationOutput:
         self._points.write(t, points)
         if self._domains is not None:
             self._domains.write(t, points, corners)
+        if not grid:
+            return True
         for out, dofs in zip(self._grid, self._maps, strict=True):
             out.x.array[:] = self.fields.w.x.array[dofs]
         for writer in self._writers:

@@ -377,6 +377,7 @@ class Simulation:
         self._iterations_of_old_grids = 0  # Newton iterations on grids since repartitioned
         self.output = None
         self._rows_written = 0  # steps in the output's steps.csv (and walls.csv)
+        self._grid_is_a_step = True  # the grid's fields are the last step's (or zero)
         self._shared = bool(shared_increment)
         self._shift: SharedIncrement | None = None
         self._by_parts: PressureByParts | None = None
@@ -649,7 +650,11 @@ class Simulation:
                         can_hold and self.tracking.can_hold,
                     )
                 except ConvergenceError as failure:
-                    length.cut_after(failure)
+                    try:
+                        length.cut_after(failure)
+                    except ConvergenceError:
+                        self._write_output(force=True)  # the last accepted step's points
+                        raise
                     continue
                 took = time.perf_counter() - started
                 spent = self.newton_iterations_total - before
@@ -702,10 +707,12 @@ class Simulation:
             _check_motion(self.mesh.comm, self.points)
         if self.step_number == 0:  # written once: the output skips a step it has written
             self._write_output(force=True)  # the initial state as the t = 0 frame
+        self._grid_is_a_step = False  # until the step is accepted: an attempt's iterate
         if self.domains is not None:
             report = step_with_domains(self, t_new, rebin)
         else:
             report = self._step_points(t_new, rebin)
+        self._grid_is_a_step = True
         self.points.simulated_to = self.t
         if self.checkpoint_dir and self.step_number % self.checkpoint_every == 0:
             self.checkpoint()
@@ -997,9 +1004,18 @@ class Simulation:
         return leaving
 
     def _write_output(self, force: bool = False) -> None:
+        """Write the frame of the current step if due (``force``: now), with its CSV rows.
+
+        Collective. After a step that failed (a run that stops, or a script's own
+        loop that caught the error) the points are the last accepted step's and are
+        written; the grid's fields are the failed attempt's and are not.
+        """
         t0, out = time.perf_counter(), self.output
         corners = None if self.domains is None else self.domains.corners
-        if out is not None and out.write(self.step_number, self.t, self.points, force, corners):
+        grid = self._grid_is_a_step
+        if out is not None and out.write(
+            self.step_number, self.t, self.points, force, corners, grid
+        ):
             if self.history and parallel.on_rank_zero(self.mesh.comm):
                 # The rows of the steps since the last output only: a long run's files
                 # grow by their new steps, not rewritten whole.
@@ -1034,8 +1050,13 @@ class Simulation:
         return self.fields.w
 
     def close(self) -> None:
-        """Close output files and free PETSc objects."""
+        """Write the last step if it is not yet written; close output files and free PETSc objects.
+
+        Collective. A script that drives :meth:`step` itself gets its last frame and
+        ``steps.csv`` rows here, as :meth:`run` writes them at its end.
+        """
         if self.output is not None:
+            self._write_output(force=True)
             self.output.close()
         if self._newton is not None:
             self._newton.destroy()

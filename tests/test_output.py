@@ -172,6 +172,54 @@ def test_a_run_writes_the_state_of_its_points_at_every_step(tmp_path):
     assert last.point_data["plastic_strain"].max() > 0
 
 
+def _pulled_past_its_limit(folder, **options):
+    """A Tresca block pulled on its top past its limit load: it stops in step 5."""
+    mesh = meshes.rectangle_mesh((0.0, 0.0), (2.0, 1.5), (12, 9))
+    c = meshes.cell_centroids(mesh)
+    points = fe_mpm.seed(mesh, per_cell=3, cells=np.flatnonzero((c[:, 1] < 1) & (c[:, 0] < 1)))
+    pull = fe_mpm.PointTraction(
+        "pull",
+        np.c_[np.linspace(1 / 12, 11 / 12, 6), np.ones(6)],
+        np.full(6, 1 / 6),
+        (400.0, 0.0),
+        scale=lambda t: t,
+    )
+    return fe_mpm.Simulation(
+        mesh,
+        points,
+        fe_mpm.MohrCoulomb.tresca(1e4, 0.3, 100.0),
+        "u",
+        dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))],
+        point_tractions=[pull],
+        output_dir=folder,
+        output_every=3,
+        min_step=0.02,
+        **options,
+    )
+
+
+@pytest.mark.parametrize("loop", ["run", "step"])
+def test_a_run_that_stops_writes_its_last_accepted_step(tmp_path, loop):
+    """Found 2026-12-06 by a helper: with output_every=3 a run that stopped in step 5 had
+    written steps 1–3 only, so step 4, the one showing the limit, was in neither the
+    frames nor steps.csv; a script's own loop of steps lost it too, even after close()."""
+    sim = _pulled_past_its_limit(tmp_path)
+    with pytest.raises(fe_mpm.ConvergenceError, match="in step 5"):
+        if loop == "run":
+            sim.run(1.0, 20, progress=False)
+        else:
+            for k in range(1, 21):
+                sim.step(k / 20)
+    sim.close()
+    assert sim.step_number == 4
+    steps = np.genfromtxt(tmp_path / "steps.csv", delimiter=",", names=True)
+    assert list(steps["step"]) == [1, 2, 3, 4]
+    frames = _frames(tmp_path / "particles.pvd")
+    assert frames[-1][0] == pytest.approx(sim.t, rel=1e-12)
+    last = meshio.read(tmp_path / frames[-1][1])
+    assert np.array_equal(last.points[:, :2], sim.points.x)
+
+
 def test_a_run_with_point_domains_writes_each_domain_as_a_cell_with_its_points_fields(tmp_path):
     """Cook, Neo-Hookean, u-p, point domains, 5 N over 4 steps on n = 8:
     ``domains.pvd`` lists the frames of ``particles.pvd``, and in each frame every
