@@ -16,6 +16,7 @@ from mpi4py import MPI
 
 import numpy as np
 
+from fe_mpm import parallel
 from fe_mpm.particles import MaterialPoints
 
 
@@ -36,14 +37,23 @@ class ParticleWriter:
     def __init__(self, folder: str | Path, name: str = "particles", comm: MPI.Comm = MPI.COMM_SELF):
         self.folder = Path(folder)
         self.comm = comm
+        error = None
         if comm.rank == 0:
-            self.folder.mkdir(parents=True, exist_ok=True)
-            for pattern in ("", "_r*"):  # from an earlier run into the same folder
-                for stale in self.folder.glob(
-                    f"{name}_[0-9][0-9][0-9][0-9][0-9][0-9]{pattern}.vtu"
-                ):
-                    stale.unlink()
-        comm.Barrier()  # the folder exists and is clean before any rank writes
+            try:
+                self.folder.mkdir(parents=True, exist_ok=True)
+                for pattern in ("", "_r*"):  # from an earlier run into the same folder
+                    for stale in self.folder.glob(
+                        f"{name}_[0-9][0-9][0-9][0-9][0-9][0-9]{pattern}.vtu"
+                    ):
+                        stale.unlink()
+            except OSError as err:  # e.g. a file of that name: say so on every rank
+                error = OSError(
+                    f"output folder {str(self.folder)!r} cannot be created or cleaned: "
+                    f"{err.strerror or err}. Give output_dir a folder that can be written."
+                )
+        # The folder exists and is clean before any rank writes; or every rank stops
+        # (found 2026-12-06 by a helper: rank 0 stopped and rank 1 waited for ever).
+        parallel.raise_together(comm, error)
         self.name = name
         self._entries: list[tuple[float, list[str]]] = []
 

@@ -10,6 +10,7 @@ rotation.
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Iterable, Sequence
 
 import numpy as np
@@ -60,7 +61,16 @@ def check_ranges(
     check_range("Simulation", "max_step_cells", max_step_cells, lo=0.0, lo_open=True)
     check_range("Simulation", "ppp_alpha", ppp_alpha, lo=0.0)
     check_range("Simulation", "damping", damping, lo=0.0)
-    check_range("Simulation", "output_every", output_every, lo=1)
+    check_int("Simulation", "output_every", output_every, lo=1)  # 2.5 was taken as 2
+
+
+def check_output_dir(output_dir) -> None:
+    """A folder's path (str or os.PathLike) or None; 123 stopped in pathlib."""
+    if output_dir is not None and not isinstance(output_dir, str | os.PathLike):
+        raise TypeError(
+            "Simulation: output_dir must be a folder's path (str or pathlib.Path) or None, "
+            f"got {type(output_dir).__name__}"
+        )
 
 
 def check_rebalance(rebalance_above: float | None) -> float | None:

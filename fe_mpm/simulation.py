@@ -295,6 +295,7 @@ class Simulation:
         if ppp_alpha is None:
             ppp_alpha = 1.0 if keeps_shape else 0.0
         model_checks.check_ranges(max_step_cells, ppp_alpha, damping, output_every)
+        model_checks.check_output_dir(output_dir)
         model_checks.check_dynamics(dynamic, formulation, damping, mass, bossak_alpha)
         if dynamic:  # before any point migrates; step() checks again (set after this)
             _check_motion(mesh.comm, points)

@@ -228,6 +228,26 @@ def test_divergence_stops_with_step_and_reason():
     assert "after 7 iterations: stalled" in str(err.value)
 
 
+def test_an_output_folder_that_is_not_one_is_refused_naming_it(tmp_path):
+    """Found 2026-12-06 by a helper: a file's name stopped in pathlib's FileExistsError,
+    123 in its TypeError, and output_every=2.5 was taken as 2."""
+    mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (2, 2))
+    base = fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))
+
+    def sim(**options):
+        return fe_mpm.Simulation(
+            mesh, fe_mpm.seed(mesh), fe_mpm.NeoHookean(1.0, 0.3), dirichlet=[base], **options
+        )
+
+    (tmp_path / "taken").write_text("a file")
+    with pytest.raises(OSError, match="output folder .*taken' cannot be created .*output_dir"):
+        sim(output_dir=tmp_path / "taken")
+    with pytest.raises(TypeError, match="output_dir must be a folder's path .* got int"):
+        sim(output_dir=123)
+    with pytest.raises(TypeError, match="output_every must be an int, got 2.5"):
+        sim(output_dir=tmp_path / "out", output_every=2.5)
+
+
 def test_projection_passes_between_bodies_apart_need_bossak():
     """Found 2026-12-06 by a helper: two blocks thrown at each other with eight passes
     and the trapezoidal rule gained 3104 times their energy. Bodies apart at the start

@@ -353,6 +353,12 @@ try:
         fe_mpm.Simulation(scene.mesh, points, fe_mpm.NeoHookean(70.0, 0.3), point_domains=True,
                           shared_increment=True)
         result = "accepted"
+    elif case == "output folder is a file":
+        (folder / "taken").write_text("a file")
+        scene = meshes.cook_membrane(n=4)
+        fe_mpm.Simulation(scene.mesh, fe_mpm.seed(scene.mesh), fe_mpm.NeoHookean(70.0, 0.3),
+                          output_dir=folder / "taken")
+        result = "accepted"
     elif case == "domains":
         domains = dict(load=5 / 16, margin=4, point_domains=True)
         result = {
@@ -883,6 +889,13 @@ def test_a_feature_not_yet_distributed_is_refused_on_every_rank(tmp_path):
     lines = _run(tmp_path, "refused", 2)
     assert all(line["error"] == "NotImplementedError" for line in lines), lines
     assert all("not yet shared_increment=True" in x["message"] for x in lines)
+
+
+def test_an_output_folder_that_cannot_be_made_stops_every_rank(tmp_path):
+    """Found 2026-12-06 by a helper: rank 0 stopped on it and rank 1 waited for ever."""
+    lines = _run(tmp_path, "output folder is a file", 2)
+    assert all(line["error"] == "OSError" for line in lines), lines
+    assert all("taken' cannot be created" in x["message"] for x in lines)
 
 
 @pytest.mark.slow
