@@ -414,6 +414,12 @@ class Simulation:
                 self._shared,
                 keeps_mean_increment(self.spec.u_degree, most),
             )
+            if initial_stress is not None:
+                # The domains moved the points and carried their stress, affine in each
+                # cell, to the new places; the law's elastic state follows it again (a
+                # fitted one is off by the square of the strain).
+                points.F[:] = np.eye(points.gdim)  # undeformed, as start_stressed found them
+                start_stressed(points, material, points.stress.copy(), self.spec.pressure)
         self._set_ghost_penalty()
         self.rebalancing = balance.RebalanceRule(model_checks.check_rebalance(rebalance_above))
         if self._rebalance_if_due(imbalance(mesh.comm, len(points))):

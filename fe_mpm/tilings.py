@@ -30,6 +30,7 @@ import math
 import numpy as np
 
 from fe_mpm.clipping import simplex_volumes
+from fe_mpm.materials.zones import MATERIAL
 from fe_mpm.particles import MaterialPoints
 
 #: A cell is full when its points' volumes add up to its area to this tolerance.
@@ -164,9 +165,51 @@ def initial_domains(points: MaterialPoints, cell_vertices: np.ndarray) -> np.nda
         corners[members] = _assign(x[members], tile_corners)
         for values in (points.volume, points.mass):
             values[members] = values[members].mean(axis=1, keepdims=True)
-    points.x = corners.mean(axis=1)
-    points.x0 = points.x.copy()
+        moved_to = corners[members].mean(axis=2)
+        for values in _fields_of_place(points):
+            values[members] = carried(values[members], x[members], moved_to)
+    moved = corners.mean(axis=1)
+    points.x0 = points.x0 + (moved - points.x)  # a fresh point's x0 is its new place
+    points.x = moved
     return corners
+
+
+def _fields_of_place(points: MaterialPoints) -> list[np.ndarray]:
+    """The points' arrays that a script may have set from where the points were.
+
+    An initial stress from ``geostatic_stress`` and its history, a starting velocity
+    field: moved with their points, they would belong to other places. Found
+    2026-12-06 by a helper: a level layer started from its geostatic stress with point
+    domains carried σ_yy off ρ g (H − y) by up to ρ g h/2 at its moved points, and
+    stayed at rest, each cell's force unchanged.
+    """
+    fields = [points.F, points.stress, points.velocity, points.acceleration]
+    fields += [
+        values
+        for name, values in points.history.items()
+        if name != MATERIAL and np.issubdtype(values.dtype, np.floating)  # a label: not fitted
+    ]
+    return fields
+
+
+def carried(values: np.ndarray, old: np.ndarray, new: np.ndarray) -> np.ndarray:
+    """A field of each cell's points (cells, k, ...) read at their new places (cells, k, d).
+
+    The affine least-squares fit of its values at the old places, per cell: exact for
+    a field affine in x (a geostatic stress, a rigid spin's velocity) where a cell's
+    old places span it. A field that is uniform in a cell is left as it is, to the bit.
+    """
+    cells, k, d = old.shape
+    flat = values.reshape(cells, k, -1)
+    varies = np.any(flat.max(axis=1) != flat.min(axis=1), axis=1)
+    if not np.any(varies):
+        return values
+    centre = old[varies].mean(axis=1, keepdims=True)
+    fit = np.concatenate([np.ones((int(varies.sum()), k, 1)), old[varies] - centre], axis=2)
+    at = np.concatenate([np.ones((int(varies.sum()), k, 1)), new[varies] - centre], axis=2)
+    out = flat.copy()
+    out[varies] = at @ (np.linalg.pinv(fit) @ flat[varies])
+    return out.reshape(values.shape)
 
 
 def _assign(x: np.ndarray, tiles: np.ndarray) -> np.ndarray:

@@ -201,6 +201,29 @@ def test_the_first_domains_tile_the_body(per_cell):
             assert len(np.unique(np.round(mine, 12), axis=0)) == per_cell
 
 
+def test_fields_set_from_the_points_places_move_with_them_to_their_tiles():
+    """A stress affine in x and a rigid spin's velocity, set before the domains move the
+    points, are read at their new places exactly; a uniform F stays bit for bit."""
+    mesh = meshes.rectangle_mesh((0.0, 0.0), (2.0, 1.0), (4, 3))
+    points = fe_mpm.seed(mesh, per_cell=6, density=3.0)
+
+    def stress(x):
+        return np.einsum("n,ij->nij", 5.0 + 2.0 * x[:, 0] - 7.0 * x[:, 1], np.eye(3))
+
+    def spin(x):
+        return np.column_stack([-(x[:, 1] - 0.5), x[:, 0] - 1.0]) * 3.0
+
+    points.stress, points.velocity = stress(points.x), spin(points.x)
+    points.F[:] = np.diag([1.01, 0.99])
+    before, x = points.F.copy(), points.x.copy()
+    initial_domains(points, Tracker(mesh).cell_vertices)
+    assert np.abs(points.x - x).max() > 0.02  # the test can fail: the points moved
+    assert np.allclose(points.stress, stress(points.x), rtol=0, atol=1e-12)
+    assert np.allclose(points.velocity, spin(points.x), rtol=0, atol=1e-12)
+    assert np.array_equal(points.F, before)
+    assert np.array_equal(points.x0, points.x)
+
+
 def test_cells_without_a_tiling_keep_shrunk_cells():
     """Cells of 2 points (no equal tiling) take their cell shrunk to each point's
     volume around it; the other cells are still tiled."""

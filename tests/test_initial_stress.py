@@ -24,7 +24,9 @@ W, H = 2.0, 1.0
 K0 = NU / (1.0 - NU)
 
 
-def _layer(formulation: str, prestressed: bool, law=None, dynamic: bool = False, per_cell=3):
+def _layer(
+    formulation: str, prestressed: bool, law=None, dynamic: bool = False, per_cell=3, **options
+):
     """A W x H plane-strain layer on a fixed base, rollers at its sides, one step or ten."""
     grid = rectangle_mesh((0.0, 0.0), (W, H), (8, 4))
     points = fe_mpm.seed(grid, per_cell=per_cell, density=RHO)
@@ -42,6 +44,7 @@ def _layer(formulation: str, prestressed: bool, law=None, dynamic: bool = False,
         body_force=(0.0, -G),
         initial_stress=stress,
         **(dict(dynamic=True, mass="lumped") if dynamic else {}),
+        **options,
     )
     reports = sim.run(0.1, 10, progress=False) if dynamic else sim.run(1.0, 1, progress=False)
     sinking = float(np.abs(points.x - points.x0).max())
@@ -54,19 +57,25 @@ def _geostatic(points):
 
 
 @pytest.mark.parametrize(
-    "formulation, dynamic",
+    "formulation, dynamic, domains",
     [
-        ("u", False),
-        ("u", True),
-        ("u-nbva", False),
-        ("u-nbva", True),
-        ("up-nostab", False),
-        ("up-p2p1", False),
+        ("u", False, False),
+        ("u", True, False),
+        ("u-nbva", False, False),
+        ("u-nbva", True, False),
+        ("up-nostab", False, False),
+        ("up-p2p1", False, False),
+        # Point domains move the seeded points to their tiles' centroids, and the
+        # stress given for the old places with them (until 2026-12-06, found by a
+        # helper: σ_yy off by up to ρ g h/2, at rest all the same).
+        ("u", False, True),
+        ("u", True, True),
     ],
 )
-def test_a_layer_started_geostatic_stays_at_rest(formulation, dynamic):
-    points, reports, sinking = _layer(formulation, True, dynamic=dynamic)
-    _, _, unstressed = _layer(formulation, False, dynamic=dynamic)
+def test_a_layer_started_geostatic_stays_at_rest(formulation, dynamic, domains):
+    options = dict(point_domains=True) if domains else {}
+    points, reports, sinking = _layer(formulation, True, dynamic=dynamic, **options)
+    _, _, unstressed = _layer(formulation, False, dynamic=dynamic, **options)
     scale = RHO * G * H**2 / E  # 2e-3 m
     assert unstressed > 0.2 * scale  # the check can fail: unstressed, the layer sinks
     assert sinking < 1e-9 * scale
