@@ -144,6 +144,11 @@ class DomainWriter(ParticleWriter):
             fields: More per-point arrays of leading dimension n.
         """
         n, v, g = corners.shape
+        # VTK wants every cell turned one way; a domain's corners come in either order.
+        edges = corners[:, 1:] - corners[:, :1]
+        turned = np.linalg.det(edges) < 0.0 if n else np.zeros(0, dtype=bool)
+        corners = corners.copy()
+        corners[turned, :2] = corners[turned, 1::-1]
         xyz = np.zeros((n * v, 3))
         xyz[:, :g] = corners.reshape(n * v, g)
         cells = [
@@ -170,7 +175,9 @@ def _point_fields(points: MaterialPoints, fields: dict) -> dict[str, np.ndarray]
     """The per-point arrays fe-mpm writes, one row per point, vectors and tensors in 3D.
 
     Displacement, velocity, volume, mass, F, stress, pressure, the cell, the material's
-    history (e.g. ``plastic_strain``) and ``fields`` (arrays of leading dimension n).
+    history (e.g. ``plastic_strain``) and ``fields`` (arrays of leading dimension n),
+    which replace those of the same name (a simulation's output gives ``cell`` as the
+    grid's input index, the same on any number of ranks).
     """
     n, g = points.x.shape
     disp = np.zeros((n, 3))

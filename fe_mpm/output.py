@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from fe_mpm._dolfinx import dolfinx
+from fe_mpm.balance import original_indices
 from fe_mpm.formulations import GridFields, collapse
 from fe_mpm.io import DomainWriter, ParticleWriter
 from fe_mpm.particles import MaterialPoints
@@ -103,9 +104,14 @@ class SimulationOutput:
         if step == self._written_step or (not force and step % self.every):
             return False
         self._written_step = step
-        self._points.write(t, points)
+        # The grid's input numbering, the same on any number of ranks (a rank's own
+        # index differs between partitions and after a repartition).
+        comm, mesh = self.fields.W.mesh.comm, self.fields.W.mesh
+        where = np.column_stack([np.full(len(points), comm.rank), np.maximum(points.cell, 0)])
+        cell = np.where(points.cell >= 0, original_indices(mesh, where), -1).astype(np.float64)
+        self._points.write(t, points, cell=cell)
         if self._domains is not None:
-            self._domains.write(t, points, corners)
+            self._domains.write(t, points, corners, cell=cell)
         if not grid:
             return True
         for out, dofs in zip(self._grid, self._maps, strict=True):
