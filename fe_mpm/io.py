@@ -105,6 +105,16 @@ class ParticleWriter:
             self._write_pvd()
         return self.folder / fname
 
+    def rewind(self, t: float) -> None:
+        """Forget the frames after time ``t``, which a restored run writes again.
+
+        Restored to an earlier step, a run writes over their files, and the ``.pvd``
+        lists each time once.
+        """
+        self._entries = [(time, names) for time, names in self._entries if time <= t]
+        if self.comm.rank == 0:
+            self._write_pvd()
+
     def _write_pvd(self) -> None:
         lines = [
             '<?xml version="1.0"?>',

@@ -120,6 +120,17 @@ class SimulationOutput:
             writer.write(t)
         return True
 
+    def rewind(self, t: float) -> None:
+        """Forget the frames after time ``t`` (a restore to an earlier step).
+
+        The grid's VTX files cannot drop steps: they keep the frames written after
+        ``t``, and the restored run's frames follow them.
+        """
+        self._written_step = -1
+        self._points.rewind(t)
+        if self._domains is not None:
+            self._domains.rewind(t)
+
     def close(self) -> None:
         """Close the grid files (the points' series is complete after every write)."""
         for writer in self._writers:

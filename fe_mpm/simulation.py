@@ -563,6 +563,14 @@ class Simulation:
             CheckpointError: It is of another fe-mpm version or scene, or corrupted.
         """
         checkpoint.read(self, path)
+        kept = [report for report in self.history if report.step <= self.step_number]
+        if len(kept) < len(self.history):
+            # This simulation had stepped past the checkpoint: those steps are undone
+            # (found 2026-12-06 by a helper: the history read 1, 2, 3, 4, 3, 4).
+            self.history = kept
+            self._rows_written = 0  # steps.csv is written anew at the next output
+            if self.output is not None:
+                self.output.rewind(self.t)
         self.rebalancing.restart()  # a partition for these points
         if self._rebalance_if_due(imbalance(self.mesh.comm, len(self.points))):
             self._track(self.step_number, self.t)

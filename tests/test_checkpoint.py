@@ -6,6 +6,7 @@ across rank counts (``tests/test_mpi.py``) it agrees to round-off.
 """
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -64,6 +65,26 @@ def test_a_script_that_steps_itself_gets_the_runs_frames_and_checkpoints(tmp_pat
         again.step(t)
     for name, value in state(sim).items():
         assert np.array_equal(state(again)[name], value), name
+
+
+def test_a_simulation_restored_to_an_earlier_step_forgets_the_steps_after_it(tmp_path):
+    """Found 2026-12-06 by a helper: run to step 4, restored to step 2 and run again, the
+    history read 1, 2, 3, 4, 3, 4, steps.csv repeated rows 3 and 4, the .pvd listed
+    t = 0.1 twice, and with output_every=2 the redone steps were not written at all."""
+    sim = falling_block(output_dir=tmp_path / "out", checkpoint_dir=tmp_path / "ck",
+                        checkpoint_every=2, output_every=2)  # fmt: skip
+    sim.run(0.1, 4, progress=False)
+    end = state(sim)
+    sim.restore(tmp_path / "ck" / "step_000002")
+    assert [r.step for r in sim.history] == [1, 2]
+    sim.run(0.1, 2, progress=False)
+    assert [r.step for r in sim.history] == [1, 2, 3, 4]
+    for name, value in end.items():
+        assert np.array_equal(state(sim)[name], value), name
+    steps = np.genfromtxt(tmp_path / "out" / "steps.csv", delimiter=",", names=True)
+    assert list(steps["step"]) == [1, 2, 3, 4]
+    pvd = (tmp_path / "out" / "particles.pvd").read_text()
+    assert [float(t) for t in re.findall(r'timestep="([^"]+)"', pvd)] == [0.0, 0.05, 0.1]
 
 
 def test_a_restored_dynamic_plastic_run_continues_exactly(tmp_path):
