@@ -627,6 +627,11 @@ def check_force_names(reactions: dict | None, walls: Sequence, boundary: Sequenc
     Returns:
         The names, which markers may not take either.
     """
+    if reactions is not None and not isinstance(reactions, dict):
+        raise TypeError(
+            "Simulation: reactions must be a dict, name -> facet tag or marker function of "
+            f"the boundary whose reaction is summed, got {type(reactions).__name__}"
+        )
     owners: dict[str, list[str]] = {}
     for kind, names in (
         ("reaction", list(reactions or {})),

@@ -16,6 +16,7 @@ the module that owns its state:
 
 from __future__ import annotations
 
+import os
 import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -530,7 +531,13 @@ class Simulation:
         nearest to it (:mod:`fe_mpm.markers`), so it never reads an empty cell.
         Read it from ``history[k].markers[name]`` or :meth:`marker`.
         """
-        xm = check_finite("Simulation.add_marker", f"x of marker {name!r}", x).reshape(self.gdim)
+        xm = check_finite("Simulation.add_marker", f"x of marker {name!r}", x)
+        if xm.size != self.gdim:
+            raise ValueError(
+                f"Simulation.add_marker: x of marker {name!r} must have {self.gdim} "
+                f"coordinates on this {self.gdim}D grid, got {xm.size}"
+            )
+        xm = xm.reshape(self.gdim)
         # A marker's columns in steps.csv are its name's, as a force's are.
         if name in self.markers.names or name in self._force_names:
             used = "another marker" if name in self.markers.names else "a force"
@@ -562,6 +569,11 @@ class Simulation:
         Raises:
             CheckpointError: It is of another fe-mpm version or scene, or corrupted.
         """
+        if not isinstance(path, str | os.PathLike):
+            raise TypeError(
+                f"Simulation.restore: path must be a checkpoint folder's path (str or "
+                f"pathlib.Path), got {type(path).__name__}"
+            )
         checkpoint.read(self, path)
         kept = [report for report in self.history if report.step <= self.step_number]
         if len(kept) < len(self.history):
@@ -628,6 +640,9 @@ class Simulation:
 
     def marker(self, name: str) -> np.ndarray:
         """Current position of a marker, shape (g,)."""
+        if name not in self.markers.names:
+            known = ", ".join(map(repr, self.markers.names)) or "none (add_marker adds one)"
+            raise KeyError(f"Simulation.marker: no marker {name!r}; the markers: {known}")
         return self.markers.position(name)
 
     def run(

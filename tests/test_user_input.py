@@ -465,3 +465,27 @@ def test_the_scene_builders_are_reached_from_the_package():
 
     assert package.meshes.rectangle_mesh is not None
     assert package.scenes.cook_membrane is not None
+
+
+def test_workflow_mistakes_are_refused_naming_the_field():
+    """Found 2026-12-06 by a helper: a 3D marker on a 2D grid stopped in numpy's reshape,
+    reactions given as a list in "'list' object has no attribute 'items'", an unknown
+    marker in a bare KeyError and restore(123) in pathlib."""
+    mesh = _mesh()
+    sim = fe_mpm.Simulation(
+        mesh, fe_mpm.seed(mesh), fe_mpm.NeoHookean(1e7, 0.3), dirichlet=[_base()]
+    )
+    with pytest.raises(ValueError, match="marker 'A' must have 2 coordinates .* got 3"):
+        sim.add_marker("A", (0.5, 0.5, 0.0))
+    with pytest.raises(KeyError, match="no marker 'B'; the markers: none"):
+        sim.marker("B")
+    with pytest.raises(TypeError, match="restore: path must be a checkpoint folder's path"):
+        sim.restore(123)
+    with pytest.raises(TypeError, match="reactions must be a dict, .* got list"):
+        fe_mpm.Simulation(
+            mesh,
+            fe_mpm.seed(mesh),
+            fe_mpm.NeoHookean(1e7, 0.3),
+            dirichlet=[_base()],
+            reactions=["base"],
+        )
