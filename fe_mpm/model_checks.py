@@ -461,10 +461,11 @@ def take_density(material, points: MaterialPoints) -> None:
 
 
 #: A rigid mode whose stiffness from the supports is below this share of the largest
-#: is free: the supports' rows are O(1) (unit directions, rotations scaled by the
-#: material's size), so a held mode's share is at least ~1/(held rows), and round-off
-#: leaves a free one's near 1e-16.
-FREE_MODE_RTOL = 1e-10
+#: is free. The rows are O(1) (unit directions, rotations scaled by the material's
+#: size), so the largest is about the number of rows N and round-off leaves a free
+#: mode near 1e-16 N; two pins a thousandth of the body apart hold a rotation with
+#: about 1e-6, a share of 1e-12 even with N = 1e6 rows.
+FREE_MODE_RTOL = 1e-13
 
 
 def check_supports(conditions, boundary, occupied: np.ndarray, walls=None) -> None:
