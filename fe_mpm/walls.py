@@ -98,6 +98,24 @@ def wall_plane(mesh: dolfinx.mesh.Mesh, facets: np.ndarray, owner: str) -> tuple
     return normal, float(np.mean(on_plane))
 
 
+def _check_apart(walls: list, comm) -> None:
+    """Refuse two walls on one facet: each would push with its own springs, twice.
+
+    Found 2026-12-06 by a helper: a dynamic run took two walls on the same facets,
+    doubled their penalty and reported half the push on each, without a word.
+    """
+    error = None
+    for i, first in enumerate(walls):
+        for second in walls[i + 1 :]:
+            shared = np.intersect1d(first.facets, second.facets)
+            if shared.size and error is None:
+                error = ValueError(
+                    f"RigidWall {second.spec.name!r} lies on {shared.size} facet(s) of "
+                    f"RigidWall {first.spec.name!r}: give each facet to one wall"
+                )
+    parallel.raise_together(comm, error)
+
+
 class _Wall:
     """One wall on the grid: facets, normal, stiffness, friction and spring extension."""
 
@@ -202,6 +220,7 @@ class RigidWalls:
             for i, spec in enumerate(walls, start=FIRST_WALL_ID)
         ]
         self.facet_domains = {wall.subdomain: wall.facets for wall in self.walls}
+        _check_apart(self.walls, mesh.comm)
         v = ufl.TestFunction(self.space)
         points = self.space.element.interpolation_points
         self._kept, self._traction, self._forces = [], [], []

@@ -199,6 +199,10 @@ def test_other_bad_values():
             message = owner + ": its marker must return a boolean array.*" + got
             with pytest.raises(ValueError, match=message):
                 fe_mpm.Simulation(mesh, points, material, **options)
+    # Found 2026-12-06 by a helper: two walls on one floor pushed twice, silently.
+    twice = [fe_mpm.RigidWall(name, lambda x: np.isclose(x[1], 0.0)) for name in ("a", "b")]
+    with pytest.raises(ValueError, match="RigidWall 'b' lies on 2 facet.* of RigidWall 'a'"):
+        fe_mpm.Simulation(mesh, points, material, dynamic=True, walls=twice)
     # A list is taken, also an empty one from a rank that holds no entity of the kind
     # searched (np.asarray([]) is float: that rank alone stopped, the others waited).
     as_list = _checked_marker("Dirichlet 0", lambda x: list(np.isclose(x[1], 0.0)))
