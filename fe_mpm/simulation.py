@@ -680,11 +680,7 @@ class Simulation:
                         can_hold and self.tracking.can_hold,
                     )
                 except ConvergenceError as failure:
-                    try:
-                        length.cut_after(failure)
-                    except ConvergenceError:
-                        self._write_output(force=True)  # the last accepted step's points
-                        raise
+                    length.cut_after(failure)
                     continue
                 took = time.perf_counter() - started
                 spent = self.newton_iterations_total - before
@@ -700,6 +696,10 @@ class Simulation:
                     self._rebalance_now()
                 length.accepted()
                 bar.update(report, nominal)
+        except (ConvergenceError, PointsOutsideError):
+            # Raised on every rank together: the last accepted step's points and rows.
+            self._write_output(force=True)
+            raise
         finally:
             bar.close()
         self._write_output(force=True)
