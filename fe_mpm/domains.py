@@ -717,8 +717,8 @@ def _inside_the_grid(points: MaterialPoints, corners: np.ndarray, tracker: Track
     x = centre + t[:, None] * (points.x[out] - centre)
     corners = corners.copy()
     corners[out] = x[:, None, :] + scale[:, None, None] * (own - centre[:, None, :])
+    points.x0[out] += x - points.x[out]  # as a tiled point's (fe_mpm.tilings)
     points.x[out] = x
-    points.x0[out] = x
     return corners
 
 

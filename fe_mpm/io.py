@@ -105,15 +105,16 @@ class ParticleWriter:
             self._write_pvd()
         return self.folder / fname
 
-    def rewind(self, t: float) -> None:
+    def rewind(self, t: float) -> bool:
         """Forget the frames after time ``t``, which a restored run writes again.
 
         Restored to an earlier step, a run writes over their files, and the ``.pvd``
-        lists each time once.
+        lists each time once. Returns whether a frame of time ``t`` is kept.
         """
         self._entries = [(time, names) for time, names in self._entries if time <= t]
         if self.comm.rank == 0:
             self._write_pvd()
+        return bool(self._entries) and self._entries[-1][0] == t
 
     def _write_pvd(self) -> None:
         lines = [

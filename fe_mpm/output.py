@@ -92,6 +92,7 @@ class SimulationOutput:
         force: bool = False,
         corners: np.ndarray | None = None,
         grid: bool = True,
+        cells_known: bool = True,
     ) -> bool:
         """Write the state after ``step`` at time ``t`` if it is due; True if written.
 
@@ -100,6 +101,8 @@ class SimulationOutput:
         (n, g + 1, g) in m, written when the output was opened with ``domains``.
         ``grid=False`` writes the points alone: after a step that failed, the grid's
         fields hold its last attempt, not the step the points are at.
+        ``cells_known=False`` writes each point's cell as −1: after a repartition the
+        points' cells are the old grid's until the next tracking.
         """
         if step == self._written_step or (not force and step % self.every):
             return False
@@ -107,8 +110,10 @@ class SimulationOutput:
         # The grid's input numbering, the same on any number of ranks (a rank's own
         # index differs between partitions and after a repartition).
         comm, mesh = self.fields.W.mesh.comm, self.fields.W.mesh
-        where = np.column_stack([np.full(len(points), comm.rank), np.maximum(points.cell, 0)])
-        cell = np.where(points.cell >= 0, original_indices(mesh, where), -1).astype(np.float64)
+        cell = np.full(len(points), -1.0)
+        if cells_known:  # collective
+            where = np.column_stack([np.full(len(points), comm.rank), np.maximum(points.cell, 0)])
+            cell = np.where(points.cell >= 0, original_indices(mesh, where), -1).astype(float)
         self._points.write(t, points, cell=cell)
         if self._domains is not None:
             self._domains.write(t, points, corners, cell=cell)
@@ -120,16 +125,16 @@ class SimulationOutput:
             writer.write(t)
         return True
 
-    def rewind(self, t: float) -> None:
-        """Forget the frames after time ``t`` (a restore to an earlier step).
+    def rewind(self, t: float, step: int) -> None:
+        """Forget the frames after time ``t``, that of ``step`` (a restore to it).
 
         The grid's VTX files cannot drop steps: they keep the frames written after
         ``t``, and the restored run's frames follow them.
         """
-        self._written_step = -1
-        self._points.rewind(t)
+        kept = self._points.rewind(t)
         if self._domains is not None:
             self._domains.rewind(t)
+        self._written_step = step if kept else -1  # a frame of t is written once
 
     def close(self) -> None:
         """Close the grid files (the points' series is complete after every write)."""

@@ -380,6 +380,7 @@ class Simulation:
         self.output = None
         self._rows_written = 0  # steps in the output's steps.csv (and walls.csv)
         self._grid_is_a_step = True  # the grid's fields are the last step's (or zero)
+        self._cells_of_grid = True  # points.cell numbers this grid's cells (not after rebalance)
         self._shared = bool(shared_increment)
         self._shift: SharedIncrement | None = None
         self._by_parts: PressureByParts | None = None
@@ -582,7 +583,7 @@ class Simulation:
             self.history = kept
             self._rows_written = 0  # steps.csv is written anew at the next output
             if self.output is not None:
-                self.output.rewind(self.t)
+                self.output.rewind(self.t, self.step_number)
         self.rebalancing.restart()  # a partition for these points
         if self._rebalance_if_due(imbalance(self.mesh.comm, len(self.points))):
             self._track(self.step_number, self.t)
@@ -616,6 +617,7 @@ class Simulation:
             self._newton.destroy()
         springs = self.walls.springs()
         self._set_grid(mesh, tags)
+        self._cells_of_grid = False  # the points' cells are the old grid's until tracked
         self.walls.set_springs(springs)
         self._set_ghost_penalty()
         if keep_home:
@@ -696,8 +698,11 @@ class Simulation:
                     self._rebalance_now()
                 length.accepted()
                 bar.update(report, nominal)
-        except (ConvergenceError, PointsOutsideError):
-            # Raised on every rank together: the last accepted step's points and rows.
+        except ConvergenceError:
+            # Raised on every rank together, the points as the last accepted step left
+            # them: their frame and rows. (Not after PointsOutsideError: tracking may
+            # have sent points to other ranks before it stopped, their cells not yet
+            # renumbered.)
             self._write_output(force=True)
             raise
         finally:
@@ -742,7 +747,6 @@ class Simulation:
             report = step_with_domains(self, t_new, rebin)
         else:
             report = self._step_points(t_new, rebin)
-        self._grid_is_a_step = True
         self.points.simulated_to = self.t
         if self.checkpoint_dir and self.step_number % self.checkpoint_every == 0:
             self.checkpoint()
@@ -795,6 +799,7 @@ class Simulation:
         )
         report.walls = walls
         self.history.append(report)
+        self._grid_is_a_step = self._cells_of_grid = True  # accepted: its frame may be written
         self._write_output()
         return report
 
@@ -901,6 +906,7 @@ class Simulation:
             layout = self.tracking.lay_out(self.points.cell, step, t)
         else:
             layout = self.tracking.track(self.points, self.markers, step, t, hold)
+            self._cells_of_grid = True
         self._add_time("tracking", t0)
         return layout
 
@@ -1044,7 +1050,7 @@ class Simulation:
         corners = None if self.domains is None else self.domains.corners
         grid = self._grid_is_a_step
         if out is not None and out.write(
-            self.step_number, self.t, self.points, force, corners, grid
+            self.step_number, self.t, self.points, force, corners, grid, self._cells_of_grid
         ):
             if self.history and parallel.on_rank_zero(self.mesh.comm):
                 # The rows of the steps since the last output only: a long run's files

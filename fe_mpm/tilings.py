@@ -174,6 +174,11 @@ def initial_domains(points: MaterialPoints, cell_vertices: np.ndarray) -> np.nda
     return corners
 
 
+#: Directions in which a cell's old places spread less than this share of their
+#: largest are not fitted (:func:`carried`): the field keeps no slope along them.
+FIT_RCOND = 1e-3
+
+
 def _fields_of_place(points: MaterialPoints) -> list[np.ndarray]:
     """The points' arrays that a script may have set from where the points were.
 
@@ -205,10 +210,14 @@ def carried(values: np.ndarray, old: np.ndarray, new: np.ndarray) -> np.ndarray:
     if not np.any(varies):
         return values
     centre = old[varies].mean(axis=1, keepdims=True)
-    fit = np.concatenate([np.ones((int(varies.sum()), k, 1)), old[varies] - centre], axis=2)
-    at = np.concatenate([np.ones((int(varies.sum()), k, 1)), new[varies] - centre], axis=2)
+    # In units of the points' spread, so that a cell's nearly collinear points (a
+    # user's seeding) leave the fit no slope across them to extrapolate far along.
+    spread = np.sqrt(((old[varies] - centre) ** 2).sum(axis=2).mean(axis=1))[:, None, None]
+    ones = np.ones((int(varies.sum()), k, 1))
+    fit = np.concatenate([ones, (old[varies] - centre) / spread], axis=2)
+    at = np.concatenate([ones, (new[varies] - centre) / spread], axis=2)
     out = flat.copy()
-    out[varies] = at @ (np.linalg.pinv(fit) @ flat[varies])
+    out[varies] = at @ (np.linalg.pinv(fit, rcond=FIT_RCOND) @ flat[varies])
     return out.reshape(values.shape)
 
 

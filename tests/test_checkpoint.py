@@ -85,6 +85,11 @@ def test_a_simulation_restored_to_an_earlier_step_forgets_the_steps_after_it(tmp
     assert list(steps["step"]) == [1, 2, 3, 4]
     pvd = (tmp_path / "out" / "particles.pvd").read_text()
     assert [float(t) for t in re.findall(r'timestep="([^"]+)"', pvd)] == [0.0, 0.05, 0.1]
+    # Restored and closed at once, the restored step's frame is not listed twice.
+    sim.restore(tmp_path / "ck" / "step_000002")
+    sim.close()
+    pvd = (tmp_path / "out" / "particles.pvd").read_text()
+    assert [float(t) for t in re.findall(r'timestep="([^"]+)"', pvd)] == [0.0, 0.05]
 
 
 def test_a_restored_dynamic_plastic_run_continues_exactly(tmp_path):

@@ -9,6 +9,7 @@ import pytest
 import fe_mpm
 from fe_mpm import meshes, scenes
 from fe_mpm.io import ParticleWriter
+from fe_mpm.output import SimulationOutput
 from fe_mpm.particles import MaterialPoints
 
 
@@ -172,6 +173,25 @@ def test_a_run_writes_the_state_of_its_points_at_every_step(tmp_path):
     )
     assert np.array_equal(last.point_data["plastic_strain"], points.history["plastic_strain"])
     assert last.point_data["plastic_strain"].max() > 0
+
+
+def test_every_frame_of_a_run_writes_the_grid_too(tmp_path, monkeypatch):
+    """Found 2026-12-06 by a review: after the change that leaves a failed attempt's
+    grid out, every frame but t = 0 was written without the grid's fields."""
+    written = []
+    write = SimulationOutput.write
+
+    def spy(self, step, t, points, *args):
+        done = write(self, step, t, points, *args)
+        if done:
+            written.append((step, args[2] if len(args) > 2 else True))
+        return done
+
+    monkeypatch.setattr(SimulationOutput, "write", spy)
+    sim = scenes.cook_membrane(4, output_dir=tmp_path)
+    sim.run(1.0, 2, progress=False)
+    sim.close()
+    assert written == [(0, True), (1, True), (2, True)]
 
 
 def _pulled_past_its_limit(folder, **options):
