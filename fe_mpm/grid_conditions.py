@@ -235,20 +235,6 @@ class GridConditions:
         pins = self.fields.pin_unsupported(occupied)
         return [bc for _, _, bc in self.dirichlet] + pins
 
-    def held_components(self, occupied: np.ndarray) -> np.ndarray:
-        """Which displacement components (g,) some Dirichlet condition holds at material.
-
-        A condition counts only where it touches a node of an ``occupied`` cell: nodes
-        outside the material are pinned anyway.
-        """
-        occupied_nodes = np.zeros(self.mesh.geometry.x.shape[0], dtype=bool)
-        occupied_nodes[self.mesh.geometry.dofmaps[0][occupied]] = True
-        held = np.zeros(self.mesh.geometry.dim, dtype=bool)
-        for (spec, _, _), nodes in zip(self.dirichlet, self.dirichlet_nodes, strict=True):
-            if np.any(occupied_nodes[nodes]):
-                held[slice(None) if spec.component is None else spec.component] = True
-        return parallel.total(self.mesh.comm, held.astype(np.int32)) > 0  # held on some rank
-
     def check_loaded_facets(self, occupied: np.ndarray, t_new: float) -> None:
         """Warn when a grid traction's nodes have no material: their load acts on nothing.
 

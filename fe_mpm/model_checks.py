@@ -475,6 +475,11 @@ def check_supports(conditions, boundary, occupied: np.ndarray, walls=None) -> No
     tangent (a rigid-body mode): Newton would fail with no hint. Supports count
     only where they reach material: nodes outside the occupied cells are pinned.
     (A model with no loads and no conditions at all stays at rest: it needs no check.)
+    Each support is a row ``d · m_k(x)`` over the rigid modes m_k (translations, and
+    rotations about the material's centre scaled by its size) at the place x it holds
+    in direction d; the modes that no row reaches are free. Rotations were added
+    2026-12-06, found by a helper: a cube on a frictionless base, held across it at one
+    node only, failed Newton in its second step with advice about cell crossing.
 
     Args:
         conditions: The grid's :class:`~fe_mpm.grid_conditions.GridConditions`.
@@ -487,21 +492,15 @@ def check_supports(conditions, boundary, occupied: np.ndarray, walls=None) -> No
     point_conditions = [] if boundary is None else boundary.points.conditions
     if not (conditions.loads_or_supports or point_conditions or walls):
         return
-    held = conditions.held_components(occupied).copy()
-    for condition in point_conditions:
-        if isinstance(condition, PointDirichlet):
-            held[list(condition.components or range(held.size))] = True
-    directions = list(np.eye(held.size)[held])
-    directions += [] if walls is None else walls.held_directions(occupied)
-    g = held.size
-    basis = np.vstack([np.array(directions).reshape(-1, g), np.zeros((1, g))])
-    free = np.linalg.svd(basis)[2][np.linalg.matrix_rank(basis) :]
-    if len(free):
+    gram = _support_gram(conditions, point_conditions, occupied, walls)
+    g = conditions.mesh.geometry.dim
+    free = _free_modes(gram[:g, :g])
+    if free.shape[1]:
         names = ", ".join(
             "xyz"[int(np.argmax(np.abs(d)))]
             if np.isclose(np.abs(d).max(), 1.0)
             else str(d.round(3))
-            for d in free
+            for d in free.T
         )
         raise ValueError(
             f"Simulation: a static model needs supports that stop every rigid "
@@ -510,18 +509,22 @@ def check_supports(conditions, boundary, occupied: np.ndarray, walls=None) -> No
             "of an occupied cell. The tangent would be singular (a rigid-body mode). Add a "
             "support, or pass dynamic=True."
         )
-    _check_rotations(conditions, point_conditions, occupied, walls)
+    free = _free_modes(gram)
+    if free.shape[1] == 0:
+        return
+    axis = free[g:, 0]  # the rotation in the first free mode (its translations are held)
+    about = "z" if g == 2 else _axis_name(axis / np.linalg.norm(axis))
+    raise ValueError(
+        f"Simulation: a static model needs supports that stop every rigid rotation, but "
+        f"nothing stops the material turning about {about}: the supports that touch "
+        "occupied cells (Dirichlet, PointDirichlet, RigidWall) hold it at too few places "
+        "(e.g. one node, or one line through the axis). The tangent would be singular "
+        "(a rigid-body mode). Hold a second place across that axis, or pass dynamic=True."
+    )
 
 
-def _check_rotations(conditions, point_conditions, occupied: np.ndarray, walls) -> None:
-    """Refuse supports that stop every rigid translation but leave a rotation free.
-
-    Each support is a row ``d · m_k(x)`` over the rigid modes m_k (translations, and
-    rotations about the material's centre scaled by its size) at the place x it holds
-    in direction d; the modes that no row reaches are free. Found 2026-12-06 by a
-    helper: a cube on a frictionless base, held across it at one node only, failed
-    Newton in its second step with advice about cell crossing.
-    """
+def _support_gram(conditions, point_conditions, occupied: np.ndarray, walls) -> np.ndarray:
+    """Σ rowᵀ row over every support's :func:`support_rows`, over all ranks (g + r, g + r)."""
     mesh = conditions.mesh
     g = mesh.geometry.dim
     x = mesh.geometry.x[:, :g]
@@ -552,20 +555,13 @@ def _check_rotations(conditions, point_conditions, occupied: np.ndarray, walls) 
     at = np.vstack(places or [np.zeros((0, g))])
     way = np.vstack(ways or [np.zeros((0, g))])
     rows = support_rows(at, way, centre, size)
-    gram = parallel.total(comm, rows.T @ rows)
+    return parallel.total(comm, rows.T @ rows)
+
+
+def _free_modes(gram: np.ndarray) -> np.ndarray:
+    """The modes (columns) that ``gram`` holds with less than :data:`FREE_MODE_RTOL` of its most."""
     stiffness, modes = np.linalg.eigh(gram)
-    free = modes[:, stiffness <= FREE_MODE_RTOL * max(stiffness.max(), 1.0)]
-    if free.shape[1] == 0:
-        return
-    axis = free[g:, 0]  # the rotation in the first free mode (its translations are held)
-    about = "z" if g == 2 else _axis_name(axis / np.linalg.norm(axis))
-    raise ValueError(
-        f"Simulation: a static model needs supports that stop every rigid rotation, but "
-        f"nothing stops the material turning about {about}: the supports that touch "
-        "occupied cells (Dirichlet, PointDirichlet, RigidWall) hold it at too few places "
-        "(e.g. one node, or one line through the axis). The tangent would be singular "
-        "(a rigid-body mode). Hold a second place across that axis, or pass dynamic=True."
-    )
+    return modes[:, stiffness <= FREE_MODE_RTOL * max(stiffness.max(), 1.0)]
 
 
 def support_rows(at: np.ndarray, way: np.ndarray, centre: np.ndarray, size: float) -> np.ndarray:

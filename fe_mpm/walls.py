@@ -262,14 +262,6 @@ class RigidWalls:
         terms = [t for t in terms if t is not None]
         return sum(terms[1:], terms[0]) if terms else None
 
-    def held_directions(self, occupied: np.ndarray) -> list[np.ndarray]:
-        """Directions (g,) the walls hold the material in: the normal, with friction the plane.
-
-        A wall counts where it touches a node of an ``occupied`` cell (on some rank).
-        """
-        comm = self.mesh.comm
-        return [d for at, d in self.held_places(occupied) if parallel.any_rank(comm, at.size > 0)]
-
     def held_places(self, occupied: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
         """Where and in which direction the walls hold the material, on this rank.
 
