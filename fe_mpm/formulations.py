@@ -11,7 +11,8 @@ name           unknowns         against locking
 =============  ===============  ==============================================
 
 θ is the step's volume change averaged over each node's patch
-(:mod:`fe_mpm.forms.volume_average`).
+(:mod:`fe_mpm.forms.volume_average`); a body of several laws averages each zone on
+its own, with one θ per zone.
 
 The weak forms themselves live in :mod:`fe_mpm.forms`.
 """
@@ -80,10 +81,13 @@ class GridFields:
         du: UFL displacement increment (a view of ``w``).
         p: UFL pressure (a view of ``w``), or None.
         volume_change: UFL averaged volume change θ of the step (a view of
-            ``w``, NB-VA), or None.
+            ``w``, NB-VA): a scalar, or a vector of one θ per zone; or None.
+        zones: How many θ NB-VA keeps (the body's laws; 1 otherwise).
         U: The displacement (sub)space, where Dirichlet conditions act.
-        Q: The collapsed space of the scalar field (p or θ) and its dofs in ``W``,
-            or None.
+        Q: The collapsed space of the scalar field (p, or the first zone's θ) and
+            its dofs in ``W``, or None.
+        second: The collapsed space of the whole second field (p, or every θ) and
+            its dofs in ``W``, or None: what the output writes.
         p_start: The step's starting pressure p̄ (a P1 function on ``Q``), the
             projection of :meth:`start_from_rest`: in u-p, and in NB-VA (whose
             pressure is the law's at the points) where ``start_pressure`` asks for
@@ -94,24 +98,35 @@ class GridFields:
         spec: The formulation.
         start_pressure: Whether NB-VA needs p̄ (its starting pressure taken by
             parts, :mod:`fe_mpm.pressure_by_parts`); u-p always projects it.
+        zones: The number of laws of the body. NB-VA averages the volume change of
+            each zone over its own points: one average across an interface would
+            give a stiff zone the soft one's volume change (a layered ground's
+            stresses off by most of their value beside the interface).
     """
 
     def __init__(
-        self, mesh: dolfinx.mesh.Mesh, spec: FormulationSpec, start_pressure: bool = False
+        self,
+        mesh: dolfinx.mesh.Mesh,
+        spec: FormulationSpec,
+        start_pressure: bool = False,
+        zones: int = 1,
     ):
         self.spec = spec
+        self.zones = zones if spec.volume_average else 1
         g = mesh.geometry.dim
         cell = mesh.topology.cell_name()
         u_el = basix.ufl.element("Lagrange", cell, spec.u_degree, shape=(g,))
+        self.Q = self.second = None
         if spec.mixed:
-            p_el = basix.ufl.element("Lagrange", cell, 1)
+            shape = (self.zones,) if self.zones > 1 else ()
+            p_el = basix.ufl.element("Lagrange", cell, 1, shape=shape)
             self.W = dolfinx.fem.functionspace(mesh, basix.ufl.mixed_element([u_el, p_el]))
             self.U = self.W.sub(0)
-            self.Q = collapse(self.W.sub(1))
+            self.second = collapse(self.W.sub(1))
+            self.Q = collapse(self.W.sub(1).sub(0)) if self.zones > 1 else self.second
         else:
             self.W = dolfinx.fem.functionspace(mesh, u_el)
             self.U = self.W
-            self.Q = None
         self.w = dolfinx.fem.Function(self.W, name="unknown")
         self._scalar_element = basix.ufl.element("Lagrange", cell, spec.u_degree)
         self.p = self.volume_change = self.p_start = None
@@ -126,7 +141,10 @@ class GridFields:
         else:
             self.du = self.w
         # Scalar subspaces, each collapsed once, to pin the dofs no point reaches.
-        scalar = [self.U.sub(c) for c in range(g)] + ([self.W.sub(1)] if spec.mixed else [])
+        scalar = [self.U.sub(c) for c in range(g)]
+        if spec.mixed:
+            second = self.W.sub(1)
+            scalar += [second.sub(z) for z in range(self.zones)] if self.zones > 1 else [second]
         self._pinnable = []
         for sub in scalar:
             collapsed, to_parent = collapse(sub)
@@ -145,16 +163,31 @@ class GridFields:
         )
 
     def scalar_dofs_of(self, cells: np.ndarray) -> np.ndarray:
-        """The entries of the scalar field (p or θ) in ``w.x.array`` on ``cells`` (k,)."""
-        _, collapsed, to_parent, _ = self._pinnable[-1]
+        """The entries of p (or the first zone's θ) in ``w.x.array`` on ``cells`` (k,)."""
+        g = self.W.mesh.geometry.dim
+        _, collapsed, to_parent, _ = self._pinnable[g]
         return to_parent[collapsed.dofmap.list[cells]]
 
-    def pin_unsupported(self, occupied: np.ndarray) -> list[dolfinx.fem.DirichletBC]:
-        """Zero conditions on every dof outside the occupied cells (they have no equation)."""
+    def pin_unsupported(
+        self, occupied: np.ndarray, zone_cells: list[np.ndarray] | None = None
+    ) -> list[dolfinx.fem.DirichletBC]:
+        """Zero conditions on every dof outside the occupied cells (they have no equation).
+
+        Args:
+            occupied: The cells that hold points.
+            zone_cells: With one θ per zone, the cells that hold each zone's points:
+                a zone's θ has no equation at the nodes none of its points reaches.
+        """
+        g = self.W.mesh.geometry.dim
+        if self.zones > 1 and (zone_cells is None or len(zone_cells) != self.zones):
+            raise ValueError(
+                f"pin_unsupported: NB-VA keeps {self.zones} zones' θ, give their cells"
+            )
         bcs = []
-        for sub, collapsed, to_parent, zero in self._pinnable:
+        for k, (sub, collapsed, to_parent, zero) in enumerate(self._pinnable):
+            cells = zone_cells[k - g] if self.zones > 1 and k >= g else occupied
             # A node on a rank boundary is supported if a cell of either rank is occupied.
-            supported = touched_nodes(collapsed, occupied)
+            supported = touched_nodes(collapsed, cells)
             bcs.append(dolfinx.fem.dirichletbc(zero, to_parent[~supported], sub))
         return bcs
 

@@ -200,7 +200,13 @@ class GridConditions:
         """Whether any condition or load acts on the grid."""
         return bool(self.dirichlet or self.tractions or self.body_force is not None)
 
-    def impose(self, occupied: np.ndarray, t_old: float, t_new: float) -> list:
+    def impose(
+        self,
+        occupied: np.ndarray,
+        t_old: float,
+        t_new: float,
+        zone_cells: list[np.ndarray] | None = None,
+    ) -> list:
         """The step's boundary conditions, with the loads set to their values at ``t_new``.
 
         Args:
@@ -208,6 +214,8 @@ class GridConditions:
                 get no equation, so they are pinned.
             t_old: The time the step starts from (s).
             t_new: The time it ends at (s).
+            zone_cells: The cells of each zone's points, where NB-VA keeps one θ per
+                zone (:meth:`~fe_mpm.formulations.GridFields.pin_unsupported`).
 
         Returns:
             The Dirichlet conditions on the increment t_old → t_new, then the pins.
@@ -232,7 +240,7 @@ class GridConditions:
                 "Simulation", f"body_force_scale(t = {t_new:g})", self._body_force_scale(t_new)
             )
             self.body_force.value = self._body_force_value * factor
-        pins = self.fields.pin_unsupported(occupied)
+        pins = self.fields.pin_unsupported(occupied, zone_cells)
         return [bc for _, _, bc in self.dirichlet] + pins
 
     def check_loaded_facets(self, occupied: np.ndarray, t_new: float) -> None:

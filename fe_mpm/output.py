@@ -77,7 +77,7 @@ class SimulationOutput:
         if not self.fields.spec.mixed:
             return [dolfinx.fem.Function(W, name="du")], [slice(None)]
         U, u_map = collapse(W.sub(0))
-        Q, p_map = self.fields.Q
+        Q, p_map = self.fields.second  # p, or θ (one per zone where NB-VA keeps several)
         name = "p" if self.fields.spec.pressure else "volume_change"
         return [dolfinx.fem.Function(U, name="du"), dolfinx.fem.Function(Q, name=name)], [
             u_map,

@@ -327,6 +327,8 @@ class Simulation:
             points.history.pop(MATERIAL, None)
         #: Whether the law keeps internal variables (plasticity), besides a point's law.
         self._plastic = bool(set(material.history) - {MATERIAL})
+        #: The number of laws: NB-VA averages each zone's volume change on its own.
+        self._zones = len(material.laws) if MATERIAL in material.history else 1
         self.mesh, self.points, self.material = mesh, points, material
         self.formulation, self.gdim, self.dynamic = formulation, mesh.geometry.dim, bool(dynamic)
         if line_search == "auto":
@@ -483,7 +485,9 @@ class Simulation:
             self.tracking = PointTracking(self.tracker, self._given["points_leaving"])
         else:
             self.tracking.tracker = self.tracker
-        self.fields = GridFields(mesh, self.spec, start_pressure=self._pressure_by_parts)
+        self.fields = GridFields(
+            mesh, self.spec, start_pressure=self._pressure_by_parts, zones=self._zones
+        )
         self.dynamics = None
         if self.dynamic:
             damping, bossak_alpha, petsc_options, passes = self._given["dynamics"]
@@ -821,7 +825,7 @@ class Simulation:
                 self.conditions, self._boundary, layout.occupied, self.walls
             )
         self.conditions.check_loaded_facets(layout.occupied, t_new)
-        bcs = self.conditions.impose(layout.occupied, self.t, t_new)
+        bcs = self.conditions.impose(layout.occupied, self.t, t_new, self._zone_cells(layout))
         self.walls.start_step(layout.occupied, self.points.x, self.points.volume)
         tied = None  # cells the ghost penalty ties to a neighbour need fewer points
         if self.ghost is not None:
@@ -899,6 +903,13 @@ class Simulation:
         return result
 
     # -- the phases of a step --------------------------------------------------
+
+    def _zone_cells(self, layout: SlotLayout) -> list[np.ndarray] | None:
+        """The cells of each zone's points (or pieces) where NB-VA keeps a θ per zone."""
+        if self.fields.zones == 1:
+            return None
+        label = np.rint(self.points.history[MATERIAL]).astype(np.int64)
+        return [np.unique(layout.cell[label == z]) for z in range(self.fields.zones)]
 
     def _track(self, step: int = 0, t: float = 0.0, hold: bool = False) -> SlotLayout:
         t0 = time.perf_counter()

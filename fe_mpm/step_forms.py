@@ -27,6 +27,7 @@ from fe_mpm.materials.linearised import MixedLinearisation
 from fe_mpm.materials.mixed_return import MixedReturnResult
 from fe_mpm.materials.protocol import PointwiseLaw
 from fe_mpm.materials.runtime import with_runtime_parameters
+from fe_mpm.materials.zones import MATERIAL, indicator
 from fe_mpm.packing import BoundForm, PointExpression
 from fe_mpm.particles import MaterialPoints
 from fe_mpm.quadrature import BOUNDARY_POINTS, OCCUPIED, MaterialPointQuadrature, SlotLayout
@@ -162,8 +163,13 @@ class StepForms:
             self.dF_shift = q.function((g, g), "dF_shift")
             self.dF_at_points = PointExpression(self.dF_grid, q)
             self.dF = self.dF_grid + self.dF_shift
+        #: χ_z of each zone where NB-VA averages every zone on its own, else None.
+        self.zones = None
         if spec.volume_average:
-            theta = q.at_points(fields.volume_change)
+            if fields.zones > 1:
+                label = self.history[MATERIAL]
+                self.zones = [indicator(label, z) for z in range(fields.zones)]
+            theta = volume_average.volume_change_at_points(q, fields.volume_change, self.zones)
             self.dF = volume_average.averaged_increment(self.dF_grid, theta)
         # The points' second moments C_p: the lumped mass and the average's lumping.
         moments = lumped or spec.volume_average
@@ -304,7 +310,7 @@ class StepForms:
         )
         if averaged:
             R += volume_average.projection_residual(
-                q, self.dF_grid, fields.volume_change, w_theta, self.second_moment
+                q, self.dF_grid, fields.volume_change, w_theta, self.second_moment, self.zones
             )
         if self.interior is not None:
             R += loads_form.start_pressure_gradient_work(w, q, self.interior, fields.p_start)

@@ -46,6 +46,11 @@ from fe_mpm.materials.state import HistoryField, PointState
 MATERIAL = "material"
 
 
+def indicator(label: ufl.core.expr.Expr, k: int) -> ufl.core.expr.Expr:
+    """χ_k: 1 at the points labelled ``k`` (the ``"material"`` slot field), 0 elsewhere."""
+    return ufl.conditional(ufl.lt(abs(label - k), 0.5), 1.0, 0.0)
+
+
 class MaterialZones:
     """Several laws as one: a point labelled k follows ``laws[k]``.
 
@@ -143,7 +148,7 @@ class MaterialZones:
         label = state.history[MATERIAL]
         out = []
         for k, law in enumerate(self.laws):
-            chi = ufl.conditional(ufl.lt(abs(label - k), 0.5), 1.0, 0.0)
+            chi = indicator(label, k)
             own = {name: state.history[name] for name in law.history}
             sub = PointState(
                 state.dF, own, state.linearisation, state.mean_stress, state.step_length
