@@ -460,6 +460,27 @@ def take_density(material, points: MaterialPoints) -> None:
             )
 
 
+def check_weight_of_initial_stress(
+    comm, points: MaterialPoints, stressed: bool, body_force
+) -> None:
+    """Refuse an initial stress under a body force on points that weigh nothing real.
+
+    Points seeded without a density, whose law gives none either, carry seed's
+    placeholder ρ₀ = 1 kg/m³. A stress at rest built for a real density (say
+    ``geostatic_stress(..., density=2000.0)``) then pushes a layer that weighs a
+    two-thousandth of what it holds up, and the layer springs up in its first
+    step without a word (a helper following the docs' example, 2026-12-06).
+    """
+    placeholder = stressed and body_force is not None and not points.density_given
+    if parallel.any_rank(comm, placeholder):  # one rank may hold no points
+        raise ValueError(
+            "Simulation: initial_stress under a body force needs the points' density, "
+            "but they have none (seed's placeholder, 1 kg/m³), so they would not weigh "
+            "what the stress holds up. Give it with seed(..., density=...) or the law's "
+            "density=...; geostatic_stress(..., density=...) only builds the stress."
+        )
+
+
 #: A rigid mode whose stiffness from the supports is below this share of the largest
 #: is free. The rows are O(1) (unit directions, rotations scaled by the material's
 #: size), so the largest is about the number of rows N and round-off leaves a free

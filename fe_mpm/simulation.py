@@ -314,6 +314,9 @@ class Simulation:
         )
         model_checks.check_law(material, self.spec, formulation)
         model_checks.take_density(material, points)
+        model_checks.check_weight_of_initial_stress(
+            mesh.comm, points, initial_stress is not None, body_force
+        )
         self._started_stressed = initial_stress is not None
         if initial_stress is not None:  # refused on every rank if on one
             parallel.check_together(
