@@ -475,8 +475,9 @@ class PointTraction:
     material points (Kratos MPM's particle line loads), so the load follows the
     body. The step adds ``−Σ_b w_b t(t)·δu(x_b)`` to the residual: with the points
     at the midpoints of boundary facets and ``w_b`` their lengths, this is exactly
-    the grid traction's integral while the body still lies on those facets
-    (``meshes.facet_points`` places them so).
+    the grid traction's integral for a P1 displacement while the body still lies on
+    those facets (``meshes.facet_points`` places them so); a P2 displacement needs
+    ``facet_points(..., degree=2)``, and points one to a cell there are warned about.
 
     Args:
         name: Name of the load; the force it applies is reported in

@@ -37,6 +37,13 @@ LOAD_MIN_FILL = 0.1
 #: 2–6 % of its points.
 P2_FAR_READ = 0.2
 P2_FAR_SHARE = 0.25
+#: A load on a P2 displacement whose points lie one to a cell in more than this share
+#: of the cells they load is warned about (once a run): a quadratic vertex function
+#: vanishes at an edge's midpoint, so ``facet_points``' default puts a facet's whole
+#: load on its middle node. Measured 2026-12-06 (a helper's scene): a block under a
+#: uniform PointTraction on its top, midpoints, ``"up-p2p1"``: σ_yy off by up to 39 %,
+#: σ_xx up to 0.32 of the load; with ``degree=2`` (two points an edge) exact.
+P2_SPARSE_SHARE = 0.5
 
 
 class BoundaryPoints:
@@ -176,6 +183,7 @@ class BoundaryPointStep:
         self._gap = np.zeros((0, points.x.shape[1]))
         self._warned = False
         self._warned_far = False
+        self._checked_rule = degree == 1  # P2 loads: their points per facet, once
 
     @classmethod
     def of(
@@ -252,6 +260,9 @@ class BoundaryPointStep:
         cells = cells[self._active]
         if self.degree == 2 and not self._warned_far:
             self._warn_far_reading(cells, t_new)
+        if not self._checked_rule:
+            self._checked_rule = True
+            self._warn_sparse_loads(cells)
         self._nslot = slot_count(np.bincount(cells), self._nslot, tracker.mesh.comm)
         self.layout = SlotLayout.from_cells(cells, self._nslot)
         return self.layout
@@ -282,6 +293,35 @@ class BoundaryPointStep:
                 "that hold material, where a quadratic field bends away from the body: "
                 "the hold on it may be lost (docs/limitations.md). Fit the grid's lines "
                 "to the edges these points hold, or take a P1 formulation."
+            )
+
+    def _warn_sparse_loads(self, cells: np.ndarray) -> None:
+        """Warn where a load on a P2 displacement has about one point per facet.
+
+        Args:
+            cells: The active points' cells on this rank, in the order of ``_active``.
+        """
+        pp, comm = self.points, self.tracker.mesh.comm
+        g = pp.x.shape[1]
+        active = np.flatnonzero(self._active)
+        n = len(pp.conditions)
+        sparse, loaded_cells = np.zeros(n, dtype=np.int64), np.zeros(n, dtype=np.int64)
+        for k in np.unique(pp.owner[active[pp.loaded[active]]]):
+            counts = np.bincount(cells[pp.owner[active] == k])
+            counts = counts[counts > 0]
+            sparse[k], loaded_cells[k] = np.count_nonzero(counts < g), counts.size
+        sparse, loaded_cells = parallel.total(comm, sparse), parallel.total(comm, loaded_cells)
+        share = np.divide(sparse, loaded_cells, out=np.zeros(n), where=loaded_cells > 0)
+        if np.any(share > P2_SPARSE_SHARE):
+            k = int(np.argmax(share))
+            condition = pp.conditions[k]
+            warn(
+                f"{type(condition).__name__} {condition.name!r}: {sparse[k]} of the "
+                f"{loaded_cells[k]} cells it loads hold fewer than {g} of its points. A P2 "
+                f"displacement needs {g} points on each facet for the load to reach the "
+                "facet's nodes as a grid traction would: one at a facet's midpoint puts "
+                "the facet's whole load on its middle node. Place them with "
+                "meshes.facet_points(mesh, facets, degree=2)."
             )
 
     def _active_anywhere(self) -> np.ndarray:

@@ -64,7 +64,8 @@ class NewtonSolver:
         u: The unknown; its vector is the SNES solution.
         sparsity_form: A bilinear form over all cells, to build the matrix once; its
             coefficients must hold finite values (they only fill the pattern).
-        prefix: PETSc options prefix, e.g. ``"fe_mpm_u_"``; ``-fe_mpm_u_snes_monitor`` works.
+        prefix: PETSc options prefix, e.g. ``"fe_mpm_u_"``: ``PETSC_OPTIONS=-fe_mpm_u_snes_monitor``
+            in the environment works (PETSc is started without the script's arguments).
         petsc_options: Overrides of :data:`NEWTON_OPTIONS` and the linear solver's options.
         timings: Dict to which assembly and total solve seconds are added.
         linear_solver: A name of :data:`LINEAR_SOLVERS`.
