@@ -832,7 +832,7 @@ class Simulation:
         self.walls.start_step(layout.occupied, self.points.x, self.points.volume)
         tied = None  # cells the ghost penalty ties to a neighbour need fewer points
         if self.ghost is not None:
-            need, volume = self.spec.min_points_per_cell, self.points.volume
+            need, volume = self.spec.min_points_per_cell(self.gdim), self.points.volume
             self.ghost.update(layout.cell, volume, self.tracker.volumes, bcs, need)
             tied = self.ghost.tied_cells()
         check_points_per_cell(

@@ -290,8 +290,8 @@ def check_points_per_cell(
 ) -> None:
     """Refuse a layout with fewer points in an occupied cell than the formulation needs.
 
-    ``spec.min_points_per_cell`` is 3 for P2/P1 (the rank of the P2 strain) and 1
-    otherwise; ``centroids`` (cells, g) locate the cell named in the message. Cells
+    ``spec.min_points_per_cell`` is 3 for P2/P1 on triangles and 4 on tetrahedra (the
+    rank of the P2 strain) and 1 otherwise; ``centroids`` (cells, g) locate the cell named in the message. Cells
     in ``tied`` (those the ghost penalty ties to a neighbour, :mod:`fe_mpm.ghost`)
     may hold fewer. Collective over ``comm``: every rank raises when one finds such a
     cell.
@@ -302,7 +302,7 @@ def check_points_per_cell(
             the singular tangent, to a wrong answer (Cook's membrane over 20 steps: 0.17
             for 1.30), so the run stops.
     """
-    need = spec.min_points_per_cell
+    need = spec.min_points_per_cell(centroids.shape[1])
     if need <= 1:
         return
     counts = np.bincount(layout.cell)[layout.occupied]

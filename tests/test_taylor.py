@@ -28,7 +28,7 @@ def _simulation(dim, formulation, seed=3, material=None):
         mesh = rectangle_mesh((0.0, 0.0, 0.0), (2.0, 1.0, 1.0), (3, 2, 2))
     ncells = mesh.topology.index_map(dim).size_local
     counts = rng.integers(0, 4, size=ncells)
-    counts[counts > 0] += FORMULATIONS[formulation].min_points_per_cell - 1
+    counts[counts > 0] += FORMULATIONS[formulation].min_points_per_cell(dim) - 1
     pts, _ = random_points(mesh, rng, counts, F_spread=0.1)
     traction = np.zeros(dim)
     traction[1] = 0.3
