@@ -291,7 +291,8 @@ def check_points_per_cell(
     """Refuse a layout with fewer points in an occupied cell than the formulation needs.
 
     ``spec.min_points_per_cell`` is 3 for P2/P1 on triangles and 4 on tetrahedra (the
-    rank of the P2 strain) and 1 otherwise; ``centroids`` (cells, g) locate the cell named in the message. Cells
+    rank of the P2 strain) and 1 otherwise; ``centroids`` (cells, g) locate the cell
+    named in the message. Cells
     in ``tied`` (those the ghost penalty ties to a neighbour, :mod:`fe_mpm.ghost`)
     may hold fewer. Collective over ``comm``: every rank raises when one finds such a
     cell.
