@@ -103,17 +103,28 @@ def check_dynamics(
 
 
 def check_projection_passes(
-    passes: int, dynamic: bool, mass: str, walls, bossak_alpha: float = 0.0
+    passes: int,
+    dynamic: bool,
+    mass: str,
+    walls,
+    bossak_alpha: float = 0.0,
+    supports: Sequence = (),
 ) -> int:
     """Passes of the velocity projection: an int ≥ 1, more than one only in dynamics.
 
-    More than one needs the consistent mass, and with rigid walls Bossak's
-    dissipation. The consistent projection, unlike the mass-weighted one, does not
-    smooth a jump of the velocity; at a contact the trapezoidal rule then leaves the
-    contact's unresolved modes ringing (an elastic bar hitting a wall at v₀, eight
-    passes: its push swings up to 69 % off ρ c v₀ and it leaves at 1.012 v₀; a block
-    held by friction on a slope walks down). Bossak's α_B damps them: with −0.1 the
-    push holds ρ c v₀ to 1.3 %, with −0.3 to 0.1 %, and the block stays.
+    More than one needs the consistent mass, and with rigid walls or grid supports
+    that move (a ``Dirichlet`` among ``supports`` whose value or profile is a
+    function of time) Bossak's dissipation. The consistent projection, unlike the
+    mass-weighted one, does not smooth a jump of the velocity; at a contact the
+    trapezoidal rule then leaves the contact's unresolved modes ringing (an elastic
+    bar hitting a wall at v₀, eight passes: its push swings up to 69 % off ρ c v₀ and
+    it leaves at 1.012 v₀; a block held by friction on a slope walks down). Bossak's
+    α_B damps them: with −0.1 the push holds ρ c v₀ to 1.3 %, with −0.3 to 0.1 %, and
+    the block stays. A plate set moving drives its body as a wall does: water started
+    by a plate at U (Couette, eight passes, α_B = 0) still swung by ±5 μU/h at the
+    fixed wall after 200 steps, where it should carry 0.986 μU/h, and its points moved
+    across the flow at 10–20 % of U (a helper's scene, 2026-12-06); with α_B = −0.3
+    the passes gave the best velocities of any setting.
     """
     passes = check_int("Simulation", "projection_passes", passes, lo=1)
     if passes == 1:
@@ -130,6 +141,15 @@ def check_projection_passes(
             "Simulation: projection_passes > 1 with rigid walls needs Bossak's "
             "dissipation, bossak_alpha in [-1/3, 0) (e.g. -0.3): with the trapezoidal "
             "rule a contact rings and gains energy; or use projection_passes=1"
+        )
+    moving = [s for s in supports if callable(s.value) or s.profile is not None]
+    if moving and bossak_alpha == 0.0:
+        raise ValueError(
+            "Simulation: projection_passes > 1 with a support that moves (a Dirichlet "
+            "whose value or profile is a function of time) needs Bossak's dissipation, "
+            "bossak_alpha in [-1/3, 0) "
+            "(e.g. -0.3): with the trapezoidal rule the body it drives rings, as at a "
+            "contact; or use projection_passes=1"
         )
     return passes
 

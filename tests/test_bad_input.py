@@ -191,6 +191,25 @@ def test_other_bad_values():
     fe_mpm.Simulation(  # with Bossak's dissipation they may
         mesh, points, material, dynamic=True, walls=[floor], projection_passes=4, bossak_alpha=-0.3
     )
+    # A support that moves drives the body as a wall would (water set moving by a plate
+    # rang under eight passes and the trapezoidal rule); one held still does not.
+    base = lambda x: np.isclose(x[1], 0.0)  # noqa: E731
+    plate = fe_mpm.Dirichlet(base, value=lambda t: (0.01 * t, 0.0))
+    sheared = fe_mpm.Dirichlet(base, profile=lambda x, t: np.vstack([0.01 * t * x[0], 0 * x[0]]))
+    for moving in ({"dirichlet": [plate]}, {"dirichlet": [sheared]}):
+        with pytest.raises(ValueError, match=r"projection_passes > 1 with a support that moves"):
+            fe_mpm.Simulation(mesh, points, material, dynamic=True, projection_passes=4, **moving)
+        fe_mpm.Simulation(
+            mesh, points, material, dynamic=True, projection_passes=4, bossak_alpha=-0.1, **moving
+        )
+    fe_mpm.Simulation(
+        mesh,
+        points,
+        material,
+        dynamic=True,
+        projection_passes=4,
+        dirichlet=[fe_mpm.Dirichlet(base)],
+    )
     with pytest.raises(ValueError, match="unknown fallback_line_search 'newton'"):
         fe_mpm.Simulation(mesh, points, material, fallback_line_search="newton")
     with pytest.raises(ValueError, match="unknown line_search 'newton'; choose one of auto, basic"):
