@@ -224,7 +224,9 @@ class PointTracking:
                     first + ". The grid does not move with the body: leave empty cells "
                     "wherever it may go (a face on the grid's edge bulges out of it unless "
                     "a Dirichlet condition holds it), or pass points_leaving='drop' to "
-                    "remove what flies off."
+                    "remove what flies off. Where a condition holds that edge, the step "
+                    "moved the nodes beside it by more than their cells, turning those "
+                    "cells over: take shorter steps."
                 ),
             )
         warn(first + "; dropped.")

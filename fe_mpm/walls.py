@@ -506,6 +506,7 @@ def plot_wall_forces(history: Sequence, path: str | Path, pyplot) -> Path:
     """
     fig, (over_time, along) = pyplot.subplots(1, 2, figsize=(10, 3.6))
     t = [report.t for report in history]
+    axes = set()
     for name in history[-1].walls:
         forces = [report.walls[name] for report in history]
         over_time.plot(t, [f.normal for f in forces], label=f"{name}: push")
@@ -518,9 +519,11 @@ def plot_wall_forces(history: Sequence, path: str | Path, pyplot) -> Path:
             push = -last.nodal[order] @ last.direction
             along_wall = np.linalg.norm(last.nodal[order] + np.outer(push, last.direction), axis=1)
             x = last.nodes[order, axis]
-            along.plot(x, push, "o-", ms=3, label=f"{name}: push")
-            along.plot(x, along_wall, "s--", ms=3, label=f"{name}: friction")
-            along.set_xlabel(f"{'xyz'[axis]} (m)")
+            # Walls that face different ways run along different axes: each is named.
+            along.plot(x, push, "o", ms=3, label=f"{name}: push, along {'xyz'[axis]}")
+            along.plot(x, along_wall, "s", ms=3, mfc="none", label=f"{name}: friction")
+            axes.add("xyz"[axis])
+    along.set_xlabel(" or ".join(sorted(axes)) + " (m), along each wall's face")
     over_time.set_xlabel("t (s)")
     over_time.set_ylabel("force on the body (N; N/m in 2D)")
     over_time.legend(fontsize=7)
