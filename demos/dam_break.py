@@ -293,7 +293,8 @@ if not args.no_output and rank0:
 # ## Check against the reference
 #
 # Measured (2026-12-05, u-p without PPP, the starting pressure by parts, the
-# defaults: 2352 points, 186 steps, 3.0 Newton iterations per step, 5 s): the front
+# defaults: 2352 points, 186 steps, 3.0 Newton iterations per step, 5 s; re-run on
+# 2026-12-06: 189 steps, the height −4.6 to +0.6 %): the front
 # runs −3.9 to +15.5 % ahead of the film (behind only at its first point, T = 0.41),
 # the height lies −4.5 to +0.3 % about it, as Mast found with averaging ("slightly
 # faster than observed"); with Δt halved, −3.9 to +15.2 % and −4.7 to +0.5 %. With

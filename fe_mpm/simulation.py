@@ -148,7 +148,8 @@ class Simulation:
             or 0 for a law that keeps no shape (``NewtonianFluid``: PPP resists the
             hydrostatic gradient, see :mod:`fe_mpm.materials.fluid`).
         dynamic: Implicit Newmark dynamics (β = 1/4, γ = 1/2 unless ``bossak_alpha``
-            is set); False (default): static.
+            is set), with a P1 displacement ("up-p2p1" is refused); False (default):
+            static.
         mass: ``"consistent"`` (default, as the thesis) or ``"lumped"`` (dynamic only).
         damping: Mass-proportional Rayleigh damping α_R ≥ 0 (1/s), dynamic only;
             default 0 (the thesis uses 1.5 for the granular collapse).
