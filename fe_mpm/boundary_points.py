@@ -7,7 +7,13 @@ from collections.abc import Sequence
 import numpy as np
 
 from fe_mpm import parallel
-from fe_mpm.boundary import SNAP_REACH, PointDirichlet, PointPressure, PointTraction
+from fe_mpm.boundary import (
+    SNAP_REACH,
+    PointDirichlet,
+    PointPressure,
+    PointTraction,
+    face_vectors,
+)
 from fe_mpm.checks import check_range
 from fe_mpm.errors import PointsOutsideError, warn
 from fe_mpm.quadrature import SlotLayout, slot_count
@@ -65,6 +71,12 @@ class BoundaryPoints:
         pressed: Whether each point carries a pressure (N,), bool.
         area: The body's face each pressure point carries, ``weight · normal``, as it
             is now (N, g), m (2D) or m² (3D); 0 on the other points.
+        corners: The corners of each pressure point's facet piece as they are now
+            (N, g, g), m, where its :class:`~fe_mpm.boundary.PointPressure` gave them;
+            NaN elsewhere.
+        framed: Whether each point's area is read from its corners (N,), bool.
+        face_scale: The share of its piece's area vector each framed point carries,
+            signed so that it points along the given normal (N,); 0 elsewhere.
     """
 
     def __init__(
@@ -72,6 +84,7 @@ class BoundaryPoints:
     ):
         self.conditions = list(conditions)
         xs, weights, owners, stiffness, reaches, areas = [], [], [], [], [], []
+        corners, scales = [], []
         for i, c in enumerate(self.conditions):
             kind = type(c).__name__
             x = np.asarray(c.x, dtype=np.float64)
@@ -88,7 +101,18 @@ class BoundaryPoints:
             xs.append(x)
             weights.append(w)
             owners.append(np.full(x.shape[0], i))
-            areas.append(w[:, None] * c.normal if pressure else np.zeros((x.shape[0], gdim)))
+            framed = pressure and c.corners is not None
+            if framed:  # the area is its share of the piece, along the given normal
+                vectors = face_vectors(c.corners)
+                sign = np.sign(np.einsum("ni,ni->n", vectors, c.normal))
+                scale = sign * w / np.linalg.norm(vectors, axis=1)
+                corners.append(np.asarray(c.corners, dtype=np.float64))
+                scales.append(scale)
+                areas.append(scale[:, None] * vectors)
+            else:
+                corners.append(np.full((x.shape[0], gdim, gdim), np.nan))
+                scales.append(np.zeros(x.shape[0]))
+                areas.append(w[:, None] * c.normal if pressure else np.zeros((x.shape[0], gdim)))
             if isinstance(c, PointTraction | PointPressure):
                 stiffness.append(np.zeros((x.shape[0], gdim)))
                 reaches.append(np.full(x.shape[0], SNAP_REACH))
@@ -112,6 +136,9 @@ class BoundaryPoints:
         self.pressed = np.array([pressure for _, pressure in kinds])[self.owner]
         self.loaded = np.array([traction or pressure for traction, pressure in kinds])[self.owner]
         self.area = np.vstack(areas)
+        self.corners = np.concatenate(corners)
+        self.face_scale = np.concatenate(scales)
+        self.framed = self.face_scale != 0.0
 
     def __len__(self) -> int:
         return self.x.shape[0]
@@ -221,6 +248,7 @@ class BoundaryPointStep:
         pp, tracker = self.points, self.tracker
         occupied = np.zeros(tracker.num_cells, dtype=bool)
         occupied[occupied_cells] = True
+        self._occupied = occupied  # where the step's faces read the grid (convect)
         # The body's surface lies between its points, often in a cell whose points
         # have moved on: read the field of an occupied neighbour, up to half a cell out.
         # Every rank holds every boundary point; each takes part on one rank only.
@@ -363,8 +391,16 @@ class BoundaryPointStep:
             x[loaded] = self.tracker.pulled_into(x[loaded], self.layout.cell[loaded])
         return x
 
-    def convect(self, forms, t_new: float) -> dict[str, np.ndarray]:
-        """Move the points with the grid solution; return each condition's force (g,)."""
+    def convect(self, forms, t_new: float, displacement_at=None) -> dict[str, np.ndarray]:
+        """Move the points with the grid solution; return each condition's force (g,).
+
+        Args:
+            forms: The step's forms (the boundary points' slot expressions).
+            t_new: The step's end time (s).
+            displacement_at: ``(cells, bary) -> Δu`` (n, g) of the step's solution, to
+                move the corners of pressure points that have them; None: no corners
+                move (their areas follow Nanson's rule alone).
+        """
         pp, active, comm = self.points, self._active, self.tracker.mesh.comm
         du = forms.du_at_boundary.evaluate(self.layout)
         if forms.boundary_pressure is not None:
@@ -375,9 +411,34 @@ class BoundaryPointStep:
         moved[active] = du
         moved = parallel.total(comm, moved)
         anywhere = self._active_anywhere()
+        if displacement_at is not None and np.any(pp.framed & anywhere):
+            self._move_corners(displacement_at, moved, pp.framed & anywhere)
         pp.x[anywhere] += moved[anywhere]
         pp.x[~anywhere] = pp.targets(t_new)[~anywhere]  # outside the material: follow the target
         return {name: parallel.total(comm, force) for name, force in forces.items()}
+
+    def _move_corners(self, displacement_at, moved: np.ndarray, rows: np.ndarray) -> None:
+        """Move the pieces' corners of ``rows`` with the grid and read their areas off them.
+
+        Each corner reads the step's displacement in the occupied cell that holds it
+        (up to ``SNAP_REACH`` outside, as a load point does), on the one rank that
+        claims it; a corner no occupied cell reaches moves with its point (``moved``).
+        Collective.
+        """
+        pp, tracker, comm = self.points, self.tracker, self.tracker.mesh.comm
+        g = pp.x.shape[1]
+        rows = np.flatnonzero(rows)
+        at = pp.corners[rows].reshape(-1, g)
+        cells, found = tracker.claim(at, self._occupied, tol=SNAP_REACH)
+        shift = np.zeros_like(at)
+        mine = cells >= 0
+        if np.any(mine):
+            shift[mine] = displacement_at(cells[mine], tracker.barycentric(at[mine], cells[mine]))
+        shift = parallel.total(comm, shift)
+        alone = ~found  # read where the point is instead
+        shift[alone] = np.repeat(moved[rows], g, axis=0)[alone]
+        pp.corners[rows] += shift.reshape(-1, g, g)
+        pp.area[rows] = pp.face_scale[rows, None] * face_vectors(pp.corners[rows])
 
     def _deform_faces(self, forms) -> None:
         """Each pressure point's face by Nanson's rule, ``a ← cof(ΔF) a``, on every rank."""

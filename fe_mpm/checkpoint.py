@@ -132,6 +132,7 @@ def write(sim, directory: str | Path) -> Path:
             if sim._boundary is not None:
                 shared["boundary_x"] = sim._boundary.points.x
                 shared["boundary_area"] = sim._boundary.points.area
+                shared["boundary_corners"] = sim._boundary.points.corners
             state = {
                 "format": FORMAT,
                 "scene": fingerprint,
@@ -227,6 +228,8 @@ def read(sim, path: str | Path) -> None:
         sim._boundary.points.x[:] = shared["boundary_x"]
         if "boundary_area" in shared:  # the faces of PointPressure (absent before them)
             sim._boundary.points.area[:] = shared["boundary_area"]
+        if "boundary_corners" in shared:  # and their corners (absent before 2026-12-06)
+            sim._boundary.points.corners[:] = shared["boundary_corners"]
         sim._boundary._nslot = state["boundary_slots"]
     sim.t, sim.step_number = float(state["t"]), int(state["step"])
     sim.tracking._nslot = state["slots"]

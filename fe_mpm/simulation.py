@@ -795,7 +795,7 @@ class Simulation:
         t0 = time.perf_counter()
         leaving = self._update_points(forms, layout, k, t_new, dt)
         if self._boundary is not None:
-            reactions.update(self._boundary.convect(forms, t_new))
+            reactions.update(self._boundary.convect(forms, t_new, self.fields.displacement_at))
         walls = self.walls.finish_step()
         reactions.update({name: force.total for name, force in walls.items()})
         self._add_time("update", t0)

@@ -5,6 +5,7 @@ import math
 import numpy as np
 import pytest
 
+import fe_mpm
 from fe_mpm import meshes
 from fe_mpm._dolfinx import dolfinx
 from fe_mpm.references import lube_height, lube_runout, lube_time
@@ -191,6 +192,17 @@ def test_facet_points_cut_each_facet_into_equal_pieces(dim, degree):
         assert np.allclose(misses, 0.0, atol=1e-15)
     else:
         assert np.allclose(np.array(misses) * np.array([1, 4, 9]), misses[0], rtol=1e-12)
+    # Each point's piece: its points share the piece's measure, and the point lies on it.
+    for k in (1, 2):
+        x, w, corners = meshes.facet_points(mesh, top, degree, subdivisions=k, corners=True)
+        assert np.array_equal(x, meshes.facet_points(mesh, top, degree, subdivisions=k)[0])
+        measure = np.linalg.norm(fe_mpm.boundary.face_vectors(corners), axis=1)
+        np.testing.assert_allclose(w, measure / points_per_piece, rtol=1e-14)
+        for point, piece in zip(x, corners, strict=True):
+            edges = (piece[1:] - piece[0]).T  # (dim, dim - 1)
+            along = np.linalg.lstsq(edges, point - piece[0], rcond=None)[0]
+            assert along.min() > 0.0 and along.sum() < 1.0
+            np.testing.assert_allclose(edges @ along, point - piece[0], atol=1e-14)
     with pytest.raises(ValueError, match="subdivisions"):
         meshes.facet_points(mesh, top, degree, subdivisions=0)
 

@@ -10,8 +10,12 @@ from fe_mpm.checks import check_int
 
 
 def facet_points(
-    mesh: dolfinx.mesh.Mesh, facets: np.ndarray, degree: int = 1, subdivisions: int = 1
-) -> tuple[np.ndarray, np.ndarray]:
+    mesh: dolfinx.mesh.Mesh,
+    facets: np.ndarray,
+    degree: int = 1,
+    subdivisions: int = 1,
+    corners: bool = False,
+) -> tuple[np.ndarray, ...]:
     """Quadrature points of straight facets and their weights.
 
     With ``degree=1``, one point per facet at its midpoint, weighted by its length
@@ -33,6 +37,9 @@ def facet_points(
         facets: Local facet indices, e.g. ``facet_tags.find(tag)``, shape (m,); ghost
             facets are left to the rank that owns them.
         degree: 1 or 2, the degree of the displacement the points load.
+        corners: Also return the corners of the facet piece each point stands for:
+            a :class:`~fe_mpm.boundary.PointPressure` given them follows its face by
+            where those corners move, not by the ΔF of one cell.
         subdivisions: Each facet is cut into this many equal pieces along each of
             its edges (k pieces of an edge, k² triangles of a triangle), each with
             the rule of ``degree``: more points where the face will slide along the
@@ -45,11 +52,13 @@ def facet_points(
 
     Returns:
         ``(x, weight)``: the points (m q, g) in m, facet by facet, and their weights
-        (m q,) in m (2D) or m² (3D), with q = 1 or the rule's points per facet.
+        (m q,) in m (2D) or m² (3D), with q = 1 or the rule's points per facet; with
+        ``corners``, also each point's piece's corners (m q, g, g) in m.
     """
     if degree not in (1, 2):
         raise ValueError(f"facet_points: degree must be 1 or 2, got {degree!r}")
     check_int("facet_points", "subdivisions", subdivisions, lo=1)
+    want_corners = bool(corners)
     g = mesh.geometry.dim
     fdim = mesh.topology.dim - 1
     # Facets found with dolfinx.mesh.locate_entities exist before their connectivity.
@@ -65,7 +74,8 @@ def facet_points(
     else:
         weight = 0.5 * np.linalg.norm(np.cross(edges[:, 0], edges[:, 1]), axis=1)
     if degree == 1 and subdivisions == 1:
-        return _from_every_rank(mesh.comm, corners.mean(axis=1), weight)  # as always, to the bit
+        x, weight = _from_every_rank(mesh.comm, corners.mean(axis=1), weight)  # to the bit
+        return (x, weight, parallel.gathered(mesh.comm, corners)) if want_corners else (x, weight)
     if degree == 1:
         rule = np.full((1, fdim + 1), 1.0 / (fdim + 1))
     elif fdim == 1:
@@ -76,7 +86,13 @@ def facet_points(
     pieces = _equal_pieces(fdim, int(subdivisions))  # (pieces, fdim + 1, fdim + 1)
     bary = np.einsum("qv,pvw->pqw", rule, pieces).reshape(-1, fdim + 1)
     x = np.einsum("qv,mvg->mqg", bary, corners).reshape(-1, g)
-    return _from_every_rank(mesh.comm, x, np.repeat(weight / len(bary), len(bary)))
+    x, weight = _from_every_rank(mesh.comm, x, np.repeat(weight / len(bary), len(bary)))
+    if not want_corners:
+        return x, weight
+    # Each piece's corners, once for every point of the rule on it (points: piece-major).
+    pieces_at = np.einsum("pvw,mwg->mpvg", pieces, corners)
+    per_point = np.repeat(pieces_at, len(rule), axis=1).reshape(-1, fdim + 1, g)
+    return x, weight, parallel.gathered(mesh.comm, per_point)
 
 
 def _equal_pieces(fdim: int, k: int) -> np.ndarray:
