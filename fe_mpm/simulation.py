@@ -720,11 +720,20 @@ class Simulation:
 
     def _failure_advice(self) -> str:
         """What the message of a run that stops adds about its set-up (collective)."""
+        _, tractions, body_force, body_force_scale, _ = self._given["conditions"]
+        # A load past the limit: one that rises, or any load in the first step.
+        loads_rise = bool(
+            tractions
+            or any(isinstance(b, PointTraction | PointPressure) for b in self._given["boundary"])
+        )
+        loads_rise |= body_force is not None and (
+            body_force_scale is not None or self.step_number == 0
+        )
         return model_checks.failure_advice(
             self.domains is not None,
             self._ghost_factor,
-            self._domains_would_do,
-            static_plastic=not self.dynamic and self._plastic,
+            self._domains_would_do and self._points_crossed_cells(),
+            static_plastic=not self.dynamic and self._plastic and loads_rise,
             sliding=""
             if self.dynamic
             else model_checks.sliding_on_walls(
@@ -907,6 +916,16 @@ class Simulation:
         return result
 
     # -- the phases of a step --------------------------------------------------
+
+    def _points_crossed_cells(self) -> bool:
+        """Whether some point lies in another cell than the one it started in (collective).
+
+        A point whose start lies in no cell of its rank (it migrated) counts as crossed.
+        """
+        pts = self.points
+        inside = pts.cell >= 0
+        start = self.tracker.locate(pts.x0[inside], pts.cell[inside])
+        return parallel.any_rank(self.mesh.comm, bool(np.any(start != pts.cell[inside])))
 
     def _zone_cells(self, layout: SlotLayout) -> list[np.ndarray] | None:
         """The cells of each zone's points (or pieces) where NB-VA keeps a θ per zone."""

@@ -191,16 +191,23 @@ def test_a_run_with_point_domains_and_no_ghost_penalty_says_so_when_it_stops(gam
 def test_a_static_standard_run_that_stops_names_point_domains(options, names_domains):
     """Standard MPM's points cross cells with their whole volume, which can leave a
     static step without a solution (``scenes.platen_compression``'s J2 block in u-p
-    stops so on n = 40): a static run without domains that stops says that domains
-    spread them; a dynamic run or one with domains does not (Newton is allowed one
-    iteration, so every attempt fails)."""
-    sim = scenes.cook_membrane(
-        4, formulation="up", petsc_options={"snes_max_it": 1}, min_step=0.5, **options
-    )
-    with pytest.raises(ConvergenceError) as info:
-        sim.run(1.0, 1, progress=False)
-    assert "min_step = 0.5" in str(info.value)
-    assert ("point_domains=True spreads" in str(info.value)) == names_domains
+    stops so on n = 40): a static run without domains that stops, once a point has
+    crossed a facet (here one moved by hand into another's cell), says that domains
+    spread them; a dynamic run or one with domains does not, nor (since 2026-12-06,
+    when a helper's wall moved 4 mm against cells of 0.25 m was told so) one whose
+    points all lie in the cells they started in (Newton is allowed one iteration, so
+    every attempt fails)."""
+    for crossed in (False, True):
+        sim = scenes.cook_membrane(
+            4, formulation="up", petsc_options={"snes_max_it": 1}, min_step=0.5, **options
+        )
+        if crossed and sim.domains is None:
+            sim.points.x[0] = sim.points.x[-1]  # from the clamped edge to the loaded one
+        with pytest.raises(ConvergenceError) as info:
+            sim.run(1.0, 1, progress=False)
+        assert "min_step = 0.5" in str(info.value)
+        told = "point_domains=True spreads" in str(info.value)
+        assert told == (names_domains and crossed)
 
 
 def test_a_static_plastic_body_past_its_limit_load_is_told_so():
@@ -232,4 +239,26 @@ def test_a_static_plastic_body_past_its_limit_load_is_told_so():
         with pytest.raises(ConvergenceError) as info:
             sim.run(1.0, 1, progress=False)
         assert ("limit load" in str(info.value)) == told
-        assert "point_domains=True spreads" in str(info.value)
+        assert "point_domains=True spreads" not in str(info.value)  # no point has crossed
+
+
+def test_a_static_plastic_body_moved_by_its_supports_is_not_told_of_a_limit_load():
+    """A J2 block squeezed by a moving support has no load to pass: its stop message
+    does not say so (a helper's Rankine wall, moved 4 mm, was told of a limit load and
+    of points crossing cells, 2026-12-06)."""
+    mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (4, 4))
+    sim = fe_mpm.Simulation(
+        mesh,
+        fe_mpm.seed(mesh, per_cell=3),
+        fe_mpm.J2Plasticity(1e3, 0.3, 1.0),
+        "u",
+        dirichlet=[
+            fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0)),
+            fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 1.0), value=lambda t: (0.0, -0.1 * t)),
+        ],
+        petsc_options={"snes_max_it": 1},
+        min_step=0.5,
+    )
+    with pytest.raises(ConvergenceError) as info:
+        sim.run(1.0, 1, progress=False)
+    assert "limit load" not in str(info.value)
