@@ -48,6 +48,7 @@ import numpy as np
 
 import fe_mpm
 from fe_mpm import meshes, parallel
+from fe_mpm.cli import nonnegative, positive
 from fe_mpm.diagnostics import contiguous_front
 from fe_mpm.plotting import pyplot
 from fe_mpm.references import lube_height, lube_runout, lube_time
@@ -56,29 +57,31 @@ from fe_mpm.references import lube_height, lube_runout, lube_time
 def parse_args(argv=None):
     """The command-line contract of the demo."""
     p = argparse.ArgumentParser(description="Granular column collapse (Lube et al. 2005)")
-    p.add_argument("--aspect", type=float, default=3.0, help="aspect ratio a = h_i/d_i")
-    p.add_argument("--d-i", type=float, default=0.0905, help="initial column width d_i (m)")
-    p.add_argument("--h", type=float, default=0.0065, help="cell size (m); thesis 0.0065")
-    p.add_argument("--points-per-cell", type=int, default=6, help="points per triangle")
-    p.add_argument("--dt", type=float, default=2.5e-3, help="time step (s)")
+    p.add_argument("--aspect", type=positive(float), default=3.0, help="aspect ratio a = h_i/d_i")
+    p.add_argument(
+        "--d-i", type=positive(float), default=0.0905, help="initial column width d_i (m)"
+    )
+    p.add_argument("--h", type=positive(float), default=0.0065, help="cell size (m); thesis 0.0065")
+    p.add_argument("--points-per-cell", type=positive(int), default=6, help="points per triangle")
+    p.add_argument("--dt", type=positive(float), default=2.5e-3, help="time step (s)")
     p.add_argument(
         "--t-end",
-        type=float,
+        type=positive(float),
         default=None,
         help="end time (s); 1.6 times the empirical duration by default",
     )
     p.add_argument(
         "--damping",
-        type=float,
+        type=nonnegative(float),
         default=1.5,
         help="mass-proportional Rayleigh damping α (1/s); the thesis's 1.5 by default, 0: none",
     )
-    p.add_argument("--E", type=float, default=0.84e6, help="Young's modulus (Pa)")
+    p.add_argument("--E", type=positive(float), default=0.84e6, help="Young's modulus (Pa)")
     p.add_argument("--nu", type=float, default=0.3, help="Poisson's ratio")
-    p.add_argument("--density", type=float, default=2600.0, help="kg/m³")
+    p.add_argument("--density", type=positive(float), default=2600.0, help="kg/m³")
     p.add_argument("--friction", type=float, default=31.0, help="friction angle φ (deg)")
     p.add_argument("--dilatancy", type=float, default=1.0, help="dilatancy angle ψ (deg)")
-    p.add_argument("--gravity", type=float, default=9.81, help="m/s²")
+    p.add_argument("--gravity", type=positive(float), default=9.81, help="m/s²")
     p.add_argument(
         "--mass",
         choices=("consistent", "lumped"),

@@ -51,6 +51,7 @@ import numpy as np
 
 import fe_mpm
 from fe_mpm import parallel
+from fe_mpm.cli import nonnegative, positive
 from fe_mpm.meshes import cell_centroids, rectangle_mesh
 from fe_mpm.plotting import pyplot
 
@@ -97,16 +98,18 @@ HEIGHT_BAND = (-0.10, 0.10)
 def parse_args(argv=None):
     """The command-line contract of the demo."""
     p = argparse.ArgumentParser(description="Dam break (Mast 2013, §6.1.1)")
-    p.add_argument("--aspect", type=float, default=2.0, help="h0/l0: 2 or 1 (checked), or other")
+    p.add_argument(
+        "--aspect", type=positive(float), default=2.0, help="h0/l0: 2 or 1 (checked), or other"
+    )
     p.add_argument("--formulation", choices=("up", "u", "u-nbva"), default="up")
     p.add_argument(
         "--h", type=float, default=0.00875, help="cell size (m), rounded to fit l0 whole"
     )
-    p.add_argument("--points-per-cell", type=int, default=12, help="points per triangle")
+    p.add_argument("--points-per-cell", type=positive(int), default=12, help="points per triangle")
     p.add_argument("--dt", type=float, default=1.0e-3, help="time step (s)")
     p.add_argument("--T-end", type=float, default=3.4, help="end time T = t sqrt(g h0)/l0")
-    p.add_argument("--bulk-modulus", type=float, default=2.0e9, help="K (Pa)")
-    p.add_argument("--viscosity", type=float, default=1.0e-3, help="mu_v (Pa s)")
+    p.add_argument("--bulk-modulus", type=positive(float), default=2.0e9, help="K (Pa)")
+    p.add_argument("--viscosity", type=nonnegative(float), default=1.0e-3, help="mu_v (Pa s)")
     p.add_argument("--bossak-alpha", type=float, default=-0.3, help="Bossak's alpha")
     p.add_argument(
         "--ppp-alpha", type=float, default=0.0, help="PPP's alpha in u-p (0: off, see below)"

@@ -45,22 +45,31 @@ import numpy as np
 
 import fe_mpm
 from fe_mpm import meshes, parallel
+from fe_mpm.cli import nonnegative, positive
 
 
 def parse_args(argv=None):
     """The command-line contract of the demo."""
     p = argparse.ArgumentParser(description="Elastic column under self-weight")
-    p.add_argument("--ny", type=int, default=32, help="cells over the height")
-    p.add_argument("--steps", type=int, default=1, help="load steps (or time steps)")
+    p.add_argument("--ny", type=positive(int), default=32, help="cells over the height")
+    p.add_argument("--steps", type=positive(int), default=1, help="load steps (or time steps)")
     # Defaults: quasi-static, AMPLE's column at 10 % base strain (the stress
     # reference holds at any strain); dynamic, Tielen et al.'s column at 0.25 %
     # strain, where the small-strain series applies.
-    p.add_argument("--height", type=float, default=None, help="L (m): 50 static, 25 dynamic")
-    p.add_argument("--E", type=float, default=None, help="Pa: 4e5 static, 5e4 dynamic")
-    p.add_argument("--density", type=float, default=None, help="kg/m³: 80 static, 1 dynamic")
-    p.add_argument("--gravity", type=float, default=None, help="m/s²: 10 static, 9.81 dynamic")
+    p.add_argument(
+        "--height", type=positive(float), default=None, help="L (m): 50 static, 25 dynamic"
+    )
+    p.add_argument("--E", type=positive(float), default=None, help="Pa: 4e5 static, 5e4 dynamic")
+    p.add_argument(
+        "--density", type=positive(float), default=None, help="kg/m³: 80 static, 1 dynamic"
+    )
+    p.add_argument(
+        "--gravity", type=positive(float), default=None, help="m/s²: 10 static, 9.81 dynamic"
+    )
     p.add_argument("--dynamic", action="store_true", help="sudden self-weight, Newmark")
-    p.add_argument("--periods", type=float, default=2.0, help="dynamic: first-mode periods")
+    p.add_argument(
+        "--periods", type=positive(float), default=2.0, help="dynamic: first-mode periods"
+    )
     p.add_argument(
         "--mass",
         choices=("consistent", "lumped"),
@@ -69,11 +78,11 @@ def parse_args(argv=None):
     )
     p.add_argument(
         "--damping",
-        type=float,
+        type=nonnegative(float),
         default=0.0,
         help="dynamic: mass-proportional Rayleigh damping α (1/s)",
     )
-    p.add_argument("--mp-per-cell", type=int, default=1)
+    p.add_argument("--mp-per-cell", type=positive(int), default=1)
     p.add_argument(
         "--point-domains",
         action="store_true",

@@ -50,6 +50,7 @@ import numpy as np
 
 import fe_mpm
 from fe_mpm import parallel
+from fe_mpm.cli import positive
 from fe_mpm.meshes import cell_centroids, rectangle_mesh
 from fe_mpm.plotting import pyplot
 from fe_mpm.walls import plot_wall_forces, write_wall_forces
@@ -73,18 +74,20 @@ def parse_args(argv=None):
     """The command-line contract of the demo."""
     p = argparse.ArgumentParser(description="Planar sand column collapse (Mast 2013, §7.2)")
     p.add_argument("--law", choices=("dp", "mn-dp"), default="dp", help="Mast's sand law")
-    p.add_argument("--aspect", type=float, default=2.0, help="aspect ratio a = h0/l0")
+    p.add_argument("--aspect", type=positive(float), default=2.0, help="aspect ratio a = h0/l0")
     p.add_argument("--full", action="store_true", help="Mast's grid: cells of 5 mm")
-    p.add_argument("--h", type=float, default=None, help="cell size (m); 0.01, or 0.005 --full")
-    p.add_argument("--points-per-cell", type=int, default=3, help="points per triangle")
-    p.add_argument("--dt", type=float, default=2.5e-3, help="time step (s)")
+    p.add_argument(
+        "--h", type=positive(float), default=None, help="cell size (m); 0.01, or 0.005 --full"
+    )
+    p.add_argument("--points-per-cell", type=positive(int), default=3, help="points per triangle")
+    p.add_argument("--dt", type=positive(float), default=2.5e-3, help="time step (s)")
     p.add_argument(
         "--bossak-alpha",
         type=float,
         default=0.0,
         help="Bossak's alpha in [-1/3, 0]: numerical damping of the deposit's ringing",
     )
-    p.add_argument("--t-end", type=float, default=None, help="end time (s)")
+    p.add_argument("--t-end", type=positive(float), default=None, help="end time (s)")
     p.add_argument("--output", default="sand_column_output", help="output folder")
     p.add_argument("--no-output", action="store_true", help="write no files")
     p.add_argument("--json", action="store_true", help="print a JSON summary as the last line")
@@ -96,11 +99,11 @@ rank0 = parallel.print_on_rank_zero()
 l0, g, rho = 0.05, 9.81, 2200.0
 K, G = 29.5e6, 13.6e6
 E, nu = 9 * K * G / (3 * K + G), (3 * K - 2 * G) / (2 * (3 * K + G))
-a, h = args.aspect, args.h or (0.005 if args.full else 0.01)
+a, h = args.aspect, (0.005 if args.full else 0.01) if args.h is None else args.h
 h0 = a * l0
 # Long enough to fall and spread: measured at a = 2, it settled at 0.28 s of 0.46 s.
 full_time = 0.1 + 2.5 * math.sqrt(2.0 * h0 / g)
-t_end = args.t_end or full_time
+t_end = full_time if args.t_end is None else args.t_end
 
 
 def bound(coefficients: tuple[float, float]) -> float:

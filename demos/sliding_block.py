@@ -45,6 +45,7 @@ import numpy as np
 
 import fe_mpm
 from fe_mpm import parallel
+from fe_mpm.cli import nonnegative, positive
 from fe_mpm.meshes import cell_centroids, rectangle_mesh
 from fe_mpm.plotting import pyplot
 from fe_mpm.walls import SLIP_SCALE_FACTOR, plot_wall_forces, write_wall_forces
@@ -53,13 +54,13 @@ from fe_mpm.walls import SLIP_SCALE_FACTOR, plot_wall_forces, write_wall_forces
 def parse_args(argv=None):
     """The command-line contract of the demo."""
     p = argparse.ArgumentParser(description="Frictionless block on a slope")
-    p.add_argument("--dt", type=float, default=0.01, help="time step (s)")
-    p.add_argument("--t-end", type=float, default=1.0, help="duration (s)")
+    p.add_argument("--dt", type=positive(float), default=0.01, help="time step (s)")
+    p.add_argument("--t-end", type=positive(float), default=1.0, help="duration (s)")
     p.add_argument("--theta", type=float, default=30.0, help="slope angle (degrees)")
-    p.add_argument("--h", type=float, default=0.1, help="grid cell size (m)")
+    p.add_argument("--h", type=positive(float), default=0.1, help="grid cell size (m)")
     p.add_argument(
         "--friction",
-        type=float,
+        type=nonnegative(float),
         default=None,
         help="Coulomb's μ of a rigid wall as the base (default: the slip condition); "
         "checked against the rigid block for μ ≤ 0.1 and μ ≥ 0.8 at θ = 30°",

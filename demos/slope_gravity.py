@@ -44,6 +44,7 @@ import sys
 
 # ruff: noqa: I001 - fe_mpm first: the PyPI wheel needs its bootstrap before dolfinx and mpi4py.
 import fe_mpm
+from fe_mpm.cli import positive
 from fe_mpm import parallel
 import dolfinx
 import gmsh
@@ -63,10 +64,12 @@ BISHOP_FACTOR = 0.83
 def parse_args(argv=None):
     """The command-line contract of the demo."""
     p = argparse.ArgumentParser(description="A slope under rising gravity")
-    p.add_argument("--h", type=float, default=0.5, help="cell size (m)")
-    p.add_argument("--g-max", type=float, default=1.2, help="final gravity, in units of g")
-    p.add_argument("--steps", type=int, default=12, help="load steps from 0 to g-max")
-    p.add_argument("--per-cell", type=int, default=3, help="points per triangle")
+    p.add_argument("--h", type=positive(float), default=0.5, help="cell size (m)")
+    p.add_argument(
+        "--g-max", type=positive(float), default=1.2, help="final gravity, in units of g"
+    )
+    p.add_argument("--steps", type=positive(int), default=12, help="load steps from 0 to g-max")
+    p.add_argument("--per-cell", type=positive(int), default=3, help="points per triangle")
     p.add_argument(
         "--law",
         choices=("mohr-coulomb", "drucker-prager"),

@@ -49,6 +49,7 @@ import numpy as np
 
 import fe_mpm
 from fe_mpm import parallel, scenes
+from fe_mpm.cli import positive
 from fe_mpm.diagnostics import stress_oscillation
 from fe_mpm.plotting import pyplot
 
@@ -57,24 +58,28 @@ def parse_args(argv=None):
     """The command-line contract of the demo."""
     p = argparse.ArgumentParser(description="Rigid strip footing on Tresca soil")
     p.add_argument("--formulation", choices=("u", "up"), default="up")
-    p.add_argument("--steps", type=int, default=200, help="load steps")
-    p.add_argument("--settlement", type=float, default=2.0, help="final settlement (m)")
-    p.add_argument("--B", type=float, default=1.0, help="footing width B (m)")
-    p.add_argument("--cu", type=float, default=100.0, help="undrained strength c_u (Pa)")
-    p.add_argument("--E", type=float, default=1.0e4, help="Young's modulus (Pa)")
+    p.add_argument("--steps", type=positive(int), default=200, help="load steps")
+    p.add_argument("--settlement", type=positive(float), default=2.0, help="final settlement (m)")
+    p.add_argument("--B", type=positive(float), default=1.0, help="footing width B (m)")
+    p.add_argument("--cu", type=positive(float), default=100.0, help="undrained strength c_u (Pa)")
+    p.add_argument("--E", type=positive(float), default=1.0e4, help="Young's modulus (Pa)")
     p.add_argument("--nu", type=float, default=0.495, help="Poisson's ratio")
-    p.add_argument("--h", type=float, default=0.05, help="cell size near the footing (m)")
-    p.add_argument("--h-far", type=float, default=None, help="cell size far away (m)")
+    p.add_argument("--h", type=positive(float), default=0.05, help="cell size near the footing (m)")
+    p.add_argument("--h-far", type=positive(float), default=None, help="cell size far away (m)")
     p.add_argument(
         "--edge-size",
-        type=float,
+        type=positive(float),
         default=None,
         help="cell size around the footing's edge and its path (m); h by default",
     )
-    p.add_argument("--near-width", type=float, default=None, help="refined zone width (m)")
-    p.add_argument("--near-depth", type=float, default=None, help="refined zone depth (m)")
-    p.add_argument("--points-near", type=int, default=12, help="points per cell near it")
-    p.add_argument("--points-far", type=int, default=3, help="points per cell elsewhere")
+    p.add_argument(
+        "--near-width", type=positive(float), default=None, help="refined zone width (m)"
+    )
+    p.add_argument(
+        "--near-depth", type=positive(float), default=None, help="refined zone depth (m)"
+    )
+    p.add_argument("--points-near", type=positive(int), default=12, help="points per cell near it")
+    p.add_argument("--points-far", type=positive(int), default=3, help="points per cell elsewhere")
     p.add_argument("--smooth", action="store_true", help="smooth footing (vertical only)")
     p.add_argument(
         "--footing-thickness",
@@ -84,7 +89,10 @@ def parse_args(argv=None):
         "(m); 2h by default, 0 for the base only",
     )
     p.add_argument(
-        "--penalty", type=float, default=None, help="footing penalty β (Pa/m); 1e3 E/h by default"
+        "--penalty",
+        type=positive(float),
+        default=None,
+        help="footing penalty β (Pa/m); 1e3 E/h by default",
     )
     p.add_argument(
         "--line-search",
@@ -173,8 +181,9 @@ print(
     f"wall time {wall:.1f} s"
 )
 for target in (0.05, 0.1, 0.25, 0.5, 1.0, 1.5, 2.0):
-    if s_over_B[-1] >= target - 1e-12:
-        print(f"  s/B = {target:<5}  q/c_u = {np.interp(target, s_over_B, q_over_cu):.3f}")
+    if s_over_B[-1] >= target - 1e-12:  # between steps, and from the unloaded start
+        q = np.interp(target, np.r_[0.0, s_over_B], np.r_[0.0, q_over_cu])
+        print(f"  s/B = {target:<5}  q/c_u = {q:.3f}")
 print(
     f"  σ_yy/c_u under the footing: [{sigma_yy.min():.2f}, {sigma_yy.max():.2f}]; "
     f"oscillation {oscillation:.3f}"

@@ -51,6 +51,7 @@ import numpy as np
 
 import fe_mpm
 from fe_mpm import parallel
+from fe_mpm.cli import positive
 from fe_mpm.meshes import cylinder, rectangle_mesh
 
 
@@ -96,9 +97,13 @@ def parse_args(argv=None):
     p.add_argument("--case", choices=tuple(CASES), default="copper", help="which bar")
     p.add_argument("--formulation", choices=("u", "u-nbva", "up"), default="up")
     p.add_argument("--full", action="store_true", help="the finer grid (half the cell)")
-    p.add_argument("--h", type=float, default=None, help="grid cell size (m), over --full")
-    p.add_argument("--steps", type=int, default=None, help="time steps (default: the case's)")
-    p.add_argument("--t-end", type=float, default=None, help="duration (s; the case's)")
+    p.add_argument(
+        "--h", type=positive(float), default=None, help="grid cell size (m), over --full"
+    )
+    p.add_argument(
+        "--steps", type=positive(int), default=None, help="time steps (default: the case's)"
+    )
+    p.add_argument("--t-end", type=positive(float), default=None, help="duration (s; the case's)")
     p.add_argument(
         "--line-search",
         choices=("basic", "bt", "l2", "auto"),
@@ -115,9 +120,9 @@ args = parse_args()
 parallel.print_on_rank_zero()  # every rank runs this script; one prints
 case = CASES[args.case]
 LENGTH, RADIUS, VELOCITY, DENSITY = (case[k] for k in ("length", "radius", "velocity", "density"))
-h = args.h or case["h"][1 if args.full else 0]
-t_end = args.t_end or case["t_end"]
-steps = args.steps or case["steps"] * (2 if args.full else 1)
+h = case["h"][1 if args.full else 0] if args.h is None else args.h
+t_end = case["t_end"] if args.t_end is None else args.t_end
+steps = case["steps"] * (2 if args.full else 1) if args.steps is None else args.steps
 # -
 
 # ## Scene: a quarter of the rod on a box grid
