@@ -166,6 +166,10 @@ class Dirichlet:
             ``t_{n+1}`` imposes ``value(t_{n+1}) − value(t_n)`` on the grid nodes
             (so a constant must be 0, which fixes the nodes; another constant is
             refused). A vector for all components, a scalar with ``component``.
+            The nodes move, not the body's face: a face pushed away from them (a
+            platen pressed into a block whose top then lies below the held nodes)
+            is no longer held, and the load falls short without a word; a face
+            that moves with the body is held by a :class:`PointDirichlet`.
         component: Constrain only this component (0, 1 or 2), e.g. a roller.
         profile: Space- and time-dependent prescribed displacement ``(x, t) ->
             u`` with ``x`` of shape ``(3, n)`` and ``u`` of shape ``(g, n)`` (or

@@ -291,7 +291,12 @@ class BoundaryPointStep:
         if not self._checked_rule:
             self._checked_rule = True
             self._warn_sparse_loads(cells)
-        self._nslot = slot_count(np.bincount(cells), self._nslot, tracker.mesh.comm)
+        crowded = (
+            "boundary points (of PointDirichlet, PointTraction and PointPressure together)",
+            "place fewer (meshes.facet_points(..., subdivisions=k) puts k^(g-1) pieces on "
+            "each facet)",
+        )
+        self._nslot = slot_count(np.bincount(cells), self._nslot, tracker.mesh.comm, crowded)
         self.layout = SlotLayout.from_cells(cells, self._nslot)
         return self.layout
 

@@ -18,9 +18,7 @@ def _checked(kind: type, test: Callable[[float], bool], what: str) -> Callable[[
         try:
             value = kind(text)
         except ValueError:
-            raise argparse.ArgumentTypeError(
-                f"not {kind.__name__}: {text!r}"
-            ) from None
+            raise argparse.ArgumentTypeError(f"not {kind.__name__}: {text!r}") from None
         if not (math.isfinite(value) and test(value)):
             raise argparse.ArgumentTypeError(f"must be {what}, got {text!r}")
         return value

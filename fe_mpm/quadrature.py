@@ -54,25 +54,37 @@ ENTITY_COST = 2.0
 SLOT_CHANGE_SAVING = 0.8
 
 
-def bucket(count: int) -> int:
-    """Smallest slot count in :data:`SLOT_BUCKETS` that holds ``count`` points."""
+#: What too many points in one cell means, and what to do: material points by default.
+MATERIAL_POINTS = ("material points", "refine the background grid")
+
+
+def bucket(count: int, what: tuple[str, str] = MATERIAL_POINTS) -> int:
+    """Smallest slot count in :data:`SLOT_BUCKETS` that holds ``count`` points.
+
+    ``what``: the points' name and the cure, for the message.
+    """
     for b in SLOT_BUCKETS:
         if b >= count:
             return b
     raise ValueError(
-        f"{count} material points in one cell exceeds the supported {SLOT_BUCKETS[-1]}; "
-        "refine the background grid"
+        f"{count} {what[0]} in one cell exceeds the supported {SLOT_BUCKETS[-1]}; {what[1]}"
     )
 
 
-def slot_count(counts: np.ndarray, current: int | None = None, comm: MPI.Comm | None = None) -> int:
+def slot_count(
+    counts: np.ndarray,
+    current: int | None = None,
+    comm: MPI.Comm | None = None,
+    what: tuple[str, str] = MATERIAL_POINTS,
+) -> int:
     """Slots per entity for cells holding ``counts`` points.
 
     Minimises ``slots + ENTITY_COST · entities`` over :data:`SLOT_BUCKETS` (up to the
     fullest cell's bucket). The ``current`` count is kept unless another saves a
     fifth of that cost, so a changing layout seldom recompiles. With ``comm``, the
     cells of every rank count, so every rank gets the same answer (its forms are
-    compiled collectively).
+    compiled collectively). ``what`` names the points for the message of a cell
+    that holds too many.
     """
     comm = MPI.COMM_SELF if comm is None else comm
     counts = np.asarray(counts)
@@ -80,7 +92,7 @@ def slot_count(counts: np.ndarray, current: int | None = None, comm: MPI.Comm | 
     error = None
     if counts.size and counts.max() > SLOT_BUCKETS[-1]:
         try:
-            bucket(int(counts.max()))
+            bucket(int(counts.max()), what)
         except ValueError as err:
             error = err
     parallel.raise_together(comm, error)

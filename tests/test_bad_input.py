@@ -117,6 +117,24 @@ def test_taylor_hood_needs_enough_points_per_cell():
         sim.step(1.0)
 
 
+def test_too_many_boundary_points_in_a_cell_are_named_as_such():
+    """A face loaded by 300 points in one cell: the message named them material points
+    and said to refine the grid, where the cure is fewer load points (a helper's 3D
+    face with 16 subdivisions, 2026-12-06)."""
+    mesh = fe_mpm.meshes.rectangle_mesh((0.0, 0.0), (1.0, 1.0), (1, 1))
+    x = np.column_stack([(np.arange(300) + 0.5) / 300, np.ones(300)])
+    load = fe_mpm.PointTraction("top", x, 1.0 / 300, (0.0, -1.0))
+    sim = fe_mpm.Simulation(
+        mesh,
+        fe_mpm.seed(mesh, 3),
+        fe_mpm.NeoHookean(1e3, 0.3),
+        dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))],
+        point_tractions=[load],
+    )
+    with pytest.raises(ValueError, match=r"300 boundary points \(of PointDirichlet.* place fewer"):
+        sim.step(1.0)
+
+
 def test_taylor_hood_needs_four_points_in_a_tetrahedron():
     """A tetrahedron's P2 strain has 24 modes, six seen per point: three points (a
     triangle's number) leave some unseen; accepted until 2026-12-06, a 3D column so
