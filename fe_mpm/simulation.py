@@ -21,6 +21,8 @@ import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
+from petsc4py import PETSc
+
 import numpy as np
 
 from fe_mpm import balance, checkpoint, model_checks, parallel
@@ -984,7 +986,17 @@ class Simulation:
                 R, J, bcs, **hooks, line_search=search, keep_best=self.ladder.resume
             )
 
-        return self.ladder.solve(attempt, self._newton.line_search)
+        try:
+            return self.ladder.solve(attempt, self._newton.line_search)
+        except PETSc.Error as err:
+            if not isinstance(err.__cause__, KeyboardInterrupt):
+                raise
+            # A Ctrl-C in a callback of SNES reaches here as a PETSc error, and leaves
+            # SNES's vectors locked mid-solve: every later solve failed (error 73). The
+            # next step builds a new solver; the points are as the last step left them.
+            self._newton.destroy()
+            self._newton = None
+            raise KeyboardInterrupt from None
 
     def _internal_force(self, R) -> Callable[[], np.ndarray]:
         """The residual's assembly, with G Δu and the starting pressure's facet terms.

@@ -8,6 +8,7 @@ from fe_mpm import scenes
 from fe_mpm.errors import ConvergenceError
 from fe_mpm.force_test import NewtonResult
 from fe_mpm.meshes import rectangle_mesh
+from fe_mpm.newton import NewtonSolver
 from fe_mpm.retry import Attempt, RetryLadder, StepLength
 
 
@@ -262,3 +263,31 @@ def test_a_static_plastic_body_moved_by_its_supports_is_not_told_of_a_limit_load
     with pytest.raises(ConvergenceError) as info:
         sim.run(1.0, 1, progress=False)
     assert "limit load" not in str(info.value)
+
+
+def test_a_ctrl_c_in_newton_leaves_the_simulation_usable(monkeypatch):
+    """A Ctrl-C lands mostly inside Newton, in a callback of PETSc's SNES: it came out
+    as a PETSc error, which ``except KeyboardInterrupt`` does not catch, and left SNES's
+    vectors locked, so every later ``run`` failed at once (PETSc error 73; a helper's
+    60 interrupts of a long run, 2026-12-06). Now it is a KeyboardInterrupt, and the
+    run goes on from the last step as if never interrupted."""
+    calls = {"residuals": 0}
+    residual = NewtonSolver._residual
+
+    def interrupted(self, snes, x, b):
+        calls["residuals"] += 1
+        if calls["residuals"] == 2:  # in the first step's first iterate
+            raise KeyboardInterrupt
+        return residual(self, snes, x, b)
+
+    monkeypatch.setattr(NewtonSolver, "_residual", interrupted)
+    sim = scenes.cook_membrane(4, formulation="up")
+    with pytest.raises(KeyboardInterrupt):
+        sim.run(1.0, 2, progress=False)
+    monkeypatch.undo()
+    assert sim.t == 0.0 and calls["residuals"] == 2
+    again = sim.run(1.0, 2, progress=False)
+    fresh = scenes.cook_membrane(4, formulation="up").run(1.0, 2, progress=False)
+    for got, want in zip(again, fresh, strict=True):
+        np.testing.assert_array_equal(got.markers["A"], want.markers["A"])
+        assert got.newton_iterations == want.newton_iterations
