@@ -10,8 +10,10 @@ rank that found one. On one rank every function here is the serial identity.
 
 from __future__ import annotations
 
+import math
 import os
 import sys
+import time
 from collections.abc import Callable
 
 from mpi4py import MPI
@@ -90,6 +92,47 @@ def raise_together(comm: MPI.Comm, error: Exception | None) -> None:
     if rank == comm.rank:
         raise error
     raise kind(f"(on rank {rank}) {message}")
+
+
+def abort_on_lone_exception(wait: float = 30.0) -> None:
+    """Abort every rank when one stops on an exception the others do not raise. Collective.
+
+    Call it at the top of an MPI script, on every rank. An exception that one rank
+    alone raises (a bug in a script's own code, say) would leave the other ranks
+    waiting in a collective call for ever; ``python -m mpi4py`` is meant to abort
+    them, but only at the rank's exit, and petsc4py's finalisation, which runs first,
+    waits for the other ranks (a helper's 3-rank run hung until killed, 2026-12-06).
+    With this, a rank that stops on an uncaught exception prints it, waits up to
+    ``wait`` seconds for the others to stop too (an error fe-mpm raises on every
+    rank: they then end normally, writing what they write at exit) and otherwise
+    aborts them all with ``MPI_Abort``. Nothing changes on one rank.
+
+    Args:
+        wait: Seconds (> 0) a stopped rank waits for the others before aborting.
+    """
+    comm = MPI.COMM_WORLD
+    if comm.size == 1:
+        return
+    if not (math.isfinite(wait) and wait > 0.0):
+        raise ValueError(f"abort_on_lone_exception: wait must be > 0 (s), got {wait!r}")
+    # A communicator of its own: the stopped ranks' barrier matches nothing else.
+    stopped = comm.Dup()
+    previous = sys.excepthook
+
+    def hook(kind, value, traceback) -> None:
+        previous(kind, value, traceback)
+        request, deadline = stopped.Ibarrier(), time.monotonic() + wait
+        while not request.Test():
+            if time.monotonic() > deadline:
+                sys.stderr.write(
+                    f"fe_mpm: rank {comm.rank} stopped on an exception that the other ranks "
+                    f"did not raise within {wait:g} s: aborting every rank\n"
+                )
+                sys.stderr.flush()
+                comm.Abort(1)
+            time.sleep(0.01)
+
+    sys.excepthook = hook
 
 
 def check_together(

@@ -1061,3 +1061,38 @@ def test_water_in_nbva_sloshes_as_in_serial_on_two_ranks(tmp_path):
         assert got["iterations"] == serial["iterations"]
         for key in ("volume", "mass centre", "kinetic"):
             assert got[key] == pytest.approx(serial[key], rel=1e-10, abs=0), key
+
+
+LONE_EXCEPTION = """
+import sys
+from mpi4py import MPI
+from fe_mpm import parallel
+parallel.abort_on_lone_exception(wait=2.0)
+comm = MPI.COMM_WORLD
+if sys.argv[1] == "lone" and comm.rank == 1:
+    raise RuntimeError("rank 1 alone")
+if sys.argv[1] == "every":
+    raise RuntimeError(f"rank {comm.rank} too")
+comm.barrier()
+"""
+
+
+@pytest.mark.parametrize("case", ["lone", "every"])
+def test_an_exception_on_one_rank_alone_aborts_every_rank(tmp_path, case):
+    """With petsc4py loaded, an uncaught exception on one rank left the others waiting
+    in a collective call for ever, ``python -m mpi4py`` or not (a helper's 3-rank run,
+    2026-12-06). ``parallel.abort_on_lone_exception`` aborts them once the stopped
+    rank has waited 2 s here for the others; an exception every rank raises ends
+    them all as before, without an abort."""
+    script = tmp_path / "lone.py"
+    script.write_text(LONE_EXCEPTION)
+    done = subprocess.run(
+        [_mpiexec(), "-n", "2", sys.executable, "-m", "mpi4py", str(script), case],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env=dict(os.environ),
+    )
+    output = done.stdout + done.stderr
+    assert done.returncode != 0, output
+    assert ("aborting every rank" in output) == (case == "lone"), output
