@@ -12,6 +12,8 @@ the N-th repartition of the grid under MPI the grid's files are ``grid_N.bp`` an
 
 from __future__ import annotations
 
+import atexit
+import weakref
 from pathlib import Path
 
 import numpy as np
@@ -21,6 +23,27 @@ from fe_mpm.balance import original_indices
 from fe_mpm.formulations import GridFields, collapse
 from fe_mpm.io import DomainWriter, ParticleWriter
 from fe_mpm.particles import MaterialPoints
+
+#: Every output that may still hold open grid files, in the order they were made.
+_OPEN: list[weakref.ref] = []
+
+
+@atexit.register
+def _close_open_outputs() -> None:
+    """Close the grid files still open at exit, on every rank in the same order.
+
+    Left to the garbage collector, an output held in a reference cycle (a script that
+    caught a run's error, whose traceback keeps the simulation alive) closed its
+    ADIOS2 files, a collective act, at a moment of each rank's own: on 2 ranks one
+    waited there while the other had gone on to PETSc's finalisation, and the job
+    hung at exit (a helper's script, 2026-12-06). Registered after PETSc's and MPI's
+    own exit handlers (fe-mpm imports them first), so it runs before them.
+    """
+    for ref in _OPEN:
+        output = ref()
+        if output is not None:
+            output.close()
+    _OPEN.clear()
 
 
 class SimulationOutput:
@@ -46,6 +69,8 @@ class SimulationOutput:
         self._domains = DomainWriter(self.folder, comm=comm) if domains else None
         self._grids = 0  # grids written so far: a repartition starts another
         self._open_grid()
+        _OPEN[:] = [ref for ref in _OPEN if ref() is not None]
+        _OPEN.append(weakref.ref(self))
 
     def _open_grid(self) -> None:
         """The grid files of the current grid: grid.bp, or grid_N.bp for the N-th repartition."""

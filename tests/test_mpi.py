@@ -1096,3 +1096,42 @@ def test_an_exception_on_one_rank_alone_aborts_every_rank(tmp_path, case):
     output = done.stdout + done.stderr
     assert done.returncode != 0, output
     assert ("aborting every rank" in output) == (case == "lone"), output
+
+
+CAUGHT_AND_ENDED = """
+import sys
+import numpy as np
+import fe_mpm
+from fe_mpm.meshes import rectangle_mesh, cell_centroids
+mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (8, 8))
+block = np.flatnonzero(cell_centroids(mesh)[:, 0] < 0.5)
+points = fe_mpm.seed(mesh, 3, cells=block, density=1000.0)
+points.velocity[:, 0] = 20.0
+sim = fe_mpm.Simulation(
+    mesh, points, fe_mpm.NeoHookean(1e5, 0.3), dynamic=True, output_dir=sys.argv[1]
+)
+try:
+    sim.run(0.1, 20, progress=False)
+except fe_mpm.PointsOutsideError:
+    print("caught", flush=True)
+"""
+
+
+def test_a_script_that_caught_an_error_ends_on_two_ranks_with_its_output_open(tmp_path):
+    """A script that caught a run's PointsOutsideError and ended without
+    ``sim.close()`` hung at exit on 2 ranks (a helper's, 4 times of 4): the grid's
+    ADIOS2 files, closed by the garbage collector at each rank's own moment, waited
+    on one rank while the other was in PETSc's finalisation. They are now closed at
+    exit on every rank in turn."""
+    script = tmp_path / "caught.py"
+    script.write_text(CAUGHT_AND_ENDED)
+    done = subprocess.run(
+        [_mpiexec(), "-n", "2", sys.executable, "-m", "mpi4py", str(script), str(tmp_path)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env=dict(os.environ),
+    )
+    output = done.stdout + done.stderr
+    assert done.returncode == 0 and output.count("caught") == 2, output
+    assert (tmp_path / "grid.bp").is_dir()
