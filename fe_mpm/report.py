@@ -266,7 +266,7 @@ class ProgressBar:
                 total=n_steps,
                 desc="fe-mpm",
                 unit="step",
-                leave=False,
+                leave=True,  # the run's steps and total time stay on the screen
                 bar_format="{l_bar}{bar}| {n:.0f}/{total_fmt} [{elapsed}<{remaining}{postfix}]",
             )
 
@@ -276,10 +276,13 @@ class ProgressBar:
             extra = (
                 {} if MPI.COMM_WORLD.size == 1 else {"imbalance": f"{report.point_imbalance:.2f}"}
             )
-            self._bar.set_postfix(t=f"{report.t:.4g}", newton=report.newton_iterations, **extra)
+            # Drawn with the count, not before it (it read "0/300 ... t=0.002" after step 1).
+            self._bar.set_postfix(
+                t=f"{report.t:.4g}", newton=report.newton_iterations, refresh=False, **extra
+            )
             self._bar.update(report.dt / nominal)
 
     def close(self) -> None:
-        """Remove the bar."""
+        """Close the bar, leaving its last state."""
         if self._bar is not None:
             self._bar.close()
