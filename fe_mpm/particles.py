@@ -141,6 +141,36 @@ class MaterialPoints:
             value = check_finite(owner, prefix + name, value, what="point")
             setattr(self, name, np.array(value, dtype=np.float64))
 
+    def check_state(self, owner: str = "MaterialPoints", prefix: str = "") -> None:
+        """Check again what a script may have set after seeding: x, volume, mass, F, stress.
+
+        ``MaterialPoints`` checks them when built, but a script may change them in place
+        (a point given det F < 0 ran to a stress of the wrong sign, a NaN position
+        stopped Newton with "force scale nan"; a helper's scenes, 2026-12-06).
+
+        Raises:
+            ValueError: A value is not finite, a volume is ≤ 0, a mass < 0, det F ≤ 0, or
+                a shape is wrong; the message names the field and the first point.
+        """
+        n, g = self.x.shape
+        for name, shape in (
+            ("x", (n, g)),
+            ("volume", (n,)),
+            ("mass", (n,)),
+            ("F", (n, g, g)),
+            ("stress", (n, 3, 3)),
+        ):
+            value = getattr(self, name)
+            if np.shape(value) != shape:
+                raise ValueError(
+                    f"{owner}: {prefix}{name} must have shape {shape}, got {np.shape(value)}"
+                )
+            check_finite(owner, prefix + name, value, what="point")
+        _refuse_points(prefix + "volume", self.volume <= 0, "> 0", self.volume, owner)
+        _refuse_points(prefix + "mass", self.mass < 0, ">= 0", self.mass, owner)
+        J = np.linalg.det(self.F)
+        _refuse_points(f"det {prefix}F", J <= 0, "> 0", J, owner)
+
     def _checked_material(self, n: int) -> np.ndarray:
         """The laws' indices as a (n,) int array, each ≥ 0."""
         if self.material is None:
@@ -199,13 +229,15 @@ class MaterialPoints:
         self.history = {name: values[mask] for name, values in self.history.items()}
 
 
-def _refuse_points(field: str, bad: np.ndarray, valid: str, values: np.ndarray) -> None:
+def _refuse_points(
+    field: str, bad: np.ndarray, valid: str, values: np.ndarray, owner: str = "MaterialPoints"
+) -> None:
     """Raise ``ValueError`` naming the first point where ``bad`` holds, if any."""
     where = np.flatnonzero(bad)
     if where.size:
         i = int(where[0])
         raise ValueError(
-            f"MaterialPoints: {field} must be {valid} at every point; point {i} "
+            f"{owner}: {field} must be {valid} at every point; point {i} "
             f"has {values[i]:g} ({where.size} of {bad.size} points)"
         )
 

@@ -281,6 +281,7 @@ class Simulation:
         initial_stress: np.ndarray | None = None,
     ):
         model_checks.check_grid_and_points(mesh, points)
+        _check_state(mesh.comm, points)  # a script may have changed them after seeding
         material = model_checks.laws_of_zones(material, points, mesh.comm)
         if parallel.any_rank(mesh.comm, points.simulated_to is not None):
             warn(
@@ -1150,6 +1151,13 @@ class Simulation:
             self._by_parts = None
         if self._shift is not None:
             self._shift.destroy()
+
+
+def _check_state(comm, points: MaterialPoints) -> None:
+    """Refuse, on every rank, points whose x, volume, mass, F or stress a script made bad."""
+    parallel.check_together(
+        comm, points.check_state, "Simulation", "points.", kinds=(ValueError, TypeError)
+    )
 
 
 def _check_motion(comm, points: MaterialPoints) -> None:

@@ -621,6 +621,28 @@ def test_a_velocity_set_after_seeding_is_checked_before_the_first_step(velocity,
     assert sim.step_number == 0
 
 
+@pytest.mark.parametrize(
+    "field, value, match",
+    [
+        ("F", np.diag([1.0, -1.0]), r"Simulation: det points.F must be > 0 at every point; po"),
+        ("x", np.array([np.nan, 0.5]), r"Simulation: points.x must be finite; point 0"),
+        ("volume", 0.0, r"Simulation: points.volume must be > 0 at every point; point 0"),
+        ("mass", -1.0, r"Simulation: points.mass must be >= 0 at every point; point 0"),
+        ("stress", np.full((3, 3), np.inf), r"Simulation: points.stress must be finite; po"),
+    ],
+)
+def test_point_fields_set_after_seeding_are_checked_at_set_up(field, value, match):
+    """MaterialPoints checks its fields when built, and a script may change them
+    after: a point given det F < 0 ended in tension under gravity without a word, a
+    NaN position stopped Newton with "force scale nan" and advice about cell crossing
+    (a helper's scenes on 1 and 3 ranks, 2026-12-06)."""
+    mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (2, 2))
+    points = fe_mpm.seed(mesh, 1, density=1.0)
+    getattr(points, field)[0] = value
+    with pytest.raises(ValueError, match=match):
+        fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1e6, 0.3), body_force=(0.0, -1.0))
+
+
 # --- 4. boundary conditions ---------------------------------------------------------------
 
 
