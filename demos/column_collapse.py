@@ -217,7 +217,7 @@ def record(report: fe_mpm.StepReport) -> None:
 
 try:
     reports = sim.run(
-        t_end=t_end, n_steps=int(round(t_end / args.dt)), progress=not args.json, on_step=record
+        t_end=t_end, n_steps=max(1, round(t_end / args.dt)), progress=not args.json, on_step=record
     )
 except (fe_mpm.ConvergenceError, fe_mpm.PointsOutsideError) as err:
     sys.exit(f"column_collapse.py: {err}")

@@ -164,7 +164,7 @@ if not wall:
         fe_mpm.RigidWall("side", lambda x: np.isclose(x[1], w_c / 2) & (x[0] > x_face - tol)),
         fe_mpm.RigidWall("back", lambda x: np.isclose(x[0], x_face + l_c) & (x[1] < w_c / 2 + tol)),
     ]
-steps = round(args.t_end / args.dt)
+steps = max(1, round(args.t_end / args.dt))
 try:
     sim = fe_mpm.Simulation(
         grid,

@@ -218,7 +218,7 @@ def record(report: fe_mpm.StepReport) -> None:
 
 
 try:
-    reports = sim.run(t_end, round(t_end / args.dt), progress=not args.json, on_step=record)
+    reports = sim.run(t_end, max(1, round(t_end / args.dt)), progress=not args.json, on_step=record)
 except (fe_mpm.ConvergenceError, fe_mpm.PointsOutsideError, ValueError) as err:
     sys.exit(f"dam_break.py: {err}")
 t, Z, H = np.array(history).T

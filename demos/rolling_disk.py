@@ -122,7 +122,7 @@ def record(report: fe_mpm.StepReport) -> None:
 
 try:
     reports = sim.run(
-        args.t_end, round(args.t_end / args.dt), progress=not args.json, on_step=record
+        args.t_end, max(1, round(args.t_end / args.dt)), progress=not args.json, on_step=record
     )
 except fe_mpm.ConvergenceError as err:
     sys.exit(f"rolling_disk.py: {err}")

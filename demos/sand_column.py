@@ -198,7 +198,7 @@ def record(report: fe_mpm.StepReport) -> None:
 
 
 try:
-    reports = sim.run(t_end, round(t_end / args.dt), progress=not args.json, on_step=record)
+    reports = sim.run(t_end, max(1, round(t_end / args.dt)), progress=not args.json, on_step=record)
 except (fe_mpm.ConvergenceError, fe_mpm.PointsOutsideError) as err:
     sys.exit(f"sand_column.py: {err}")
 t, H, L, energy = np.array(history).T

@@ -124,7 +124,7 @@ try:
 
     com = [(0.0, 0.0)]
     reports = []
-    for k in range(1, round(args.t_end / args.dt) + 1):
+    for k in range(1, max(1, round(args.t_end / args.dt)) + 1):
         reports.extend(sim.run(k * args.dt, 1, progress=False))
         com.append((reports[-1].t, slide()))
 except (ValueError, fe_mpm.ConvergenceError, fe_mpm.PointsOutsideError) as err:

@@ -434,13 +434,15 @@ class BoundaryPointStep:
         g = pp.x.shape[1]
         rows = np.flatnonzero(rows)
         at = pp.corners[rows].reshape(-1, g)
-        cells, found = tracker.claim(at, self._occupied, tol=SNAP_REACH)
+        cells, _ = tracker.claim(at, self._occupied, tol=SNAP_REACH)
         shift = np.zeros_like(at)
         mine = cells >= 0
         if np.any(mine):
             shift[mine] = displacement_at(cells[mine], tracker.barycentric(at[mine], cells[mine]))
         shift = parallel.total(comm, shift)
-        alone = ~found  # read where the point is instead
+        # No rank's occupied cell took the corner (found only says the grid holds it):
+        # it moves with its point.
+        alone = parallel.total(comm, mine.astype(np.int64)) == 0
         shift[alone] = np.repeat(moved[rows], g, axis=0)[alone]
         pp.corners[rows] += shift.reshape(-1, g, g)
         pp.area[rows] = pp.face_scale[rows, None] * face_vectors(pp.corners[rows])

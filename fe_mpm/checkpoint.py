@@ -160,6 +160,25 @@ def write(sim, directory: str | Path) -> Path:
     return final
 
 
+def _check_corners(sim, shared, path: Path) -> None:
+    """Refuse a checkpoint without corners for the PointPressure points that have them.
+
+    Written without ``corners=`` (NaN) or before them (absent), a face read off those
+    corners, or off the undeformed facets, would lose its load without a word (a
+    review's restore, 2026-12-06, gave every area NaN after a step).
+    """
+    if sim._boundary is None or not np.any(sim._boundary.points.framed):
+        return
+    framed = sim._boundary.points.framed
+    saved = shared["boundary_corners"] if "boundary_corners" in shared else None
+    if saved is None or saved.shape[0] != framed.size or not np.isfinite(saved[framed]).all():
+        raise CheckpointError(
+            f"checkpoint {path}: it holds no facet corners for the PointPressure points "
+            "that have them here; build the PointPressure as the checkpointed run did "
+            "(without corners=), or restore a checkpoint written with them"
+        )
+
+
 def read(sim, path: str | Path) -> None:
     """Put the state of the checkpoint at ``path`` into ``sim``; collective.
 
@@ -193,6 +212,7 @@ def read(sim, path: str | Path) -> None:
         shared = _load(path / "shared.npz", state["shared_sha256"], None)
         points = _joined(loaded, sim)
         domains = _joined_domains(loaded, sim, path)
+        _check_corners(sim, shared, path)
     except CheckpointError as err:
         error = err
     parallel.raise_together(comm, error)
@@ -228,7 +248,7 @@ def read(sim, path: str | Path) -> None:
         sim._boundary.points.x[:] = shared["boundary_x"]
         if "boundary_area" in shared:  # the faces of PointPressure (absent before them)
             sim._boundary.points.area[:] = shared["boundary_area"]
-        if "boundary_corners" in shared:  # and their corners (absent before 2026-12-06)
+        if "boundary_corners" in shared:  # their corners (absent before 2026-12-06)
             sim._boundary.points.corners[:] = shared["boundary_corners"]
         sim._boundary._nslot = state["boundary_slots"]
     sim.t, sim.step_number = float(state["t"]), int(state["step"])

@@ -92,7 +92,6 @@ class GridFields:
         p: UFL pressure (a view of ``w``), or None.
         volume_change: UFL averaged volume change θ of the step (a view of
             ``w``, NB-VA): a scalar, or a vector of one θ per zone; or None.
-        zones: How many θ NB-VA keeps (the body's laws; 1 otherwise).
         U: The displacement (sub)space, where Dirichlet conditions act.
         Q: The collapsed space of the scalar field (p, or the first zone's θ) and
             its dofs in ``W``, or None.

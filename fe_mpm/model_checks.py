@@ -142,7 +142,11 @@ def check_projection_passes(
             "dissipation, bossak_alpha in [-1/3, 0) (e.g. -0.3): with the trapezoidal "
             "rule a contact rings and gains energy; or use projection_passes=1"
         )
-    moving = [s for s in supports if callable(s.value) or s.profile is not None]
+    moving = [
+        s
+        for s in supports
+        if callable(getattr(s, "value", None)) or getattr(s, "profile", None) is not None
+    ]
     if moving and bossak_alpha == 0.0:
         raise ValueError(
             "Simulation: projection_passes > 1 with a support that moves (a Dirichlet "
@@ -491,13 +495,21 @@ def check_weight_of_initial_stress(
     two-thousandth of what it holds up, and the layer springs up in its first
     step without a word (a helper following the docs' example, 2026-12-06).
     """
-    placeholder = stressed and body_force is not None and not points.density_given
-    if parallel.any_rank(comm, placeholder):  # one rank may hold no points
+    weighs = body_force is not None and np.any(np.asarray(body_force, dtype=float) != 0.0)
+    placeholder = (
+        stressed
+        and weighs
+        and not points.density_given
+        # masses a script set by hand after seeding are its own
+        and np.allclose(points.mass, points.volume / np.linalg.det(points.F), rtol=1e-12)
+    )
+    if parallel.any_rank(comm, bool(placeholder)):  # one rank may hold no points
         raise ValueError(
             "Simulation: initial_stress under a body force needs the points' density, "
             "but they have none (seed's placeholder, 1 kg/m³), so they would not weigh "
             "what the stress holds up. Give it with seed(..., density=...) or the law's "
-            "density=...; geostatic_stress(..., density=...) only builds the stress."
+            "density=... (or set points.mass); geostatic_stress(..., density=...) only "
+            "builds the stress."
         )
 
 

@@ -23,7 +23,8 @@ from test_taylor import assert_first_step_is_consistent
 
 import fe_mpm
 from fe_mpm import meshes
-from fe_mpm.boundary_points import BoundaryPointStep
+from fe_mpm._dolfinx import dolfinx
+from fe_mpm.boundary_points import BoundaryPoints, BoundaryPointStep
 from fe_mpm.meshes import cell_centroids, rectangle_mesh
 from fe_mpm.tracker import Tracker
 
@@ -225,3 +226,72 @@ def test_a_restored_run_keeps_the_faces_as_they_had_deformed(tmp_path):
     reports = sim.run(1.0, 2, progress=False)
     for got, want in zip(reports, expected[2:], strict=True):
         np.testing.assert_array_equal(got.reactions["top"], want.reactions["top"])
+
+
+def _small_bore(corners: bool, **options) -> fe_mpm.Simulation:
+    """A thick cylinder (bore 1, outside 2, cells of 0.2) pressed on its bore."""
+    scene = meshes.quarter_ring(1.0, 2.0, 0.2, 1.0)
+    points = fe_mpm.seed(scene.mesh, 3, cells=scene.cell_tags.find(meshes.RING_BODY))
+    bore = scene.facet_tags.find(meshes.RING_INNER)
+    x, w, pieces = meshes.facet_points(scene.mesh, bore, corners=True)
+    load = fe_mpm.PointPressure(
+        "bore",
+        x,
+        w,
+        -x / np.linalg.norm(x, axis=1)[:, None],
+        60.0,
+        scale=lambda t: t,
+        corners=pieces if corners else None,
+    )
+    return fe_mpm.Simulation(
+        scene.mesh,
+        points,
+        fe_mpm.NeoHookean(1000.0, 0.499),
+        "up",
+        facet_tags=scene.facet_tags,
+        dirichlet=[
+            fe_mpm.Dirichlet(meshes.RING_X_AXIS, component=1),
+            fe_mpm.Dirichlet(meshes.RING_Y_AXIS, component=0),
+        ],
+        point_tractions=[load],
+        point_domains=True,
+        **options,
+    )
+
+
+def test_the_faces_corners_are_restored_and_a_checkpoint_without_them_is_refused(tmp_path):
+    """A run with corners restored after 2 of 4 steps repeats the uninterrupted one to
+    every digit; a checkpoint written without corners, restored into a simulation whose
+    PointPressure has them, would read NaN corners (every area NaN a step later, a
+    review found) and is refused."""
+    expected = _small_bore(True, checkpoint_dir=tmp_path / "with", checkpoint_every=2).run(
+        1.0, 4, progress=False
+    )
+    sim = _small_bore(True)
+    sim.restore(tmp_path / "with" / "step_000002")
+    for got, want in zip(sim.run(1.0, 2, progress=False), expected[2:], strict=True):
+        np.testing.assert_array_equal(got.reactions["bore"], want.reactions["bore"])
+    _small_bore(False, checkpoint_dir=tmp_path / "without", checkpoint_every=2).run(
+        0.5, 2, progress=False
+    )
+    with pytest.raises(ValueError, match="holds no facet corners for the PointPressure"):
+        _small_bore(True).restore(tmp_path / "without" / "step_000002")
+
+
+def test_a_corner_no_occupied_cell_reaches_moves_with_its_point():
+    """A corner in the grid but past every occupied cell's reach has no field to read:
+    it moves with its load point. It stayed where it was (a review, 2026-12-06): the
+    fallback took corners outside the grid only."""
+    mesh = rectangle_mesh((0.0, 0.0), (4.0, 1.0), (4, 1))
+    top = dolfinx.mesh.locate_entities_boundary(
+        mesh, 1, lambda x: np.isclose(x[1], 1.0) & (x[0] < 1.01)
+    )
+    x, w, corners = meshes.facet_points(mesh, top, corners=True)
+    load = fe_mpm.PointPressure("top", x, w, (0.0, 1.0), 1.0, corners=corners)
+    step = BoundaryPointStep(BoundaryPoints([load], 2), Tracker(mesh), 1)
+    step._occupied = step.tracker.centroids[:, 0] < 1.0  # the body: the first cells
+    step.points.corners[:] += (2.5, -0.5)  # corners moved far past them
+    before = step.points.corners.copy()
+    moved = np.full((len(w), 2), 0.01)  # what the points moved by
+    step._move_corners(lambda cells, bary: np.full((len(cells), 2), 0.02), moved, w > 0)
+    np.testing.assert_allclose(step.points.corners - before, 0.01, rtol=0, atol=1e-15)
