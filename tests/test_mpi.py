@@ -512,11 +512,13 @@ try:
         reports = sim.run(1.0, 6, progress=False)
         result = {"face": [r.markers["face"].tolist() for r in reports],
                   "force": [r.reactions["cavity"].tolist() for r in reports]}
-    elif case == "zones":
+    elif case in ("zones", "zones nbva"):  # NB-VA: one averaged volume change per zone
         from fe_mpm import scenes
         from fe_mpm.materials import HenckyJ2
         laws = [HenckyJ2(1000.0, 0.3, 1.0), fe_mpm.MohrCoulomb.tresca(1000.0, 0.3, 1.5)]
-        sim = scenes.platen_compression(6, 3, layers=laws, formulation="up", point_domains=True)
+        formulation = "up" if case == "zones" else "u-nbva"
+        sim = scenes.platen_compression(6, 3, layers=laws, formulation=formulation,
+                                        point_domains=True)
         reports = sim.run(0.6, 6, progress=False)
         pts = sim.points
         agree = bool(np.all(np.rint(pts.history["material"]) == pts.material))
@@ -743,13 +745,15 @@ def test_a_pressure_that_follows_a_cavitys_face_gives_the_serial_answer_on_two_r
         np.testing.assert_allclose(result["force"], serial["force"], rtol=1e-9)
 
 
-def test_a_body_of_two_laws_gives_the_serial_answer_on_two_ranks(tmp_path):
+@pytest.mark.parametrize("case", ["zones", "zones nbva"])
+def test_a_body_of_two_laws_gives_the_serial_answer_on_two_ranks(tmp_path, case):
     """Two plastic bands side by side (a principal-space J2 and Tresca, point domains,
-    u-p) squeezed by a platen: the force at every step and each band's plastic strain
-    as serial to 1e-9, and every point keeps its law as it moves to another rank."""
-    (serial,) = _run(tmp_path, "zones", 1)
+    u-p, and NB-VA with its average per zone) squeezed by a platen: the force at every
+    step and each band's plastic strain as serial to 1e-9, and every point keeps its
+    law as it moves to another rank."""
+    (serial,) = _run(tmp_path, case, 1)
     assert min(serial["strain"]) > 0.0  # both bands yield
-    for result in _run(tmp_path, "zones", 2):
+    for result in _run(tmp_path, case, 2):
         assert result["agree"]
         np.testing.assert_allclose(result["force"], serial["force"], rtol=1e-9)
         np.testing.assert_allclose(result["strain"], serial["strain"], rtol=1e-9)
