@@ -154,36 +154,26 @@ def test_bad_point_pressures_are_refused_with_the_field_named():
         fe_mpm.PointPressure("top", x, 0.1, (1.0, 0.0), P, corners=pieces)
 
 
-def _inflated_cylinder(corners: bool) -> tuple[float, float]:
-    """A plane-strain Neo-Hookean thick cylinder (bore 1, outside 2, E = 1000, ν =
-    0.499, cells of 0.1, point domains) inflated by a PointPressure on its bore in 10
-    steps to the pressure that takes an incompressible one to a bore of 2 (a quarter,
-    on rollers): the load points' area over the polyline through them at the end,
-    and the pressure of the bore reached over the pressure applied (closed form)."""
-    A, B, law = 1.0, 2.0, fe_mpm.NeoHookean(1000.0, 0.499)
+#: The thick cylinder of these tests: bore A, outside B, a Neo-Hookean law near
+#: incompressibility.
+A, B, BORE_LAW = 1.0, 2.0, fe_mpm.NeoHookean(1000.0, 0.499)
 
-    def pressure(a: float) -> float:  # Rivlin's, for the incompressible law
-        c = a * a - A * A
-        b = np.sqrt(B * B + c)
-        return law.mu * (np.log(B / A) - np.log(b / a) + 0.5 * c * (1 / a**2 - 1 / b**2))
 
-    scene = meshes.quarter_ring(A, B, 0.1, np.sqrt(B * B + 3.0) - B + 0.3)
+def _bore(h: float, margin: float, pressure: float, corners: bool, **options):
+    """A quarter of the cylinder on rollers, on cells of h with ``margin`` of grid
+    around it, pressed on its bore by a PointPressure rising to ``pressure``."""
+    scene = meshes.quarter_ring(A, B, h, margin)
     points = fe_mpm.seed(scene.mesh, 3, cells=scene.cell_tags.find(meshes.RING_BODY))
     bore = scene.facet_tags.find(meshes.RING_INNER)
     x, w, pieces = meshes.facet_points(scene.mesh, bore, corners=True)
+    normal = -x / np.linalg.norm(x, axis=1)[:, None]
     load = fe_mpm.PointPressure(
-        "bore",
-        x,
-        w,
-        -x / np.linalg.norm(x, axis=1)[:, None],
-        pressure(2.0),
-        scale=lambda t: t,
-        corners=pieces if corners else None,
+        "bore", x, w, normal, pressure, scale=lambda t: t, corners=pieces if corners else None
     )
-    sim = fe_mpm.Simulation(
+    return fe_mpm.Simulation(
         scene.mesh,
         points,
-        law,
+        BORE_LAW,
         "up",
         facet_tags=scene.facet_tags,
         dirichlet=[
@@ -192,7 +182,22 @@ def _inflated_cylinder(corners: bool) -> tuple[float, float]:
         ],
         point_tractions=[load],
         point_domains=True,
+        **options,
     )
+
+
+def _inflated_cylinder(corners: bool) -> tuple[float, float]:
+    """The cylinder (cells of 0.1, point domains) inflated in 10 steps to the pressure
+    that takes an incompressible one to a bore of 2: the load points' area over the
+    polyline through them at the end, and the pressure of the bore reached over the
+    pressure applied (closed form)."""
+
+    def pressure(a: float) -> float:  # Rivlin's, for the incompressible law
+        c = a * a - A * A
+        b = np.sqrt(B * B + c)
+        return BORE_LAW.mu * (np.log(B / A) - np.log(b / a) + 0.5 * c * (1 / a**2 - 1 / b**2))
+
+    sim = _bore(0.1, np.sqrt(B * B + 3.0) - B + 0.3, pressure(2.0), corners)
     sim.add_marker("middle", (A / np.sqrt(2.0), A / np.sqrt(2.0)))
     report = sim.run(1.0, 10, progress=False)[-1]
     at = sim._boundary.points.x
@@ -229,34 +234,8 @@ def test_a_restored_run_keeps_the_faces_as_they_had_deformed(tmp_path):
 
 
 def _small_bore(corners: bool, **options) -> fe_mpm.Simulation:
-    """A thick cylinder (bore 1, outside 2, cells of 0.2) pressed on its bore."""
-    scene = meshes.quarter_ring(1.0, 2.0, 0.2, 1.0)
-    points = fe_mpm.seed(scene.mesh, 3, cells=scene.cell_tags.find(meshes.RING_BODY))
-    bore = scene.facet_tags.find(meshes.RING_INNER)
-    x, w, pieces = meshes.facet_points(scene.mesh, bore, corners=True)
-    load = fe_mpm.PointPressure(
-        "bore",
-        x,
-        w,
-        -x / np.linalg.norm(x, axis=1)[:, None],
-        60.0,
-        scale=lambda t: t,
-        corners=pieces if corners else None,
-    )
-    return fe_mpm.Simulation(
-        scene.mesh,
-        points,
-        fe_mpm.NeoHookean(1000.0, 0.499),
-        "up",
-        facet_tags=scene.facet_tags,
-        dirichlet=[
-            fe_mpm.Dirichlet(meshes.RING_X_AXIS, component=1),
-            fe_mpm.Dirichlet(meshes.RING_Y_AXIS, component=0),
-        ],
-        point_tractions=[load],
-        point_domains=True,
-        **options,
-    )
+    """The cylinder on cells of 0.2, its bore pressed to 60 Pa."""
+    return _bore(0.2, 1.0, 60.0, corners, **options)
 
 
 def test_the_faces_corners_are_restored_and_a_checkpoint_without_them_is_refused(tmp_path):
