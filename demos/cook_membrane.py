@@ -213,7 +213,7 @@ summary = {
     "newton_iterations": int(sum(iterations)),
     "newton_iterations_per_step": iterations,
     "wall_time_s": wall,
-    "timings": sim.timings,
+    "timings": sim.timings,  # seconds by phase
     "point_imbalance": max(r.point_imbalance for r in reports),
     "n_particles": n_points,
     "n": args.n,
@@ -225,7 +225,6 @@ summary = {
     "reference": None
     if reference is None
     else {"source": reference[0], "tip_displacement_y": reference[1]},
-    "timings_s": sim.timings,
 }
 # -
 
@@ -258,6 +257,7 @@ if reference is None:
         f"ν = {args.nu}, E = {args.E:g}, "
         f"{'structured' if args.structured else 'unstructured'} grid, "
         f"{args.mp_per_cell} point(s) per triangle"
+        + (f", PPP α = {args.ppp_alpha:g}" if args.formulation == "up" else "")
     )
 elif args.formulation == "up-nostab" and args.nu != 0.33:
     not_checked = "the thesis's quasi-incompressible UP no stab column fits another ν"
