@@ -29,7 +29,7 @@
 # total imposed displacement), steel-like E = 200 GPa and σ_Y = 250 MPa, and
 # ν = 0.3 (compressible) or 0.4999 (incompressible). 3 points per triangle
 # (the thesis uses 12): they sit far enough inside the cells that none crosses
-# the pulled top line.
+# the pulled top line while h > 6 U (checked below).
 #
 # Usage: `python demos/tension_plate.py --formulation up --nu 0.4999 --json`.
 
@@ -80,6 +80,13 @@ rank0 = parallel.print_on_rank_zero()  # every rank runs this script; one prints
 # pseudo-time t ∈ [0, 1]; its reaction is the pulling force.
 
 # +
+# The grid ends at the pulled line, and the points nearest it sit h/6 below it: a
+# pull U ≥ h/6 carries them past it (h = 0.5 mm stopped in step 14, 2026-12-06).
+if not args.h > 6.0 * args.displacement:
+    sys.exit(
+        f"tension_plate.py: --h {args.h:g} must exceed 6 U = {6.0 * args.displacement:g} m: "
+        "the points nearest the pulled top line sit h/6 below it and would cross it"
+    )
 try:
     scene = meshes.tension_specimen(args.width, args.height, args.h)
     material = fe_mpm.J2Plasticity(args.E, args.nu, args.yield_stress, args.hardening, 7800.0)
