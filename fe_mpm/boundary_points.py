@@ -50,6 +50,11 @@ P2_FAR_SHARE = 0.25
 #: uniform PointTraction on its top, midpoints, ``"up-p2p1"``: σ_yy off by up to 39 %,
 #: σ_xx up to 0.32 of the load; with ``degree=2`` (two points an edge) exact.
 P2_SPARSE_SHARE = 0.5
+#: What too many boundary points in a cell are, and the cure (:func:`~fe_mpm.quadrature.bucket`).
+CROWDED_CELL = (
+    "boundary points (of PointDirichlet, PointTraction and PointPressure together)",
+    "place fewer (meshes.facet_points(..., subdivisions=k) puts k^(g-1) pieces on each facet)",
+)
 
 
 class BoundaryPoints:
@@ -291,12 +296,8 @@ class BoundaryPointStep:
         if not self._checked_rule:
             self._checked_rule = True
             self._warn_sparse_loads(cells)
-        crowded = (
-            "boundary points (of PointDirichlet, PointTraction and PointPressure together)",
-            "place fewer (meshes.facet_points(..., subdivisions=k) puts k^(g-1) pieces on "
-            "each facet)",
-        )
-        self._nslot = slot_count(np.bincount(cells), self._nslot, tracker.mesh.comm, crowded)
+        counts = np.bincount(cells)
+        self._nslot = slot_count(counts, self._nslot, tracker.mesh.comm, CROWDED_CELL)
         self.layout = SlotLayout.from_cells(cells, self._nslot)
         return self.layout
 

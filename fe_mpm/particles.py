@@ -96,12 +96,11 @@ class MaterialPoints:
         self.mass = (
             check_finite("MaterialPoints", "mass", self.mass, what="point").reshape(n).copy()
         )
-        _refuse_points("volume", self.volume <= 0, "> 0", self.volume)
-        _refuse_points("mass", self.mass < 0, ">= 0", self.mass)
         if self.F is None:
             self.F = np.tile(np.eye(g), (n, 1, 1))
         else:
             self.F = self._checked_F(n, g).copy()
+        self._refuse_bad_values()
         if self.stress is None:
             self.stress = np.zeros((n, 3, 3))
         else:
@@ -166,6 +165,13 @@ class MaterialPoints:
                     f"{owner}: {prefix}{name} must have shape {shape}, got {np.shape(value)}"
                 )
             check_finite(owner, prefix + name, value, what="point")
+        self._refuse_bad_values(owner, prefix)
+
+    def _refuse_bad_values(self, owner: str = "MaterialPoints", prefix: str = "") -> None:
+        """Refuse a volume ≤ 0, a mass < 0 or det F ≤ 0, naming the first such point.
+
+        det F ≤ 0 is an inverted or flattened point: its volume V = J V₀ would be ≤ 0.
+        """
         _refuse_points(prefix + "volume", self.volume <= 0, "> 0", self.volume, owner)
         _refuse_points(prefix + "mass", self.mass < 0, ">= 0", self.mass, owner)
         J = np.linalg.det(self.F)
@@ -192,13 +198,10 @@ class MaterialPoints:
         return labels.astype(np.int32)
 
     def _checked_F(self, n: int, g: int) -> np.ndarray:
-        """The given deformation gradients as a (n, g, g) float array with det F > 0."""
+        """The given deformation gradients as a finite (n, g, g) float array."""
         F = check_finite("MaterialPoints", "F", self.F, what="point")
         if F.shape != (n, g, g):
             raise ValueError(f"MaterialPoints: F must have shape {(n, g, g)}, got {F.shape}")
-        # det F ≤ 0 is an inverted or flattened point: its volume V = J V₀ would be ≤ 0.
-        J = np.linalg.det(F)
-        _refuse_points("det F", J <= 0, "> 0", J)
         return F
 
     def __len__(self) -> int:

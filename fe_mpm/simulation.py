@@ -281,7 +281,7 @@ class Simulation:
         initial_stress: np.ndarray | None = None,
     ):
         model_checks.check_grid_and_points(mesh, points)
-        _check_state(mesh.comm, points)  # a script may have changed them after seeding
+        _check_points(mesh.comm, points.check_state)  # a script may change them after seeding
         material = model_checks.laws_of_zones(material, points, mesh.comm)
         if parallel.any_rank(mesh.comm, points.simulated_to is not None):
             warn(
@@ -303,7 +303,7 @@ class Simulation:
         model_checks.check_output_dir(output_dir)
         model_checks.check_dynamics(dynamic, formulation, damping, mass, bossak_alpha)
         if dynamic:  # before any point migrates; step() checks again (set after this)
-            _check_motion(mesh.comm, points)
+            _check_points(mesh.comm, points.check_motion)
         self.spec = FORMULATIONS[formulation]
         self._volume_of_pressure = self.spec.pressure and not keeps_shape
         self._volume_of_average = self.spec.volume_average and not keeps_shape
@@ -759,7 +759,7 @@ class Simulation:
             raise ValueError(f"Simulation.step: t_new must exceed the current time {self.t}")
         if self.dynamic and self.step_number == 0:
             # A script gives a body its velocity by setting points.velocity after seeding.
-            _check_motion(self.mesh.comm, self.points)
+            _check_points(self.mesh.comm, self.points.check_motion)
         if self.step_number == 0:  # written once: the output skips a step it has written
             self._write_output(force=True)  # the initial state as the t = 0 frame
         self._grid_is_a_step = False  # until the step is accepted: an attempt's iterate
@@ -1153,15 +1153,11 @@ class Simulation:
             self._shift.destroy()
 
 
-def _check_state(comm, points: MaterialPoints) -> None:
-    """Refuse, on every rank, points whose x, volume, mass, F or stress a script made bad."""
-    parallel.check_together(
-        comm, points.check_state, "Simulation", "points.", kinds=(ValueError, TypeError)
-    )
+def _check_points(comm, check: Callable[[str, str], None]) -> None:
+    """Refuse on every rank what a points' check refuses on one.
 
-
-def _check_motion(comm, points: MaterialPoints) -> None:
-    """Refuse, on every rank, a velocity or acceleration that is not finite or of shape (n, g)."""
-    parallel.check_together(
-        comm, points.check_motion, "Simulation", "points.", kinds=(ValueError, TypeError)
-    )
+    ``check`` is ``points.check_state`` (x, volume, mass, F, stress) or
+    ``points.check_motion`` (velocity, acceleration); the message names the field as
+    a script sets it (``points.x``).
+    """
+    parallel.check_together(comm, check, "Simulation", "points.", kinds=(ValueError, TypeError))
