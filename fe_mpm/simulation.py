@@ -387,7 +387,10 @@ class Simulation:
         self._conditions_warned: dict[int, float] = {}
         self._iterations_of_old_grids = 0  # Newton iterations on grids since repartitioned
         self.output = None
-        self._rows_written = 0  # steps in the output's steps.csv (and walls.csv)
+        # The steps whose CSV rows are not yet written, and the step whose columns the
+        # CSV has: kept apart from ``history``, which a long run's script may shorten.
+        self._unwritten: list[StepReport] = []
+        self._csv_head: StepReport | None = None
         self._grid_is_a_step = True  # the grid's fields are the last step's (or zero)
         self._cells_of_grid = True  # points.cell numbers this grid's cells (not after rebalance)
         self._shared = bool(shared_increment)
@@ -592,7 +595,8 @@ class Simulation:
             # This simulation had stepped past the checkpoint: those steps are undone
             # (found 2026-12-06 by a helper: the history read 1, 2, 3, 4, 3, 4).
             self.history = kept
-            self._rows_written = 0  # steps.csv is written anew at the next output
+            # steps.csv is written anew at the next output, from the steps kept.
+            self._unwritten, self._csv_head = (list(kept) if self.output else []), None
             if self.output is not None:
                 self.output.rewind(self.t, self.step_number)
         self.rebalancing.restart()  # a partition for these points
@@ -819,6 +823,8 @@ class Simulation:
         )
         report.walls = walls
         self.history.append(report)
+        if self.output is not None:
+            self._unwritten.append(report)
         self._grid_is_a_step = self._cells_of_grid = True  # accepted: its frame may be written
         self._write_output()
         return report
@@ -1099,13 +1105,18 @@ class Simulation:
         if out is not None and out.write(
             self.step_number, self.t, self.points, force, corners, grid, self._cells_of_grid
         ):
-            if self.history and parallel.on_rank_zero(self.mesh.comm):
+            if self._unwritten and parallel.on_rank_zero(self.mesh.comm):
                 # The rows of the steps since the last output only: a long run's files
-                # grow by their new steps, not rewritten whole.
-                write_steps(self.history, out.folder / "steps.csv", self._rows_written)
+                # grow by their new steps, not rewritten whole. Appended rows keep the
+                # columns of the first step written.
+                head = self._csv_head
+                rows, first = ([head, *self._unwritten], 1) if head else (self._unwritten, 0)
+                write_steps(rows, out.folder / "steps.csv", first)
                 if self.walls:
-                    write_wall_forces(self.history, out.folder / "walls.csv", self._rows_written)
-            self._rows_written = len(self.history)
+                    write_wall_forces(rows, out.folder / "walls.csv", first)
+            if self._unwritten:
+                self._csv_head = self._csv_head or self._unwritten[0]
+            self._unwritten = []
             self._add_time("output", t0)
 
     def _add_time(self, key: str, t0: float) -> None:

@@ -158,6 +158,34 @@ def test_block_at_rest_on_a_wall_weighs_on_it_in_a_static_run(tmp_path):
     assert 0.5 < entry.max() * PENALTY_FACTOR * E / H / mean_pressure < 2.0
 
 
+def test_a_run_whose_script_clears_its_history_keeps_every_steps_row(tmp_path):
+    """A long run bounds its memory by running in chunks and clearing ``sim.history``.
+
+    Outputs every second step, four chunks of three steps, the history cleared after
+    each: ``steps.csv`` and ``walls.csv`` hold steps 1–12 once each, in order, with the
+    numbers the chunks' reports gave (until 2026-12-06 they took their new rows from
+    ``history`` by position and lost steps 3–12).
+    """
+    sim, _ = _block(
+        0.0,
+        0.5,
+        dynamic=False,
+        body_force_scale=lambda t: t,
+        output_dir=tmp_path,
+        output_every=2,
+    )
+    reports = []
+    for chunk in range(4):
+        reports += sim.run(t_end=(chunk + 1) / 4, n_steps=3, progress=False)
+        sim.history.clear()
+    steps = np.genfromtxt(tmp_path / "steps.csv", delimiter=",", names=True)
+    assert list(steps["step"]) == list(range(1, 13))
+    np.testing.assert_array_equal(steps["t"], [r.t for r in reports])
+    rows = np.genfromtxt(tmp_path / "walls.csv", delimiter=",", names=True, dtype=None)
+    assert list(rows["step"]) == list(range(1, 13))
+    np.testing.assert_array_equal(rows["normal"], [r.walls["base"].normal for r in reports])
+
+
 def test_walls_hold_point_domains_as_they_hold_points():
     """With point domains the walls act on the pieces of the domains as on points.
 
