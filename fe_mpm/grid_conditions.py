@@ -74,6 +74,15 @@ def facet_node_weights(
     return nodes, weights / parallel.total(mesh.comm, float(weights.sum()))
 
 
+def follow_the_body(label: str) -> str:
+    """What carries the load of the grid condition ``label`` on the body instead."""
+    kind = "PointPressure" if label.startswith("Pressure") else "PointTraction"
+    carries = "a pressure" if kind == "PointPressure" else "a fixed traction"
+    return (
+        f"A grid load stays on the grid; {kind} carries {carries} on points that follow the body."
+    )
+
+
 class GridConditions:
     """Dirichlet conditions, tractions, body force and reaction boundaries of a grid.
 
@@ -269,9 +278,13 @@ class GridConditions:
                 warn(
                     f"{self.traction_labels[i]}: {n_idle} of its {n_nodes} grid nodes carry "
                     f"no material at the step to t = {t_new:g}, so {100 * share:.1f} % of its "
-                    "load is lost (StepReport.lost_load). A grid load stays on the grid; "
-                    "PointTraction carries a fixed traction on points that follow the body."
+                    "load is lost (StepReport.lost_load). "
+                    + follow_the_body(self.traction_labels[i])
                 )
+
+    def lost_loads(self) -> dict[str, float]:
+        """The share of each grid load that the last step lost, by label, where > 0."""
+        return {self.traction_labels[i]: share for i, share in self.lost_load.items() if share > 0}
 
     def reactions(self, residual: Callable[[], np.ndarray]) -> dict[str, np.ndarray]:
         """The force (g,) each named boundary exerts on the body, in N (N/m in 2D).

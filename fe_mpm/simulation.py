@@ -748,6 +748,7 @@ class Simulation:
                 self._given["conditions"][2],  # the body force as given
                 np.unique(self.points.cell[self.points.cell >= 0]),
             ),
+            lost_loads=self.conditions.lost_loads(),
         )
 
     def step(self, t_new: float, rebin: bool = True) -> StepReport:
@@ -764,6 +765,8 @@ class Simulation:
         if self.dynamic and self.step_number == 0:
             # A script gives a body its velocity by setting points.velocity after seeding.
             _check_points(self.mesh.comm, self.points.check_motion)
+        if not self.dynamic and self.step_number == 0:
+            self._warn_static_velocities()
         if self.step_number == 0:  # written once: the output skips a step it has written
             self._write_output(force=True)  # the initial state as the t = 0 frame
         self._grid_is_a_step = False  # until the step is accepted: an attempt's iterate
@@ -828,6 +831,22 @@ class Simulation:
         self._grid_is_a_step = self._cells_of_grid = True  # accepted: its frame may be written
         self._write_output()
         return report
+
+    def _warn_static_velocities(self) -> None:
+        """Warn (collective) where a static run's points carry velocities it ignores.
+
+        A script that sets ``points.velocity`` and forgets ``dynamic=True`` ran without
+        a word, and the points kept their velocities (a helper's scene, 2026-12-06).
+        """
+        v = self.points.velocity
+        fastest = np.sqrt(np.max(np.sum(v * v, axis=1))) if len(v) else 0.0
+        fastest = parallel.largest(self.mesh.comm, float(fastest))
+        if fastest > 0.0:
+            warn(
+                f"Simulation: the points carry velocities (the fastest {fastest:.3g} m/s) "
+                "but the run is static (dynamic=False): a static step ignores them and "
+                "leaves them as they are. Pass dynamic=True for them to act."
+            )
 
     def prepare_step(self, t_new: float, rebin: bool = True):
         """Track, pack and bind the forms of the step to ``t_new`` without solving.

@@ -489,3 +489,55 @@ def test_workflow_mistakes_are_refused_naming_the_field():
             dirichlet=[_base()],
             reactions=["base"],
         )
+
+
+def test_a_lost_grid_pressure_names_point_pressure_and_the_stop_message_names_the_loss():
+    """A grid ``Pressure`` on a grid edge the body does not reach: the warning names
+    ``PointPressure`` (it named ``PointTraction``, which cannot carry a pressure), and
+    the advice a stop message adds says how much load was lost (a helper's thick
+    sphere stopped with 14 % of its grid pressure lost, and the message spoke only
+    of cell crossing)."""
+    mesh = rectangle_mesh((0.0, 0.0), (1.0, 2.0), (4, 8))
+    points = fe_mpm.seed(mesh, per_cell=3, density=RHO, cells=_cells_below(mesh, 1.0))
+    sim = fe_mpm.Simulation(
+        mesh,
+        points,
+        fe_mpm.NeoHookean(1e5, 0.3),
+        dirichlet=[_base()],
+        tractions=[fe_mpm.Pressure(lambda x: np.isclose(x[1], 2.0), 100.0)],
+    )
+    with pytest.warns(
+        UserWarning,
+        match=r"Pressure 0: .* 100\.0 % of its load is lost.*"
+        r"PointPressure carries a pressure",
+    ):
+        report = sim.step(1.0)
+    assert report.lost_load == {"Pressure 0": pytest.approx(1.0)}
+    assert "Pressure 0 had lost 100.0 % of its load" in sim._failure_advice()
+
+
+def _cells_below(mesh, height: float) -> np.ndarray:
+    """The cells whose centroids lie below ``height``."""
+    cells = np.arange(mesh.topology.index_map(2).size_local, dtype=np.int32)
+    centroids = dolfinx.mesh.compute_midpoints(mesh, 2, cells)
+    return cells[centroids[:, 1] < height]
+
+
+def test_a_static_run_warns_that_it_ignores_the_points_velocities():
+    """Velocities set on the points of a static run: a warning says they are ignored
+    (a helper set them and forgot ``dynamic=True``; the run said nothing)."""
+    mesh = _mesh()
+    points = fe_mpm.seed(mesh, per_cell=3, density=RHO)
+    sim = fe_mpm.Simulation(
+        mesh, points, fe_mpm.NeoHookean(1e5, 0.3), body_force=(0.0, -G), dirichlet=[_base()]
+    )
+    points.velocity[:, 1] = -1.0
+    with pytest.warns(UserWarning, match=r"velocities \(the fastest 1 m/s\) .* dynamic=True"):
+        sim.step(1.0)
+    at_rest = fe_mpm.seed(mesh, per_cell=3, density=RHO)
+    sim = fe_mpm.Simulation(
+        mesh, at_rest, fe_mpm.NeoHookean(1e5, 0.3), body_force=(0.0, -G), dirichlet=[_base()]
+    )
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        sim.step(1.0)
