@@ -98,6 +98,35 @@ def test_cells_and_level_set_combine():
     assert np.all(np.isin(points.cell, left))
 
 
+def _box(x, left, right, bottom, top):
+    return np.minimum(np.minimum(x[0] - left, right - x[0]), np.minimum(x[1] - bottom, top - x[1]))
+
+
+def test_bodies_whose_edges_lie_on_grid_lines_keep_their_area_whatever_the_round_off():
+    """Boxes and L-shapes with decimal corners on the nodes of a 20 × 30 grid.
+
+    A node on the surface evaluates to ±1e-16, so round-off chose the side of a cell
+    whose vertices all lie on it: 192 of 342 boxes lost area, up to a whole cell
+    (−4.2 %; a helper's scan, 2026-12-06). Every box's area is exact to 1e-13 now,
+    and so is each L-shape's whichever way its re-entrant corner faces: there a cell
+    outside has all its vertices on the surface, which its centroid decides.
+    """
+    mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.5), (20, 30))
+    for x0 in np.round(np.arange(0.1, 0.5, 0.05), 10):
+        for y0 in np.round(np.arange(0.3, 1.0, 0.05), 10):
+            box = fe_mpm.seed(mesh, 3, level_set=lambda x: _box(x, x0, x0 + 0.3, y0, y0 + 0.2))
+            assert box.volume.sum() == pytest.approx(0.06, rel=1e-13), (x0, y0)
+    for sx in (1.0, -1.0):
+        for sy in (1.0, -1.0):
+
+            def l_shape(x, sx=sx, sy=sy):
+                y = np.stack([0.5 + sx * (x[0] - 0.5), 0.75 + sy * (x[1] - 0.75)])
+                return np.maximum(_box(y, 0.2, 0.8, 0.2, 0.4), _box(y, 0.2, 0.4, 0.2, 0.8))
+
+            points = fe_mpm.seed(mesh, 3, level_set=l_shape)
+            assert points.volume.sum() == pytest.approx(0.2, rel=1e-13), (sx, sy)
+
+
 @pytest.mark.parametrize(
     "level_set, error, match",
     [
