@@ -228,6 +228,13 @@ class MaterialPoints:
         """Total kinetic energy ``Σ ½ m_p |v_p|²`` (J per unit thickness in 2D)."""
         return 0.5 * float(self.mass @ np.sum(self.velocity**2, axis=1))
 
+    def extend(self, new: MaterialPoints) -> None:
+        """Append the points ``new`` to these, in place, as :func:`merge` joins sets."""
+        joined = merge(self, new)
+        for name in PER_POINT_FIELDS:
+            setattr(self, name, getattr(joined, name))
+        self.history = joined.history
+
     def keep(self, mask: np.ndarray) -> None:
         """Keep only the points where ``mask`` is true (used when dropping points)."""
         for name in PER_POINT_FIELDS:
@@ -499,7 +506,9 @@ def merge(*sets: MaterialPoints) -> MaterialPoints:
     if len({tuple(sorted(s.history)) for s in sets}) > 1:
         raise ValueError(
             "merge: the sets hold different internal variables "
-            f"({[sorted(s.history) for s in sets]}); merge them before a simulation fills them in"
+            f"({[sorted(s.history) for s in sets]}); merge them before a simulation fills them "
+            "in, or add new points to a running one with Simulation.add_points, which starts "
+            "theirs at the law's initial values"
         )
     history = {name: np.concatenate([s.history[name] for s in sets]) for name in sets[0].history}
     fields = {name: np.concatenate([getattr(s, name) for s in sets]) for name in PER_POINT_FIELDS}

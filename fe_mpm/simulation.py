@@ -24,6 +24,7 @@ from pathlib import Path
 from petsc4py import PETSc
 
 import numpy as np
+import numpy.typing as npt
 
 from fe_mpm import balance, checkpoint, model_checks, parallel
 from fe_mpm._dolfinx import dolfinx
@@ -561,6 +562,110 @@ class Simulation:
             raise PointsOutsideError(f"marker {name!r} at {xm} is outside the grid")
         self.markers.add(name, xm, self.points.x)
 
+    def remove_points(self, remove: npt.ArrayLike) -> int:
+        """Remove this rank's points where ``remove`` is true, between steps (excavation).
+
+        What follows the points follows: the markers' hosts and the cells a retry
+        may hold the points in are renumbered, and the next frame and checkpoint hold
+        the points that stay. A script that called ``sim.points.keep(mask)`` itself
+        left them on the old numbering: a marker moved with another point, or the
+        next step failed with an ``IndexError`` (a helper's trench, 2026-12-06).
+        Collective: every rank calls it, with a mask of its own points.
+
+        Args:
+            remove: Boolean mask over this rank's points, shape (n,).
+
+        Returns:
+            The number of points removed on all ranks.
+
+        Raises:
+            ValueError: The mask is not boolean of shape (n,), it removes a marker's
+                host point or every point, or the run has point domains (their
+                tiling has no hole: build a new Simulation from the points kept).
+        """
+        remove = np.asarray(remove)
+        n = len(self.points)
+        if remove.dtype != bool or remove.shape != (n,):
+            raise ValueError(
+                f"Simulation.remove_points: remove must be a boolean mask of shape ({n},) "
+                f"over this rank's points, got dtype {remove.dtype} and shape {remove.shape}"
+            )
+        if self.domains is not None:
+            raise ValueError(
+                "Simulation.remove_points: the points have domains, which tile the body "
+                "and cannot leave a hole; keep the points (sim.points.keep(~remove)) and "
+                "build a new Simulation from them"
+            )
+        hosts = [name for name, host in self.markers.hosts().items() if remove[host]]
+        error = None
+        if hosts:
+            error = ValueError(
+                f"Simulation.remove_points: it removes the host point of marker "
+                f"{hosts[0]!r}; a marker moves with its host"
+            )
+        parallel.raise_together(self.mesh.comm, error)
+        removed = int(parallel.total(self.mesh.comm, int(remove.sum())))
+        if removed == parallel.total(self.mesh.comm, n):
+            raise ValueError("Simulation.remove_points: it removes every point")
+        keep = ~remove
+        self.markers.keep_hosts(keep)
+        self.points.keep(keep)
+        self.tracking.keep(keep)
+        return removed
+
+    def add_points(self, new: MaterialPoints) -> int:
+        """Add points between steps (staged construction: a layer placed on a body).
+
+        The new points start as they are given (seeded: undeformed, unstressed, at
+        rest), their internal variables at the law's initial values; they go after
+        this rank's points, so the markers keep their hosts. Collective: every rank
+        calls it with its own new points (none on some ranks is fine).
+
+        Args:
+            new: The points to add, e.g. from :func:`~fe_mpm.seed` with ``cells=``.
+
+        Returns:
+            The number of points added on all ranks.
+
+        Raises:
+            ValueError: The points' dimension is not the grid's, they lie outside the
+                grid, one of their values is out of range, their masses were
+                given with a density where the run's were not (or the reverse), they
+                hold internal variables the law does not, or the run has point
+                domains (build a new Simulation from the points merged).
+        """
+        if not isinstance(new, MaterialPoints):
+            raise TypeError(
+                f"Simulation.add_points: new must be MaterialPoints, got {type(new).__name__}"
+            )
+        if self.domains is not None:
+            raise ValueError(
+                "Simulation.add_points: the points have domains, which tile the body as it "
+                "was seeded; merge the points (fe_mpm.merge(sim.points, new)) and build a "
+                "new Simulation from them"
+            )
+        if new.gdim != self.gdim:
+            raise ValueError(
+                f"Simulation.add_points: the new points are {new.gdim}D, the grid {self.gdim}D"
+            )
+        _check_points(self.mesh.comm, new.check_state)
+        model_checks.take_density(self.material, new)
+        unknown = sorted(set(new.history) - set(self.points.history))
+        if unknown:
+            raise ValueError(
+                f"Simulation.add_points: the new points hold internal variables {unknown} "
+                f"that the law does not ({sorted(self.points.history)})"
+            )
+        for name, h in self.material.history.items():
+            new.history.setdefault(name, h.initial_values(len(new)))
+        if MATERIAL in new.history:
+            new.history[MATERIAL] = new.material.astype(np.float64)
+        added = int(parallel.total(self.mesh.comm, len(new)))
+        self.points.extend(new)
+        self.tracking.forget()  # the new points have no accepted cell to be held in
+        self._track(self.step_number, self.t)  # points outside the grid fail now
+        return added
+
     def checkpoint(self, directory: str | Path | None = None) -> Path:
         """Write the run's state after the current step (collective); return its folder.
 
@@ -767,6 +872,7 @@ class Simulation:
             _check_points(self.mesh.comm, self.points.check_motion)
         if not self.dynamic and self.step_number == 0:
             self._warn_static_velocities()
+        self._check_point_count()
         if self.step_number == 0:  # written once: the output skips a step it has written
             self._write_output(force=True)  # the initial state as the t = 0 frame
         self._grid_is_a_step = False  # until the step is accepted: an attempt's iterate
@@ -831,6 +937,32 @@ class Simulation:
         self._grid_is_a_step = self._cells_of_grid = True  # accepted: its frame may be written
         self._write_output()
         return report
+
+    def _check_point_count(self) -> None:
+        """Refuse (collective) a step after a script added or removed points itself.
+
+        ``sim.points.keep(mask)`` or points appended in place leave the markers,
+        the cells a retry holds the points in and the domains on the old numbering:
+        a marker followed another point, or the step failed with an ``IndexError``
+        (a helper's trench, 2026-12-06). :meth:`remove_points` and :meth:`add_points`
+        renumber them.
+        """
+        n = len(self.points)
+        if self.domains is not None:
+            known = len(self.domains.corners)
+        else:
+            home = self.tracking._home
+            known = n if home is None else len(home)
+        error = None
+        if known != n:
+            error = ValueError(
+                f"Simulation.step: the points changed in number since the last step "
+                f"({known} -> {n} on rank {self.mesh.comm.rank}) behind the simulation's "
+                "back (points.keep, or arrays replaced): what follows the points (markers, "
+                "cells, domains) is on the old numbering. Use sim.remove_points(mask) and "
+                "sim.add_points(points), or build a new Simulation from the points."
+            )
+        parallel.raise_together(self.mesh.comm, error)
 
     def _warn_static_velocities(self) -> None:
         """Warn (collective) where a static run's points carry velocities it ignores.

@@ -55,6 +55,10 @@ class PointTracking:
         rank = self.tracker.mesh.comm.rank
         self._home = np.column_stack([np.full(cells.size, rank), cells]).astype(np.int64)
 
+    def keep(self, keep: np.ndarray) -> None:
+        """Keep the remembered cells of the points where ``keep`` (n,) is true."""
+        self._home = None if self._home is None else self._home[keep]
+
     def forget(self) -> None:
         """No accepted step to hold the points in (set-up, restart)."""
         self._home = None

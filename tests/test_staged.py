@@ -1,0 +1,107 @@
+"""Points removed (excavation) and added (staged construction) between steps.
+
+References: the base of a layer on rollers carries the weight of the points it holds
+to Newton's tolerance, whatever was taken away or put on before the step (measured
+1e-12 relative; bound 1e-9), and a marker moves with the point it started on.
+"""
+
+import numpy as np
+import pytest
+
+import fe_mpm
+from fe_mpm.meshes import rectangle_mesh
+
+RHO, G, E, NU = 2000.0, 9.81, 5e7, 0.3
+WIDTH, DEPTH = 4.0, 4.0
+
+
+def _layer(**options):
+    """A layer 4 m deep at rest on a 4 × 5 m grid (one 1 m row above it empty)."""
+    mesh = rectangle_mesh((0.0, 0.0), (WIDTH, 5.0), (8, 10))
+    points = fe_mpm.seed(mesh, 3, density=RHO, level_set=lambda x: DEPTH - x[1])
+    base = fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))
+    sides = fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0) | np.isclose(x[0], WIDTH), component=0)
+    sim = fe_mpm.Simulation(
+        mesh,
+        points,
+        fe_mpm.MohrCoulomb(E, NU, 1e9, 0.0),  # elastic, with internal variables
+        "u",
+        dirichlet=[base, sides],
+        body_force=(0.0, -G),
+        reactions={"base": lambda x: np.isclose(x[1], 0.0)},
+        initial_stress=fe_mpm.geostatic_stress(points, DEPTH, G, NU / (1 - NU)),
+        **options,
+    )
+    return sim, points
+
+
+def _weight(points) -> float:
+    return G * points.mass.sum()
+
+
+def test_a_trench_dug_between_steps_leaves_the_base_carrying_what_is_left():
+    """Dig a trench 1 m wide and 2 m deep after a step at rest: the base carries the
+    weight left, and a marker beside the trench moves with its own point. Done with
+    ``sim.points.keep`` instead, the marker followed a point 1.9 m away or the step
+    failed with an ``IndexError``; now the step refuses it by name."""
+    sim, points = _layer()
+    sim.add_marker("crest", (1.45, 3.95))
+    sim.step(1.0)
+    host = sim.markers.hosts()["crest"]
+    start = points.x0[host].copy()
+    trench = (np.abs(points.x[:, 0] - 2.0) < 0.5) & (points.x[:, 1] > 2.0)
+    removed = sim.remove_points(trench)
+    assert removed == trench.sum() > 0 and len(points) == trench.size - removed
+    report = sim.step(2.0)
+    assert report.reactions["base"][1] == pytest.approx(_weight(points), rel=1e-9)
+    host = sim.markers.hosts()["crest"]
+    assert np.array_equal(points.x0[host], start)
+    # The wall of the trench comes in and the ground beside it rises: the marker
+    # on its crest moves towards the trench (+x) and up, by less than a millimetre.
+    moved = sim.marker("crest") - (1.45, 3.95)
+    assert 0.0 < moved[0] < 1e-3 and 0.0 < moved[1] < 1e-3
+
+    points.keep(points.x[:, 1] < 3.0)  # behind the simulation's back
+    with pytest.raises(ValueError, match=r"points changed in number .* sim.remove_points"):
+        sim.step(3.0)
+
+
+def test_a_layer_placed_on_a_stepped_one_adds_its_weight_to_the_base():
+    """Staged construction: a second 0.5 m layer seeded on top of the first after a
+    step; its internal variables start at the law's initial values, and the base
+    carries both layers' weight."""
+    sim, points = _layer()
+    sim.step(1.0)
+    before = len(points)
+    fill = fe_mpm.seed(
+        sim.mesh, 3, density=RHO, level_set=lambda x: np.minimum(x[1] - DEPTH, DEPTH + 0.5 - x[1])
+    )
+    added = sim.add_points(fill)
+    assert added == len(fill) and len(points) == before + added
+    report = sim.step(2.0)
+    assert report.reactions["base"][1] == pytest.approx(_weight(points), rel=1e-9)
+    top = points.x0[:, 1] > DEPTH
+    assert np.all(points.x[top, 1] < points.x0[top, 1])  # the new layer settles
+
+
+@pytest.mark.parametrize(
+    ("call", "match"),
+    [
+        (lambda sim, pts: sim.remove_points(np.ones(3, dtype=bool)), r"boolean mask of shape"),
+        (lambda sim, pts: sim.remove_points(np.zeros(len(pts))), r"boolean mask"),
+        (lambda sim, pts: sim.remove_points(np.ones(len(pts), dtype=bool)), r"every point"),
+        (lambda sim, pts: sim.add_points(pts.x), r"must be MaterialPoints"),
+    ],
+)
+def test_bad_removals_and_additions_are_refused_by_name(call, match):
+    sim, points = _layer()
+    with pytest.raises((ValueError, TypeError), match=match):
+        call(sim, points)
+
+
+def test_points_with_domains_are_not_removed_or_added():
+    sim, points = _layer(point_domains=True)
+    with pytest.raises(ValueError, match=r"domains, which tile the body"):
+        sim.remove_points(points.x[:, 1] > 3.0)
+    with pytest.raises(ValueError, match=r"domains, which tile the body"):
+        sim.add_points(fe_mpm.seed(sim.mesh, 1, density=RHO))
