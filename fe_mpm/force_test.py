@@ -7,7 +7,7 @@ in play, with a floor at the round-off of the internal forces.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from petsc4py import PETSc
 
@@ -72,6 +72,9 @@ class NewtonResult:
         force_scale: The forces in play at the last iterate whose forces were finite,
             S (N; N/m in 2D).
         tolerance: The largest ‖R‖ accepted at that scale (N).
+        attempts: The line searches of the solves joined in ``residual_norms``, and
+            how many of its entries each gave (:meth:`RetryLadder.solve` joins them);
+            empty for one solve.
     """
 
     converged: bool
@@ -80,6 +83,7 @@ class NewtonResult:
     residual_norms: list[float]
     force_scale: float = 0.0
     tolerance: float = 0.0
+    attempts: list[tuple[str, int]] = field(default_factory=list)
 
     @property
     def relative_residual(self) -> float:

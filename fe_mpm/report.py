@@ -236,20 +236,36 @@ def newton_failure(
     mass holds them); in a dynamic run with the consistent mass the cells with too few
     points to hold their nodes by it (``degree``: the displacement's, 1 or 2).
     """
-    norms = ", ".join(f"{r:.3e}" for r in result.residual_norms)
+    norms = _norms_by_attempt(result)
     if not dynamic:
         diagnosis = hinge_diagnosis(mesh, layout, centroids)
     elif consistent_mass:
         diagnosis = sparse_mass_diagnosis(mesh, layout, centroids, degree)
     else:
         diagnosis = ""
+    ended = "the last solve " if len(result.attempts) > 1 else ""
     return ConvergenceError(
         f"Newton failed in step {step} (t = {t_old:g} -> {t_new:g}) after "
-        f"{result.iterations} iterations: {result.reason}; ‖R‖ history: [{norms}] "
+        f"{result.iterations} iterations: {ended}{result.reason}; ‖R‖ history: {norms} "
         f"against the force scale {result.force_scale:.3e} (accepted: ‖R‖ <= "
         f"{result.tolerance:.3e}). {diagnosis}"
         "Points were not updated and nothing was written for this step."
     )
+
+
+def _norms_by_attempt(result: NewtonResult) -> str:
+    """‖R‖ of each iterate, in brackets per solve, each named by its line search.
+
+    Joined in one list, a solve that was still falling read as part of the next one,
+    whose stall test names its own smallest ‖R‖ (a helper's slope, 2026-12-06).
+    """
+    attempts = result.attempts or [("", len(result.residual_norms))]
+    parts, start = [], 0
+    for search, count in attempts:
+        norms = ", ".join(f"{r:.3e}" for r in result.residual_norms[start : start + count])
+        parts.append(f"{search} [{norms}]" if len(attempts) > 1 else f"[{norms}]")
+        start += count
+    return "; ".join(parts)
 
 
 class ProgressBar:

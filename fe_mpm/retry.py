@@ -133,9 +133,13 @@ class RetryLadder:
         result = None
         for search in self.line_searches(configured):
             attempt = newton(search, self.resume and result is not None)
+            tried = (search or configured, len(attempt.residual_norms))
             if result is not None:
                 attempt.residual_norms = result.residual_norms + attempt.residual_norms
                 attempt.iterations += result.iterations
+                attempt.attempts = [*result.attempts, tried]
+            else:
+                attempt.attempts = [tried]
             result = attempt
             if result.converged:
                 break
