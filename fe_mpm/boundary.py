@@ -397,7 +397,12 @@ class PointDirichlet:
             rank gives all of them; each point then acts on one rank. A face that
             grows is held only where points are: lay them over all the face will
             reach (a point beyond the material waits at its target until material
-            reaches it). A block squeezed to half its length by a platen laid over
+            reaches it: until a cell that holds points lies within ``reach`` of it,
+            which may be half a cell before the body's face; from then on it holds
+            the body both ways, so it is a support, not a contact: a block thrown
+            onto a row of them was caught three quarters of a cell short and stayed
+            glued, pulled back as hard as it had pushed; for an impact or a body that
+            may lift off take a :class:`RigidWall`). A block squeezed to half its length by a platen laid over
             its initial face only flows around the platen's last point, and the
             force falls 10 % short in the last 5 % of the stroke
             (:func:`fe_mpm.scenes.platen_compression` covers the grid's side).
