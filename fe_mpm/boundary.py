@@ -402,9 +402,10 @@ class PointDirichlet:
             the body both ways, so it is a support, not a contact: a block thrown
             onto a row of them was caught three quarters of a cell short and stayed
             glued, pulled back as hard as it had pushed; for an impact or a body that
-            may lift off take a :class:`RigidWall`). A block squeezed to half its length by a platen laid over
-            its initial face only flows around the platen's last point, and the
-            force falls 10 % short in the last 5 % of the stroke
+            may lift off take a :class:`RigidWall`). A block squeezed to half its
+            length by a platen laid over its initial face only flows around the
+            platen's last point, and the force falls 10 % short in the last 5 % of
+            the stroke
             (:func:`fe_mpm.scenes.platen_compression` covers the grid's side).
         weight: Boundary measure each point represents (n,): length (m) in 2D,
             area (m²) in 3D, > 0. Points may also fill a rigid body to tie the grid

@@ -192,9 +192,9 @@ def check_passes_between_bodies(
 
 def check_grid_and_points(mesh: dolfinx.mesh.Mesh, points: MaterialPoints) -> None:
     """A non-empty simplex grid, and points of its dimension (on some rank)."""
+    simplex_cell_type(mesh)
     if mesh.topology.index_map(mesh.topology.dim).size_global == 0:
         raise ValueError("Simulation: the mesh is empty (it has no cells)")
-    simplex_cell_type(mesh)
     if parallel.total(mesh.comm, len(points)) == 0:
         raise ValueError("Simulation: there are no material points")
     if points.gdim != mesh.geometry.dim:

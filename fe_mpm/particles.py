@@ -20,6 +20,10 @@ from fe_mpm.checks import check_choice, check_finite, check_int, check_range
 from fe_mpm.cut_cells import inside_simplices
 
 #: The per-point arrays of :class:`MaterialPoints` (all indexed by point first).
+# A cell whose size (d! times its area or volume) is below this share of its longest
+# edge to the power d is flat.
+FLAT_CELL = 1e-10
+
 # A level set's value within this share of its largest magnitude is on its zero.
 LEVEL_SET_ROUND_OFF = 1e-12
 
@@ -343,6 +347,7 @@ def seed(
     check_choice("seed", "volumes", volumes, ("gauss", "equal"))
     per_cell = check_int("seed", "per_cell", per_cell, lo=1)
     material = check_int("seed", "material", material, lo=0)
+    cell_type = simplex_cell_type(mesh)
     tdim = mesh.topology.dim
     cell_map = mesh.topology.index_map(tdim)
     num_cells = cell_map.size_local
@@ -350,7 +355,6 @@ def seed(
     # selection that is empty on every rank is an error.
     if parallel.total(mesh.comm, num_cells) == 0:
         raise ValueError("seed: the mesh has no cells")
-    cell_type = simplex_cell_type(mesh)
     ref_pts, ref_wts = _rule_with_count(cell_type, per_cell)
     if cells is None:
         cells = np.arange(num_cells, dtype=np.int32)
@@ -366,7 +370,7 @@ def seed(
         nodes, piece_cell = inside_simplices(nodes, values)
         cells = cells[piece_cell]
         if parallel.total(mesh.comm, cells.size) == 0:
-            raise ValueError("seed: level_set is negative at every vertex of the cells to seed")
+            raise ValueError("seed: level_set is nowhere positive in the cells to seed")
     x0 = nodes[:, 0, :]
     jac = nodes[:, 1:, :] - x0[:, None, :]  # rows are edge vectors: x = x0 + ξ @ jac
     x = x0[:, None, :] + np.einsum("qk,ckg->cqg", ref_pts, jac)
@@ -522,7 +526,22 @@ def merge(*sets: MaterialPoints) -> MaterialPoints:
 
 
 def simplex_cell_type(mesh: dolfinx.mesh.Mesh) -> basix.CellType:
-    """The basix cell type of an affine simplex mesh; a clear error for anything else."""
+    """The basix cell type of an affine simplex mesh; a clear error for anything else.
+
+    Also refused: a grid of several cell types (a gmsh surface recombined into
+    quadrilaterals beside triangles ended in DOLFINx's "Multiple index maps of this
+    dimension"), and cells of no area or volume (a 2D gmsh model drawn in the x–z
+    plane and read with ``gdim=2`` is flat: seeding it gave a body of 1e-16 m², and
+    the first step spoke of a free rotation; a helper's scenes, 2026-12-06).
+    Collective.
+    """
+    types = mesh.topology.entity_types[-1]
+    if len(types) > 1:
+        raise ValueError(
+            "fe-mpm needs a grid of one simplex cell type, got a grid mixing "
+            f"{' and '.join(t.name for t in types)} cells (a gmsh surface recombined "
+            "into quadrilaterals? leave recombination off)"
+        )
     name = mesh.topology.cell_name()
     if name not in ("triangle", "tetrahedron"):
         raise ValueError(f"fe-mpm needs a triangle or tetrahedron mesh, got {name} cells")
@@ -533,4 +552,32 @@ def simplex_cell_type(mesh: dolfinx.mesh.Mesh) -> basix.CellType:
         )
     if mesh.geometry.cmaps[0].degree != 1:
         raise ValueError("fe-mpm needs an affine (degree-1) mesh geometry")
+    _refuse_flat_cells(mesh)
     return basix.CellType[name]
+
+
+def _refuse_flat_cells(mesh: dolfinx.mesh.Mesh) -> None:
+    """Refuse (collective) cells whose size is round-off against their longest edge.
+
+    A cell's size over its longest edge to the power d is about 0.1 to 1 for a fair
+    simplex; :data:`FLAT_CELL` is far below any cell a mesher makes.
+    """
+    tdim = mesh.topology.dim
+    cells = mesh.topology.index_map(tdim).size_local
+    corners = mesh.geometry.x[mesh.geometry.dofmaps[0][:cells], :tdim]
+    edges = corners[:, 1:, :] - corners[:, :1, :]
+    size = np.abs(np.linalg.det(edges)) if cells else np.zeros(0)
+    longest = np.zeros(cells)
+    for i in range(tdim + 1):
+        for j in range(i):
+            longest = np.maximum(longest, np.linalg.norm(corners[:, i] - corners[:, j], axis=1))
+    flat = np.flatnonzero(size <= FLAT_CELL * longest**tdim)
+    error = None
+    if flat.size:
+        k = int(flat[0])
+        error = ValueError(
+            f"fe-mpm needs cells with {'an area' if tdim == 2 else 'a volume'}: {flat.size} "
+            f"of the grid's cells are flat (first: cell {k} at {corners[k].tolist()}). Was "
+            "a 2D gmsh model drawn outside the x-y plane? Draw it in x-y."
+        )
+    parallel.raise_together(mesh.comm, error)

@@ -282,7 +282,7 @@ def test_divergence_stops_with_step_and_reason():
     # Full Newton steps fail at once (the first step makes the residual NaN); the
     # retry with the bt line search gains nothing (‖R‖ stays at the force scale) and
     # stops as stalled after six such iterates, before the limit of 8.
-    assert "after 7 iterations: stalled" in str(err.value)
+    assert "after 7 iterations: the last solve stalled" in str(err.value)
 
 
 def test_an_output_folder_that_is_not_one_is_refused_naming_it(tmp_path):

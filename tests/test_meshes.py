@@ -364,3 +364,61 @@ def test_a_graded_quarter_ring_is_fine_at_its_inner_arc_and_coarse_at_its_outer(
     area = 0.5 * np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]).sum()
     assert area == pytest.approx(math.pi / 4 * (20.0**2 - 1.0), rel=3e-3)
     assert mesh.topology.index_map(2).size_local < 3000  # uniform h = 0.1: about 70 000
+
+
+def _gmsh_grid(build, gdim: int):
+    """The grid of the model that ``build(model)`` draws and meshes, on COMM_SELF."""
+    from mpi4py import MPI
+
+    from fe_mpm.meshes.gmsh_session import gmsh_session, to_dolfinx
+
+    with gmsh_session("test") as model:
+        build(model)
+        return to_dolfinx(model, gdim, MPI.COMM_SELF).mesh
+
+
+def _in_xz_plane(model):
+    square = model.occ.addRectangle(0.0, 0.0, 0.0, 1.0, 1.0)
+    model.occ.rotate([(2, square)], 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, math.pi / 2)
+    model.occ.synchronize()
+    model.addPhysicalGroup(2, [square], 1)
+    import gmsh
+
+    gmsh.option.setNumber("Mesh.MeshSizeMax", 0.25)
+    model.mesh.generate(2)
+
+
+def _half_recombined(model):
+    import gmsh
+
+    a = model.occ.addRectangle(0.0, 0.0, 0.0, 1.0, 1.0)
+    b = model.occ.addRectangle(1.0, 0.0, 0.0, 1.0, 1.0)
+    model.occ.fragment([(2, a)], [(2, b)])
+    model.occ.synchronize()
+    model.addPhysicalGroup(2, [a, b], 1)
+    gmsh.option.setNumber("Mesh.MeshSizeMax", 0.25)
+    model.mesh.setRecombine(2, b)
+    model.mesh.generate(2)
+
+
+@pytest.mark.parametrize(
+    ("build", "match"),
+    [
+        (_in_xz_plane, r"cells are flat .* Draw it in x-y"),
+        (
+            _half_recombined,
+            r"one simplex cell type, got a grid mixing \w+ and \w+ cells",
+        ),
+    ],
+)
+def test_a_flat_or_mixed_grid_is_refused_by_seed_and_simulation(build, match):
+    """A 2D gmsh model drawn in the x–z plane and read with gdim = 2 is flat: seed gave
+    a body of 1e-16 m² and the first step spoke of a free rotation. A surface
+    recombined into quadrilaterals beside triangles ended in DOLFINx's "Multiple index
+    maps of this dimension". Both are refused by name (a helper's grids, 2026-12-06)."""
+    mesh = _gmsh_grid(build, 2)
+    with pytest.raises(ValueError, match=match):
+        fe_mpm.seed(mesh, 1)
+    points = fe_mpm.MaterialPoints(x=np.array([[0.5, 0.0]]), volume=np.ones(1), mass=np.ones(1))
+    with pytest.raises(ValueError, match=match):
+        fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1e6, 0.3))

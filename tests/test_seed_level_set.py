@@ -137,7 +137,11 @@ def test_bodies_whose_edges_lie_on_grid_lines_keep_their_area_whatever_the_round
             ValueError,
             r"seed: level_set must be finite; grid node",
         ),
-        (lambda x: -1.0 - x[0], ValueError, r"seed: level_set is negative at every vertex"),
+        (
+            lambda x: -1.0 - x[0],
+            ValueError,
+            r"seed: level_set is nowhere positive in the cells to seed",
+        ),
     ],
 )
 def test_bad_level_sets_are_refused_by_name(level_set, error, match):
