@@ -352,6 +352,16 @@ def sliding_on_walls(walls, body_force: np.ndarray | None, occupied: np.ndarray)
     )
 
 
+#: What a stop message adds for a cohesionless soil that failed its first static step.
+COHESIONLESS_ADVICE = (
+    "The law is cohesionless (c = 0) and its points start unstressed: near zero stress "
+    "they return to the apex, where they carry nothing and stiffen nothing, so the first "
+    "step may have no solution however short. Start them from their weight "
+    "(initial_stress=fe_mpm.geostatic_stress(...)), or give the soil a small cohesion "
+    "(100 Pa let a silo of sand between frictional walls run)."
+)
+
+
 def failure_advice(
     point_domains: bool,
     ghost_factor: float,
@@ -359,6 +369,7 @@ def failure_advice(
     static_plastic: bool = False,
     sliding: str = "",
     lost_loads: dict[str, float] | None = None,
+    cohesionless_from_rest: bool = False,
 ) -> str:
     """What a run's stop message adds about its options (empty if nothing).
 
@@ -377,8 +388,14 @@ def failure_advice(
     loads that the last step lost (``lost_loads``, label -> share): a thick sphere
     pressurised by a grid ``Pressure`` on cells of 0.125 had lost 14 % of its load by
     step 8, where Newton stopped, and the message spoke only of cell crossing.
+    ``cohesionless_from_rest``: a static run of a cohesionless law (c = 0) whose
+    unstressed points failed their first step: a helper's Janssen silo (sand between
+    frictional walls, gravity ramped) stopped there with the step cut 4096-fold, where
+    a geostatic start or c = 100 Pa ran.
     """
     advice = [sliding] if sliding else []
+    if cohesionless_from_rest:
+        advice.append(COHESIONLESS_ADVICE)
     for label, share in (lost_loads or {}).items():
         advice.append(
             f"{label} had lost {100 * share:.1f} % of its load in the last step (its grid "

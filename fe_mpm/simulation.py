@@ -854,6 +854,13 @@ class Simulation:
                 np.unique(self.points.cell[self.points.cell >= 0]),
             ),
             lost_loads=self.conditions.lost_loads(),
+            cohesionless_from_rest=not self.dynamic
+            and self.step_number == 0
+            and not self._started_stressed
+            and any(
+                getattr(law, "cohesion", None) == 0.0
+                for law in getattr(self.material, "laws", [self.material])
+            ),
         )
 
     def step(self, t_new: float, rebin: bool = True) -> StepReport:

@@ -272,6 +272,37 @@ def test_a_static_plastic_body_moved_by_its_supports_is_not_told_of_a_limit_load
     assert "limit load" not in str(info.value)
 
 
+@pytest.mark.parametrize(
+    ("cohesion", "stressed", "told"),
+    [(0.0, False, True), (100.0, False, False), (0.0, True, False)],
+)
+def test_a_cohesionless_soil_that_fails_from_rest_is_told_to_start_from_its_weight(
+    cohesion, stressed, told
+):
+    """A helper's Janssen silo (Mohr–Coulomb sand, c = 0, between frictional walls,
+    gravity ramped) stopped in its first step, cut 4096-fold, told only of a limit
+    load; it ran from a geostatic start or with c = 100 Pa. Here Newton is allowed one
+    iteration, so the first step stops: the message says what the silo needed, only
+    for a cohesionless law whose points started unstressed."""
+    mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.5), (4, 6))
+    points = fe_mpm.seed(mesh, per_cell=3, cells=np.arange(16), density=2000.0)
+    sim = fe_mpm.Simulation(
+        mesh,
+        points,
+        fe_mpm.MohrCoulomb(20e6, 0.3, cohesion, 30.0),
+        "u",
+        dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))],
+        body_force=(0.0, -9.81),
+        body_force_scale=None if stressed else (lambda t: t),
+        initial_stress=fe_mpm.geostatic_stress(points, 1.0, 9.81, 0.5) if stressed else None,
+        petsc_options={"snes_max_it": 1},
+        min_step=0.5,
+    )
+    with pytest.raises(ConvergenceError) as info:
+        sim.run(1.0, 1, progress=False)
+    assert ("The law is cohesionless (c = 0)" in str(info.value)) == told
+
+
 def test_a_ctrl_c_in_newton_leaves_the_simulation_usable(monkeypatch):
     """A Ctrl-C lands mostly inside Newton, in a callback of PETSc's SNES: it came out
     as a PETSc error, which ``except KeyboardInterrupt`` does not catch, and left SNES's
