@@ -203,6 +203,33 @@ def check_grid_and_points(mesh: dolfinx.mesh.Mesh, points: MaterialPoints) -> No
         )
 
 
+def check_distinct_points(comm, points: MaterialPoints) -> None:
+    """Refuse (collective) points at the same place as another on a rank, after tracking.
+
+    Two points at one place count the material twice. Under ``mpiexec`` a body seeded
+    on every rank from a mesh of its own (``meshes.disk`` on ``COMM_SELF``, the
+    default) is that many copies: a helper's disk weighed twice as much on two ranks,
+    silently (2026-12-06). Tracking has sent each copy to the rank of its cell.
+    """
+    error = None
+    if len(points):
+        _, first, counts = np.unique(points.x, axis=0, return_index=True, return_counts=True)
+        shared = np.flatnonzero(counts > 1)
+        if shared.size:
+            i = int(first[shared[0]])
+            j = int(np.flatnonzero(np.all(points.x == points.x[i], axis=1))[1])
+            error = ValueError(
+                f"Simulation: {int(counts[shared].sum() - shared.size)} material points lie "
+                f"at the same place as another (first: points {i} and {j} at x = "
+                f"{points.x[i].tolist()}), which counts the material twice. Under mpiexec, "
+                "points seeded on every rank from a mesh of its own (meshes.disk or "
+                "meshes.cylinder on COMM_SELF, their default) are copies: keep them on one "
+                "rank (points.keep(...) on the others) or build that mesh on the grid's "
+                "communicator."
+            )
+    parallel.raise_together(comm, error)
+
+
 def check_serial_only(comm, features: dict[str, bool]) -> None:
     """Refuse, on every rank alike, what does not run on a distributed mesh yet.
 

@@ -409,6 +409,7 @@ class Simulation:
         self._set_grid(mesh, facet_tags)
         self._add_time("setup", t0)
         self._track()  # once now, so a bad initial layout fails at set-up
+        model_checks.check_distinct_points(self.mesh.comm, points)
         model_checks.check_passes_between_bodies(passes, bossak_alpha, self.mesh, points.cell)
         self.ghost = None
         #: Grid repartitions so far (:meth:`rebalance`).

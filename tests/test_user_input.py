@@ -541,3 +541,16 @@ def test_a_static_run_warns_that_it_ignores_the_points_velocities():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         sim.step(1.0)
+
+
+def test_points_at_the_same_place_are_refused():
+    """A body seeded twice (under mpiexec: once per rank from a mesh on COMM_SELF, as
+    ``meshes.disk`` makes by default) counts its material twice: a helper's disk
+    weighed twice as much on two ranks, silently. Points at one place are refused."""
+    mesh = _mesh()
+    once = fe_mpm.seed(mesh, per_cell=3, density=RHO)
+    twice = fe_mpm.merge(once, fe_mpm.seed(mesh, per_cell=3, density=RHO))
+    law = fe_mpm.NeoHookean(1e5, 0.3)
+    with pytest.raises(ValueError, match=r"96 material points lie at the same place as another"):
+        fe_mpm.Simulation(mesh, twice, law, body_force=(0.0, -G), dirichlet=[_base()])
+    fe_mpm.Simulation(mesh, once, law, body_force=(0.0, -G), dirichlet=[_base()])

@@ -29,7 +29,10 @@ def cylinder(
         h: Cell size (m), in (0, radius].
         sector: The angle of the sector about the axis (rad), in (0, 2π], from the
             x axis towards the y axis.
-        comm: MPI communicator (every rank its own copy by default).
+        comm: MPI communicator (every rank its own copy by default). Points
+            seeded on every rank's copy are that many copies of the body: under
+            ``mpiexec`` keep them on one rank (``points.keep(...)`` elsewhere) or pass
+            the grid's communicator; ``Simulation`` refuses points at one place.
 
     Returns:
         ``dolfinx.io.gmsh.MeshData`` with ``.mesh``.

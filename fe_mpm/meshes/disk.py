@@ -23,7 +23,10 @@ def disk(
         centre: The disk's centre (m), (x, y).
         radius: Its radius (m), > 0.
         h: Cell size (m), in (0, radius].
-        comm: MPI communicator (every rank its own copy by default).
+        comm: MPI communicator (every rank its own copy by default). Points
+            seeded on every rank's copy are that many copies of the body: under
+            ``mpiexec`` keep them on one rank (``points.keep(...)`` elsewhere) or pass
+            the grid's communicator; ``Simulation`` refuses points at one place.
 
     Returns:
         ``dolfinx.io.gmsh.MeshData`` with ``.mesh``.
