@@ -41,6 +41,30 @@ def body_labels(cell_nodes: np.ndarray) -> np.ndarray:
     return np.argsort(np.argsort(first))[body]
 
 
+def bodies_of_cells(mesh: dolfinx.mesh.Mesh, cells: np.ndarray) -> tuple[np.ndarray, int]:
+    """The body of each of this rank's occupied cells, and how many bodies there are.
+
+    As :func:`count_bodies` (collective; gathers the occupied cells' nodes).
+
+    Args:
+        mesh: The grid.
+        cells: This rank's occupied cells (local indices; repeats and -1 ignored).
+
+    Returns:
+        ``np.unique(cells[cells >= 0])``'s bodies (numbered alike on every rank), and
+        the number of bodies over all ranks.
+    """
+    occupied = np.unique(cells[cells >= 0])
+    local_nodes = mesh.geometry.dofmaps[0][occupied]
+    index_map = mesh.geometry.index_map()
+    global_nodes = index_map.local_to_global(local_nodes.ravel().astype(np.int32))
+    gathered = parallel.gathered(mesh.comm, global_nodes.reshape(local_nodes.shape))
+    labels = body_labels(gathered)
+    counts = mesh.comm.allgather(occupied.size) if mesh.comm.size > 1 else [occupied.size]
+    start = int(sum(counts[: mesh.comm.rank]))
+    return labels[start : start + occupied.size], int(labels.max(initial=-1)) + 1
+
+
 def count_bodies(mesh: dolfinx.mesh.Mesh, cells: np.ndarray) -> int:
     """How many separate bodies the material in ``cells`` forms, over all ranks.
 

@@ -17,7 +17,7 @@ import numpy as np
 
 from fe_mpm import parallel
 from fe_mpm._dolfinx import dolfinx
-from fe_mpm.bodies import count_bodies
+from fe_mpm.bodies import bodies_of_cells, count_bodies
 from fe_mpm.boundary import PointDirichlet, RigidWall
 from fe_mpm.checks import check_choice, check_int, check_range
 from fe_mpm.formulations import FORMULATIONS, FormulationSpec
@@ -379,6 +379,9 @@ def sliding_on_walls(walls, body_force: np.ndarray | None, occupied: np.ndarray)
     )
 
 
+#: Above this many separate bodies a static model's supports are not checked body by body.
+MOST_BODIES_CHECKED = 50
+
 #: What a stop message adds for a cohesionless soil that failed its first static step.
 COHESIONLESS_ADVICE = (
     "The law is cohesionless (c = 0) and its points start unstressed: near zero stress "
@@ -618,6 +621,7 @@ def check_supports(conditions, boundary, occupied: np.ndarray, walls=None) -> No
         )
     free = _free_modes(gram)
     if free.shape[1] == 0:
+        _check_each_body(conditions, point_conditions, occupied, walls)
         return
     axis = free[g:, 0]  # the rotation in the first free mode (its translations are held)
     about = "z" if g == 2 else _axis_name(axis / np.linalg.norm(axis))
@@ -628,6 +632,41 @@ def check_supports(conditions, boundary, occupied: np.ndarray, walls=None) -> No
         "(e.g. one node, or one line through the axis). The tangent would be singular "
         "(a rigid-body mode). Hold a second place across that axis, or pass dynamic=True."
     )
+
+
+def _check_each_body(conditions, point_conditions, occupied: np.ndarray, walls) -> None:
+    """Refuse a static model with a body that nothing holds, once the whole is held.
+
+    Material in cells that share no node forms separate bodies, and each needs its
+    own supports: a block in the air beside one on its base, or one body on a gmsh
+    model whose surfaces were not fragmented (two nodes at each place along their
+    common edge), stopped Newton with a diverged line search and no hint (a helper's
+    scenes, 2026-12-06). Every ``PointDirichlet`` point counts for every body, so a
+    body held by none is always found, one held elsewhere may not be. Above
+    :data:`MOST_BODIES_CHECKED` bodies (a granular packing) each is not checked.
+    """
+    mesh = conditions.mesh
+    occupied = np.unique(occupied)
+    body, count = bodies_of_cells(mesh, occupied)
+    if not 1 < count <= MOST_BODIES_CHECKED:
+        return
+    g = mesh.geometry.dim
+    for b in range(count):
+        cells = occupied[body == b]
+        if _free_modes(_support_gram(conditions, point_conditions, cells, walls)).shape[1]:
+            corners = mesh.geometry.x[mesh.geometry.dofmaps[0][cells], :g].reshape(-1, g)
+            lo = parallel.smallest(mesh.comm, corners.min(axis=0, initial=np.inf))
+            hi = parallel.largest(mesh.comm, corners.max(axis=0, initial=-np.inf))
+            raise ValueError(
+                f"Simulation: the material forms {count} separate bodies (groups of "
+                "occupied cells that share no node), and a static model needs supports "
+                f"for each: nothing holds the one between {lo.round(6).tolist()} and "
+                f"{hi.round(6).tolist()} against every rigid motion, so the tangent would "
+                "be singular. Support it, join it to another, or pass dynamic=True. A gmsh "
+                "model whose surfaces were not fragmented (gmsh.model.occ.fragment) has "
+                "two nodes at each place along their common edges, which cuts one body "
+                "in two."
+            )
 
 
 def _support_gram(conditions, point_conditions, occupied: np.ndarray, walls) -> np.ndarray:

@@ -554,3 +554,31 @@ def test_points_at_the_same_place_are_refused():
     with pytest.raises(ValueError, match=r"96 material points lie at the same place as another"):
         fe_mpm.Simulation(mesh, twice, law, body_force=(0.0, -G), dirichlet=[_base()])
     fe_mpm.Simulation(mesh, once, law, body_force=(0.0, -G), dirichlet=[_base()])
+
+
+def _two_blocks(x):
+    """A block on the base (x in [0.2, 0.8], y below 0.5) and one above it in the air."""
+    on_base = np.minimum.reduce([x[0] - 0.2, 0.8 - x[0], 0.5 - x[1]])
+    in_air = np.minimum.reduce([x[0] - 1.2, 1.8 - x[0], x[1] - 1.0, 1.5 - x[1]])
+    return np.maximum(on_base, in_air)
+
+
+@pytest.mark.parametrize("dynamic", [False, True])
+def test_a_static_body_that_nothing_holds_beside_one_held_is_refused_by_place(dynamic):
+    """A second block in the air of a static run stopped Newton with a diverged line
+    search and no hint (so did a body cut in two by an unfragmented gmsh model):
+    the whole was held, by the first block's base. Each body's supports are checked
+    now, and the free one is named by where it lies; a dynamic run lets it fall."""
+    mesh = rectangle_mesh((0.0, 0.0), (2.0, 2.0), (20, 20))
+    points = fe_mpm.seed(mesh, 3, density=RHO, level_set=_two_blocks)
+    sim = fe_mpm.Simulation(
+        mesh, points, fe_mpm.NeoHookean(1e6, 0.3), body_force=(0.0, -G), dirichlet=[_base()],
+        dynamic=dynamic,
+    )  # fmt: skip
+    if dynamic:
+        sim.step(1e-3)
+        return
+    with pytest.raises(
+        ValueError, match=r"2 separate bodies .* between \[1\.2, 1\.0\] and \[1\.8, 1\.5\]"
+    ):
+        sim.step(1.0)
