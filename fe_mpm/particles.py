@@ -379,7 +379,11 @@ def seed(
             nodes, piece_cell = inside_simplices(nodes, _values_at_vertices(one, mesh, nodes))
             cells = cells[piece_cell]
         if parallel.total(mesh.comm, cells.size) == 0:
-            raise ValueError("seed: level_set is nowhere positive in the cells to seed")
+            raise ValueError(
+                "seed: level_set is nowhere positive in the cells to seed (at none of their "
+                "vertices: a body narrower than a cell that falls between the grid's nodes "
+                "is missed; give its faces as a list of level sets, or refine the grid)"
+            )
     x0 = nodes[:, 0, :]
     jac = nodes[:, 1:, :] - x0[:, None, :]  # rows are edge vectors: x = x0 + ξ @ jac
     x = x0[:, None, :] + np.einsum("qk,ckg->cqg", ref_pts, jac)

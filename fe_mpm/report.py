@@ -246,7 +246,8 @@ def newton_failure(
     ended = "the last solve " if len(result.attempts) > 1 else ""
     return ConvergenceError(
         f"Newton failed in step {step} (t = {t_old:g} -> {t_new:g}) after "
-        f"{result.iterations} iterations: {ended}{result.reason}; ‖R‖ history: {norms} "
+        f"{result.iterations} iteration{'' if result.iterations == 1 else 's'}: {ended}"
+        f"{result.reason}; ‖R‖ history: {norms} "
         f"against the force scale {result.force_scale:.3e} (accepted: ‖R‖ <= "
         f"{result.tolerance:.3e}). {diagnosis}"
         "Points were not updated and nothing was written for this step."

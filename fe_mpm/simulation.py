@@ -391,6 +391,8 @@ class Simulation:
         # The steps whose CSV rows are not yet written, and the step whose columns the
         # CSV has: kept apart from ``history``, which a long run's script may shorten.
         self._unwritten: list[StepReport] = []
+        self._check_supports_again = False  # points were removed or added since
+        self._restart_dynamics = False  # points were added: accelerations anew
         self._csv_head: StepReport | None = None
         self._grid_is_a_step = True  # the grid's fields are the last step's (or zero)
         self._cells_of_grid = True  # points.cell numbers this grid's cells (not after rebalance)
@@ -612,6 +614,7 @@ class Simulation:
         self.markers.keep_hosts(keep)
         self.points.keep(keep)
         self.tracking.keep(keep)
+        self._check_supports_again = True  # what is left may hang free
         return removed
 
     def add_points(self, new: MaterialPoints) -> int:
@@ -649,22 +652,51 @@ class Simulation:
             raise ValueError(
                 f"Simulation.add_points: the new points are {new.gdim}D, the grid {self.gdim}D"
             )
-        _check_points(self.mesh.comm, new.check_state)
+        comm = self.mesh.comm
+        _check_points(comm, new.check_state)
+        new.material = new._checked_material(len(new))
+        laws = len(getattr(self.material, "laws", [self.material]))
+        highest = parallel.largest(comm, int(new.material.max(initial=0)))
+        if highest >= laws:
+            raise ValueError(
+                f"Simulation.add_points: the new points are seeded with material={highest}, "
+                f"but the simulation has {laws} law(s), material 0 to {laws - 1}"
+            )
         model_checks.take_density(self.material, new)
+        if new.density_given != self.points.density_given:
+            raise ValueError(
+                "Simulation.add_points: the new points' masses were "
+                + ("" if new.density_given else "not ")
+                + "given by a density and the simulation's were "
+                + ("" if self.points.density_given else "not")
+                + "; seed them with seed(..., density=...) as the others"
+            )
         unknown = sorted(set(new.history) - set(self.points.history))
         if unknown:
             raise ValueError(
                 f"Simulation.add_points: the new points hold internal variables {unknown} "
                 f"that the law does not ({sorted(self.points.history)})"
             )
+        _refuse_misplaced(comm, self.tracker, self.points.x, new.x)
+        if parallel.any_rank(comm, new.simulated_to is not None):
+            warn(
+                "Simulation.add_points: the new points were stepped by another Simulation "
+                f"(to t = {new.simulated_to}), so they come deformed, with their stresses"
+            )
         for name, h in self.material.history.items():
             new.history.setdefault(name, h.initial_values(len(new)))
         if MATERIAL in new.history:
             new.history[MATERIAL] = new.material.astype(np.float64)
-        added = int(parallel.total(self.mesh.comm, len(new)))
+        added = int(parallel.total(comm, len(new)))
         self.points.extend(new)
         self.tracking.forget()  # the new points have no accepted cell to be held in
-        self._track(self.step_number, self.t)  # points outside the grid fail now
+        self._track(self.step_number, self.t)
+        self._check_supports_again = True
+        # The new points' accelerations in equilibrium, as a run's first step gives
+        # (from 0, a body added in free fall lagged g Δt / 2 behind for ever).
+        self._restart_dynamics = self.dynamic
+        if not self.dynamic:
+            self._warn_static_velocities()
         return added
 
     def checkpoint(self, directory: str | Path | None = None) -> Path:
@@ -904,8 +936,9 @@ class Simulation:
             warn(self.spec.multi_step_warning())
         # Track, lay out, pack, impose (and project the points' motion, in dynamics).
         forms, layout, R, J, bcs = self.prepare_step(t_new, rebin=rebin)
-        if self.dynamics is not None and k == 1:
+        if self.dynamics is not None and (k == 1 or self._restart_dynamics):
             self._consistent_initial_acceleration(forms, layout, R, bcs, dt)
+            self._restart_dynamics = False
         # Solve for the grid increment: Newton from Δu = 0.
         result = self._solve(forms, R, J, bcs)
         finite = not parallel.any_rank(self.mesh.comm, not np.all(np.isfinite(self.w.x.array)))
@@ -1001,10 +1034,11 @@ class Simulation:
             :meth:`refresh_material` before each assembly for a pointwise law).
         """
         layout = self._track(self.step_number + 1, t_new, hold=not rebin)
-        if self.step_number == 0 and not self.dynamic:
+        if (self.step_number == 0 or self._check_supports_again) and not self.dynamic:
             model_checks.check_supports(
                 self.conditions, self._boundary, layout.occupied, self.walls
             )
+            self._check_supports_again = False
         self.conditions.check_loaded_facets(layout.occupied, t_new)
         bcs = self.conditions.impose(layout.occupied, self.t, t_new, self._zone_cells(layout))
         self.walls.start_step(layout.occupied, self.points.x, self.points.volume)
@@ -1321,6 +1355,41 @@ class Simulation:
             self._by_parts = None
         if self._shift is not None:
             self._shift.destroy()
+
+
+def _refuse_misplaced(comm, tracker, x: np.ndarray, new: np.ndarray) -> None:
+    """Refuse (collective) new points outside the grid or where a point already lies.
+
+    Checked before they join the points, which a refusal leaves as they were (added
+    first and tracked, points outside the grid stayed and failed every later step; a
+    copy of the body doubled its weight; a helper's scenes, 2026-12-06).
+
+    Args:
+        comm: The grid's communicator.
+        tracker: The grid's point locator.
+        x: This rank's points (n, g).
+        new: This rank's new points (m, g).
+    """
+    every_new = parallel.gathered(comm, new)
+    found = parallel.total(comm, (tracker.locate(every_new) >= 0).astype(np.int64)) > 0
+    error = None
+    if not np.all(found):
+        first = every_new[np.flatnonzero(~found)[0]]
+        error = ValueError(
+            f"Simulation.add_points: {int(np.sum(~found))} of the new points lie outside "
+            f"the grid (first at x = {first.tolist()})"
+        )
+    else:
+        together = np.vstack([x, every_new])
+        _, inverse, counts = np.unique(together, axis=0, return_inverse=True, return_counts=True)
+        twice = np.flatnonzero(counts[inverse.ravel()][len(x) :] > 1)
+        if twice.size:
+            error = ValueError(
+                f"Simulation.add_points: {twice.size} of the new points lie where a point "
+                f"already lies (first at x = {every_new[twice[0]].tolist()}), which counts "
+                "the material twice"
+            )
+    parallel.raise_together(comm, error)
 
 
 def _check_points(comm, check: Callable[[str, str], None]) -> None:

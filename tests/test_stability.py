@@ -216,7 +216,7 @@ def test_impossible_or_nan_load_stops_cleanly_and_keeps_the_last_good_output(tmp
         output_dir=tmp_path,
     )
     if np.isfinite(bad):
-        error, match = fe_mpm.ConvergenceError, r"step 2 \(t = 0.5 -> .*: stalled"
+        error, match = fe_mpm.ConvergenceError, r"step 2 \(t = 0.5 -> .*: the last solve stalled"
     else:
         error, match = ValueError, r"Traction: scale\(t\) must return finite numbers, got nan"
     with pytest.raises(error, match=match):
