@@ -376,17 +376,28 @@ def hinge_diagnosis(mesh: dolfinx.mesh.Mesh, layout: SlotLayout, centroids: np.n
     A P1 simplex has a constant strain whatever number of points it holds, so an
     occupied cell that shares at most one node with the other occupied cells can
     rotate freely about it: a mechanism of quasi-static MPM that appears when points
-    cross into empty cells. Returns "" when no cell is hinged.
+    cross into empty cells. Returns "" when no cell is hinged. Collective: the nodes'
+    uses are counted over every rank, so a cell beside another rank's is not taken for
+    hinged, and every rank returns the same words (on two ranks one rank's message
+    named a hinged cell and the other's did not; a helper's trench, 2026-12-06).
     """
+    comm = mesh.comm
     nodes = mesh.geometry.dofmaps[0][layout.occupied]
-    uses = np.bincount(nodes.ravel())
+    index_map = mesh.geometry.index_map()
+    uses = np.zeros(index_map.size_local + index_map.num_ghosts)
+    np.add.at(uses, nodes.ravel(), 1.0)
+    uses = summed_over_ranks(index_map, uses)
     shared = (uses[nodes] > 1).sum(axis=1)
     hinged = layout.occupied[shared <= 1]
-    if hinged.size == 0:
+    count = int(parallel.total(comm, int(hinged.size)))
+    if count == 0:
         return ""
+    first = centroids[hinged[0]] if hinged.size else None
+    if comm.size > 1:
+        first = next(x for x in comm.allgather(first) if x is not None)
     return (
-        f"{hinged.size} occupied cell(s) share at most one node with the rest of the "
-        f"material (first near x = {centroids[hinged[0]]}); such a cell can swing about that "
+        f"{count} occupied cell(s) share at most one node with the rest of the "
+        f"material (first near x = {first}); such a cell can swing about that "
         "node, so the static tangent is singular there. This typically follows points "
         "crossing into otherwise empty cells; a coarser grid or a dynamic analysis "
         "avoids it. "
