@@ -362,7 +362,7 @@ class Simulation:
             reactions, walls, [*point_dirichlet, *point_tractions]
         )
         passes = model_checks.check_projection_passes(
-            projection_passes, dynamic, mass, walls, bossak_alpha, dirichlet
+            projection_passes, dynamic, mass, walls, bossak_alpha, [*dirichlet, *point_dirichlet]
         )
         # What the grid's objects are built from, again after a repartition.
         self._given = {

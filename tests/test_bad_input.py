@@ -228,6 +228,19 @@ def test_other_bad_values():
         projection_passes=4,
         dirichlet=[fe_mpm.Dirichlet(base)],
     )
+    # A PointDirichlet's penalty rings as a wall's (a helper's platen pushing a bar:
+    # its force swung between -0.74 and 2.65 rho c V A with eight passes).
+    platen = fe_mpm.PointDirichlet(
+        "platen", np.array([[0.5, 0.0]]), np.ones(1), lambda t: (0.0, -0.01 * t), penalty=1e6
+    )
+    with pytest.raises(ValueError, match=r"passes > 1 with PointDirichlet 'platen' needs Bossak"):
+        fe_mpm.Simulation(
+            mesh, points, material, dynamic=True, projection_passes=4, point_dirichlet=[platen]
+        )
+    fe_mpm.Simulation(
+        mesh, points, material, dynamic=True, projection_passes=4, point_dirichlet=[platen],
+        bossak_alpha=-0.1,
+    )  # fmt: skip
     with pytest.raises(ValueError, match="unknown fallback_line_search 'newton'"):
         fe_mpm.Simulation(mesh, points, material, fallback_line_search="newton")
     with pytest.raises(ValueError, match="unknown line_search 'newton'; choose one of auto, basic"):
