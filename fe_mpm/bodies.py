@@ -83,3 +83,49 @@ def count_bodies(mesh: dolfinx.mesh.Mesh, cells: np.ndarray) -> int:
     gathered = parallel.gathered(mesh.comm, global_nodes.reshape(local_nodes.shape))
     labels = body_labels(gathered)
     return int(labels.max(initial=-1)) + 1
+
+
+def joined_at_a_node(mesh: dolfinx.mesh.Mesh, cells: np.ndarray) -> np.ndarray | None:
+    """Where parts of the material touch at a node only, if they do (collective).
+
+    Occupied cells that share a facet form a part; two parts that share nodes but no
+    facet are joined by a hinge (in 2D) or a ball (at a node in 3D), about which one
+    turns freely unless each is held: two blocks stacked corner to corner failed a
+    static step with no hint (a helper's scene, 2026-12-06). Gathers the occupied
+    cells' facets and nodes on every rank; meant for a stop message.
+
+    Args:
+        mesh: The grid.
+        cells: This rank's occupied cells (local indices; repeats and -1 ignored).
+
+    Returns:
+        The coordinates (g,) of a node where two parts meet, the same on every rank,
+        or None.
+    """
+    tdim, g = mesh.topology.dim, mesh.geometry.dim
+    occupied = np.unique(cells[cells >= 0])
+    mesh.topology.create_connectivity(tdim, tdim - 1)
+    to_facets = mesh.topology.connectivity(tdim, tdim - 1)
+    local_facets = np.array([to_facets.links(c) for c in occupied], dtype=np.int32)
+    local_facets = local_facets.reshape(occupied.size, tdim + 1)
+    facet_map = mesh.topology.index_map(tdim - 1)
+    facets = facet_map.local_to_global(local_facets.ravel()).reshape(local_facets.shape)
+    local_nodes = mesh.geometry.dofmaps[0][occupied]
+    node_map = mesh.geometry.index_map()
+    nodes = node_map.local_to_global(local_nodes.ravel().astype(np.int32))
+    nodes = nodes.reshape(local_nodes.shape)
+    coordinates = mesh.geometry.x[local_nodes, :g]
+    facets, nodes = parallel.gathered(mesh.comm, facets), parallel.gathered(mesh.comm, nodes)
+    coordinates = parallel.gathered(mesh.comm, coordinates)
+    part = body_labels(facets)
+    if part.size == 0 or part.max() == body_labels(nodes).max():
+        return None  # each body is one part
+    # A node whose cells lie in more than one part.
+    flat_nodes, flat_parts = nodes.ravel(), np.repeat(part, nodes.shape[1])
+    pairs = np.unique(np.column_stack([flat_nodes, flat_parts]), axis=0)
+    node_ids, counts = np.unique(pairs[:, 0], return_counts=True)
+    shared = node_ids[counts > 1]
+    if shared.size == 0:
+        return None
+    where = np.flatnonzero(flat_nodes == shared[0])[0]
+    return coordinates.reshape(-1, g)[where]

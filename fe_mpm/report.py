@@ -11,6 +11,7 @@ import numpy as np
 
 from fe_mpm import parallel
 from fe_mpm._dolfinx import dolfinx
+from fe_mpm.bodies import joined_at_a_node
 from fe_mpm.errors import ConvergenceError
 from fe_mpm.force_test import NewtonResult
 from fe_mpm.io import write_csv_rows
@@ -239,6 +240,14 @@ def newton_failure(
     norms = _norms_by_attempt(result)
     if not dynamic:
         diagnosis = hinge_diagnosis(mesh, layout, centroids)
+        if not diagnosis:
+            joint = joined_at_a_node(mesh, layout.occupied)
+            if joint is not None:
+                diagnosis = (
+                    "Parts of the material touch at a node and nowhere else (first at x = "
+                    f"{joint.tolist()}): each can turn about it, so the static tangent is "
+                    "singular unless every part is held on its own. "
+                )
     elif consistent_mass:
         diagnosis = sparse_mass_diagnosis(mesh, layout, centroids, degree)
     else:

@@ -582,3 +582,22 @@ def test_a_static_body_that_nothing_holds_beside_one_held_is_refused_by_place(dy
         ValueError, match=r"2 separate bodies .* between \[1\.2, 1\.0\] and \[1\.8, 1\.5\]"
     ):
         sim.step(1.0)
+
+
+def test_blocks_touching_corner_to_corner_are_named_as_a_hinge_when_newton_fails():
+    """Two blocks stacked corner to corner form one body whose parts turn about the
+    node they share: a static step fails, and its message said only that the line
+    search diverged. It names the node now (2D; in 3D a node or an edge)."""
+    mesh = rectangle_mesh((0.0, 0.0), (8.0, 4.0), (16, 8))
+
+    def blocks(x):
+        lower = np.minimum.reduce([x[0] - 1.0, 3.0 - x[0], 2.0 - x[1]])
+        upper = np.minimum.reduce([x[0] - 3.0, 5.0 - x[0], x[1] - 2.0, 4.0 - x[1]])
+        return np.maximum(lower, upper)
+
+    points = fe_mpm.seed(mesh, 3, density=RHO, level_set=blocks)
+    sim = fe_mpm.Simulation(
+        mesh, points, fe_mpm.NeoHookean(5e7, 0.3), body_force=(0.0, -G), dirichlet=[_base()]
+    )
+    with pytest.raises(fe_mpm.ConvergenceError, match=r"touch at a node .* x = \[3\.0, 2\.0\]"):
+        sim.step(1.0)
