@@ -106,8 +106,8 @@ def joined_at_a_node(mesh: dolfinx.mesh.Mesh, cells: np.ndarray) -> np.ndarray |
     occupied = np.unique(cells[cells >= 0])
     mesh.topology.create_connectivity(tdim, tdim - 1)
     to_facets = mesh.topology.connectivity(tdim, tdim - 1)
-    local_facets = np.array([to_facets.links(c) for c in occupied], dtype=np.int32)
-    local_facets = local_facets.reshape(occupied.size, tdim + 1)
+    # Every simplex has d + 1 facets: the adjacency list is a table.
+    local_facets = to_facets.array.reshape(-1, tdim + 1)[occupied].astype(np.int32)
     facet_map = mesh.topology.index_map(tdim - 1)
     facets = facet_map.local_to_global(local_facets.ravel()).reshape(local_facets.shape)
     local_nodes = mesh.geometry.dofmaps[0][occupied]
