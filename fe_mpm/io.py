@@ -182,6 +182,20 @@ def write_csv_rows(path: str | Path, header: list[str], rows: list[str], first: 
     return path
 
 
+def drop_rows_after(path: str | Path, step: int) -> None:
+    """Drop the rows of the CSV ``path`` whose first column, the step, exceeds ``step``.
+
+    A restore to an earlier step undoes the steps after it in ``steps.csv`` and
+    ``walls.csv`` too. A missing file is left missing.
+    """
+    path = Path(path)
+    if not path.exists():
+        return
+    header, *rows = path.read_text().splitlines()
+    kept = [row for row in rows if int(row.split(",", 1)[0]) <= step]
+    path.write_text("".join(line + "\n" for line in [header, *kept]))
+
+
 def _point_fields(points: MaterialPoints, fields: dict) -> dict[str, np.ndarray]:
     """The per-point arrays fe-mpm writes, one row per point, vectors and tensors in 3D.
 

@@ -19,14 +19,14 @@ from fe_mpm._dolfinx import dolfinx
 from fe_mpm.checks import check_choice, check_finite, check_int, check_range
 from fe_mpm.cut_cells import inside_simplices
 
-#: The per-point arrays of :class:`MaterialPoints` (all indexed by point first).
-# A cell whose size (d! times its area or volume) is below this share of its longest
-# edge to the power d is flat.
+#: A cell whose size (d! times its area or volume) is below this share of its longest
+#: edge to the power d is flat.
 FLAT_CELL = 1e-10
 
-# A level set's value within this share of its largest magnitude is on its zero.
+#: A level set's value within this share of its largest magnitude is on its zero.
 LEVEL_SET_ROUND_OFF = 1e-12
 
+#: The per-point arrays of :class:`MaterialPoints` (all indexed by point first).
 PER_POINT_FIELDS = (
     "x",
     "volume",
@@ -375,7 +375,10 @@ def seed(
     nodes = X[mesh.geometry.dofmaps[0][cells]]  # (nc, tdim+1, g)
     if level_set is not None:
         # Each level set cuts the pieces the ones before it left: their intersection.
-        for one in level_set if isinstance(level_set, list | tuple) else [level_set]:
+        sets = list(level_set) if isinstance(level_set, list | tuple) else [level_set]
+        if not sets:
+            raise ValueError("seed: level_set is an empty list; give one level set or more")
+        for one in sets:
             nodes, piece_cell = inside_simplices(nodes, _values_at_vertices(one, mesh, nodes))
             cells = cells[piece_cell]
         if parallel.total(mesh.comm, cells.size) == 0:

@@ -52,6 +52,7 @@ from fe_mpm.formulations import FORMULATIONS, GridFields
 from fe_mpm.ghost import GhostStabilisation
 from fe_mpm.grid_conditions import GridConditions
 from fe_mpm.initial_stress import start_stressed
+from fe_mpm.io import drop_rows_after
 from fe_mpm.markers import Markers
 from fe_mpm.materials import ReturnMapResult
 from fe_mpm.materials.mixed_return import MixedReturnResult
@@ -391,6 +392,7 @@ class Simulation:
         # The steps whose CSV rows are not yet written, and the step whose columns the
         # CSV has: kept apart from ``history``, which a long run's script may shorten.
         self._unwritten: list[StepReport] = []
+        self._writes_csv = output_dir is not None
         self._check_supports_again = False  # points were removed or added since
         self._restart_dynamics = False  # points were added: accelerations anew
         self._csv_head: StepReport | None = None
@@ -588,11 +590,15 @@ class Simulation:
         """
         remove = np.asarray(remove)
         n = len(self.points)
+        if n == 0 and remove.size == 0:  # a rank with no points: np.array([]) is float
+            remove = np.zeros(0, dtype=bool)
+        error = None
         if remove.dtype != bool or remove.shape != (n,):
-            raise ValueError(
+            error = ValueError(
                 f"Simulation.remove_points: remove must be a boolean mask of shape ({n},) "
                 f"over this rank's points, got dtype {remove.dtype} and shape {remove.shape}"
             )
+        parallel.raise_together(self.mesh.comm, error)
         if self.domains is not None:
             raise ValueError(
                 "Simulation.remove_points: the points have domains, which tile the body "
@@ -653,8 +659,15 @@ class Simulation:
                 f"Simulation.add_points: the new points are {new.gdim}D, the grid {self.gdim}D"
             )
         comm = self.mesh.comm
+        if parallel.total(comm, len(new)) == 0:
+            return 0
         _check_points(comm, new.check_state)
-        new.material = new._checked_material(len(new))
+        _check_points(comm, new.check_motion)
+
+        def material_labels() -> None:
+            new.material = new._checked_material(len(new))
+
+        parallel.check_together(comm, material_labels, kinds=(TypeError, ValueError))
         laws = len(getattr(self.material, "laws", [self.material]))
         highest = parallel.largest(comm, int(new.material.max(initial=0)))
         if highest >= laws:
@@ -662,14 +675,14 @@ class Simulation:
                 f"Simulation.add_points: the new points are seeded with material={highest}, "
                 f"but the simulation has {laws} law(s), material 0 to {laws - 1}"
             )
-        model_checks.take_density(self.material, new)
-        if new.density_given != self.points.density_given:
+        parallel.check_together(comm, model_checks.take_density, self.material, new)
+        given = parallel.all_ranks(comm, new.density_given or len(new) == 0)
+        if given != self.points.density_given:
             raise ValueError(
-                "Simulation.add_points: the new points' masses were "
-                + ("" if new.density_given else "not ")
-                + "given by a density and the simulation's were "
-                + ("" if self.points.density_given else "not")
-                + "; seed them with seed(..., density=...) as the others"
+                "Simulation.add_points: the run's points have masses from a density "
+                f"({'given' if self.points.density_given else 'none given'}) and the new "
+                f"ones {'do' if given else 'do not'}: seed both with seed(..., density=...) "
+                "or give the law a density"
             )
         unknown = sorted(set(new.history) - set(self.points.history))
         if unknown:
@@ -678,10 +691,11 @@ class Simulation:
                 f"that the law does not ({sorted(self.points.history)})"
             )
         _refuse_misplaced(comm, self.tracker, self.points.x, new.x)
-        if parallel.any_rank(comm, new.simulated_to is not None):
+        stepped = parallel.largest(comm, -np.inf if new.simulated_to is None else new.simulated_to)
+        if np.isfinite(stepped):
             warn(
                 "Simulation.add_points: the new points were stepped by another Simulation "
-                f"(to t = {new.simulated_to}), so they come deformed, with their stresses"
+                f"(to t = {stepped:g}), so they come deformed, with their stresses"
             )
         for name, h in self.material.history.items():
             new.history.setdefault(name, h.initial_values(len(new)))
@@ -689,8 +703,9 @@ class Simulation:
             new.history[MATERIAL] = new.material.astype(np.float64)
         added = int(parallel.total(comm, len(new)))
         self.points.extend(new)
-        self.tracking.forget()  # the new points have no accepted cell to be held in
-        self._track(self.step_number, self.t)
+        layout = self._track(self.step_number, self.t)
+        if self.step_number > 0:  # a retry may hold every point where it is now
+            self.tracking.remember(layout.cell)
         self._check_supports_again = True
         # The new points' accelerations in equilibrium, as a run's first step gives
         # (from 0, a body added in free fall lagged g Δt / 2 behind for ever).
@@ -727,16 +742,21 @@ class Simulation:
                 f"Simulation.restore: path must be a checkpoint folder's path (str or "
                 f"pathlib.Path), got {type(path).__name__}"
             )
+        before = self.step_number
         checkpoint.read(self, path)
-        kept = [report for report in self.history if report.step <= self.step_number]
-        if len(kept) < len(self.history):
+        self._check_supports_again = self._restart_dynamics = False
+        if before > self.step_number:
             # This simulation had stepped past the checkpoint: those steps are undone
-            # (found 2026-12-06 by a helper: the history read 1, 2, 3, 4, 3, 4).
-            self.history = kept
-            # steps.csv is written anew at the next output, from the steps kept.
-            self._unwritten, self._csv_head = (list(kept) if self.output else []), None
+            # (found 2026-12-06 by a helper: the history read 1, 2, 3, 4, 3, 4), also
+            # in the CSV files, whatever a script kept of the history.
+            step = self.step_number
+            self.history = [report for report in self.history if report.step <= step]
+            self._unwritten = [report for report in self._unwritten if report.step <= step]
             if self.output is not None:
-                self.output.rewind(self.t, self.step_number)
+                if parallel.on_rank_zero(self.mesh.comm):
+                    for name in ("steps.csv", "walls.csv"):
+                        drop_rows_after(self.output.folder / name, step)
+                self.output.rewind(self.t, step)
         self.rebalancing.restart()  # a partition for these points
         if self._rebalance_if_due(imbalance(self.mesh.comm, len(self.points))):
             self._track(self.step_number, self.t)
@@ -973,7 +993,7 @@ class Simulation:
         )
         report.walls = walls
         self.history.append(report)
-        if self.output is not None:
+        if self._writes_csv:  # (with domains the output is set aside in the step)
             self._unwritten.append(report)
         self._grid_is_a_step = self._cells_of_grid = True  # accepted: its frame may be written
         self._write_output()

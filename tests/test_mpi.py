@@ -512,6 +512,26 @@ try:
         reports = sim.run(1.0, 6, progress=False)
         result = {"face": [r.markers["face"].tolist() for r in reports],
                   "force": [r.reactions["cavity"].tolist() for r in reports]}
+    elif case == "staged":  # a trench dug, then a layer placed, between steps
+        mesh = meshes.rectangle_mesh((0.0, 0.0), (4.0, 5.0), (8, 10))
+        points = fe_mpm.seed(mesh, 3, density=2000.0, level_set=lambda x: 4.0 - x[1])
+        base = lambda x: np.isclose(x[1], 0.0)  # noqa: E731
+        sim = fe_mpm.Simulation(
+            mesh, points, fe_mpm.MohrCoulomb(5e7, 0.3, 1e9, 0.0), "u", body_force=(0.0, -9.81),
+            dirichlet=[fe_mpm.Dirichlet(base), fe_mpm.Dirichlet(
+                lambda x: np.isclose(x[0], 0.0) | np.isclose(x[0], 4.0), component=0)],
+            reactions={"base": base})
+        sim.add_marker("crest", (1.45, 3.95))
+        sim.step(1.0)
+        sim.remove_points((np.abs(points.x[:, 0] - 2.0) < 0.5) & (points.x[:, 1] > 2.0))
+        dug = sim.step(2.0)
+        layer = [lambda x: x[1] - 4.0, lambda x: 4.5 - x[1]]
+        sim.add_points(fe_mpm.seed(sim.mesh, 3, density=2000.0, level_set=layer))
+        placed = sim.step(3.0)
+        weight = 9.81 * float(parallel.total(MPI.COMM_WORLD, points.mass.sum()))
+        result = {"base": [dug.reactions["base"].tolist(), placed.reactions["base"].tolist()],
+                  "weight": weight, "crest": placed.markers["crest"].tolist(),
+                  "points": int(parallel.total(MPI.COMM_WORLD, len(points)))}
     elif case in ("zones", "zones nbva"):  # NB-VA: one averaged volume change per zone
         from fe_mpm import scenes
         from fe_mpm.materials import HenckyJ2
@@ -743,6 +763,18 @@ def test_a_pressure_that_follows_a_cavitys_face_gives_the_serial_answer_on_two_r
     for result in _run(tmp_path, "point pressure", 2):
         np.testing.assert_allclose(result["face"], serial["face"], rtol=1e-9)
         np.testing.assert_allclose(result["force"], serial["force"], rtol=1e-9)
+
+
+def test_points_removed_and_added_between_steps_give_the_serial_answer_on_two_ranks(tmp_path):
+    """A trench dug in a layer at rest, then a layer placed on it, each rank removing
+    and seeding its own points: the base's reactions, the marker beside the trench and
+    the points' count as serial to 1e-9, the base carrying the weight."""
+    (serial,) = _run(tmp_path, "staged", 1)
+    assert serial["base"][1][1] == pytest.approx(serial["weight"], rel=1e-9)
+    for result in _run(tmp_path, "staged", 2):
+        np.testing.assert_allclose(result["base"], serial["base"], rtol=1e-9, atol=1e-6)
+        np.testing.assert_allclose(result["crest"], serial["crest"], rtol=1e-9)
+        assert result["points"] == serial["points"]
 
 
 @pytest.mark.parametrize("case", ["zones", "zones nbva"])

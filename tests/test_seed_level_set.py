@@ -174,6 +174,7 @@ def test_a_list_of_planes_seeds_a_thin_slab_of_tetrahedra_exactly():
             ValueError,
             r"seed: level_set is nowhere positive in the cells to seed",
         ),
+        ([], ValueError, r"seed: level_set is an empty list"),
     ],
 )
 def test_bad_level_sets_are_refused_by_name(level_set, error, match):

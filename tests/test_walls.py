@@ -186,6 +186,33 @@ def test_a_run_whose_script_clears_its_history_keeps_every_steps_row(tmp_path):
     np.testing.assert_array_equal(rows["normal"], [r.walls["base"].normal for r in reports])
 
 
+def test_a_restore_undoes_the_later_steps_rows_whatever_the_history_kept(tmp_path):
+    """Five steps with the history cleared after each and a checkpoint after the
+    fourth, then a restore to it and two steps: the CSVs hold steps 1–6 once each. A
+    restore rewound them only when the history had been longer than the checkpoint,
+    so step 5 came twice (or steps 1–3 were lost with a part of the history kept)."""
+    sim, _ = _block(
+        0.0,
+        0.5,
+        dynamic=False,
+        body_force_scale=lambda t: t,
+        output_dir=tmp_path / "out",
+        output_every=2,
+    )
+    for k in range(1, 6):
+        sim.step(0.1 * k)
+        if k == 4:
+            kept = sim.checkpoint(tmp_path / "checkpoints")
+        sim.history.clear()
+    sim.restore(kept)
+    for k in (5, 6):
+        sim.step(0.1 * k)
+    sim.close()
+    for name in ("steps.csv", "walls.csv"):
+        rows = np.genfromtxt(tmp_path / "out" / name, delimiter=",", names=True, dtype=None)
+        assert list(rows["step"]) == [1, 2, 3, 4, 5, 6], name
+
+
 def test_walls_hold_point_domains_as_they_hold_points():
     """With point domains the walls act on the pieces of the domains as on points.
 
