@@ -20,6 +20,7 @@ from fe_mpm._dolfinx import dolfinx
 from fe_mpm.bodies import bodies_of_cells, count_bodies
 from fe_mpm.boundary import PointDirichlet, RigidWall
 from fe_mpm.checks import check_choice, check_int, check_range
+from fe_mpm.errors import warn
 from fe_mpm.formulations import FORMULATIONS, FormulationSpec
 from fe_mpm.ghost import WITH_DOMAINS, WITH_DOMAINS_DYNAMIC
 from fe_mpm.grid_conditions import follow_the_body
@@ -458,6 +459,26 @@ def failure_advice(
     if static_plastic:
         advice.append(LIMIT_LOAD_ADVICE)
     return " ".join(advice)
+
+
+def warn_dilatant_averaging(material, spec: FormulationSpec, dynamic: bool) -> None:
+    """Warn where a static ``u-nbva`` run has a law that dilates as it yields.
+
+    A helper's footing (Drucker–Prager, ψ = 30°) stopped at a fifth of its collapse
+    load in ``u-nbva`` and ran to it in u-p; with ψ = 0 both run (docs/limitations.md).
+    """
+    if dynamic or not spec.volume_average:
+        return
+    laws = getattr(material, "laws", [material])
+    dilating = [law for law in laws if getattr(law, "dilatancy_angle", 0.0) > 0.0]
+    if dilating:
+        law = dilating[0]
+        warn(
+            f"Simulation: 'u-nbva' with {type(law).__name__} dilating at "
+            f"psi = {law.dilatancy_angle:g} deg: a static run of a dilatant soil in u-nbva "
+            "stopped far below its collapse load (a strip footing at 0.18 c N_c, where "
+            "u-p reached 1.02); take 'up' for a dilatant soil (docs/limitations.md)"
+        )
 
 
 def check_law(material, spec: FormulationSpec, formulation: str) -> None:

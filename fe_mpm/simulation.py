@@ -319,6 +319,7 @@ class Simulation:
             {"shared_increment=True": bool(shared_increment)},
         )
         model_checks.check_law(material, self.spec, formulation)
+        model_checks.warn_dilatant_averaging(material, self.spec, dynamic)
         model_checks.take_density(material, points)
         model_checks.check_weight_of_initial_stress(
             mesh.comm, points, initial_stress is not None, body_force

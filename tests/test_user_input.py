@@ -601,3 +601,17 @@ def test_blocks_touching_corner_to_corner_are_named_as_a_hinge_when_newton_fails
     )
     with pytest.raises(fe_mpm.ConvergenceError, match=r"touch at a node .* x = \[3\.0, 2\.0\]"):
         sim.step(1.0)
+
+
+@pytest.mark.parametrize(("psi", "warned"), [(10.0, True), (0.0, False)])
+def test_a_static_u_nbva_run_of_a_dilatant_soil_warns(psi, warned):
+    """A helper's footing on a dilatant cone stopped at a fifth of its collapse load in
+    u-nbva (docs/limitations.md): a static run warns, naming u-p; ψ = 0 does not."""
+    mesh = _mesh()
+    points = fe_mpm.seed(mesh, per_cell=3, density=RHO)
+    law = fe_mpm.DruckerPrager(1e7, 0.3, 1e4, 30.0, psi)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        fe_mpm.Simulation(mesh, points, law, "u-nbva", body_force=(0.0, -G), dirichlet=[_base()])
+    said = [str(w.message) for w in caught if "dilatant soil in u-nbva" in str(w.message)]
+    assert bool(said) == warned
