@@ -26,7 +26,7 @@ from fe_mpm.ghost import WITH_DOMAINS, WITH_DOMAINS_DYNAMIC
 from fe_mpm.grid_conditions import follow_the_body
 from fe_mpm.materials.protocol import Law, MixedLaw, missing_members
 from fe_mpm.materials.zones import material_zones
-from fe_mpm.particles import MaterialPoints, simplex_cell_type
+from fe_mpm.particles import MaterialPoints, coincident, simplex_cell_type
 from fe_mpm.transfer import touched_nodes
 
 #: Relative mismatch between the law's density and the points' that counts as a conflict.
@@ -223,21 +223,20 @@ def check_distinct_points(comm, points: MaterialPoints) -> None:
     silently (2026-12-06). Tracking has sent each copy to the rank of its cell.
     """
     error = None
-    if len(points):
-        _, first, counts = np.unique(points.x, axis=0, return_index=True, return_counts=True)
-        shared = np.flatnonzero(counts > 1)
-        if shared.size:
-            i = int(first[shared[0]])
-            j = int(np.flatnonzero(np.all(points.x == points.x[i], axis=1))[1])
-            error = ValueError(
-                f"Simulation: {int(counts[shared].sum() - shared.size)} material points lie "
-                f"at the same place as another (first: points {i} and {j} at x = "
-                f"{points.x[i].tolist()}), which counts the material twice. Under mpiexec, "
-                "points seeded on every rank from a mesh of its own (meshes.disk or "
-                "meshes.cylinder on COMM_SELF, their default) are copies: keep them on one "
-                "rank (points.keep(...) on the others) or build that mesh on the grid's "
-                "communicator."
-            )
+    twice = np.flatnonzero(coincident(points.x))
+    if twice.size:
+        i = int(twice[0])
+        j = int(np.flatnonzero(np.all(points.x == points.x[i], axis=1))[1])
+        places = len(np.unique(points.x[twice], axis=0))  # the few that coincide
+        error = ValueError(
+            f"Simulation: {twice.size - places} material points lie "
+            f"at the same place as another (first: points {i} and {j} at x = "
+            f"{points.x[i].tolist()}), which counts the material twice. Under mpiexec, "
+            "points seeded on every rank from a mesh of its own (meshes.disk or "
+            "meshes.cylinder on COMM_SELF, their default) are copies: keep them on one "
+            "rank (points.keep(...) on the others) or build that mesh on the grid's "
+            "communicator."
+        )
     parallel.raise_together(comm, error)
 
 
@@ -677,8 +676,7 @@ def _check_each_body(conditions, point_conditions, occupied: np.ndarray, walls) 
     :data:`MOST_BODIES_CHECKED` bodies (a granular packing) each is not checked.
     """
     mesh = conditions.mesh
-    occupied = np.unique(occupied)
-    body, count = bodies_of_cells(mesh, occupied)
+    body, count = bodies_of_cells(mesh, occupied)  # occupied: sorted, each cell once
     if not 1 < count <= MOST_BODIES_CHECKED:
         return
     g = mesh.geometry.dim

