@@ -651,7 +651,6 @@ def check_supports(conditions, boundary, occupied: np.ndarray, walls=None) -> No
         )
     free = _free_modes(gram)
     if free.shape[1] == 0:
-        _check_each_body(conditions, point_conditions, occupied, walls)
         return
     axis = free[g:, 0]  # the rotation in the first free mode (its translations are held)
     about = "z" if g == 2 else _axis_name(axis / np.linalg.norm(axis))
@@ -664,8 +663,11 @@ def check_supports(conditions, boundary, occupied: np.ndarray, walls=None) -> No
     )
 
 
-def _check_each_body(conditions, point_conditions, occupied: np.ndarray, walls) -> None:
+def check_each_body(conditions, boundary, occupied: np.ndarray, walls=None) -> None:
     """Refuse a static model with a body that nothing holds, once the whole is held.
+
+    Called by a step, after :func:`check_supports` (which :meth:`Simulation.prepare_step`
+    calls, and the Taylor tests' scattered points pass).
 
     Material in cells that share no node forms separate bodies, and each needs its
     own supports: a block in the air beside one on its base, or one body on a gmsh
@@ -676,6 +678,7 @@ def _check_each_body(conditions, point_conditions, occupied: np.ndarray, walls) 
     :data:`MOST_BODIES_CHECKED` bodies (a granular packing) each is not checked.
     """
     mesh = conditions.mesh
+    point_conditions = [] if boundary is None else boundary.points.conditions
     body, count = bodies_of_cells(mesh, occupied)  # occupied: sorted, each cell once
     if not 1 < count <= MOST_BODIES_CHECKED:
         return

@@ -129,6 +129,9 @@ def abort_on_lone_exception(wait: float = 30.0) -> None:
                     f"did not raise within {wait:g} s: aborting every rank\n"
                 )
                 sys.stderr.flush()
+                # mpiexec may stop forwarding a rank's output once it aborts: a loaded
+                # machine lost this line (a fresh clone's suite, 2026-12-06).
+                time.sleep(0.5)
                 comm.Abort(1)
             time.sleep(0.01)
 

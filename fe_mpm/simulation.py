@@ -956,7 +956,12 @@ class Simulation:
         if k == 2 and self.spec.u_degree == 2 and self.domains is None:
             warn(self.spec.multi_step_warning())
         # Track, lay out, pack, impose (and project the points' motion, in dynamics).
+        supports_due = (self.step_number == 0 or self._check_supports_again) and not self.dynamic
         forms, layout, R, J, bcs = self.prepare_step(t_new, rebin=rebin)
+        if supports_due:  # each body apart, once the whole is held (prepare_step)
+            model_checks.check_each_body(
+                self.conditions, self._boundary, layout.occupied, self.walls
+            )
         if self.dynamics is not None and (k == 1 or self._restart_dynamics):
             self._consistent_initial_acceleration(forms, layout, R, bcs, dt)
             self._restart_dynamics = False
