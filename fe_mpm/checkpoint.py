@@ -83,6 +83,28 @@ def latest(directory: str | Path) -> Path:
     return max(found, key=lambda p: int(p.name[5:]))
 
 
+def set_aside_after(directory: str | Path, step: int) -> list[Path]:
+    """Rename the checkpoints of steps after ``step`` under ``directory`` to ``undone_…``.
+
+    A run restored to an earlier step undoes the steps after it; their checkpoints,
+    left as they were, were what :func:`latest` found next (a helper restored step 3
+    of 7, ran on to t = 1.0, and a new simulation restored from the folder went back
+    to the undone step 6, t = 0.857, without a word). Renamed, not deleted. Call on
+    one rank.
+
+    Returns:
+        The folders as renamed.
+    """
+    moved = []
+    for folder in sorted(Path(directory).glob("step_*")):
+        if folder.name[5:].isdigit() and int(folder.name[5:]) > step:
+            target = folder.with_name("undone_" + folder.name)
+            shutil.rmtree(target, ignore_errors=True)
+            folder.rename(target)
+            moved.append(target)
+    return moved
+
+
 def write(sim, directory: str | Path) -> Path:
     """Write the state of ``sim`` after its current step; collective.
 

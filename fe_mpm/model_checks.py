@@ -791,6 +791,19 @@ def domains_would_be_taken(
     return True
 
 
+def check_column_name(owner: str, name) -> None:
+    """Refuse a name that cannot head a CSV column.
+
+    A comma split a marker "tip,left" into two columns of ``steps.csv`` and shifted
+    every value after it (a helper's post-processing, 2026-12-06).
+    """
+    if not isinstance(name, str) or not name or any(c in name for c in ',"\n\r'):
+        raise ValueError(
+            f"{owner} name {name!r} must be a non-empty string without commas, quotes or "
+            "line breaks: it heads columns of steps.csv and walls.csv"
+        )
+
+
 def check_force_names(reactions: dict | None, walls: Sequence, boundary: Sequence) -> set[str]:
     """The names under which forces are reported, refused if two conditions share one.
 
@@ -814,6 +827,7 @@ def check_force_names(reactions: dict | None, walls: Sequence, boundary: Sequenc
         ("boundary-point condition", [condition.name for condition in boundary]),
     ):
         for name in names:
+            check_column_name(f"Simulation: the {kind}", name)
             owners.setdefault(name, []).append(kind)
     for name, kinds in owners.items():
         if len(kinds) > 1:

@@ -13,6 +13,7 @@ the N-th repartition of the grid under MPI the grid's files are ``grid_N.bp`` an
 from __future__ import annotations
 
 import atexit
+import shutil
 import weakref
 from pathlib import Path
 
@@ -46,6 +47,25 @@ def _close_open_outputs() -> None:
     _OPEN.clear()
 
 
+def _clear_earlier_run(folder: Path, domains: bool) -> None:
+    """Remove what an earlier run left in ``folder`` that this one may not overwrite.
+
+    A run with domains, walls and a pressure, then a plain one in the same folder,
+    left the first run's ``domains.pvd`` (ParaView showed domains to t = 1 for a run
+    that ended at 0.5), ``grid_pressure.bp`` and ``walls.csv`` (a helper's scene,
+    2026-12-06). Only fe-mpm's own names go; the points' frames are their writer's.
+    """
+    stale = [folder / "steps.csv", folder / "walls.csv"]
+    stale += [*folder.glob("grid_pressure*.bp"), *folder.glob("grid_[0-9]*.bp")]
+    if not domains:  # a run with domains clears its own series
+        stale += [folder / "domains.pvd", *folder.glob("domains_*.vtu")]
+    for path in stale:
+        if path.is_dir():
+            shutil.rmtree(path, ignore_errors=True)
+        elif path.exists():
+            path.unlink()
+
+
 class SimulationOutput:
     """The files of one run, written every ``every`` steps and at the ends.
 
@@ -65,6 +85,9 @@ class SimulationOutput:
         self.folder, self.fields, self.every = Path(folder).resolve(), fields, int(every)
         self._written_step = -1
         comm = fields.W.mesh.comm
+        if comm.rank == 0:
+            _clear_earlier_run(self.folder, domains)
+        comm.barrier()
         self._points = ParticleWriter(self.folder, comm=comm)
         self._domains = DomainWriter(self.folder, comm=comm) if domains else None
         self._grids = 0  # grids written so far: a repartition starts another

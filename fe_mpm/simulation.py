@@ -553,6 +553,7 @@ class Simulation:
         nearest to it (:mod:`fe_mpm.markers`), so it never reads an empty cell.
         Read it from ``history[k].markers[name]`` or :meth:`marker`.
         """
+        model_checks.check_column_name("Simulation.add_marker: the marker", name)
         xm = check_finite("Simulation.add_marker", f"x of marker {name!r}", x)
         if xm.size != self.gdim:
             raise ValueError(
@@ -758,6 +759,17 @@ class Simulation:
                     for name in ("steps.csv", "walls.csv"):
                         drop_rows_after(self.output.folder / name, step)
                 self.output.rewind(self.t, step)
+            if self.checkpoint_dir is not None:
+                moved = []
+                if parallel.on_rank_zero(self.mesh.comm):
+                    moved = checkpoint.set_aside_after(self.checkpoint_dir, step)
+                    if moved:
+                        warn(
+                            f"Simulation.restore: the checkpoints of the steps undone, "
+                            f"{', '.join(p.name for p in moved)}, are set aside as such in "
+                            f"{self.checkpoint_dir}: a restore from that folder continues "
+                            "this run"
+                        )
         self.rebalancing.restart()  # a partition for these points
         if self._rebalance_if_due(imbalance(self.mesh.comm, len(self.points))):
             self._track(self.step_number, self.t)

@@ -75,8 +75,13 @@ def test_a_simulation_restored_to_an_earlier_step_forgets_the_steps_after_it(tmp
                         checkpoint_every=2, output_every=2)  # fmt: skip
     sim.run(0.1, 4, progress=False)
     end = state(sim)
-    sim.restore(tmp_path / "ck" / "step_000002")
+    with pytest.warns(UserWarning, match=r"undone_step_000004, are set aside"):
+        sim.restore(tmp_path / "ck" / "step_000002")
     assert [r.step for r in sim.history] == [1, 2]
+    # The undone step's checkpoint is set aside: a restore from the folder continues
+    # this run (it went back to the undone step, a helper's scene).
+    assert checkpoint.latest(tmp_path / "ck").name == "step_000002"
+    assert (tmp_path / "ck" / "undone_step_000004" / "state.json").is_file()
     sim.run(0.1, 2, progress=False)
     assert [r.step for r in sim.history] == [1, 2, 3, 4]
     for name, value in end.items():
@@ -86,7 +91,8 @@ def test_a_simulation_restored_to_an_earlier_step_forgets_the_steps_after_it(tmp
     pvd = (tmp_path / "out" / "particles.pvd").read_text()
     assert [float(t) for t in re.findall(r'timestep="([^"]+)"', pvd)] == [0.0, 0.05, 0.1]
     # Restored and closed at once, the restored step's frame is not listed twice.
-    sim.restore(tmp_path / "ck" / "step_000002")
+    with pytest.warns(UserWarning, match=r"set aside"):
+        sim.restore(tmp_path / "ck" / "step_000002")
     sim.close()
     pvd = (tmp_path / "out" / "particles.pvd").read_text()
     assert [float(t) for t in re.findall(r'timestep="([^"]+)"', pvd)] == [0.0, 0.05]

@@ -281,3 +281,23 @@ def test_a_run_with_point_domains_writes_each_domain_as_a_cell_with_its_points_f
     original = sim.mesh.topology.original_cell_index[sim.points.cell]
     assert np.array_equal(particles.point_data["cell"], original)
     assert np.array_equal(mesh.cell_data["cell"][0], original)
+
+
+def test_a_new_run_clears_what_an_earlier_one_left_in_its_folder(tmp_path):
+    """A run with point domains and a pressure field, then a plain one in the same
+    folder: the first run's ``domains.pvd`` (ParaView showed domains past the second
+    run's end), ``grid_pressure.bp`` and an earlier ``walls.csv`` are gone; a name
+    that would split a CSV column is refused."""
+    scenes.cook_membrane(4, formulation="up", traction=0.1, output_dir=tmp_path,
+                         point_domains=True).run(1.0, 1, progress=False)  # fmt: skip
+    (tmp_path / "walls.csv").write_text("step,t,wall\n")
+    assert (tmp_path / "domains.pvd").exists() and (tmp_path / "grid_pressure.bp").exists()
+    sim = scenes.cook_membrane(4, formulation="u", traction=0.1, output_dir=tmp_path)
+    sim.run(1.0, 1, progress=False)
+    sim.close()
+    left = {p.name for p in tmp_path.iterdir()}
+    assert not {"domains.pvd", "grid_pressure.bp", "walls.csv"} & left
+    assert not any(name.startswith("domains_") for name in left)
+    assert {"particles.pvd", "grid.bp", "steps.csv"} <= left
+    with pytest.raises(ValueError, match=r"marker name 'tip,left' must be .* without commas"):
+        sim.add_marker("tip,left", (48.0, 52.0))
