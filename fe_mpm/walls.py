@@ -503,7 +503,15 @@ def plot_wall_forces(history: Sequence, path: str | Path, pyplot) -> Path:
         history: The :class:`~fe_mpm.StepReport` objects of a run.
         path: The image file to write.
         pyplot: ``matplotlib.pyplot`` (see :func:`fe_mpm.plotting.pyplot`).
+
+    The right panel's friction is each node's magnitude, which opposite nodal
+    frictions do not cancel in: their sum can exceed the wall's total.
+
+    Raises:
+        ValueError: ``history`` is empty or its last step has no walls.
     """
+    if not history or not history[-1].walls:
+        raise ValueError("plot_wall_forces: history holds no step with wall forces")
     fig, (over_time, along) = pyplot.subplots(1, 2, figsize=(10, 3.6))
     t = [report.t for report in history]
     axes = set()
@@ -521,10 +529,10 @@ def plot_wall_forces(history: Sequence, path: str | Path, pyplot) -> Path:
             x = last.nodes[order, axis]
             # Walls that face different ways run along different axes: each is named.
             along.plot(x, push, "o", ms=3, label=f"{name}: push, along {'xyz'[axis]}")
-            along.plot(x, along_wall, "s", ms=3, mfc="none", label=f"{name}: friction")
+            along.plot(x, along_wall, "s", ms=3, mfc="none", label=f"{name}: |friction|")
             axes.add("xyz"[axis])
     along.set_xlabel(" or ".join(sorted(axes)) + " (m), along each wall's face")
-    over_time.set_xlabel("t (s)")
+    over_time.set_xlabel("t (s; a static run's load time)")
     over_time.set_ylabel("force on the body (N; N/m in 2D)")
     over_time.legend(fontsize=7)
     along.set_ylabel("nodal force at the end (N; N/m in 2D)")
