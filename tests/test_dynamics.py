@@ -6,6 +6,8 @@ of a fixed–free bar (u = v0/ω sin ωt sin βY), the self-weight column
 shared/notes/benchmark_refs.md §5a).
 """
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -603,3 +605,26 @@ def test_a_mass_system_that_does_not_converge_stops_the_run_naming_it():
     ):
         sim.run(0.01, 1, progress=False)
     assert sim.step_number == 0
+
+
+@pytest.mark.parametrize(
+    ("passes", "dt", "warned"), [(8, 0.01, True), (4, 0.01, False), (8, 0.005, False)]
+)
+def test_projection_passes_against_a_long_step_warn(passes, dt, warned):
+    """A free Neo-Hookean square translating, eight passes at c Δt / h = 18: its
+    spurious stress grew from 1e-9 to 9e-3 Pa in 200 steps (a helper's scene); four
+    passes, or eight at c Δt / h = 9, kept it at 1e-9. Passes × c Δt / h above 100
+    warn at the first step."""
+    mesh = rectangle_mesh((-0.4, -0.4), (0.4, 0.4), (40, 40))
+    square = [lambda x: x[0] + 0.16, lambda x: 0.16 - x[0], lambda x: x[1] + 0.16,
+              lambda x: 0.16 - x[1]]  # fmt: skip
+    points = fe_mpm.seed(mesh, 3, density=1000.0, level_set=square)
+    points.velocity[:, 0] = 0.25
+    sim = fe_mpm.Simulation(
+        mesh, points, fe_mpm.NeoHookean(1e6, 0.3), dynamic=True, projection_passes=passes
+    )
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        sim.step(dt)
+    said = [w for w in caught if "spurious stress grew" in str(w.message)]
+    assert bool(said) == warned
