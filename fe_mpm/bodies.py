@@ -76,13 +76,7 @@ def count_bodies(mesh: dolfinx.mesh.Mesh, cells: np.ndarray) -> int:
         mesh: The grid.
         cells: This rank's occupied cells (local indices; repeats and -1 ignored).
     """
-    occupied = np.unique(cells[cells >= 0])
-    local_nodes = mesh.geometry.dofmaps[0][occupied]
-    index_map = mesh.geometry.index_map()
-    global_nodes = index_map.local_to_global(local_nodes.ravel().astype(np.int32))
-    gathered = parallel.gathered(mesh.comm, global_nodes.reshape(local_nodes.shape))
-    labels = body_labels(gathered)
-    return int(labels.max(initial=-1)) + 1
+    return bodies_of_cells(mesh, cells)[1]
 
 
 def joined_at_a_node(mesh: dolfinx.mesh.Mesh, cells: np.ndarray) -> np.ndarray | None:

@@ -119,6 +119,14 @@ def test_coulomb_wall_holds_a_block_below_its_friction_angle():
     assert along == pytest.approx(-weight * math.sin(math.radians(10.0)), rel=0.05)
 
 
+def _resting_block(output_dir):
+    """The block at rest on a level wall, gravity ramped, written every second step."""
+    return _block(
+        0.0, 0.5, dynamic=False, body_force_scale=lambda t: t, output_dir=output_dir,
+        output_every=2,
+    )  # fmt: skip
+
+
 def test_block_at_rest_on_a_wall_weighs_on_it_in_a_static_run(tmp_path):
     """Static, gravity ramped: nothing but the wall holds the block, and it carries m g.
 
@@ -127,14 +135,7 @@ def test_block_at_rest_on_a_wall_weighs_on_it_in_a_static_run(tmp_path):
     The run's ``walls.csv`` (written at the outputs of steps 2 and 3, appended) has
     each step's row once, with the reports' numbers.
     """
-    sim, points = _block(
-        0.0,
-        0.5,
-        dynamic=False,
-        body_force_scale=lambda t: t,
-        output_dir=tmp_path,
-        output_every=2,
-    )
+    sim, points = _resting_block(tmp_path)
     reports = sim.run(t_end=1.0, n_steps=3)
     rows = np.genfromtxt(tmp_path / "walls.csv", delimiter=",", names=True, dtype=None)
     assert list(rows["step"]) == [1, 2, 3]
@@ -166,14 +167,7 @@ def test_a_run_whose_script_clears_its_history_keeps_every_steps_row(tmp_path):
     numbers the chunks' reports gave (until 2026-12-06 they took their new rows from
     ``history`` by position and lost steps 3–12).
     """
-    sim, _ = _block(
-        0.0,
-        0.5,
-        dynamic=False,
-        body_force_scale=lambda t: t,
-        output_dir=tmp_path,
-        output_every=2,
-    )
+    sim, _ = _resting_block(tmp_path)
     reports = []
     for chunk in range(4):
         reports += sim.run(t_end=(chunk + 1) / 4, n_steps=3, progress=False)
@@ -191,14 +185,7 @@ def test_a_restore_undoes_the_later_steps_rows_whatever_the_history_kept(tmp_pat
     fourth, then a restore to it and two steps: the CSVs hold steps 1–6 once each. A
     restore rewound them only when the history had been longer than the checkpoint,
     so step 5 came twice (or steps 1–3 were lost with a part of the history kept)."""
-    sim, _ = _block(
-        0.0,
-        0.5,
-        dynamic=False,
-        body_force_scale=lambda t: t,
-        output_dir=tmp_path / "out",
-        output_every=2,
-    )
+    sim, _ = _resting_block(tmp_path / "out")
     for k in range(1, 6):
         sim.step(0.1 * k)
         if k == 4:
