@@ -460,6 +460,31 @@ def failure_advice(
     return " ".join(advice)
 
 
+def warn_static_fluid(material, dynamic: bool) -> None:
+    """Warn where a static run has a law that keeps no shape (a fluid).
+
+    A static step gives a fluid no shear stiffness but its viscosity over a pseudo-time
+    step: water at rest in a tank held its level for two static steps, then its
+    surface fell from 0.094 to 0.063 m as the steps were cut, and the run ended with
+    points through the base (a helper's tank, 2026-12-06).
+    """
+    if dynamic:
+        return
+    fluids = [law for law in getattr(material, "laws", [material]) if not law_keeps_shape(law)]
+    if fluids:
+        warn(
+            f"Simulation: a static run of {type(fluids[0]).__name__}, which keeps no shape: "
+            "a static step gives it no shear stiffness, and water at rest in a tank left "
+            "its level within steps and ended with points through its base. Run fluids "
+            "with dynamic=True."
+        )
+
+
+def law_keeps_shape(law) -> bool:
+    """Whether ``law`` resists shear at rest (a solid), as its ``keeps_shape`` says."""
+    return bool(getattr(law, "keeps_shape", True))
+
+
 def warn_dilatant_averaging(material, spec: FormulationSpec, dynamic: bool) -> None:
     """Warn where a static ``u-nbva`` run has a law that dilates as it yields.
 

@@ -324,6 +324,7 @@ class Simulation:
         )
         model_checks.check_law(material, self.spec, formulation)
         model_checks.warn_dilatant_averaging(material, self.spec, dynamic)
+        model_checks.warn_static_fluid(material, dynamic)
         model_checks.take_density(material, points)
         model_checks.check_weight_of_initial_stress(
             mesh.comm, points, initial_stress is not None, body_force

@@ -6,6 +6,8 @@ step's residual and Jacobian. The dam break against Martin & Moyce is in
 ``tests/test_demos.py``.
 """
 
+import warnings
+
 import numpy as np
 import pytest
 from test_taylor import _simulation, assert_first_step_is_consistent
@@ -404,3 +406,18 @@ def test_water_started_at_its_hydrostatic_pressure_stays_at_rest_in_its_first_st
 
     by_parts, usual = first_step_speed(True), first_step_speed(False)
     assert by_parts < 1.2 * usual + 1e-6, (by_parts, usual)
+
+
+def test_a_static_run_of_a_fluid_warns():
+    """Water in a static run held its level for two steps, then fell apart (a helper's
+    tank): a static run of a law that keeps no shape warns; a dynamic one does not."""
+    mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (4, 4))
+    water = fe_mpm.NewtonianFluid(2.0e6, 1e-3, shear_scale=1.0e3, density=1000.0)
+    for dynamic in (False, True):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            fe_mpm.Simulation(
+                mesh, fe_mpm.seed(mesh, 3, density=1000.0), water, "up", dynamic=dynamic
+            )
+        said = [w for w in caught if "keeps no shape" in str(w.message)]
+        assert bool(said) == (not dynamic)
