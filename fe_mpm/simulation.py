@@ -50,7 +50,7 @@ from fe_mpm.errors import ConvergenceError, PointsOutsideError, warn
 from fe_mpm.forms.mixed_up import PPPData
 from fe_mpm.formulations import FORMULATIONS, GridFields
 from fe_mpm.ghost import GhostStabilisation
-from fe_mpm.grid_conditions import GridConditions
+from fe_mpm.grid_conditions import GridConditions, body_force_at
 from fe_mpm.initial_stress import start_stressed
 from fe_mpm.io import drop_rows_after
 from fe_mpm.markers import Markers
@@ -138,7 +138,10 @@ class Simulation:
         walls: Fixed rigid faces of the grid's boundary that the body presses on,
             slides along with Coulomb friction, or leaves (:class:`~fe_mpm.RigidWall`);
             their forces in ``StepReport.reactions`` and ``StepReport.walls``.
-        body_force: Body force per unit mass (m/s², length g), e.g. gravity.
+        body_force: Body force per unit mass (m/s², length g), e.g. gravity; or a
+            function ``t -> vector`` for one whose direction changes (gravity plus an
+            earthquake's horizontal acceleration in the base's frame,
+            ``lambda t: (-a(t), -9.81)``).
         body_force_scale: Load factor of the body force, ``t -> float``; 1 if None
             (``lambda t: t`` ramps self-weight over static load steps).
         facet_tags: Facet tags for ``Dirichlet``, ``Traction`` and ``Pressure`` given by tag.
@@ -256,7 +259,7 @@ class Simulation:
         point_dirichlet: Sequence[PointDirichlet] = (),
         point_tractions: Sequence[PointTraction | PointPressure] = (),
         walls: Sequence[RigidWall] = (),
-        body_force: Sequence[float] | None = None,
+        body_force: Sequence[float] | Callable[[float], Sequence[float]] | None = None,
         body_force_scale: Callable[[float], float] | None = None,
         facet_tags: dolfinx.mesh.MeshTags | None = None,
         petsc_options: dict | None = None,
@@ -327,7 +330,10 @@ class Simulation:
         model_checks.warn_static_fluid(material, dynamic)
         model_checks.take_density(material, points)
         model_checks.check_weight_of_initial_stress(
-            mesh.comm, points, initial_stress is not None, body_force
+            mesh.comm,
+            points,
+            initial_stress is not None,
+            None if body_force is None else body_force_at(body_force, 0.0, mesh.geometry.dim),
         )
         self._started_stressed = initial_stress is not None
         if initial_stress is not None:  # refused on every rank if on one
@@ -911,7 +917,7 @@ class Simulation:
             or any(isinstance(b, PointTraction | PointPressure) for b in self._given["boundary"])
         )
         loads_rise |= body_force is not None and (
-            body_force_scale is not None or self.step_number == 0
+            callable(body_force) or body_force_scale is not None or self.step_number == 0
         )
         return model_checks.failure_advice(
             self.domains is not None,
@@ -922,7 +928,7 @@ class Simulation:
             if self.dynamic
             else model_checks.sliding_on_walls(
                 self.walls,
-                self._given["conditions"][2],  # the body force as given
+                None if self.conditions.body_force is None else self.conditions.body_force.value,
                 np.unique(self.points.cell[self.points.cell >= 0]),
             ),
             lost_loads=self.conditions.lost_loads(),
@@ -983,7 +989,9 @@ class Simulation:
                 self.conditions, self._boundary, layout.occupied, self.walls
             )
         if self.dynamics is not None and (k == 1 or self._restart_dynamics):
+            self.conditions.set_loads(self.t)  # equilibrium at the step's start
             self._consistent_initial_acceleration(forms, layout, R, bcs, dt)
+            self.conditions.set_loads(t_new)
             self._restart_dynamics = False
         # Solve for the grid increment: Newton from Δu = 0.
         result = self._solve(forms, R, J, bcs)

@@ -628,3 +628,23 @@ def test_projection_passes_against_a_long_step_warn(passes, dt, warned):
         sim.step(dt)
     said = [w for w in caught if "spurious stress grew" in str(w.message)]
     assert bool(said) == warned
+
+
+def test_a_body_force_whose_direction_changes_in_time_drives_a_free_body():
+    """Gravity and a horizontal acceleration growing as t (m/s³), given as
+    ``body_force=lambda t: (t, -g)``: a free block's velocity is (t²/2, −g t), which
+    the trapezoidal rule integrates exactly for an acceleration linear in time (to
+    1e-9). ``body_force_scale``, one factor for the whole vector, could not pose it
+    (a helper's sliding block in the base's frame). A wrong length is refused."""
+    mesh = rectangle_mesh((0.0, 0.0), (2.0, 2.0), (8, 8))
+    block = [lambda x: x[0] - 0.5, lambda x: 1.0 - x[0], lambda x: x[1] - 1.0,
+             lambda x: 1.5 - x[1]]  # fmt: skip
+    points = fe_mpm.seed(mesh, 3, density=1000.0, level_set=block)
+    sim = fe_mpm.Simulation(
+        mesh, points, fe_mpm.NeoHookean(1e6, 0.3), body_force=lambda t: (t, -9.81), dynamic=True
+    )
+    sim.run(0.2, 10, progress=False)
+    np.testing.assert_allclose(points.velocity[:, 0], 0.2**2 / 2, rtol=1e-9)
+    np.testing.assert_allclose(points.velocity[:, 1], -9.81 * 0.2, rtol=1e-9)
+    with pytest.raises(ValueError, match=r"body_force\(t = 0\) must have 2 components"):
+        fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1e6, 0.3), body_force=lambda t: (t,))
