@@ -89,8 +89,9 @@ def set_aside_after(directory: str | Path, step: int) -> list[Path]:
     A run restored to an earlier step undoes the steps after it; their checkpoints,
     left as they were, were what :func:`latest` found next (a helper restored step 3
     of 7, ran on to t = 1.0, and a new simulation restored from the folder went back
-    to the undone step 6, t = 0.857, without a word). Renamed, not deleted. Call on
-    one rank.
+    to the undone step 6, t = 0.857, without a word). Renamed, not deleted, but for
+    an ``undone_…`` folder of the same step from an earlier restore, which the newer
+    replaces. Call on one rank.
 
     Returns:
         The folders as renamed.

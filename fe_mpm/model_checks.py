@@ -485,6 +485,20 @@ def law_keeps_shape(law) -> bool:
     return bool(getattr(law, "keeps_shape", True))
 
 
+def _dilates(law) -> bool:
+    """Whether ``law`` may dilate as it yields.
+
+    A dilatancy angle above 0; Mast's evolving-angle cones whose friction rises above
+    the critical state's (a₁ > 0, so tan ψ = tan φ_F − tan φ_cs > 0); a smooth cap's
+    cone flowing with some associativity.
+    """
+    return (
+        getattr(law, "dilatancy_angle", 0.0) > 0.0
+        or getattr(law, "a1", 0.0) > 0.0
+        or getattr(law, "associativity", 0.0) > 0.0
+    )
+
+
 def warn_dilatant_averaging(material, spec: FormulationSpec, dynamic: bool) -> None:
     """Warn where a static ``u-nbva`` run has a law that dilates as it yields.
 
@@ -494,12 +508,12 @@ def warn_dilatant_averaging(material, spec: FormulationSpec, dynamic: bool) -> N
     if dynamic or not spec.volume_average:
         return
     laws = getattr(material, "laws", [material])
-    dilating = [law for law in laws if getattr(law, "dilatancy_angle", 0.0) > 0.0]
+    dilating = [law for law in laws if _dilates(law)]
     if dilating:
         law = dilating[0]
         warn(
-            f"Simulation: 'u-nbva' with {type(law).__name__} dilating at "
-            f"psi = {law.dilatancy_angle:g} deg: a static run of a dilatant soil in u-nbva "
+            f"Simulation: 'u-nbva' with {type(law).__name__}, which dilates as it yields: "
+            "a static run of a dilatant soil in u-nbva "
             "stopped far below its collapse load (a strip footing at 0.18 c N_c, where "
             "u-p reached 1.02); take 'up' for a dilatant soil (docs/limitations.md)"
         )
@@ -704,6 +718,8 @@ def check_each_body(conditions, boundary, occupied: np.ndarray, walls=None) -> N
     """
     mesh = conditions.mesh
     point_conditions = [] if boundary is None else boundary.points.conditions
+    if not (conditions.loads_or_supports or point_conditions or walls):
+        return  # nothing acts: the bodies stay at rest (as check_supports says)
     body, count = bodies_of_cells(mesh, occupied)  # occupied: sorted, each cell once
     if not 1 < count <= MOST_BODIES_CHECKED:
         return

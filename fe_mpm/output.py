@@ -13,12 +13,14 @@ the N-th repartition of the grid under MPI the grid's files are ``grid_N.bp`` an
 from __future__ import annotations
 
 import atexit
+import re
 import shutil
 import weakref
 from pathlib import Path
 
 import numpy as np
 
+from fe_mpm import parallel
 from fe_mpm._dolfinx import dolfinx
 from fe_mpm.balance import original_indices
 from fe_mpm.formulations import GridFields, collapse
@@ -55,14 +57,16 @@ def _clear_earlier_run(folder: Path, domains: bool) -> None:
     that ended at 0.5), ``grid_pressure.bp`` and ``walls.csv`` (a helper's scene,
     2026-12-06). Only fe-mpm's own names go; the points' frames are their writer's.
     """
-    stale = [folder / "steps.csv", folder / "walls.csv"]
-    stale += [*folder.glob("grid_pressure*.bp"), *folder.glob("grid_[0-9]*.bp")]
+    names = [r"steps\.csv", r"walls\.csv", r"grid_pressure(_\d+)?\.bp", r"grid_\d+\.bp"]
     if not domains:  # a run with domains clears its own series
-        stale += [folder / "domains.pvd", *folder.glob("domains_*.vtu")]
-    for path in stale:
+        names += [r"domains\.pvd", r"domains_\d{6}(_r\d+)?\.vtu"]
+    fe_mpm_names = re.compile("|".join(f"(?:{name})" for name in names))
+    for path in folder.glob("*") if folder.is_dir() else []:
+        if not fe_mpm_names.fullmatch(path.name):
+            continue
         if path.is_dir():
-            shutil.rmtree(path, ignore_errors=True)
-        elif path.exists():
+            shutil.rmtree(path)
+        else:
             path.unlink()
 
 
@@ -85,9 +89,13 @@ class SimulationOutput:
         self.folder, self.fields, self.every = Path(folder).resolve(), fields, int(every)
         self._written_step = -1
         comm = fields.W.mesh.comm
+        error = None
         if comm.rank == 0:
-            _clear_earlier_run(self.folder, domains)
-        comm.barrier()
+            try:
+                _clear_earlier_run(self.folder, domains)
+            except OSError as err:
+                error = OSError(f"Simulation: cannot clear {self.folder} of an earlier run: {err}")
+        parallel.raise_together(comm, error)
         self._points = ParticleWriter(self.folder, comm=comm)
         self._domains = DomainWriter(self.folder, comm=comm) if domains else None
         self._grids = 0  # grids written so far: a repartition starts another

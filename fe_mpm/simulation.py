@@ -766,25 +766,35 @@ class Simulation:
             step = self.step_number
             self.history = [report for report in self.history if report.step <= step]
             self._unwritten = [report for report in self._unwritten if report.step <= step]
-            if self.output is not None:
-                if parallel.on_rank_zero(self.mesh.comm):
-                    for name in ("steps.csv", "walls.csv"):
-                        drop_rows_after(self.output.folder / name, step)
-                self.output.rewind(self.t, step)
-            if self.checkpoint_dir is not None:
-                moved = []
-                if parallel.on_rank_zero(self.mesh.comm):
-                    moved = checkpoint.set_aside_after(self.checkpoint_dir, step)
-                    if moved:
-                        warn(
-                            f"Simulation.restore: the checkpoints of the steps undone, "
-                            f"{', '.join(p.name for p in moved)}, are set aside as such in "
-                            f"{self.checkpoint_dir}: a restore from that folder continues "
-                            "this run"
-                        )
+            self._undo_files_after(step)
         self.rebalancing.restart()  # a partition for these points
         if self._rebalance_if_due(imbalance(self.mesh.comm, len(self.points))):
             self._track(self.step_number, self.t)
+
+    def _undo_files_after(self, step: int) -> None:
+        """Drop the CSV rows and frames after ``step``, and set aside later checkpoints.
+
+        Collective; the files' work is rank 0's, and an error there stops every rank.
+        """
+        comm, error, moved = self.mesh.comm, None, []
+        if parallel.on_rank_zero(comm):
+            try:
+                if self.output is not None:
+                    for name in ("steps.csv", "walls.csv"):
+                        drop_rows_after(self.output.folder / name, step)
+                if self.checkpoint_dir is not None:
+                    moved = checkpoint.set_aside_after(self.checkpoint_dir, step)
+            except OSError as err:
+                error = OSError(f"Simulation.restore: {err}")
+        parallel.raise_together(comm, error)
+        if self.output is not None:
+            self.output.rewind(self.t, step)
+        if moved:
+            warn(
+                f"Simulation.restore: the checkpoints of the steps undone, "
+                f"{', '.join(p.name for p in moved)}, are set aside as such in "
+                f"{self.checkpoint_dir}: a restore from that folder continues this run"
+            )
 
     def rebalance(self) -> None:
         """Repartition the grid so that the ranks hold about equal numbers of points.
@@ -988,8 +998,11 @@ class Simulation:
             model_checks.check_each_body(
                 self.conditions, self._boundary, layout.occupied, self.walls
             )
+            self._check_supports_again = False  # checked: not again until points change
         if self.dynamics is not None and (k == 1 or self._restart_dynamics):
-            self.conditions.set_loads(self.t)  # equilibrium at the step's start
+            # Equilibrium at the step's start: the grid loads there (the boundary
+            # points' loads stay at its end; repacked, they were lost from the step).
+            self.conditions.set_loads(self.t)
             self._consistent_initial_acceleration(forms, layout, R, bcs, dt)
             self.conditions.set_loads(t_new)
             self._restart_dynamics = False
@@ -1049,9 +1062,9 @@ class Simulation:
             return
         laws = getattr(self.material, "laws", [self.material])
         try:
-            modulus = max(float(law.bulk_modulus) + 4.0 * float(law.mu) / 3.0 for law in laws)
-        except (AttributeError, TypeError):
-            return  # a law without both moduli (a fluid): no wave speed to compare
+            modulus = max(_p_wave_modulus(law) for law in laws)
+        except (AttributeError, TypeError, ValueError):
+            return  # a law without the moduli to give a wave speed
         pts = self.points
         density = pts.mass / (pts.volume / np.linalg.det(pts.F)) if len(pts) else np.inf
         lightest = parallel.smallest(self.mesh.comm, float(np.min(density, initial=np.inf)))
@@ -1128,7 +1141,6 @@ class Simulation:
             model_checks.check_supports(
                 self.conditions, self._boundary, layout.occupied, self.walls
             )
-            self._check_supports_again = False
         self.conditions.check_loaded_facets(layout.occupied, t_new)
         bcs = self.conditions.impose(layout.occupied, self.t, t_new, self._zone_cells(layout))
         self.walls.start_step(layout.occupied, self.points.x, self.points.volume)
@@ -1445,6 +1457,13 @@ class Simulation:
             self._by_parts = None
         if self._shift is not None:
             self._shift.destroy()
+
+
+def _p_wave_modulus(law) -> float:
+    """K + 4/3 μ (Pa) of a solid, K of a fluid (no shear stiffness at rest)."""
+    if model_checks.law_keeps_shape(law):
+        return float(law.bulk_modulus) + 4.0 * float(law.mu) / 3.0
+    return float(law.bulk_modulus)
 
 
 def _refuse_misplaced(comm, tracker, x: np.ndarray, new: np.ndarray) -> None:

@@ -421,3 +421,17 @@ def test_a_static_run_of_a_fluid_warns():
             )
         said = [w for w in caught if "keeps no shape" in str(w.message)]
         assert bool(said) == (not dynamic)
+
+
+def test_water_without_a_shear_scale_takes_projection_passes():
+    """The passes' check of the step's length read a fluid's μ, which a fluid without
+    ``shear_scale`` does not have: its first step failed (a review's catch). A fluid's
+    wave speed is √(K/ρ)."""
+    mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (8, 8))
+    points = fe_mpm.seed(mesh, 3, density=1000.0, level_set=lambda x: 0.5 - x[1])
+    water = fe_mpm.NewtonianFluid(2.0e6, 1e-3, density=1000.0)
+    sim = fe_mpm.Simulation(
+        mesh, points, water, "up", dynamic=True, projection_passes=4, body_force=(0.0, -9.81),
+        dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))],
+    )  # fmt: skip
+    sim.step(1e-3)
