@@ -1049,7 +1049,8 @@ class Simulation:
     def _warn_passes_against_step(self, dt: float) -> None:
         """Warn (once, collective) where projection passes meet too long a step.
 
-        Passes × c Δt / h above about 100 (c the P-wave speed, h the smallest cell)
+        Passes × c Δt / h above about 100 (c the P-wave speed, h the smallest cell's
+        longest edge)
         leave a free body's spurious stress growing without bound: a Neo-Hookean
         square translating freely, eight passes, grew from 1e-9 to 9e-3 Pa in 200 steps
         at c Δt / h = 18 (and a disk spinning on gained energy 13 000-fold), stayed at
@@ -1075,11 +1076,11 @@ class Simulation:
         if passes * courant > PASSES_TIMES_COURANT:
             warn(
                 f"Simulation: projection_passes={passes} with steps of c dt / h = "
-                f"{courant:.3g} (c the P-wave speed, h the smallest cell): above passes x "
-                f"c dt / h = {PASSES_TIMES_COURANT:g} a free body's spurious stress grew "
-                "without bound (eight passes at 18: 1e-9 to 9e-3 Pa in 200 steps; four at "
-                "18 or eight at 9 stayed at 1e-9). Take fewer passes or shorter steps "
-                "(docs/dynamics.md)."
+                f"{courant:.3g} (c the P-wave speed, h the smallest cell's longest edge): "
+                f"above passes x c dt / h = {PASSES_TIMES_COURANT:g} a free body's spurious "
+                "stress grew without bound (eight passes at c dt / h = 18 by the cells' side: "
+                "1e-9 to 9e-3 Pa in 200 steps; four passes there, or eight at 9, stayed at "
+                "1e-9). Take fewer passes or shorter steps (docs/dynamics.md)."
             )
 
     def _check_point_count(self) -> None:
