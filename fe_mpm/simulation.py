@@ -406,7 +406,9 @@ class Simulation:
         self._unwritten: list[StepReport] = []
         self._writes_csv = output_dir is not None
         self._check_supports_again = False  # points were removed or added since
-        self._passes_checked = False  # projection passes against the step's length
+        # Projection passes against the step's length: the longest step checked, and
+        # whether the run was warned (once).
+        self._passes_checked_dt, self._passes_warned = 0.0, False
         self._restart_dynamics = False  # points were added: accelerations anew
         self._csv_head: StepReport | None = None
         self._grid_is_a_step = True  # the grid's fields are the last step's (or zero)
@@ -991,7 +993,7 @@ class Simulation:
             warn(self.spec.multi_step_warning())
         # Track, lay out, pack, impose (and project the points' motion, in dynamics).
         supports_due = (self.step_number == 0 or self._check_supports_again) and not self.dynamic
-        if self.dynamic and not self._passes_checked:
+        if self.dynamic and not self._passes_warned and dt > self._passes_checked_dt:
             self._warn_passes_against_step(dt)
         forms, layout, R, J, bcs = self.prepare_step(t_new, rebin=rebin)
         if supports_due:  # each body apart, once the whole is held (prepare_step)
@@ -1049,6 +1051,8 @@ class Simulation:
     def _warn_passes_against_step(self, dt: float) -> None:
         """Warn (once, collective) where projection passes meet too long a step.
 
+        Checked at the first step and whenever a step is longer than any checked.
+
         Passes × c Δt / h above about 100 (c the P-wave speed, h the smallest cell's
         longest edge)
         leave a free body's spurious stress growing without bound: a Neo-Hookean
@@ -1058,7 +1062,7 @@ class Simulation:
         helper's scenes, 2026-12-06).
         """
         passes = self._given["dynamics"][3]
-        self._passes_checked = True
+        self._passes_checked_dt = dt  # a step as long or shorter needs no new check
         if passes == 1:
             return
         laws = getattr(self.material, "laws", [self.material])
@@ -1074,6 +1078,7 @@ class Simulation:
             return
         courant = np.sqrt(modulus / lightest) * dt / smallest
         if passes * courant > PASSES_TIMES_COURANT:
+            self._passes_warned = True
             warn(
                 f"Simulation: projection_passes={passes} with steps of c dt / h = "
                 f"{courant:.3g} (c the P-wave speed, h the smallest cell's longest edge): "
