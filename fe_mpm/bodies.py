@@ -41,6 +41,12 @@ def body_labels(cell_nodes: np.ndarray) -> np.ndarray:
     return np.argsort(np.argsort(first))[body]
 
 
+def _gathered_globally(comm, index_map, local: np.ndarray) -> np.ndarray:
+    """Every rank's rows of local entity indices ``local`` (n, k), as global indices."""
+    ids = index_map.local_to_global(local.ravel().astype(np.int32)).reshape(local.shape)
+    return parallel.gathered(comm, ids)
+
+
 def bodies_of_cells(mesh: dolfinx.mesh.Mesh, cells: np.ndarray) -> tuple[np.ndarray, int]:
     """The body of each of this rank's occupied cells, and how many bodies there are.
 
@@ -55,11 +61,8 @@ def bodies_of_cells(mesh: dolfinx.mesh.Mesh, cells: np.ndarray) -> tuple[np.ndar
         the number of bodies over all ranks.
     """
     occupied = np.unique(cells[cells >= 0])
-    local_nodes = mesh.geometry.dofmaps[0][occupied]
-    index_map = mesh.geometry.index_map()
-    global_nodes = index_map.local_to_global(local_nodes.ravel().astype(np.int32))
-    gathered = parallel.gathered(mesh.comm, global_nodes.reshape(local_nodes.shape))
-    labels = body_labels(gathered)
+    nodes = mesh.geometry.dofmaps[0][occupied]
+    labels = body_labels(_gathered_globally(mesh.comm, mesh.geometry.index_map(), nodes))
     counts = mesh.comm.allgather(occupied.size) if mesh.comm.size > 1 else [occupied.size]
     start = int(sum(counts[: mesh.comm.rank]))
     return labels[start : start + occupied.size], int(labels.max(initial=-1)) + 1
@@ -102,15 +105,10 @@ def joined_at_a_node(mesh: dolfinx.mesh.Mesh, cells: np.ndarray) -> np.ndarray |
     to_facets = mesh.topology.connectivity(tdim, tdim - 1)
     # Every simplex has d + 1 facets: the adjacency list is a table.
     local_facets = to_facets.array.reshape(-1, tdim + 1)[occupied].astype(np.int32)
-    facet_map = mesh.topology.index_map(tdim - 1)
-    facets = facet_map.local_to_global(local_facets.ravel()).reshape(local_facets.shape)
+    facets = _gathered_globally(mesh.comm, mesh.topology.index_map(tdim - 1), local_facets)
     local_nodes = mesh.geometry.dofmaps[0][occupied]
-    node_map = mesh.geometry.index_map()
-    nodes = node_map.local_to_global(local_nodes.ravel().astype(np.int32))
-    nodes = nodes.reshape(local_nodes.shape)
-    coordinates = mesh.geometry.x[local_nodes, :g]
-    facets, nodes = parallel.gathered(mesh.comm, facets), parallel.gathered(mesh.comm, nodes)
-    coordinates = parallel.gathered(mesh.comm, coordinates)
+    nodes = _gathered_globally(mesh.comm, mesh.geometry.index_map(), local_nodes)
+    coordinates = parallel.gathered(mesh.comm, mesh.geometry.x[local_nodes, :g])
     part = body_labels(facets)
     if part.size == 0 or part.max() == body_labels(nodes).max():
         return None  # each body is one part

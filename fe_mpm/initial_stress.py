@@ -34,7 +34,7 @@ import numpy.typing as npt
 
 from fe_mpm.checks import check_range
 from fe_mpm.materials.spectral import deviator, from_principal, spectral_decomposition
-from fe_mpm.materials.zones import MATERIAL
+from fe_mpm.materials.zones import MATERIAL, laws_of
 from fe_mpm.particles import MaterialPoints
 
 
@@ -161,7 +161,7 @@ def start_stressed(
             "Simulation: initial_stress needs undeformed points (F = I); these carry "
             "a deformation already"
         )
-    for one in getattr(law, "laws", [law]):  # several laws: each must keep be
+    for one in laws_of(law):  # several laws: each must keep be
         kept = getattr(one, "history", {}).get("be")
         if kept is None or kept.shape != (3, 3):
             raise ValueError(

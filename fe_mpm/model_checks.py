@@ -25,7 +25,7 @@ from fe_mpm.formulations import FORMULATIONS, FormulationSpec
 from fe_mpm.ghost import WITH_DOMAINS, WITH_DOMAINS_DYNAMIC
 from fe_mpm.grid_conditions import follow_the_body
 from fe_mpm.materials.protocol import Law, MixedLaw, missing_members
-from fe_mpm.materials.zones import material_zones
+from fe_mpm.materials.zones import laws_of, material_zones
 from fe_mpm.particles import MaterialPoints, coincident, simplex_cell_type
 from fe_mpm.transfer import touched_nodes
 
@@ -460,29 +460,24 @@ def failure_advice(
     return " ".join(advice)
 
 
-def warn_static_fluid(material, dynamic: bool) -> None:
+def warn_static_fluid(material, keeps_shape: bool, dynamic: bool) -> None:
     """Warn where a static run has a law that keeps no shape (a fluid).
+
+    ``keeps_shape`` is the law's: False only for a fluid, which zones of several laws
+    refuse.
 
     A static step gives a fluid no shear stiffness but its viscosity over a pseudo-time
     step: water at rest in a tank held its level for two static steps, then its
     surface fell from 0.094 to 0.063 m as the steps were cut, and the run ended with
     points through the base (a helper's tank, 2026-12-06).
     """
-    if dynamic:
-        return
-    fluids = [law for law in getattr(material, "laws", [material]) if not law_keeps_shape(law)]
-    if fluids:
+    if not (dynamic or keeps_shape):
         warn(
-            f"Simulation: a static run of {type(fluids[0]).__name__}, which keeps no shape: "
+            f"Simulation: a static run of {type(material).__name__}, which keeps no shape: "
             "a static step gives it no shear stiffness, and water at rest in a tank left "
             "its level within steps and ended with points through its base. Run fluids "
             "with dynamic=True."
         )
-
-
-def law_keeps_shape(law) -> bool:
-    """Whether ``law`` resists shear at rest (a solid), as its ``keeps_shape`` says."""
-    return bool(getattr(law, "keeps_shape", True))
 
 
 def _dilates(law) -> bool:
@@ -507,8 +502,7 @@ def warn_dilatant_averaging(material, spec: FormulationSpec, dynamic: bool) -> N
     """
     if dynamic or not spec.volume_average:
         return
-    laws = getattr(material, "laws", [material])
-    dilating = [law for law in laws if _dilates(law)]
+    dilating = [law for law in laws_of(material) if _dilates(law)]
     if dilating:
         law = dilating[0]
         warn(
@@ -647,6 +641,18 @@ def check_weight_of_initial_stress(
 FREE_MODE_RTOL = 1e-13
 
 
+def _acting_point_conditions(conditions, boundary, walls) -> list | None:
+    """The boundary points' conditions, or None where nothing acts on the model.
+
+    A model with no loads and no conditions at all stays at rest: it needs no check
+    of its supports, as a whole or body by body.
+    """
+    point_conditions = [] if boundary is None else boundary.points.conditions
+    if not (conditions.loads_or_supports or point_conditions or walls):
+        return None
+    return point_conditions
+
+
 def check_supports(conditions, boundary, occupied: np.ndarray, walls=None) -> None:
     """Refuse a static model whose supports leave a rigid translation or rotation free.
 
@@ -668,8 +674,8 @@ def check_supports(conditions, boundary, occupied: np.ndarray, walls=None) -> No
         walls: The grid's :class:`~fe_mpm.walls.RigidWalls`, or None: a wall holds
             the body along its normal, and with friction along its plane too.
     """
-    point_conditions = [] if boundary is None else boundary.points.conditions
-    if not (conditions.loads_or_supports or point_conditions or walls):
+    point_conditions = _acting_point_conditions(conditions, boundary, walls)
+    if point_conditions is None:
         return
     gram = _support_gram(conditions, point_conditions, occupied, walls)
     g = conditions.mesh.geometry.dim
@@ -717,9 +723,9 @@ def check_each_body(conditions, boundary, occupied: np.ndarray, walls=None) -> N
     :data:`MOST_BODIES_CHECKED` bodies (a granular packing) each is not checked.
     """
     mesh = conditions.mesh
-    point_conditions = [] if boundary is None else boundary.points.conditions
-    if not (conditions.loads_or_supports or point_conditions or walls):
-        return  # nothing acts: the bodies stay at rest (as check_supports says)
+    point_conditions = _acting_point_conditions(conditions, boundary, walls)
+    if point_conditions is None:
+        return
     body, count = bodies_of_cells(mesh, occupied)  # occupied: sorted, each cell once
     if not 1 < count <= MOST_BODIES_CHECKED:
         return

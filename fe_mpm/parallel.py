@@ -74,6 +74,13 @@ def gathered(comm: MPI.Comm, values: np.ndarray) -> np.ndarray:
     return np.concatenate(comm.allgather(np.asarray(values)))
 
 
+def first_given(comm: MPI.Comm, value):
+    """The lowest rank's ``value`` that is not None, on every rank (None if none is)."""
+    if comm.size == 1:
+        return value
+    return next((v for v in comm.allgather(value) if v is not None), None)
+
+
 def raise_together(comm: MPI.Comm, error: Exception | None) -> None:
     """Raise on every rank if ``error`` is set on some rank; return otherwise.
 

@@ -55,8 +55,9 @@ from fe_mpm.initial_stress import start_stressed
 from fe_mpm.io import drop_rows_after
 from fe_mpm.markers import Markers
 from fe_mpm.materials import ReturnMapResult
+from fe_mpm.materials.elastic import p_wave_modulus
 from fe_mpm.materials.mixed_return import MixedReturnResult
-from fe_mpm.materials.zones import MATERIAL
+from fe_mpm.materials.zones import MATERIAL, laws_of
 from fe_mpm.newton import NewtonResult, NewtonSolver
 from fe_mpm.output import SimulationOutput
 from fe_mpm.particles import MaterialPoints, coincident
@@ -327,7 +328,7 @@ class Simulation:
         )
         model_checks.check_law(material, self.spec, formulation)
         model_checks.warn_dilatant_averaging(material, self.spec, dynamic)
-        model_checks.warn_static_fluid(material, dynamic)
+        model_checks.warn_static_fluid(material, keeps_shape, dynamic)
         model_checks.take_density(material, points)
         model_checks.check_weight_of_initial_stress(
             mesh.comm,
@@ -684,12 +685,11 @@ class Simulation:
             new.material = new._checked_material(len(new))
 
         parallel.check_together(comm, material_labels, kinds=(TypeError, ValueError))
-        laws = len(getattr(self.material, "laws", [self.material]))
         highest = parallel.largest(comm, int(new.material.max(initial=0)))
-        if highest >= laws:
+        if highest >= self._zones:
             raise ValueError(
                 f"Simulation.add_points: the new points are seeded with material={highest}, "
-                f"but the simulation has {laws} law(s), material 0 to {laws - 1}"
+                f"but the simulation has {self._zones} law(s), material 0 to {self._zones - 1}"
             )
         parallel.check_together(comm, model_checks.take_density, self.material, new)
         given = parallel.all_ranks(comm, new.density_given or len(new) == 0)
@@ -947,10 +947,7 @@ class Simulation:
             cohesionless_from_rest=not self.dynamic
             and self.step_number == 0
             and not self._started_stressed
-            and any(
-                getattr(law, "cohesion", None) == 0.0
-                for law in getattr(self.material, "laws", [self.material])
-            ),
+            and any(getattr(law, "cohesion", None) == 0.0 for law in laws_of(self.material)),
         )
 
     def step(self, t_new: float, rebin: bool = True) -> StepReport:
@@ -1065,9 +1062,8 @@ class Simulation:
         self._passes_checked_dt = dt  # a step as long or shorter needs no new check
         if passes == 1:
             return
-        laws = getattr(self.material, "laws", [self.material])
         try:
-            modulus = max(_p_wave_modulus(law) for law in laws)
+            modulus = p_wave_modulus(self.material)
         except (AttributeError, TypeError, ValueError):
             return  # a law without the moduli to give a wave speed
         pts = self.points
@@ -1463,13 +1459,6 @@ class Simulation:
             self._by_parts = None
         if self._shift is not None:
             self._shift.destroy()
-
-
-def _p_wave_modulus(law) -> float:
-    """K + 4/3 μ (Pa) of a solid, K of a fluid (no shear stiffness at rest)."""
-    if model_checks.law_keeps_shape(law):
-        return float(law.bulk_modulus) + 4.0 * float(law.mu) / 3.0
-    return float(law.bulk_modulus)
 
 
 def _refuse_misplaced(comm, tracker, x: np.ndarray, new: np.ndarray) -> None:

@@ -219,7 +219,7 @@ class PointTracking:
         count = int(parallel.total(comm, int(outside.size)))
         first = _outside_message(points, outside, where, count) if outside.size else None
         if comm.size > 1:  # the lowest rank that has one gives the example
-            first = next(m for m in comm.allgather(first) if m is not None)
+            first = parallel.first_given(comm, first)
             first += f" (in none of the {comm.size} MPI ranks' cells)"
         if self.points_leaving == "raise":
             parallel.raise_together(
@@ -392,9 +392,7 @@ def hinge_diagnosis(mesh: dolfinx.mesh.Mesh, layout: SlotLayout, centroids: np.n
     count = int(parallel.total(comm, int(hinged.size)))
     if count == 0:
         return ""
-    first = centroids[hinged[0]] if hinged.size else None
-    if comm.size > 1:
-        first = next(x for x in comm.allgather(first) if x is not None)
+    first = parallel.first_given(comm, centroids[hinged[0]] if hinged.size else None)
     return (
         f"{count} occupied cell(s) share at most one node with the rest of the "
         f"material (first near x = {first}); such a cell can swing about that "

@@ -40,6 +40,19 @@ def young_modulus(law) -> float:
     return 9.0 * K * mu / (3.0 * K + mu)
 
 
+def p_wave_modulus(law) -> float:
+    """The P-wave modulus K + 4μ/3 (Pa) of a solid, K of a law that keeps no shape.
+
+    For several laws in one body (:mod:`fe_mpm.materials.zones`), the stiffest's.
+    """
+    laws = getattr(law, "laws", None)
+    if laws is not None:
+        return max(p_wave_modulus(one) for one in laws)
+    if not getattr(law, "keeps_shape", True):  # a fluid: no shear stiffness at rest
+        return float(law.bulk_modulus)
+    return float(law.bulk_modulus) + 4.0 * float(law.mu) / 3.0
+
+
 class IsotropicModuli(CheckedFields):
     """Shear and bulk moduli of a law with fields ``E`` (Pa) and ``nu``."""
 

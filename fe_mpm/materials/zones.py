@@ -307,6 +307,11 @@ class PointwiseZones(MaterialZones):
         return MixedReturnResult(deviator, volumetric, derivative, updated, region)
 
 
+def laws_of(material) -> tuple:
+    """The laws of ``material``: a :class:`MaterialZones`' own, or the law alone."""
+    return tuple(getattr(material, "laws", (material,)))
+
+
 def material_zones(laws: Sequence) -> MaterialZones:
     """The zones of ``laws``: :class:`PointwiseZones` if any law's return runs in numpy."""
     laws = tuple(laws)  # checked by the zones it builds
