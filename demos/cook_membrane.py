@@ -136,7 +136,7 @@ try:
         dirichlet=[fe_mpm.Dirichlet(meshes.COOK_CLAMPED)],
         tractions=[fe_mpm.Traction(meshes.COOK_LOADED, load, scale=lambda t: t)],
         output_dir=None if args.no_output else args.output,
-        ppp_alpha=args.ppp_alpha,
+        ppp_alpha=args.ppp_alpha if args.formulation == "up" else None,  # only u-p has PPP
     )
 except (ValueError, NotImplementedError) as err:
     sys.exit(f"cook_membrane.py: {err}")

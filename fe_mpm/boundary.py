@@ -678,7 +678,11 @@ class RigidWall:
             the mean size of the wall's facets.
         slip_scale: The slip s over which friction rises to μ p (m), > 0: it
             reaches 76 % at s, 99.5 % at 3 s (see :mod:`fe_mpm.forms.contact`).
-            None: 10⁻³ h.
+            None: 10⁻³ h. Below s the wall holds like a spring of stiffness μ p / s,
+            so a body that should slide but whose elastic slip is below about 3 s
+            (a stiff fill in a small hopper: ρ g H² / E) carries too little
+            friction: give a slip scale well below the slip you expect
+            (docs/limitations.md).
     """
 
     name: str

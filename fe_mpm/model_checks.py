@@ -66,6 +66,20 @@ def check_ranges(
     check_int("Simulation", "output_every", output_every, lo=1)  # 2.5 was taken as 2
 
 
+def check_ppp(ppp_alpha: float, spec: FormulationSpec) -> None:
+    """Refuse a PPP coefficient > 0 for a formulation that has no PPP term.
+
+    ``Simulation(..., "up-p2p1", ppp_alpha=5.0)`` ran without a word and without
+    PPP (found 2026-12-06 by a helper).
+    """
+    if ppp_alpha > 0.0 and not spec.ppp:
+        raise ValueError(
+            f"Simulation: ppp_alpha={ppp_alpha:g} acts only in 'up' (PPP, the pressure's "
+            f"stabilisation), and formulation {spec.name!r} has none; leave ppp_alpha out "
+            "or give 0"
+        )
+
+
 def check_output_dir(output_dir) -> None:
     """A folder's path (str or os.PathLike) or None; 123 stopped in pathlib."""
     if output_dir is not None and not isinstance(output_dir, str | os.PathLike):

@@ -47,7 +47,7 @@ from fe_mpm.domains import (
 )
 from fe_mpm.dynamics import NewmarkDynamics
 from fe_mpm.errors import ConvergenceError, PointsOutsideError, warn
-from fe_mpm.forms.mixed_up import PPPData
+from fe_mpm.forms.mixed_up import PPPData, PressureFloor
 from fe_mpm.formulations import FORMULATIONS, GridFields
 from fe_mpm.ghost import GhostStabilisation
 from fe_mpm.grid_conditions import GridConditions, body_force_at
@@ -158,7 +158,8 @@ class Simulation:
         ppp_alpha: The thesis's PPP coefficient α ≥ 0 (``up``), times Kratos's factor
             (8 in 2D, 10 in 3D) in the form; α = 1 reproduces the thesis. Default: 1,
             or 0 for a law that keeps no shape (``NewtonianFluid``: PPP resists the
-            hydrostatic gradient, see :mod:`fe_mpm.materials.fluid`).
+            hydrostatic gradient, see :mod:`fe_mpm.materials.fluid`). Refused > 0
+            with another formulation, which has no PPP.
         dynamic: Implicit Newmark dynamics (β = 1/4, γ = 1/2 unless ``bossak_alpha``
             is set), with a P1 displacement ("up-p2p1" is refused); False (default):
             static.
@@ -308,8 +309,9 @@ class Simulation:
         # the mixed forms its points take the volume of their pressure after a step.
         keeps_shape = getattr(material, "keeps_shape", True)
         if ppp_alpha is None:
-            ppp_alpha = 1.0 if keeps_shape else 0.0
+            ppp_alpha = 1.0 if keeps_shape and FORMULATIONS[formulation].ppp else 0.0
         model_checks.check_ranges(max_step_cells, ppp_alpha, damping, output_every)
+        model_checks.check_ppp(ppp_alpha, FORMULATIONS[formulation])
         model_checks.check_output_dir(output_dir)
         model_checks.check_dynamics(dynamic, formulation, damping, mass, bossak_alpha)
         if dynamic:  # before any point migrates; step() checks again (set after this)
@@ -537,9 +539,11 @@ class Simulation:
             )
         else:
             self._boundary.tracker = self.tracker
-        ppp = None
+        ppp = floor = None
         if self.spec.ppp and self._given["ppp_alpha"] > 0:  # α = 0: no term at all
             ppp = PPPData.on_grid(mesh, self.tracker.centroids, self._given["ppp_alpha"])
+        elif self.spec.pressure and self.spec.name != "up-nostab":  # the bare pair
+            floor = PressureFloor.on_grid(mesh, self.tracker.centroids)
         self._forms = FormsBySlotCount(
             self.fields,
             self.spec,
@@ -552,6 +556,7 @@ class Simulation:
             shared_increment=self._shared,
             pressure_by_parts=self._pressure_by_parts,
             point_pressure=any(isinstance(c, PointPressure) for c in self._given["boundary"]),
+            floor=floor,
         )
         if self._by_parts is not None:
             self._by_parts.destroy()
@@ -1175,7 +1180,16 @@ class Simulation:
         bary = self.tracker.barycentric(pts.x, layout.cell)
         forms.pack(layout, pts, self.tracker, bary)
         if self._by_parts is not None:
-            interior = self._by_parts.update(layout.occupied)
+            self.fields.start_from_rest(layout.cell, bary, pts.mass, pts.stress)  # p̄
+            body = self.conditions.body_force
+            interior = self._by_parts.update(
+                layout.occupied,
+                layout.cell,
+                pts.volume,
+                pts.mass,
+                self.tracker.volumes,
+                np.zeros(self.gdim) if body is None else np.asarray(body.value),
+            )
             forms.q.pack(forms.interior, layout, interior[layout.cell].astype(np.float64))
         if boundary is not None:
             self._boundary.pack(forms, t_new)

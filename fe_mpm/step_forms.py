@@ -113,6 +113,7 @@ class StepForms:
         nslot_boundary: Slots per entity of the boundary points (0: none).
         conditions: The grid's loads (body force, tractions).
         ppp: PPP data (u-p), or None.
+        floor: The pressure floor of a pressure field without PPP, or None.
         newmark: Newmark's fields and constants (dynamics), or None.
         lumped: Whether the mass matrix is lumped (dynamics).
         walls: The rigid walls of the grid, or None.
@@ -134,6 +135,7 @@ class StepForms:
         *,
         conditions: GridConditions,
         ppp: mixed_up.PPPData | None = None,
+        floor: mixed_up.PressureFloor | None = None,
         newmark: inertia.NewmarkData | None = None,
         lumped: bool = False,
         walls: RigidWalls | None = None,
@@ -146,7 +148,7 @@ class StepForms:
         self.mesh, self.spec, self.material, self.newmark = mesh, spec, material, newmark
         # The forms read the law's parameters as constants: one kernel for all values.
         self.law_in_forms = with_runtime_parameters(material, mesh)
-        self.ppp = ppp
+        self.ppp, self.floor = ppp, floor
         self.q = q = MaterialPointQuadrature(mesh, nslot)
         self.F_n = q.function((g, g), "F_n", empty=np.eye(g))
         self.density = q.function((), "density")
@@ -235,7 +237,8 @@ class StepForms:
         """Write the points' data at t_n into the slot fields of ``layout``.
 
         Position, volume, ``F_n``, density and history; the second moments of a
-        lumped mass; and the PPP fill of each cell (volume of its points over its own).
+        lumped mass; the PPP fill of each cell (volume of its points over its own), or
+        the pressure floor's weight.
 
         Args:
             layout: The step's slot layout.
@@ -259,6 +262,17 @@ class StepForms:
                 weights = points.volume * (self.material.mu / point_mu(points.history))
             volume = np.bincount(layout.cell, weights=weights, minlength=tracker.num_cells)
             q.pack_cell_field(self.ppp.fill, layout, volume / tracker.volumes)
+        if self.floor is not None:
+            point_K = getattr(self.material, "point_bulk_moduli", None)
+            K = self.material.bulk_modulus if point_K is None else point_K(points.history)
+            n = tracker.num_cells
+            compliance = np.bincount(layout.cell, weights=points.volume / K, minlength=n)
+            volume = np.bincount(layout.cell, weights=points.volume, minlength=n)
+            blind = mixed_up.blind_cells(layout.cell, bary, points.volume, n)
+            # As if the cell were full: a sliver of a domain would barely hold it.
+            mean_compliance = compliance / np.where(blind, volume, 1.0)
+            weight = np.where(blind, mixed_up.PRESSURE_FLOOR * mean_compliance, 0.0)
+            q.pack_cell_field(self.floor.weight, layout, weight)
         if self.dF_shift is not None:  # until the first iterate's (SharedIncrement)
             q.pack(self.dF_shift, layout, np.zeros((len(points), g, g)))
 
@@ -285,6 +299,7 @@ class StepForms:
                 state=state,
                 increment=None if self.dF_shift is None else self.dF,
                 by_parts=None if self.interior is None else (fields.p_start, self.interior),
+                floor=self.floor,
             )
         averaged = self.spec.volume_average
         if averaged:
@@ -420,7 +435,7 @@ class FormsBySlotCount:
         dynamics: Newmark's rule, or None (static).
         mass: ``"consistent"`` or ``"lumped"`` (dynamics).
         walls: The rigid walls of the grid, or None.
-        shared_increment, pressure_by_parts, point_pressure: As for :class:`StepForms`.
+        shared_increment, pressure_by_parts, point_pressure, floor: As for :class:`StepForms`.
     """
 
     def __init__(
@@ -436,6 +451,7 @@ class FormsBySlotCount:
         shared_increment: bool = False,
         pressure_by_parts: bool = False,
         point_pressure: bool = False,
+        floor: mixed_up.PressureFloor | None = None,
     ):
         self.fields, self.spec, self.material = fields, spec, material
         #: The step's length Δt (s), set before each step (:meth:`set_step_length`).
@@ -447,6 +463,7 @@ class FormsBySlotCount:
             walls=walls,
             conditions=conditions,
             ppp=ppp,
+            floor=floor,
             lumped=mass == "lumped",
             newmark=None if dynamics is None else dynamics.data,
             step_length=self.step_length,

@@ -318,13 +318,16 @@ def check_points_per_cell(
     error = (
         None
         if counts.min(initial=need) >= need
-        else _too_few(counts, need, layout, spec, step_number, centroids)
+        else _too_few(counts, need, layout, spec, step_number, centroids, tied is not None)
     )
     parallel.raise_together(comm, error)
 
 
-def _too_few(counts, need, layout, spec, step_number, centroids) -> Exception:
-    """The error of a layout with cells of fewer than ``need`` points (counts per occupied cell)."""
+def _too_few(counts, need, layout, spec, step_number, centroids, ghost: bool) -> Exception:
+    """The error of a layout with cells of fewer than ``need`` points (counts per occupied cell).
+
+    ``ghost``: whether a ghost penalty is on (the advice then does not repeat it).
+    """
     formulation = spec.name
     few = int(np.sum(counts < need))
     worst = layout.occupied[np.argmin(counts)]
@@ -334,13 +337,28 @@ def _too_few(counts, need, layout, spec, step_number, centroids) -> Exception:
         f"{centroids[worst]} holds {counts.min()}) and no ghost facet ties it to a "
         "neighbour: the quadratic displacement then has strain modes no point sees."
     )
+    # Point domains carry P2 on triangles only.
+    domains = centroids.shape[1] == 2
     if step_number == 0:
-        return ValueError(f"Simulation: {message} Seed more points per cell.")
+        return ValueError(
+            f"Simulation: {message} Seed more points per cell"
+            + (
+                ", or pass point_domains=True (then one point per cell is enough)."
+                if domains
+                else "."
+            )
+        )
+    ghost_advice = (
+        "the ghost penalty holds only a cell tied by a facet to cells with enough points, "
+        "and this one is not; use"
+        if ghost
+        else "use a ghost_penalty > 0 (it holds a cell tied by facets to cells with enough points),"
+    )
+    if domains:
+        ghost_advice += " point_domains=True,"
     return ConvergenceError(
-        f"step {step_number + 1}: {message} The points no longer support the "
-        "unknowns; use point_domains=True, a ghost_penalty > 0 (it holds a cell tied "
-        "by facets to cells with enough points), more points per cell, or the 'up' "
-        "(P1) formulation."
+        f"step {step_number + 1}: {message} The points no longer support the unknowns; "
+        f"{ghost_advice} more points per cell, or the 'up' (P1) formulation."
     )
 
 

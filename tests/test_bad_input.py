@@ -14,7 +14,7 @@ from fe_mpm._dolfinx import dolfinx
 from fe_mpm.boundary import _checked_marker, boundary_facets
 from fe_mpm.checks import check_range
 from fe_mpm.force_test import NewtonResult
-from fe_mpm.meshes import cook_membrane, rectangle_mesh
+from fe_mpm.meshes import cell_centroids, cook_membrane, rectangle_mesh
 from fe_mpm.report import newton_failure
 
 
@@ -115,6 +115,9 @@ def test_taylor_hood_needs_enough_points_per_cell():
     sim = fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1.0, 0.3), formulation="up-p2p1")
     with pytest.raises(ValueError, match="'up-p2p1' needs at least 3 material points in every"):
         sim.step(1.0)
+    # The message names the option that makes one point per cell enough.
+    with pytest.raises(ValueError, match=r"or pass point_domains=True \(then one point per"):
+        sim.step(1.0)
 
 
 def test_too_many_boundary_points_in_a_cell_are_named_as_such():
@@ -196,6 +199,9 @@ def test_other_bad_values():
         fe_mpm.Simulation(mesh, points, material, bossak_alpha=-0.1)
     with pytest.raises(ValueError, match="mass='lumped' needs dynamic=True"):
         fe_mpm.Simulation(mesh, points, material, mass="lumped")
+    for formulation in ("u", "u-nbva", "up-nostab", "up-p2p1"):  # accepted and ignored
+        with pytest.raises(ValueError, match=f"acts only in 'up'.*{formulation!r} has none"):
+            fe_mpm.Simulation(mesh, points, material, formulation, ppp_alpha=5.0)
     for passes, error in ((0, ValueError), (2.5, TypeError), (True, TypeError)):
         with pytest.raises(error, match="Simulation: projection_passes must"):
             fe_mpm.Simulation(mesh, points, material, dynamic=True, projection_passes=passes)
@@ -419,6 +425,33 @@ def test_taylor_hood_stops_when_points_move_into_too_few_per_cell():
     ):
         sim.step(2.0)
     assert sim.step_number == 1
+
+
+def test_too_few_points_with_a_ghost_penalty_on_does_not_advise_a_ghost_penalty():
+    """A P2/P1 run with ``ghost_penalty`` set was told to use a ghost penalty (a
+    helper's scene, 2026-12-06): the advice now says why the one it has did not hold."""
+    mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (2, 2))
+    centroids = cell_centroids(mesh)
+    below = np.flatnonzero(centroids[:, 1] < 0.5)
+    points = fe_mpm.seed(mesh, per_cell=3, cells=below)
+    sim = fe_mpm.Simulation(
+        mesh,
+        points,
+        fe_mpm.NeoHookean(1.0, 0.3),
+        formulation="up-p2p1",
+        dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))],
+        ghost_penalty=0.1,
+    )
+    sim.step(1.0)
+    # One point of each lower cell moves up, two to a cell: no cell then holds
+    # three, so none is tied to a cell with enough.
+    above = np.flatnonzero(centroids[:, 1] > 0.5)[:2]
+    movers = [np.flatnonzero(points.cell == c)[0] for c in below]
+    points.x[movers] = np.repeat(centroids[above], 2, axis=0)[:, :2] + [[0.0, 0.0], [0.01, 0.0]] * 2
+    with pytest.raises(fe_mpm.ConvergenceError) as stop:
+        sim.step(2.0)
+    assert "ghost_penalty > 0" not in str(stop.value), str(stop.value)
+    assert "the ghost penalty holds only a cell tied by a facet" in str(stop.value)
 
 
 # --- 1. check_range takes real numbers only ------------------------------------------

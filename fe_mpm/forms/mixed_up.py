@@ -84,21 +84,118 @@ class PPPData:
     def on_grid(cls, mesh, centroids: np.ndarray, alpha: float) -> PPPData:
         """The PPP data of a grid with cell centroids (cells, g) in m, thesis α ≥ 0."""
         g = mesh.geometry.dim
-        dg0 = dolfinx.fem.functionspace(mesh, ("DG", 0))
-        dg0_vec = dolfinx.fem.functionspace(mesh, ("DG", 0, (g,)))
-        centroid = dolfinx.fem.Function(dg0_vec, name="centroid")
-        cells = np.arange(centroids.shape[0])
-        centroid.x.array.reshape(-1, g)[dg0_vec.dofmap.list[cells, 0]] = centroids
-        centroid.x.scatter_forward()  # given for owned cells; the ghosts' too are integrated
-        fill = dolfinx.fem.Function(dg0, name="fill")
-        # In the material-point subdomain, so one kernel does both; the fill
-        # is packed per entity (zero on a cell's copies), so each cell counts once;
-        # under MPI each rank packs its own points' share of a cell's fill.
-        dx2 = ufl.Measure(
-            "dx", domain=mesh, subdomain_id=OCCUPIED, metadata={"quadrature_degree": 2}
-        )
+        centroid, dx2 = _cell_centroids_and_measure(mesh, centroids)
+        fill = dolfinx.fem.Function(dolfinx.fem.functionspace(mesh, ("DG", 0)), name="fill")
         alpha_eff = dolfinx.fem.Constant(mesh, np.float64(effective_alpha(alpha, g)))
         return cls(alpha_eff, centroid, fill, dx2)
+
+
+#: The pressure floor's share of the points' own volumetric term V_p/K. It only has
+#: to make the pressure's unseen combinations definite. Measured on a dam break
+#: against a downstream ``RigidWall`` (lumped mass, Δt = 1 ms) with the floor in
+#: every occupied cell: a share of 7e-7 left the wall forces unchanged to 1e-6 until
+#: the surge reached the wall, 7e-4 moved the wall's peak force by 3 %, and 1 in the
+#: blind cells alone by half.
+PRESSURE_FLOOR = 1e-6
+
+#: A cell's points fix a linear pressure in it when the smallest eigenvalue of their
+#: volume-weighted barycentric moments Σ V_p λ_p λ_pᵀ / Σ V_p is at least this: 1/12
+#: for the three points of a seeded triangle, 0 for one or two points, or for
+#: points on one line.
+BLIND_CELL_MOMENT = 1e-2
+
+
+@dataclass
+class PressureFloor:
+    r"""Per-cell data of the pressure floor of a u-p form without PPP.
+
+    At the points the P1 pressure is seen only through its values there
+    (:math:`V_p\, q\, p/K` and :math:`p\,\nabla\cdot w`). A cell that holds fewer
+    than g + 1 points, or points on one line, leaves combinations of its nodal
+    pressures that vanish at all of them. Where no other cell fixes those nodes (the
+    tip of a jet, a drop, a film climbing a wall) the Jacobian is singular, the
+    direct solver puts pressures of 1e10–1e20 Pa on them, and their round-off keeps
+    Newton's residual from falling (a dam break against a ``RigidWall`` stopped so
+    at t = 0.231 s). In those cells only (:func:`blind_cells`) the floor adds
+
+    .. math:: -\epsilon\,\frac{\sum_{p\in K} V_p/K_p}{\sum_{p\in K} V_p}
+              \int_K (\nabla q\cdot(x - x_c))(\nabla p\cdot(x - x_c))\,dx,
+
+    PPP's term with the bulk modulus in place of the shear modulus, as for a full
+    cell, and ε = :data:`PRESSURE_FLOOR`: a millionth of a full cell's own term,
+    enough to make the unseen combinations definite, too little to move a pressure
+    the neighbouring cells fix. It is weighted as for a full cell because a sliver
+    of a point domain in a cell still sees the opposite node, a little: weighted by
+    the sliver's volume, a drop with domains kept nodal pressures of 2e8 Pa. Cells
+    whose points fix a linear pressure get nothing, so a hydrostatic or geostatic
+    pressure, which PPP would resist, stays exact where every cell holds g + 1
+    spread points; where every cell is blind (one point per cell, point domains) it
+    is kept to about ε of its variation across a cell (a geostatic layer with one
+    point per cell: σ_yy to 8e-9 of ρ g H).
+
+    Attributes:
+        centroid: DG0 vector field of cell centroids x_c (m).
+        weight: DG0 field ε Σ_p (V_p / K_p) / Σ_p V_p in blind cells, else 0 (1/Pa),
+            packed each step.
+        dx: Cell measure with a degree-2 rule over the occupied cells.
+    """
+
+    centroid: ufl.Coefficient
+    weight: ufl.Coefficient
+    dx: ufl.Measure
+
+    @classmethod
+    def on_grid(cls, mesh, centroids: np.ndarray) -> PressureFloor:
+        """The floor's data on a grid with cell centroids (cells, g) in m."""
+        centroid, dx = _cell_centroids_and_measure(mesh, centroids)
+        weight = dolfinx.fem.Function(dolfinx.fem.functionspace(mesh, ("DG", 0)), name="floor")
+        return cls(centroid, weight, dx)
+
+
+def blind_cells(
+    cell: np.ndarray, bary: np.ndarray, volume: np.ndarray, num_cells: int
+) -> np.ndarray:
+    """Which cells hold points that cannot fix a linear pressure in them, (num_cells,) bool.
+
+    Those whose points' moments fall below :data:`BLIND_CELL_MOMENT`; empty cells
+    are not blind. Under MPI with point domains a cell may hold pieces of two ranks;
+    each rank judges its own share.
+
+    Args:
+        cell: Each point's cell (n,).
+        bary: Its barycentric coordinates there (n, g + 1).
+        volume: Its volume (n,), m³ (m² in 2D).
+        num_cells: Cells on this rank, owned and ghost.
+    """
+    moments = np.zeros((num_cells, bary.shape[1], bary.shape[1]))
+    np.add.at(moments, cell, volume[:, None, None] * bary[:, :, None] * bary[:, None, :])
+    total = np.bincount(cell, weights=volume, minlength=num_cells)
+    held = np.flatnonzero(total > 0.0)
+    smallest = np.linalg.eigvalsh(moments[held] / total[held, None, None])[:, 0]
+    blind = np.zeros(num_cells, dtype=bool)
+    blind[held[smallest < BLIND_CELL_MOMENT]] = True
+    return blind
+
+
+def _cell_centroids_and_measure(mesh, centroids: np.ndarray) -> tuple:
+    """A DG0 field of the cell centroids (cells, g) and the occupied cells' degree-2 dx."""
+    g = mesh.geometry.dim
+    dg0_vec = dolfinx.fem.functionspace(mesh, ("DG", 0, (g,)))
+    centroid = dolfinx.fem.Function(dg0_vec, name="centroid")
+    cells = np.arange(centroids.shape[0])
+    centroid.x.array.reshape(-1, g)[dg0_vec.dofmap.list[cells, 0]] = centroids
+    centroid.x.scatter_forward()  # given for owned cells; the ghosts' too are integrated
+    # In the material-point subdomain, so one kernel does both; the per-cell
+    # weights are packed per entity (zero on a cell's copies), so each cell counts
+    # once; under MPI each rank packs its own points' share of a cell's weight.
+    dx2 = ufl.Measure("dx", domain=mesh, subdomain_id=OCCUPIED, metadata={"quadrature_degree": 2})
+    return centroid, dx2
+
+
+def _within_cell_product(q_test, p, centroid) -> ufl.core.expr.Expr:
+    """(q − Π₀q)(p − Π₀p) of P1 fields on an affine cell: (∇q·(x − x_c))(∇p·(x − x_c))."""
+    r = ufl.SpatialCoordinate(ufl.domain.extract_unique_domain(centroid)) - centroid
+    return ufl.dot(ufl.grad(q_test), r) * ufl.dot(ufl.grad(p), r)
 
 
 def stress_parts(material, F: ufl.core.expr.Expr, p: ufl.core.expr.Expr, state=None):
@@ -147,6 +244,7 @@ def residual(
     state=None,
     increment: ufl.core.expr.Expr | None = None,
     by_parts: tuple[ufl.Coefficient, ufl.Coefficient] | None = None,
+    floor: PressureFloor | None = None,
 ) -> ufl.Form:
     """Residual of one static u-p step.
 
@@ -171,6 +269,8 @@ def residual(
             cell's χ (slot field, 1 or 0); p̄ is integrated by parts where χ = 1, at
             the points and on the grid of the step's start
             (:mod:`fe_mpm.pressure_by_parts`, whose facet terms complete it).
+        floor: Without PPP, the :class:`PressureFloor` that keeps the pressure of
+            cells with too few points definite, or None.
     """
     g = ufl.shape(du)[0]
     dF = ufl.Identity(g) + mpq.grad_at_points(du, u_degree) if increment is None else increment
@@ -185,14 +285,10 @@ def residual(
         R += start_pressure_gradient_work(w, mpq, chi, p_start, u_degree)
     R -= mpq.sum(volume * mpq.at_points(q_test))
     if ppp is not None:
-        x = ufl.SpatialCoordinate(mpq.mesh)
-        r = x - ppp.centroid
-        R -= (
-            (ppp.alpha_eff / material.mu)
-            * ppp.fill
-            * (ufl.dot(ufl.grad(q_test), r) * ufl.dot(ufl.grad(p), r))
-            * ppp.dx
-        )
+        within = _within_cell_product(q_test, p, ppp.centroid)
+        R -= (ppp.alpha_eff / material.mu) * ppp.fill * within * ppp.dx
+    if floor is not None:
+        R -= floor.weight * _within_cell_product(q_test, p, floor.centroid) * floor.dx
     loads = external_work(w, mpq, density, body_force, tractions, u_degree)
     return R if loads is None else R - loads
 
