@@ -92,7 +92,7 @@ class _ConeLaw(LinearisedStress, IsotropicModuli):
     def history(self) -> dict[str, HistoryField]:
         """Elastic left Cauchy–Green tensor and equivalent plastic strain."""
         return {
-            "be": HistoryField((3, 3), np.eye(3), "elastic left Cauchy-Green bᵉ"),
+            "be": HistoryField((3, 3), np.eye(3), "elastic left Cauchy-Green bᵉ", "left"),
             "plastic_strain": HistoryField(
                 (), 0.0, "equivalent plastic strain α = Σ √(2/3)‖dev Δεᵖ‖ (Hencky)"
             ),
@@ -455,7 +455,7 @@ class ModifiedDruckerPrager(_ConeLaw):
     def history(self) -> dict[str, HistoryField]:
         """Elastic left Cauchy–Green tensor and Mast's plastic measure λ."""
         return {
-            "be": HistoryField((3, 3), np.eye(3), "elastic left Cauchy-Green bᵉ"),
+            "be": HistoryField((3, 3), np.eye(3), "elastic left Cauchy-Green bᵉ", "left"),
             "plastic_shear": HistoryField(
                 (), 0.0, "plastic measure λ = Σ ‖dev Δεᵖ‖ (Hencky; Mast Eq. 3.116)"
             ),

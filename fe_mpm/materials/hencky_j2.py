@@ -92,7 +92,7 @@ class HenckyJ2(LinearisedStress, IsotropicModuli):
     def history(self) -> dict[str, HistoryField]:
         """bᵉ, the back stress and the equivalent plastic strain."""
         return {
-            "be": HistoryField((3, 3), np.eye(3), "elastic left Cauchy-Green bᵉ"),
+            "be": HistoryField((3, 3), np.eye(3), "elastic left Cauchy-Green bᵉ", "left"),
             "back_stress": HistoryField((3, 3), np.zeros((3, 3)), "back stress β (Pa)"),
             "plastic_strain": HistoryField(
                 (), 0.0, "equivalent plastic strain α = Σ √(2/3)‖Δεᵖ‖ (Hencky)"

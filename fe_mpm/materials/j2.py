@@ -68,7 +68,9 @@ class J2Plasticity(IsotropicModuli):
     def history(self) -> dict[str, HistoryField]:
         """Elastic isochoric left Cauchy–Green tensor and equivalent plastic strain."""
         return {
-            "be_bar": HistoryField((3, 3), np.eye(3), "isochoric elastic left Cauchy-Green b̄ᵉ"),
+            "be_bar": HistoryField(
+                (3, 3), np.eye(3), "isochoric elastic left Cauchy-Green b̄ᵉ", "left isochoric"
+            ),
             "plastic_strain": HistoryField((), 0.0, "equivalent plastic strain α"),
         }
 

@@ -91,7 +91,7 @@ class MohrCoulomb(LinearisedStress, IsotropicModuli):
     def history(self) -> dict[str, HistoryField]:
         """Elastic left Cauchy–Green tensor and equivalent plastic strain."""
         return {
-            "be": HistoryField((3, 3), np.eye(3), "elastic left Cauchy-Green bᵉ"),
+            "be": HistoryField((3, 3), np.eye(3), "elastic left Cauchy-Green bᵉ", "left"),
             "plastic_strain": HistoryField(
                 (), 0.0, "equivalent plastic strain Σ √(2/3)‖Δεᵖ‖ (Hencky)"
             ),

@@ -7,6 +7,9 @@ from dataclasses import dataclass, field
 import numpy as np
 import ufl
 
+#: The values of :attr:`HistoryField.convected`.
+CONVECTIONS = ("", "left", "left isochoric")
+
 
 @dataclass(frozen=True)
 class HistoryField:
@@ -16,11 +19,29 @@ class HistoryField:
         shape: Value shape per point, e.g. ``()`` or ``(3, 3)``.
         initial: Value of a virgin point (broadcast to ``shape``).
         description: What it is, with units; it names the output field too.
+        convected: How an elastic step carries it: ``""`` not at all (a scalar, a
+            back stress), ``"left"`` as a left Cauchy–Green tensor, b ↦ ΔF b ΔFᵀ
+            (3 x 3, ΔF embedded), ``"left isochoric"`` as its isochoric part,
+            b̄ ↦ ΔF̄ b̄ ΔF̄ᵀ with ΔF̄ = det(ΔF)^(−1/3) ΔF. A point whose pieces took
+            other increments than its own (:mod:`fe_mpm.domains`) carries its own
+            value forward by its own increment where every piece stepped
+            elastically, and takes the pieces' mean where one yielded
+            (:func:`fe_mpm.domains.convected_mean`).
     """
 
     shape: tuple[int, ...]
     initial: float | np.ndarray
     description: str = ""
+    convected: str = ""
+
+    def __post_init__(self) -> None:
+        if self.convected not in CONVECTIONS:
+            raise ValueError(
+                f"HistoryField: convected must be one of {sorted(CONVECTIONS)}, "
+                f"got {self.convected!r}"
+            )
+        if self.convected and tuple(self.shape) != (3, 3):
+            raise ValueError(f"HistoryField: a convected field is 3 x 3, got shape {self.shape}")
 
     def initial_values(self, n: int) -> np.ndarray:
         """Initial values for ``n`` points, shape ``(n, *shape)``."""
