@@ -33,6 +33,7 @@ import numpy as np
 import numpy.typing as npt
 
 from fe_mpm.checks import check_range
+from fe_mpm.errors import warn
 from fe_mpm.materials.spectral import deviator, from_principal, spectral_decomposition
 from fe_mpm.materials.zones import MATERIAL, laws_of
 from fe_mpm.particles import MaterialPoints
@@ -46,7 +47,8 @@ def geostatic_stress(
     The vertical is the last coordinate (y in 2D, z in 3D); the other two
     directions, the out-of-plane one of plane strain included, carry
     :math:`K_0 \sigma_v`. Each point takes its own density :math:`m_p/V_p` for the
-    whole depth above it, which is exact for a layer of one density.
+    whole depth above it, which is exact for a layer of one density; points of
+    different densities (layered ground) get a warning.
 
     Args:
         points: The points (positions in m, masses in kg, volumes in m³ or m²).
@@ -90,6 +92,15 @@ def geostatic_stress(
         )
     else:
         rho = points.mass / points.volume
+        if len(rho) and np.ptp(rho) > 1e-9 * np.max(rho):
+            # Found 2026-12-06 by a helper: 1600 over 2000 kg/m³ put the lower layer's
+            # σ_v up to 24 % off, and its first step moved it, without a word.
+            warn(
+                f"geostatic_stress: the points' densities differ ({np.min(rho):.6g} to "
+                f"{np.max(rho):.6g} kg/m³), and each point takes its own for the whole "
+                "depth above it, which is right for one density only: for layered ground "
+                "give σ_v = −g Σ ρ_i t_i over the layers above each point yourself"
+            )
     vertical = -rho * gravity * np.maximum(depth, 0.0)
     stress = np.zeros((len(points), 3, 3))
     g = points.gdim
