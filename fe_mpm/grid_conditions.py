@@ -274,15 +274,22 @@ class GridConditions:
         for spec, value in self.tractions:
             value.value = spec.at(t)
         if self.body_force is not None:
-            if self._body_force_of_time is not None:
-                g = self.mesh.geometry.dim
-                self._body_force_value = body_force_at(self._body_force_of_time, t, g)
-            factor = 1.0
-            if self._body_force_scale is not None:
-                factor = check_range(
-                    "Simulation", f"body_force_scale(t = {t:g})", self._body_force_scale(t)
-                )
-            self.body_force.value = self._body_force_value * factor
+            self.body_force.value = self.body_force_value(t)
+
+    def body_force_value(self, t: float) -> np.ndarray:
+        """The body force (g,) in m/s² at time ``t``, scale included; zero without one."""
+        g = self.mesh.geometry.dim
+        if self.body_force is None:
+            return np.zeros(g)
+        value = self._body_force_value
+        if self._body_force_of_time is not None:
+            value = body_force_at(self._body_force_of_time, t, g)
+        factor = 1.0
+        if self._body_force_scale is not None:
+            factor = check_range(
+                "Simulation", f"body_force_scale(t = {t:g})", self._body_force_scale(t)
+            )
+        return value * factor
 
     def check_loaded_facets(self, occupied: np.ndarray, t_new: float) -> None:
         """Warn when a grid traction's nodes have no material: their load acts on nothing.

@@ -1181,14 +1181,13 @@ class Simulation:
         forms.pack(layout, pts, self.tracker, bary)
         if self._by_parts is not None:
             self.fields.start_from_rest(layout.cell, bary, pts.mass, pts.stress)  # p̄
-            body = self.conditions.body_force
             interior = self._by_parts.update(
                 layout.occupied,
                 layout.cell,
                 pts.volume,
                 pts.mass,
                 self.tracker.volumes,
-                np.zeros(self.gdim) if body is None else np.asarray(body.value),
+                self.conditions.body_force_value(self.t),  # the start's, as p̄'s
             )
             forms.q.pack(forms.interior, layout, interior[layout.cell].astype(np.float64))
         if boundary is not None:

@@ -651,3 +651,65 @@ def test_a_taylor_hood_layer_of_an_elastic_hencky_law_stays_at_rest_with_domains
     early = error()
     sim.run(3.0, 50, progress=False)
     assert early < 0.01 and error() < early + 1e-3, (early, error())
+
+
+def test_several_laws_carry_each_points_own_convected_field():
+    """Zones of ModifiedDruckerPrager (bᵉ, a numpy return) and J2Plasticity (b̄ᵉ, in
+    UFL) with domains, the first step at rest: every Drucker–Prager point carries its
+    bᵉ forward (exactly its start's at rest), judged on its own field only. Found
+    2026-12-06 by a reviewer: the check asked the zones' return map for J2's b̄ᵉ,
+    which it does not return (a KeyError), and a Drucker–Prager point was judged on
+    J2's b̄ᵉ too, left at I, so none was carried."""
+    from fe_mpm.materials.drucker_prager import MAST_TABLE_3_5
+
+    laws = [
+        fe_mpm.ModifiedDruckerPrager(1e6, 0.3, **MAST_TABLE_3_5["dense"], apex_stress=1e4),
+        fe_mpm.J2Plasticity(1e6, 0.3, 1e9),
+    ]
+    grid = meshes.rectangle_mesh((0.0, 0.0), (1.0, 2.0), (4, 8))
+    low = meshes.cell_centroids(grid)[:, 1] < 1.0
+    points = fe_mpm.merge(
+        fe_mpm.seed(grid, 3, cells=np.flatnonzero(low), material=0),
+        fe_mpm.seed(grid, 3, cells=np.flatnonzero(~low), material=1),
+    )
+    top = lambda x: np.isclose(x[1], 2.0)  # noqa: E731
+    sim = fe_mpm.Simulation(
+        grid,
+        points,
+        laws,
+        "u",
+        dirichlet=[
+            fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0), component=0),
+            fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0), component=1),
+        ],
+        tractions=[fe_mpm.Traction(top, (0.0, -1e2), scale=lambda t: max(t - 0.5, 0.0))],
+        point_domains=True,
+    )
+    sim.run(0.5, 1, progress=False)  # at rest
+    drucker = points.material == 0
+    assert np.allclose(points.history["be"][drucker], np.eye(3), rtol=0, atol=1e-14)
+    sim.run(1.0, 1, progress=False)  # loaded: runs
+    assert np.all(np.isfinite(points.stress))
+
+
+def test_a_point_of_one_law_is_judged_on_its_own_convected_field():
+    """The zones of the test above: a Drucker–Prager point is judged on its bᵉ alone,
+    not on J2's b̄ᵉ (left at I at its points, which under the pieces' shear is no
+    multiple of I, so no point was carried); J2's b̄ᵉ is not carried at all, its law
+    having no return map to check a carried value with."""
+    from fe_mpm.domains import _checkable_fields
+    from fe_mpm.materials.drucker_prager import MAST_TABLE_3_5
+    from fe_mpm.materials.zones import material_zones
+
+    law = material_zones(
+        [
+            fe_mpm.ModifiedDruckerPrager(1e4, 0.3, **MAST_TABLE_3_5["dense"], apex_stress=1e3),
+            fe_mpm.J2Plasticity(1e4, 0.3, 1e9),
+        ]
+    )
+    labels = {"material": np.array([0.0, 0.0, 1.0, 1.0])}
+    checkable = _checkable_fields(law, labels, 4)
+    assert list(checkable) == ["be"]
+    kind, uses = checkable["be"]
+    assert kind == "left" and list(uses) == [True, True, False, False]
+    assert _checkable_fields(fe_mpm.J2Plasticity(1e4, 0.3, 1e9), {}, 4) == {}
