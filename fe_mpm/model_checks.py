@@ -695,12 +695,7 @@ def check_supports(conditions, boundary, occupied: np.ndarray, walls=None) -> No
     g = conditions.mesh.geometry.dim
     free = _free_modes(gram[:g, :g])
     if free.shape[1]:
-        names = ", ".join(
-            "xyz"[int(np.argmax(np.abs(d)))]
-            if np.isclose(np.abs(d).max(), 1.0)
-            else str(d.round(3))
-            for d in free.T
-        )
+        names = _directions(free)
         raise ValueError(
             f"Simulation: a static model needs supports that stop every rigid "
             f"translation, but nothing holds the material in {names}: no Dirichlet "
@@ -746,15 +741,25 @@ def check_each_body(conditions, boundary, occupied: np.ndarray, walls=None) -> N
     g = mesh.geometry.dim
     for b in range(count):
         cells = occupied[body == b]
-        if _free_modes(_support_gram(conditions, point_conditions, cells, walls)).shape[1]:
+        gram = _support_gram(conditions, point_conditions, cells, walls)
+        if _free_modes(gram).shape[1]:
             corners = mesh.geometry.x[mesh.geometry.dofmaps[0][cells], :g].reshape(-1, g)
             lo = parallel.smallest(mesh.comm, corners.min(axis=0, initial=np.inf))
             hi = parallel.largest(mesh.comm, corners.max(axis=0, initial=-np.inf))
+            # Name the free motion, as check_supports does (a helper's floating slab,
+            # held sideways by rollers, was told only "every rigid motion").
+            moving = _free_modes(gram[:g, :g])
+            if moving.shape[1]:
+                motion = f"moving along {_directions(moving)}"
+            else:
+                axis = _free_modes(gram)[g:, 0]
+                about = "z" if g == 2 else _axis_name(axis / np.linalg.norm(axis))
+                motion = f"turning about {about}"
             raise ValueError(
                 f"Simulation: the material forms {count} separate bodies (groups of "
                 "occupied cells that share no node), and a static model needs supports "
-                f"for each: nothing holds the one between {lo.round(6).tolist()} and "
-                f"{hi.round(6).tolist()} against every rigid motion, so the tangent would "
+                f"for each: nothing stops the one in the box from {lo.round(6).tolist()} "
+                f"to {hi.round(6).tolist()} {motion}, so the tangent would "
                 "be singular. Support it, join it to another, or pass dynamic=True. A gmsh "
                 "model whose surfaces were not fragmented (gmsh.model.occ.fragment) has "
                 "two nodes at each place along their common edges, which cuts one body "
@@ -822,6 +827,14 @@ def support_rows(at: np.ndarray, way: np.ndarray, centre: np.ndarray, size: floa
         return np.column_stack([way, turn])
     # about axis e_k, x moves by e_k × arm, and d · (e_k × arm) = (arm × d)_k
     return np.column_stack([way, np.cross(arm, way)])
+
+
+def _directions(free: np.ndarray) -> str:
+    """The free translations (columns of ``free``, (g, k)) in words: ``x``, or a vector."""
+    return ", ".join(
+        "xyz"[int(np.argmax(np.abs(d)))] if np.isclose(np.abs(d).max(), 1.0) else str(d.round(3))
+        for d in free.T
+    )
 
 
 def _axis_name(axis: np.ndarray) -> str:

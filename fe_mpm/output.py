@@ -169,7 +169,8 @@ class SimulationOutput:
         cell = np.full(len(points), -1.0)
         if cells_known:  # collective
             where = np.column_stack([np.full(len(points), comm.rank), np.maximum(points.cell, 0)])
-            cell = np.where(points.cell >= 0, original_indices(mesh, where), -1).astype(float)
+            known = original_indices(mesh, where, fallback=True)  # submesh: global indices
+            cell = np.where(points.cell >= 0, known, -1).astype(float)
         self._points.write(t, points, cell=cell)
         if self._domains is not None:
             self._domains.write(t, points, corners, cell=cell)

@@ -301,3 +301,31 @@ def test_a_new_run_clears_what_an_earlier_one_left_in_its_folder(tmp_path):
     assert {"particles.pvd", "grid.bp", "steps.csv"} <= left
     with pytest.raises(ValueError, match=r"marker name 'tip,left' must be .* without commas"):
         sim.add_marker("tip,left", (48.0, 52.0))
+
+
+def test_a_grid_cut_by_create_submesh_writes_its_output_and_refuses_a_checkpoint(tmp_path):
+    """A grid cut from another by ``dolfinx.mesh.create_submesh`` (a gate's slot, a
+    weir plate) has no original cell indices in DOLFINx 0.11: the first output
+    stopped with "Mixed topology unsupported" (a helper's sluice gate, 2026-12-06;
+    ``benchmarks/tank_drain.py`` with its default output too). Output now numbers
+    the cells globally; a checkpoint, which needs the input numbering, is refused
+    with what to do."""
+    from fe_mpm._dolfinx import dolfinx
+
+    whole = meshes.rectangle_mesh((0.0, 0.0), (1.0, 1.0), (4, 4))
+    keep = np.flatnonzero(meshes.cell_centroids(whole)[:, 1] < 0.75).astype(np.int32)
+    grid = dolfinx.mesh.create_submesh(whole, 2, keep)[0]
+    points = fe_mpm.seed(grid, 3, density=1.0, cells=np.arange(8))
+    sim = fe_mpm.Simulation(
+        grid,
+        points,
+        fe_mpm.NeoHookean(1e3, 0.3),
+        dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))],
+        body_force=(0.0, -1.0),
+        output_dir=tmp_path,
+    )
+    sim.run(1.0, 1, progress=False)
+    frame = meshio.read(sorted(tmp_path.glob("particles*.vtu"))[-1])
+    assert np.array_equal(np.sort(frame.point_data["cell"]), np.sort(points.cell))
+    with pytest.raises(ValueError, match="no original cell indices.*create_submesh"):
+        sim.checkpoint(tmp_path / "checkpoints")
