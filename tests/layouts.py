@@ -54,3 +54,16 @@ def geostatic_layer(gravity: float = 9.81):
     points = fe_mpm.seed(grid, 3, density=2000.0, cells=cells)
     law = fe_mpm.MohrCoulomb(E=2e7, nu=0.3, cohesion=1e3, friction_angle=30.0, density=2000.0)
     return grid, points, law, fe_mpm.geostatic_stress(points, 1.0, gravity, 0.5)
+
+
+def base_and_rollers(width: float) -> list:
+    """A fixed base (y = 0) and rollers on the sides x = 0 and x = ``width``: a layer's supports."""
+    import fe_mpm
+
+    def sides(x):
+        return np.isclose(x[0], 0.0) | np.isclose(x[0], width)
+
+    return [
+        fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0)),
+        fe_mpm.Dirichlet(sides, component=0),
+    ]

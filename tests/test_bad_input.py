@@ -403,18 +403,24 @@ def test_singular_tangent_names_the_hinged_cells():
         assert ("mass='lumped'" in message) is sparse
 
 
-def test_taylor_hood_stops_when_points_move_into_too_few_per_cell():
-    """A P2 cell with fewer than 3 points has strain modes no point sees: the step
-    could converge on the singular tangent to a wrong answer, so it is refused."""
-    mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (2, 2))
-    points = fe_mpm.seed(mesh, per_cell=3)
-    sim = fe_mpm.Simulation(
+def _taylor_hood_square(mesh, points, **options) -> fe_mpm.Simulation:
+    """A P2/P1 run of ``points`` on ``mesh`` (the unit square) held at its base."""
+    return fe_mpm.Simulation(
         mesh,
         points,
         fe_mpm.NeoHookean(1.0, 0.3),
         formulation="up-p2p1",
         dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))],
+        **options,
     )
+
+
+def test_taylor_hood_stops_when_points_move_into_too_few_per_cell():
+    """A P2 cell with fewer than 3 points has strain modes no point sees: the step
+    could converge on the singular tangent to a wrong answer, so it is refused."""
+    mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (2, 2))
+    points = fe_mpm.seed(mesh, per_cell=3)
+    sim = _taylor_hood_square(mesh, points)
     sim.step(1.0)
     first = np.flatnonzero(points.cell == points.cell[0])[0]
     other = np.flatnonzero(points.cell != points.cell[0])[0]
@@ -434,14 +440,7 @@ def test_too_few_points_with_a_ghost_penalty_on_does_not_advise_a_ghost_penalty(
     centroids = cell_centroids(mesh)
     below = np.flatnonzero(centroids[:, 1] < 0.5)
     points = fe_mpm.seed(mesh, per_cell=3, cells=below)
-    sim = fe_mpm.Simulation(
-        mesh,
-        points,
-        fe_mpm.NeoHookean(1.0, 0.3),
-        formulation="up-p2p1",
-        dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))],
-        ghost_penalty=0.1,
-    )
+    sim = _taylor_hood_square(mesh, points, ghost_penalty=0.1)
     sim.step(1.0)
     # One point of each lower cell moves up, two to a cell: no cell then holds
     # three, so none is tied to a cell with enough.

@@ -7,7 +7,7 @@ import meshio
 import numpy as np
 import pytest
 from dolfinx.mesh import CellType, create_box, create_submesh
-from layouts import geostatic_layer
+from layouts import base_and_rollers, geostatic_layer
 
 import fe_mpm
 from fe_mpm import domain_flips, meshes, scenes
@@ -628,16 +628,12 @@ def test_a_taylor_hood_layer_of_an_elastic_hencky_law_stays_at_rest_with_domains
     grid = meshes.rectangle_mesh((0.0, 0.0), (1.0, 1.3), (10, 13))
     below = np.flatnonzero(meshes.cell_centroids(grid)[:, 1] < depth)
     points = fe_mpm.seed(grid, 1, density=rho, cells=below)
-    sides = lambda x: np.isclose(x[0], 0.0) | np.isclose(x[0], 1.0)  # noqa: E731
     sim = fe_mpm.Simulation(
         grid,
         points,
         fe_mpm.HenckyJ2(E, nu, 1e9),
         "up-p2p1",
-        dirichlet=[
-            fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0)),
-            fe_mpm.Dirichlet(sides, component=0),
-        ],
+        dirichlet=base_and_rollers(1.0),
         body_force=(0.0, -g),
         point_domains=True,
         initial_stress=fe_mpm.geostatic_stress(points, depth, g, nu / (1 - nu)),

@@ -16,6 +16,7 @@ import warnings
 
 import numpy as np
 import pytest
+from layouts import base_and_rollers
 
 import fe_mpm
 from fe_mpm.initial_stress import elastic_left_cauchy_green
@@ -272,16 +273,12 @@ def test_a_geostatic_layer_held_in_up_settles_once_and_stays(law):
     grid = rectangle_mesh((0.0, 0.0), (1.0, 1.5), (6, 9))
     below = np.flatnonzero(fe_mpm.meshes.cell_centroids(grid)[:, 1] < H)
     points = fe_mpm.seed(grid, 1, density=RHO, cells=below)
-    sides = lambda x: np.isclose(x[0], 0.0) | np.isclose(x[0], 1.0)  # noqa: E731
     sim = fe_mpm.Simulation(
         grid,
         points,
         law,
         "up",
-        dirichlet=[
-            fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0)),
-            fe_mpm.Dirichlet(sides, component=0),
-        ],
+        dirichlet=base_and_rollers(1.0),
         body_force=(0.0, -G),
         initial_stress=fe_mpm.geostatic_stress(points, H, G, K0),
     )
