@@ -450,7 +450,8 @@ def owned_original_cells(mesh: dolfinx.mesh.Mesh, fallback: bool = False) -> np.
     A grid cut from another by ``dolfinx.mesh.create_submesh`` has none (DOLFINx
     0.11: "Mixed topology unsupported"; found 2026-12-06 by a helper, whose slotted
     grid stopped its first output, as ``benchmarks/tank_drain.py``'s did). With
-    ``fallback`` the cells' global indices stand in (the same on one rank count);
+    ``fallback`` the cells' global indices stand in (they change with the number of
+    ranks);
     without, it is refused with what needs the numbering.
 
     Raises:
@@ -464,7 +465,7 @@ def owned_original_cells(mesh: dolfinx.mesh.Mesh, fallback: bool = False) -> np.
             cell_map = mesh.topology.index_map(mesh.topology.dim)
             return np.asarray(cell_map.local_to_global(np.arange(owned, dtype=np.int32)))
         raise ValueError(
-            f"the grid has no original cell indices ({err}; a grid made by "
+            f"the grid has no original cell indices ({str(err).rstrip('.')}: a grid made by "
             "dolfinx.mesh.create_submesh): checkpoints and repartitions need them; build "
             "the grid with create_mesh, create_rectangle/box or from gmsh (a cut-out "
             "region can be drawn in gmsh)"

@@ -143,8 +143,9 @@ def share_weighted_mean(
 
 
 #: A piece took an elastic step when its tensor pulled back by its increment is the
-#: point's at t_n times a number (the volume a return at the field's pressure gives
-#: it) to this share of the latter's size (round-off is ~1e-15).
+#: point's at t_n times a number (1 in an elastic step, since 2026-12-06 in u-p too;
+#: the number stays for a point held at a cone's apex) to this share of the latter's
+#: size (round-off is ~1e-15).
 ELASTIC_PULL_BACK = 1e-9
 
 
@@ -167,9 +168,9 @@ def convected_mean(
     yields nowhere, P2/P1 with one point per cell, was 11 % off after 60 steps and
     103 % after 100, where NeoHookean (no history) stays within 1.5 % (found
     2026-12-06 by a helper). So where every piece of a point stepped elastically,
-    its value pulled back by its increment, ΔF_k⁻¹ b_k ΔF_k⁻ᵀ, being s_k bᵉ_n (s_k = 1,
-    or in u-p for a pressure-dependent law the volume change its return at the
-    field's pressure gives, :mod:`~fe_mpm.materials.mixed_return`; to
+    its value pulled back by its increment, ΔF_k⁻¹ b_k ΔF_k⁻ᵀ, being s_k bᵉ_n (s_k = 1
+    for an elastic step, in u-p too, :mod:`~fe_mpm.materials.mixed_return`; other
+    values only at a cone's apex; to
     :data:`ELASTIC_PULL_BACK`), the point takes s̄ ΔF bᵉ_n ΔFᵀ with its own
     increment and the pieces' mean s̄: exact. Where a piece yielded the point keeps
     the pieces' plain mean: pushing the mean of their plastic corrections forward by

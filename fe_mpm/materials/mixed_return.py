@@ -25,6 +25,13 @@ volume change :math:`\Delta\varepsilon_v^p` (e.g. :math:`3\varrho_G\Delta\gamma`
 Drucker–Prager's cone). When the mixed problem has converged with :math:`v = 0`,
 the point's stress is the one the law gives under the displacement alone.
 
+**What a point keeps.** A point that stepped elastically keeps bᵉ at the volume its
+displacement gave it, :math:`e^{-2\delta/3} b^{e*} = \Delta F\, b^e_n\, \Delta F^T`, so
+the next step's :math:`v` counts the mismatch left over (kept at the shifted volume,
+each step forgot it, and a geostatic Mohr–Coulomb layer held in u-p crept); a point
+that yielded, or lies beyond the apex, keeps the return's :math:`b^{e*}` and forgets
+it (kept there too, points crossing cells swelled Mast's sand column).
+
 :math:`\tau_m(\delta)` is piecewise smooth and nondecreasing (linear within each
 region for the cones and Mohr-Coulomb), so :math:`\delta` is found by Newton's
 method with the law's own slope :math:`\partial\tau_m/\partial\delta`, kept in the
@@ -106,7 +113,9 @@ class MixedReturnResult:
         deviator: Deviatoric Kirchhoff stress s (n, 3, 3), Pa.
         volumetric: The volumetric equation's value v = ε_v^tr − ε_v* (n,), strain.
         derivative: Computes the four blocks, read through :attr:`tangent`.
-        history: Internal variables at t_{n+1}, by name.
+        history: Internal variables at t_{n+1}, by name: the return's, except that a
+            point that stepped elastically has bᵉ at its displacement's volume,
+            e^{−2δ/3} bᵉ* = ΔF bᵉₙ ΔFᵀ (see :func:`return_at_mean_stress`).
         region: The law's return region per point (n,), or :data:`BEYOND_APEX`.
     """
 
@@ -329,6 +338,11 @@ def _largest_mean_stress(law, shifted: _Shifted, start: np.ndarray) -> np.ndarra
     return np.trace(tau, axis1=1, axis2=2) / 3.0
 
 
+#: A return is elastic when its bᵉ* is the shifted trial to this share of its size
+#: (the laws copy the trial there: it matches to round-off).
+ELASTIC_MATCH = 1e-12
+
+
 def return_at_mean_stress(
     law, dF: np.ndarray, tau_m: np.ndarray, history: dict[str, np.ndarray]
 ) -> MixedReturnResult:
@@ -409,7 +423,7 @@ def return_at_mean_stress(
     shifted_F = F3 * np.exp(evaluated / 3.0)[:, None, None]
     trial = shifted_F @ shifted.history["be"] @ np.swapaxes(shifted_F, 1, 2)
     size = np.linalg.norm(trial, axis=(1, 2))
-    within = np.linalg.norm(final.history["be"] - trial, axis=(1, 2)) <= 1e-12 * size
+    within = np.linalg.norm(final.history["be"] - trial, axis=(1, 2)) <= ELASTIC_MATCH * size
     within[beyond] = False
     history["be"] = final.history["be"].copy()
     history["be"][within] *= np.exp(-2.0 * evaluated[within] / 3.0)[:, None, None]
