@@ -63,8 +63,8 @@ from fe_mpm.ghost import require_facet_ghosts
 from fe_mpm.transfer import touched_nodes
 
 #: A cell takes p̄ by parts while the net force this puts on its nodes beyond the
-#: usual form's, |Σ V_p − |T|| |∇p̄ − ρ b|, is at most this share of its weight
-#: |T| ρ |b|. Measured (2026-12-06): 0.01 let the closed vortex of
+#: usual form's, ``|Σ V_p − |T|| |∇p̄ − ρ b|``, is at most this share of its weight
+#: ``|T| ρ |b|``. Measured (2026-12-06): 0.01 let the closed vortex of
 #: ``tests/test_fluid.py`` gain 17.6-fold (the projected p̄'s own noise exceeds it);
 #: 0.3 and 1 keep the benchmark's energies unchanged and the drop's impact tame.
 SPLIT_FORCE = 1.0
@@ -115,21 +115,21 @@ class PressureByParts:
     ) -> np.ndarray:
         """χ of every owned cell from the cells that hold points on this rank.
 
-        Call it once p̄ is projected. Where the points do not fill a cell, Σ V_p ≠ |T|,
-        the cell's part of the split puts a net force (Σ V_p − |T|) ∇p̄ on its nodes
+        Call it once p̄ is projected. Where the points do not fill a cell, ``Σ V_p ≠ |T|``,
+        the cell's part of the split puts a net force ``(Σ V_p − |T|) ∇p̄`` on its nodes
         that the usual form does not: harmless while ∇p̄ is the weight's ρ b, which the
         points' own mass balances, but at an impact, where ∇p̄ reached 4e7 Pa/m in
         cells filled from 26 to 133 %, it threw a drop's points out at 14 m/s and
         added 45 % of its energy in one step (a helper's scene, 2026-12-06). Such a
-        cell keeps the usual form: χ = 0 where |Σ V_p − |T|| |∇p̄ − ρ b| exceeds
-        :data:`SPLIT_FORCE` × |T| ρ |b|.
+        cell keeps the usual form: χ = 0 where ``|Σ V_p − |T|| |∇p̄ − ρ b|`` exceeds
+        :data:`SPLIT_FORCE` × ``|T| ρ |b|``.
 
         Args:
             occupied: This rank's owned cells that hold points (local indices).
             cell: Each point's cell (n,).
             volume: The points' volumes (n,), m³ (m² in 2D).
             mass: Their masses (n,), kg.
-            cell_volumes: Every cell's volume |T| (owned first), m³ (m² in 2D).
+            cell_volumes: Every cell's volume ``|T|`` (owned first), m³ (m² in 2D).
             body_force: The body force b (g,), m/s².
 
         Returns:
