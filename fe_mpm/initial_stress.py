@@ -29,6 +29,8 @@ and :math:`\tau_0 = J_0 \sigma_0`.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 import numpy.typing as npt
 
@@ -40,39 +42,57 @@ from fe_mpm.particles import MaterialPoints
 
 
 def geostatic_stress(
-    points: MaterialPoints, surface: float, gravity: float, K0: float, density: float | None = None
+    points: MaterialPoints,
+    surface: float,
+    gravity: float,
+    K0: float | npt.ArrayLike,
+    density: float | None = None,
+    layers: Sequence[tuple[float, float]] | None = None,
 ) -> np.ndarray:
-    r"""The stress at rest of a level layer: σ_v = −ρ_p g (surface − z), σ_h = K₀ σ_v.
+    r"""The stress at rest of level ground: σ_v = −g ∫ ρ dz over the depth above, σ_h = K₀ σ_v.
 
     The vertical is the last coordinate (y in 2D, z in 3D); the other two
     directions, the out-of-plane one of plane strain included, carry
-    :math:`K_0 \sigma_v`. Each point takes its own density :math:`m_p/V_p` for the
-    whole depth above it, which is exact for a layer of one density; points of
-    different densities (layered ground) get a warning.
+    :math:`K_0 \sigma_v`. Without ``layers`` each point takes its own density
+    :math:`m_p/V_p` (or ``density``) for the whole depth above it, which is exact for
+    ground of one density; points of different densities get a warning. With
+    ``layers`` σ_v sums the layers above each point, σ_v = −g Σ ρ_i t_i.
 
     Args:
         points: The points (positions in m, masses in kg, volumes in m³ or m²).
-        surface: Height of the layer's free surface (m); no point may lie above it.
+        surface: Height of the ground's free surface (m); no point may lie above it.
         gravity: Magnitude g > 0 of gravity (m/s²), acting along −z (−y in 2D).
-        K0: Ratio K₀ ≥ 0 of horizontal to vertical stress at rest.
-        density: The layer's density ρ (kg/m³), > 0. None takes each point's own,
+        K0: Ratio K₀ ≥ 0 of horizontal to vertical stress at rest: one, or each
+            point's (n,) (a layer's own, e.g. by ``points.material``).
+        density: The ground's density ρ (kg/m³), > 0. None takes each point's own,
             which points seeded without a density do not have yet: the law's is
             given to them when the Simulation starts, after this is called (until
             2026-12-06 such points gave a stress of ρ = 1 kg/m³ without a word, and
             the layer sank as if unstressed; found by a helper typing the docs'
             example with the density on the law).
+        layers: Layered ground, ``[(thickness, density), ...]`` from the surface down
+            (m, kg/m³, each > 0); every point must lie within them. Not with
+            ``density``.
 
     Returns:
         Cauchy stresses (Pa), shape ``(n, 3, 3)``, compression negative.
 
     Raises:
-        ValueError: ``gravity`` ≤ 0, ``K0`` < 0, ``surface`` not finite, a point
-            above it, ``density`` ≤ 0, or no density to take.
+        ValueError: ``gravity`` ≤ 0, ``K0`` < 0 or not one per point, ``surface`` not
+            finite, a point above it or below the layers, ``density`` or a layer's
+            thickness or density ≤ 0, both ``density`` and ``layers``, or no density
+            to take.
     """
     if not (np.isfinite(gravity) and gravity > 0.0):
         raise ValueError(f"geostatic_stress: gravity must be > 0 (m/s²), got {gravity!r}")
-    if not (np.isfinite(K0) and K0 >= 0.0):
-        raise ValueError(f"geostatic_stress: K0 must be >= 0, got {K0!r}")
+    K0 = np.asarray(K0, dtype=float)
+    if K0.ndim > 1 or (K0.ndim == 1 and K0.size != len(points)):
+        raise ValueError(
+            f"geostatic_stress: K0 must be one number or one per point ({len(points)}), "
+            f"got shape {K0.shape}"
+        )
+    if not (np.all(np.isfinite(K0)) and np.all(K0 >= 0.0)):
+        raise ValueError(f"geostatic_stress: K0 must be >= 0, got {K0.min(initial=np.nan)!r}")
     if not np.isfinite(surface):
         raise ValueError(f"geostatic_stress: surface must be a finite height (m), got {surface!r}")
     depth = surface - points.x[:, -1]
@@ -82,31 +102,64 @@ def geostatic_stress(
             f"geostatic_stress: point {p} lies {-depth[p]:.3g} m above the surface "
             f"{surface:g} m; surface must be >= every point's height"
         )
-    if density is not None:
-        rho = check_range("geostatic_stress", "density", density, lo=0.0, lo_open=True)
-    elif not points.density_given:
-        raise ValueError(
-            "geostatic_stress: the points were seeded without a density (the law's "
-            "reaches them only when the Simulation starts): pass density=ρ (kg/m³), or "
-            "seed them with seed(..., density=ρ)"
-        )
+    depth = np.maximum(depth, 0.0)
+    if layers is not None:
+        if density is not None:
+            raise ValueError("geostatic_stress: give density or layers, not both")
+        overburden = _layered_overburden(depth, layers)  # ∫ ρ dz above, kg/m²
     else:
-        rho = points.mass / points.volume
-        if len(rho) and np.ptp(rho) > 1e-9 * np.max(rho):
-            # Found 2026-12-06 by a helper: 1600 over 2000 kg/m³ put the lower layer's
-            # σ_v up to 24 % off, and its first step moved it, without a word.
-            warn(
-                f"geostatic_stress: the points' densities differ ({np.min(rho):.6g} to "
-                f"{np.max(rho):.6g} kg/m³), and each point takes its own for the whole "
-                "depth above it, which is right for one density only: for layered ground "
-                "give σ_v = −g Σ ρ_i t_i over the layers above each point yourself"
-            )
-    vertical = -rho * gravity * np.maximum(depth, 0.0)
+        overburden = _own_density(points, density) * depth
+    vertical = -gravity * overburden
     stress = np.zeros((len(points), 3, 3))
     g = points.gdim
     for axis in range(3):
         stress[:, axis, axis] = vertical if axis == g - 1 else K0 * vertical
     return stress
+
+
+def _own_density(points: MaterialPoints, density: float | None) -> np.ndarray | float:
+    """``density``, or each point's own m_p/V_p, warned where they differ."""
+    if density is not None:
+        return check_range("geostatic_stress", "density", density, lo=0.0, lo_open=True)
+    if not points.density_given:
+        raise ValueError(
+            "geostatic_stress: the points were seeded without a density (the law's "
+            "reaches them only when the Simulation starts): pass density=ρ (kg/m³), or "
+            "seed them with seed(..., density=ρ)"
+        )
+    rho = points.mass / points.volume
+    if len(rho) and np.ptp(rho) > 1e-9 * np.max(rho):
+        # Found 2026-12-06 by a helper: 1600 over 2000 kg/m³ put the lower layer's
+        # σ_v up to 24 % off, and its first step moved it, without a word.
+        warn(
+            f"geostatic_stress: the points' densities differ ({np.min(rho):.6g} to "
+            f"{np.max(rho):.6g} kg/m³), and each point takes its own for the whole "
+            "depth above it, which is right for one density only: for layered ground "
+            "pass layers=[(thickness, density), ...] from the surface down"
+        )
+    return rho
+
+
+def _layered_overburden(depth: np.ndarray, layers: Sequence[tuple[float, float]]) -> np.ndarray:
+    """∫ ρ dz from the surface down to each ``depth`` (n,) through ``layers``, kg/m²."""
+    table = np.asarray(layers, dtype=float)
+    if table.ndim != 2 or table.shape[1] != 2 or table.shape[0] == 0:
+        raise ValueError(
+            "geostatic_stress: layers must be [(thickness, density), ...] from the "
+            f"surface down, got {layers!r}"
+        )
+    for k, (thickness, rho) in enumerate(table):
+        check_range("geostatic_stress", f"layers[{k}] thickness", thickness, lo=0.0, lo_open=True)
+        check_range("geostatic_stress", f"layers[{k}] density", rho, lo=0.0, lo_open=True)
+    bottoms = np.cumsum(table[:, 0])
+    if len(depth) and depth.max() > bottoms[-1] * (1.0 + 1e-12):
+        raise ValueError(
+            f"geostatic_stress: a point lies {depth.max():.6g} m below the surface, below "
+            f"the layers' {bottoms[-1]:.6g} m; add a layer down to it"
+        )
+    tops = bottoms - table[:, 0]
+    within = np.clip(depth[:, None], tops[None, :], bottoms[None, :]) - tops[None, :]
+    return within @ table[:, 1]
 
 
 def elastic_left_cauchy_green(

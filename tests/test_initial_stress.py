@@ -307,9 +307,53 @@ def test_layered_points_are_warned_that_each_takes_its_own_density():
         fe_mpm.seed(grid, 3, density=2000.0, cells=np.flatnonzero(low), material=0),
         fe_mpm.seed(grid, 3, density=1600.0, cells=np.flatnonzero(~low), material=1),
     )
-    with pytest.warns(UserWarning, match="densities differ.*layered ground"):
+    with pytest.warns(UserWarning, match="densities differ.*pass layers="):
         fe_mpm.geostatic_stress(points, 2.0, G, K0)
     one = fe_mpm.seed(grid, 3, density=2000.0)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         fe_mpm.geostatic_stress(one, 2.0, G, K0)
+
+
+def test_layered_ground_starts_at_rest_with_its_layers_stress():
+    """Two Mohr–Coulomb layers 1 m thick, 1600 over 2000 kg/m³, on a fixed base with
+    rollers at its sides, started from ``geostatic_stress(..., layers=)`` (σ_v = −g Σ ρ_i
+    t_i) with each layer's K₀: no motion, at most one Newton iteration, the stress
+    kept to 1e-9 of ρ g H; each point's own density for the whole depth above it
+    (the default, which warns) was up to 24 % off below the interface."""
+    grid = rectangle_mesh((0.0, 0.0), (1.0, 2.0), (4, 8))
+    low = fe_mpm.meshes.cell_centroids(grid)[:, 1] < 1.0
+    points = fe_mpm.merge(
+        fe_mpm.seed(grid, 3, density=2000.0, cells=np.flatnonzero(low), material=0),
+        fe_mpm.seed(grid, 3, density=1600.0, cells=np.flatnonzero(~low), material=1),
+    )
+    laws = [
+        fe_mpm.MohrCoulomb(E, 0.3, cohesion=1e4, friction_angle=30.0, density=2000.0),
+        fe_mpm.MohrCoulomb(E, 0.25, cohesion=1e4, friction_angle=30.0, density=1600.0),
+    ]
+    K0_each = np.where(points.material == 0, 0.3 / 0.7, 0.25 / 0.75)
+    stress = fe_mpm.geostatic_stress(points, 2.0, G, K0_each, layers=[(1.0, 1600.0), (1.0, 2000.0)])
+    depth = 2.0 - points.x[:, 1]
+    exact = -G * (1600.0 * np.minimum(depth, 1.0) + 2000.0 * np.maximum(depth - 1.0, 0.0))
+    assert np.allclose(stress[:, 1, 1], exact, rtol=1e-14, atol=0)
+    sim = fe_mpm.Simulation(
+        grid,
+        points,
+        laws,
+        "u",
+        dirichlet=base_and_rollers(1.0),
+        body_force=(0.0, -G),
+        initial_stress=stress,
+    )
+    reports = sim.run(1.0, 1, progress=False)
+    assert reports[-1].newton_iterations <= 1
+    assert np.abs(points.x - points.x0).max() < 1e-12
+    scale = 2000.0 * G * 2.0
+    assert np.abs(points.stress[:, 1, 1] - exact).max() < 1e-9 * scale
+    assert np.abs(points.stress[:, 0, 0] - K0_each * exact).max() < 1e-9 * scale
+    with pytest.raises(ValueError, match="below the layers' 1.5 m; add a layer"):
+        fe_mpm.geostatic_stress(points, 2.0, G, K0, layers=[(1.0, 1600.0), (0.5, 2000.0)])
+    with pytest.raises(ValueError, match="density or layers, not both"):
+        fe_mpm.geostatic_stress(points, 2.0, G, K0, density=1.0, layers=[(2.0, 1.0)])
+    with pytest.raises(ValueError, match="K0 must be one number or one per point"):
+        fe_mpm.geostatic_stress(points, 2.0, G, np.ones(3), layers=[(2.0, 1.0)])
