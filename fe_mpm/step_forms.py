@@ -265,13 +265,10 @@ class StepForms:
         if self.floor is not None:
             point_K = getattr(self.material, "point_bulk_moduli", None)
             K = self.material.bulk_modulus if point_K is None else point_K(points.history)
-            n = tracker.num_cells
-            compliance = np.bincount(layout.cell, weights=points.volume / K, minlength=n)
-            volume = np.bincount(layout.cell, weights=points.volume, minlength=n)
-            blind = mixed_up.blind_cells(layout.cell, bary, points.volume, n)
-            # As if the cell were full: a sliver of a domain would barely hold it.
-            mean_compliance = compliance / np.where(blind, volume, 1.0)
-            weight = np.where(blind, mixed_up.PRESSURE_FLOOR * mean_compliance, 0.0)
+            cell_map = self.mesh.topology.index_map(self.mesh.topology.dim)
+            weight = mixed_up.floor_weights(
+                layout.cell, bary, points.volume, points.volume / K, cell_map, tracker.num_cells
+            )
             q.pack_cell_field(self.floor.weight, layout, weight)
         if self.dF_shift is not None:  # until the first iterate's (SharedIncrement)
             q.pack(self.dF_shift, layout, np.zeros((len(points), g, g)))

@@ -116,7 +116,7 @@ class PressureFloor:
     tip of a jet, a drop, a film climbing a wall) the Jacobian is singular, the
     direct solver puts pressures of 1e10–1e20 Pa on them, and their round-off keeps
     Newton's residual from falling (a dam break against a ``RigidWall`` stopped so
-    at t = 0.231 s). In those cells only (:func:`blind_cells`) the floor adds
+    at t = 0.231 s). In those cells only (:func:`floor_weights`) the floor adds
 
     .. math:: -\epsilon\,\frac{\sum_{p\in K} V_p/K_p}{\sum_{p\in K} V_p}
               \int_K (\nabla q\cdot(x - x_c))(\nabla p\cdot(x - x_c))\,dx,
@@ -152,29 +152,54 @@ class PressureFloor:
         return cls(centroid, weight, dx)
 
 
-def blind_cells(
-    cell: np.ndarray, bary: np.ndarray, volume: np.ndarray, num_cells: int
+def floor_weights(
+    cell: np.ndarray,
+    bary: np.ndarray,
+    volume: np.ndarray,
+    compliance: np.ndarray,
+    cell_map,
+    num_cells: int,
 ) -> np.ndarray:
-    """Which cells hold points that cannot fix a linear pressure in them, (num_cells,) bool.
+    """This rank's share of each cell's :class:`PressureFloor` weight, (num_cells,) in 1/Pa.
 
-    Those whose points' moments fall below :data:`BLIND_CELL_MOMENT`; empty cells
-    are not blind. Under MPI with point domains a cell may hold pieces of two ranks;
-    each rank judges its own share.
+    A cell is blind where its points' moments Σ V_p λ_p λ_pᵀ / Σ V_p fall below
+    :data:`BLIND_CELL_MOMENT` (empty cells are not); there its weight is
+    ε Σ_p (V_p/K_p) / Σ_p V_p, as for a full cell, elsewhere 0. Under MPI with point
+    domains a cell may hold pieces of two ranks: the moments and volumes are summed
+    over the ranks before a cell is judged, and each rank packs its own points'
+    compliance over the cell's whole volume, so that the ranks' shares add up to the
+    serial weight (judged on each rank's share, a cell holding a sliver on one rank
+    got the floor twice: nodal pressures 0.2 % off the serial run's, a helper's
+    drop on two ranks, 2026-12-06).
 
     Args:
-        cell: Each point's cell (n,).
+        cell: Each point's cell (n,), local (owned or ghost).
         bary: Its barycentric coordinates there (n, g + 1).
         volume: Its volume (n,), m³ (m² in 2D).
-        num_cells: Cells on this rank, owned and ghost.
+        compliance: Its V_p / K_p (n,), m³/Pa (m²/Pa in 2D).
+        cell_map: The grid's cell index map.
+        num_cells: Cells the weights are wanted for (owned, and ghosts where packed).
     """
-    moments = np.zeros((num_cells, bary.shape[1], bary.shape[1]))
-    np.add.at(moments, cell, volume[:, None, None] * bary[:, :, None] * bary[:, None, :])
-    total = np.bincount(cell, weights=volume, minlength=num_cells)
+    from fe_mpm.transfer import summed_over_ranks
+
+    k = bary.shape[1]
+    n_all = cell_map.size_local + cell_map.num_ghosts
+    sums = np.zeros((n_all, k * k + 1))
+    np.add.at(
+        sums[:, :-1],
+        cell,
+        (volume[:, None, None] * bary[:, :, None] * bary[:, None, :]).reshape(-1, k * k),
+    )
+    sums[:, -1] = np.bincount(cell, weights=volume, minlength=n_all)
+    sums = summed_over_ranks(cell_map, sums)[:num_cells]
+    total = sums[:, -1]
     held = np.flatnonzero(total > 0.0)
-    smallest = np.linalg.eigvalsh(moments[held] / total[held, None, None])[:, 0]
-    blind = np.zeros(num_cells, dtype=bool)
-    blind[held[smallest < BLIND_CELL_MOMENT]] = True
-    return blind
+    smallest = np.linalg.eigvalsh(sums[held, :-1].reshape(-1, k, k) / total[held, None, None])
+    blind = held[smallest[:, 0] < BLIND_CELL_MOMENT]
+    weight = np.zeros(num_cells)
+    own = np.bincount(cell, weights=compliance, minlength=n_all)[:num_cells]
+    weight[blind] = PRESSURE_FLOOR * own[blind] / total[blind]
+    return weight
 
 
 def _cell_centroids_and_measure(mesh, centroids: np.ndarray) -> tuple:
