@@ -332,6 +332,14 @@ class Simulation:
         model_checks.warn_dilatant_averaging(material, self.spec, dynamic)
         model_checks.warn_static_fluid(material, keeps_shape, dynamic)
         model_checks.take_density(material, points)
+        model_checks.warn_ppp_against_weight(
+            mesh,
+            points,
+            material,
+            self.spec,
+            ppp_alpha,
+            None if body_force is None else body_force_at(body_force, 0.0, mesh.geometry.dim),
+        )
         model_checks.check_weight_of_initial_stress(
             mesh.comm,
             points,

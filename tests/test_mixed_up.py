@@ -137,3 +137,28 @@ def test_splitting_cells_into_entities_changes_nothing(monkeypatch):
         assert report.nslot == nslot
         tips[nslot] = scenes.tip_deflection(sim)
     assert abs(tips[2] / tips[6] - 1) < 1e-12, tips
+
+
+def test_ppp_against_a_soft_bodys_weight_warns():
+    """A soft Neo-Hookean "water" (G = 1 kPa) 1 m deep on cells of 0.1 m under gravity:
+    ρ g h / G ≈ 1, and PPP, which resists a linear pressure in proportion to 1/G, put
+    its side thrust 60 % off ρ g H²/2 with every step converged (a helper's tank,
+    2026-12-06). Set-up warns; without PPP, or with a stiff body, it does not."""
+    import warnings
+
+    import fe_mpm
+    from fe_mpm.meshes import rectangle_mesh
+
+    mesh = rectangle_mesh((0.0, 0.0), (2.0, 1.0), (20, 10))
+    points = fe_mpm.seed(mesh, 3, density=1000.0)
+    soft = fe_mpm.NeoHookean(3e3, 0.4998)  # G = 1000 Pa, K = 2.5 MPa
+    base = [fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))]
+    with pytest.warns(UserWarning, match=r"ρ \|b\| h / G = 1\.\d+ .*ppp_alpha=0 or .*u-nbva"):
+        fe_mpm.Simulation(mesh, points, soft, "up", dirichlet=base, body_force=(0.0, -9.81))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        fe_mpm.Simulation(
+            mesh, points, soft, "up", dirichlet=base, body_force=(0.0, -9.81), ppp_alpha=0.0
+        )
+        stiff = fe_mpm.NeoHookean(3e6, 0.3)
+        fe_mpm.Simulation(mesh, points, stiff, "up", dirichlet=base, body_force=(0.0, -9.81))
