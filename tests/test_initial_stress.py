@@ -252,6 +252,20 @@ def test_a_layer_whose_surface_cuts_the_cells_stays_at_rest_when_seeded_by_level
     assert layer(level_set=False)[0] > 1e-3
 
 
+def _held_under_weight(grid, points, law, formulation: str, stress) -> fe_mpm.Simulation:
+    """A body 1 m wide on a fixed base with rollers at its sides, under gravity, started
+    from ``stress``."""
+    return fe_mpm.Simulation(
+        grid,
+        points,
+        law,
+        formulation,
+        dirichlet=base_and_rollers(1.0),
+        body_force=(0.0, -G),
+        initial_stress=stress,
+    )
+
+
 @pytest.mark.parametrize(
     "law",
     [
@@ -273,15 +287,7 @@ def test_a_geostatic_layer_held_in_up_settles_once_and_stays(law):
     grid = rectangle_mesh((0.0, 0.0), (1.0, 1.5), (6, 9))
     below = np.flatnonzero(fe_mpm.meshes.cell_centroids(grid)[:, 1] < H)
     points = fe_mpm.seed(grid, 1, density=RHO, cells=below)
-    sim = fe_mpm.Simulation(
-        grid,
-        points,
-        law,
-        "up",
-        dirichlet=base_and_rollers(1.0),
-        body_force=(0.0, -G),
-        initial_stress=fe_mpm.geostatic_stress(points, H, G, K0),
-    )
+    sim = _held_under_weight(grid, points, law, "up", fe_mpm.geostatic_stress(points, H, G, K0))
     vertical = -RHO * G * (H - points.x0[:, 1])
 
     def horizontal_error() -> float:
@@ -336,15 +342,7 @@ def test_layered_ground_starts_at_rest_with_its_layers_stress():
     depth = 2.0 - points.x[:, 1]
     exact = -G * (1600.0 * np.minimum(depth, 1.0) + 2000.0 * np.maximum(depth - 1.0, 0.0))
     assert np.allclose(stress[:, 1, 1], exact, rtol=1e-14, atol=0)
-    sim = fe_mpm.Simulation(
-        grid,
-        points,
-        laws,
-        "u",
-        dirichlet=base_and_rollers(1.0),
-        body_force=(0.0, -G),
-        initial_stress=stress,
-    )
+    sim = _held_under_weight(grid, points, laws, "u", stress)
     reports = sim.run(1.0, 1, progress=False)
     assert reports[-1].newton_iterations <= 1
     assert np.abs(points.x - points.x0).max() < 1e-12
