@@ -496,7 +496,7 @@ def warn_static_fluid(material, keeps_shape: bool, dynamic: bool) -> None:
 
 #: PPP resists a pressure's variation across a cell in proportion to 1/G: a body whose
 #: weight changes its pressure by more than this share of its shear modulus from one
-#: side of a cell to the other (ρ |b| h / G) is warned.
+#: side of a cell to the other (``ρ |b| h / G``) is warned.
 PPP_WEIGHT_RATIO = 0.03
 
 
