@@ -116,6 +116,7 @@ def write(sim, directory: str | Path) -> Path:
         The checkpoint folder.
     """
     comm = sim.mesh.comm
+    balance.owned_original_cells(sim.mesh)  # a grid without them is refused before a folder
     final = folder_for(directory, sim.step_number)
     partial = final.with_name(final.name + ".partial")
     error = None

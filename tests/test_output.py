@@ -329,3 +329,4 @@ def test_a_grid_cut_by_create_submesh_writes_its_output_and_refuses_a_checkpoint
     assert np.array_equal(np.sort(frame.point_data["cell"]), np.sort(points.cell))
     with pytest.raises(ValueError, match="no original cell indices.*create_submesh"):
         sim.checkpoint(tmp_path / "checkpoints")
+    assert not list(tmp_path.glob("checkpoints/*"))  # no half-made folder left
