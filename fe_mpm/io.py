@@ -17,6 +17,7 @@ from mpi4py import MPI
 import numpy as np
 
 from fe_mpm import parallel
+from fe_mpm.materials.spectral import embedded_3d
 from fe_mpm.particles import MaterialPoints
 
 
@@ -207,8 +208,7 @@ def _point_fields(points: MaterialPoints, fields: dict) -> dict[str, np.ndarray]
     n, g = points.x.shape
     disp = np.zeros((n, 3))
     disp[:, :g] = points.x - points.x0
-    F3 = np.tile(np.eye(3), (n, 1, 1))
-    F3[:, :g, :g] = points.F
+    F3 = embedded_3d(points.F)
     data = {
         "displacement": disp,
         "velocity": np.pad(points.velocity, ((0, 0), (0, 3 - g))),

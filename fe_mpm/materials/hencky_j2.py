@@ -46,6 +46,7 @@ from fe_mpm.materials.principal_return import YIELD_TOLERANCE
 from fe_mpm.materials.spectral import (
     derivative_wrt_dF,
     deviator,
+    embedded_3d,
     from_principal,
     norm,
     spectral_decomposition,
@@ -110,8 +111,7 @@ class HenckyJ2(LinearisedStress, IsotropicModuli):
         n, g = dF.shape[0], dF.shape[1]
         K, G = self.bulk_modulus, self.mu
         k, H = self.hardening, self.kinematic_hardening
-        F3 = np.tile(np.eye(3), (n, 1, 1))
-        F3[:, :g, :g] = dF
+        F3 = embedded_3d(dF)
         b_n = history["be"]
         b = F3 @ b_n @ np.swapaxes(F3, 1, 2)
         x, Q = spectral_decomposition(b)

@@ -86,7 +86,7 @@ from functools import cached_property
 import numpy as np
 
 from fe_mpm.materials import route
-from fe_mpm.materials.spectral import deviator
+from fe_mpm.materials.spectral import deviator, embedded_3d
 
 #: The soft volumetric stiffness beyond the apex, as a fraction of K (see above).
 APEX_STIFFNESS_FRACTION = 1e-3
@@ -357,8 +357,7 @@ def return_at_mean_stress(
     """
     n, g = dF.shape[0], dF.shape[1]
     K = law.bulk_modulus
-    F3 = np.tile(np.eye(3), (n, 1, 1))
-    F3[:, :g, :g] = dF
+    F3 = embedded_3d(dF)
     with np.errstate(invalid="ignore", divide="ignore"):
         eps_v = np.log(_det3(F3)) + 0.5 * np.log(_det3(history["be"]))
     if not (np.all(np.isfinite(eps_v)) and np.all(np.isfinite(tau_m))):

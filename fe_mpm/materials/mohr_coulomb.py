@@ -31,7 +31,12 @@ from fe_mpm.materials import route
 from fe_mpm.materials.elastic import IsotropicModuli
 from fe_mpm.materials.linearised import LinearisedStress, ReturnMapResult
 from fe_mpm.materials.principal_return import ELASTIC, MohrCoulombSurface, mohr_coulomb_return
-from fe_mpm.materials.spectral import derivative_wrt_dF, from_principal, spectral_decomposition
+from fe_mpm.materials.spectral import (
+    derivative_wrt_dF,
+    embedded_3d,
+    from_principal,
+    spectral_decomposition,
+)
 from fe_mpm.materials.state import HistoryField
 
 _SQRT_2_3 = math.sqrt(2.0 / 3.0)
@@ -114,12 +119,11 @@ class MohrCoulomb(LinearisedStress, IsotropicModuli):
             dF: Deformation gradient increments (n, g, g).
             history: ``be`` (n, 3, 3) and ``plastic_strain`` (n,) at t_n.
         """
-        n, g = dF.shape[0], dF.shape[1]
+        g = dF.shape[1]
         kernels = route.compiled()
         if kernels is not None:
             return self._compiled_return_map(kernels, dF, history)
-        F3 = np.tile(np.eye(3), (n, 1, 1))
-        F3[:, :g, :g] = dF
+        F3 = embedded_3d(dF)
         b_n = history["be"]
         b = F3 @ b_n @ np.swapaxes(F3, 1, 2)
         x, Q = spectral_decomposition(b)

@@ -27,6 +27,14 @@ import numpy as np
 REPEATED = 1e-10
 
 
+def embedded_3d(F: np.ndarray) -> np.ndarray:
+    """Deformation gradients (n, g, g) as (n, 3, 3): in plane strain F₃₃ = 1."""
+    n, g = F.shape[0], F.shape[1]
+    F3 = np.tile(np.eye(3), (n, 1, 1))
+    F3[:, :g, :g] = F
+    return F3
+
+
 def spectral_decomposition(b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Eigenvalues in descending order (n, 3) and eigenvectors as columns (n, 3, 3)."""
     if not (b[:, 2, :2].any() or b[:, :2, 2].any()):
