@@ -65,6 +65,7 @@ from fe_mpm.domain_flips import flip_distorted
 from fe_mpm.errors import ConvergenceError, PointsOutsideError
 from fe_mpm.markers import Markers
 from fe_mpm.materials.route import compiled_module
+from fe_mpm.materials.spectral import embedded_3d
 from fe_mpm.migration import migrate
 from fe_mpm.particles import MaterialPoints
 from fe_mpm.point_update import apply_update
@@ -151,6 +152,7 @@ ELASTIC_PULL_BACK = 1e-9
 
 def convected_mean(
     values: np.ndarray,
+    mean: np.ndarray,
     start: np.ndarray,
     piece_F: np.ndarray,
     point_F: np.ndarray,
@@ -180,6 +182,7 @@ def convected_mean(
 
     Args:
         values: The pieces' tensors at t_{n+1} (k, 3, 3).
+        mean: Their share-weighted mean by point (n, 3, 3) (:func:`share_weighted_mean`).
         start: The points' tensors at t_n (n, 3, 3).
         piece_F: The pieces' deformation gradients at t_{n+1} (k, g, g).
         point_F: The points' deformation gradients at t_n (n, g, g).
@@ -190,13 +193,11 @@ def convected_mean(
 
     Returns:
         The points' tensors (n, 3, 3), and which of them were carried by their own
-        increment (n,) bool (the others are their pieces' mean).
+        increment (n,) bool (the others are ``mean``'s).
     """
 
     def embedded(F: np.ndarray) -> np.ndarray:
-        g = F.shape[1]
-        out = np.tile(np.eye(3), (F.shape[0], 1, 1))
-        out[:, :g, :g] = F
+        out = embedded_3d(F)
         if kind == "left isochoric":
             out *= np.linalg.det(out)[:, None, None] ** (-1.0 / 3.0)
         return out
@@ -211,11 +212,11 @@ def convected_mean(
     size = np.linalg.norm(carried_k, axis=(1, 2))
     off = np.linalg.norm(values / scale[:, None, None] - carried_k, axis=(1, 2))
     carried = np.bincount(owner, weights=off > ELASTIC_PULL_BACK * size, minlength=n) == 0
-    mean = share_weighted_mean(values, owner, share, n)
+    out = mean.copy()
     forward = embedded(point_dF[carried])
     volume = share_weighted_mean(scale, owner, share, n)[carried]
-    mean[carried] = volume[:, None, None] * (forward @ start[carried] @ np.swapaxes(forward, 1, 2))
-    return mean, carried
+    out[carried] = volume[:, None, None] * (forward @ start[carried] @ np.swapaxes(forward, 1, 2))
+    return out, carried
 
 
 class PointDomains:
@@ -724,7 +725,15 @@ class PointDomains:
         carried = np.ones(n, dtype=bool)
         for name, (kind, uses) in checkable.items():
             history[name], own = convected_mean(
-                sub.history[name], points.history[name], sub.F, points.F, dF, kind, p.owner, p.share
+                sub.history[name],
+                plain[name],
+                points.history[name],
+                sub.F,
+                points.F,
+                dF,
+                kind,
+                p.owner,
+                p.share,
             )
             carried &= own | ~uses
         users = np.zeros(n, dtype=bool)

@@ -7,7 +7,7 @@ import meshio
 import numpy as np
 import pytest
 from dolfinx.mesh import CellType, create_box, create_submesh
-from layouts import base_and_rollers, geostatic_layer
+from layouts import base_and_rollers, embed_3d, geostatic_layer
 
 import fe_mpm
 from fe_mpm import domain_flips, meshes, scenes
@@ -18,6 +18,7 @@ from fe_mpm.domains import (
     convected_mean,
     keeps_mean_increment,
     shape_quality,
+    share_weighted_mean,
 )
 from fe_mpm.errors import ConvergenceError, PointsOutsideError
 from fe_mpm.tracker import Tracker
@@ -587,8 +588,7 @@ def test_a_convected_history_averages_to_the_points_own_elastic_step(kind):
     b_n = np.eye(3) + 0.1 * (a @ np.swapaxes(a, 1, 2))
 
     def embedded(F):
-        out = np.tile(np.eye(3), (F.shape[0], 1, 1))
-        out[:, :g, :g] = F
+        out = embed_3d(F)
         if kind == "left isochoric":
             out *= np.linalg.det(out)[:, None, None] ** (-1.0 / 3.0)
         return out
@@ -596,20 +596,24 @@ def test_a_convected_history_averages_to_the_points_own_elastic_step(kind):
     E = embedded(piece_dF)
     b_pieces = E @ b_n[owner] @ np.swapaxes(E, 1, 2)
     args = (piece_dF @ F_n[owner], F_n, point_dF, kind, owner, share)
-    mean, carried = convected_mean(b_pieces, b_n, *args)
+
+    def convected(values):
+        return convected_mean(values, share_weighted_mean(values, owner, share, n), b_n, *args)
+
+    mean, carried = convected(b_pieces)
     P = embedded(point_dF)
     carried_forward = P @ b_n @ np.swapaxes(P, 1, 2)
     assert carried.all() and np.allclose(mean, carried_forward, rtol=0, atol=1e-13)
     # A return at the field's pressure scales a piece's bᵉ (its volume): the point
     # takes the pieces' mean scale.
     scale = rng.uniform(0.99, 1.01, owner.size)
-    mean, carried = convected_mean(b_pieces * scale[:, None, None], b_n, *args)
+    mean, carried = convected(b_pieces * scale[:, None, None])
     mean_scale = np.bincount(owner, weights=share * scale)
     expected = mean_scale[:, None, None] * carried_forward
     assert carried.all() and np.allclose(mean, expected, rtol=0, atol=1e-13)
     # A point one of whose pieces yielded (its bᵉ's shape changed) keeps the mean.
     b_pieces[0] = b_pieces[0] @ np.diag([1.02, 0.99, 1.0])
-    mean, carried = convected_mean(b_pieces, b_n, *args)
+    mean, carried = convected(b_pieces)
     first = owner == 0
     plain = np.einsum("k,kij->ij", share[first], b_pieces[first])
     assert list(carried) == [False, True, True, True]
