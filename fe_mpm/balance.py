@@ -451,8 +451,7 @@ def owned_original_cells(mesh: dolfinx.mesh.Mesh, fallback: bool = False) -> np.
     0.11: "Mixed topology unsupported"; found 2026-12-06 by a helper, whose slotted
     grid stopped its first output, as ``benchmarks/tank_drain.py``'s did). With
     ``fallback`` the cells' global indices stand in (they change with the number of
-    ranks);
-    without, it is refused with what needs the numbering.
+    ranks); without, it is refused with what needs the numbering.
 
     Raises:
         ValueError: No original indices and no fallback.

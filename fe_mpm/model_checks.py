@@ -746,8 +746,7 @@ def check_supports(conditions, boundary, occupied: np.ndarray, walls=None) -> No
     free = _free_modes(gram)
     if free.shape[1] == 0:
         return
-    axis = free[g:, 0]  # the rotation in the first free mode (its translations are held)
-    about = "z" if g == 2 else _axis_name(axis / np.linalg.norm(axis))
+    about = _rotation_axis(free, g)
     raise ValueError(
         f"Simulation: a static model needs supports that stop every rigid rotation, but "
         f"nothing stops the material turning about {about}: the supports that touch "
@@ -782,7 +781,8 @@ def check_each_body(conditions, boundary, occupied: np.ndarray, walls=None) -> N
     for b in range(count):
         cells = occupied[body == b]
         gram = _support_gram(conditions, point_conditions, cells, walls)
-        if _free_modes(gram).shape[1]:
+        free = _free_modes(gram)
+        if free.shape[1]:
             corners = mesh.geometry.x[mesh.geometry.dofmaps[0][cells], :g].reshape(-1, g)
             lo = parallel.smallest(mesh.comm, corners.min(axis=0, initial=np.inf))
             hi = parallel.largest(mesh.comm, corners.max(axis=0, initial=-np.inf))
@@ -792,9 +792,7 @@ def check_each_body(conditions, boundary, occupied: np.ndarray, walls=None) -> N
             if moving.shape[1]:
                 motion = f"moving along {_directions(moving)}"
             else:
-                axis = _free_modes(gram)[g:, 0]
-                about = "z" if g == 2 else _axis_name(axis / np.linalg.norm(axis))
-                motion = f"turning about {about}"
+                motion = f"turning about {_rotation_axis(free, g)}"
             raise ValueError(
                 f"Simulation: the material forms {count} separate bodies (groups of "
                 "occupied cells that share no node), and a static model needs supports "
@@ -875,6 +873,15 @@ def _directions(free: np.ndarray) -> str:
         "xyz"[int(np.argmax(np.abs(d)))] if np.isclose(np.abs(d).max(), 1.0) else str(d.round(3))
         for d in free.T
     )
+
+
+def _rotation_axis(free: np.ndarray, g: int) -> str:
+    """The axis of the first free mode's rotation (``free``'s columns; translations held).
+
+    ``z`` in 2D, else :func:`_axis_name`'s.
+    """
+    axis = free[g:, 0]
+    return "z" if g == 2 else _axis_name(axis / np.linalg.norm(axis))
 
 
 def _axis_name(axis: np.ndarray) -> str:

@@ -53,6 +53,7 @@ from fe_mpm._dolfinx import dolfinx
 from fe_mpm.forms.loads import external_work, start_pressure_gradient_work
 from fe_mpm.materials import embed_3d
 from fe_mpm.quadrature import OCCUPIED, MaterialPointQuadrature
+from fe_mpm.transfer import summed_over_ranks
 
 #: Kratos MPM's factor on the PPP α, by geometric dimension.
 KRATOS_PPP_FACTOR = {2: 8.0, 3: 10.0}
@@ -180,8 +181,6 @@ def floor_weights(
         cell_map: The grid's cell index map.
         num_cells: Cells the weights are wanted for (owned, and ghosts where packed).
     """
-    from fe_mpm.transfer import summed_over_ranks
-
     k = bary.shape[1]
     n_all = cell_map.size_local + cell_map.num_ghosts
     sums = np.zeros((n_all, k * k + 1))
