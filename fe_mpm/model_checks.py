@@ -501,9 +501,12 @@ PPP_WEIGHT_RATIO = 0.03
 
 
 def warn_ppp_against_weight(
-    mesh, points, material, spec: FormulationSpec, ppp_alpha: float, body_force
+    comm, sizes: np.ndarray, points, material, spec: FormulationSpec, ppp_alpha: float, body_force
 ) -> None:
     """Warn where PPP would resist a body's hydrostatic gradient; collective.
+
+    ``sizes`` are this rank's cells' longest edges (m, ``fe_mpm.tracker.Tracker.sizes``); the
+    largest over every rank is the h of the ratio ρ |b| h / G.
 
     PPP penalises the pressure's variation inside each cell, a linear pressure too,
     with weight α/G. Measured on a soft Neo-Hookean "water" (K = 2 MPa) in a tank 1 m
@@ -517,10 +520,8 @@ def warn_ppp_against_weight(
     g = float(np.linalg.norm(body_force))
     if g == 0.0:
         return
-    tdim = mesh.topology.dim
-    owned = np.arange(mesh.topology.index_map(tdim).size_local, dtype=np.int32)
-    h = parallel.largest(mesh.comm, float(np.max(mesh.h(tdim, owned), initial=0.0)))
-    rho = parallel.largest(mesh.comm, float(np.max(points.density, initial=0.0)))
+    h = parallel.largest(comm, float(np.max(sizes, initial=0.0)))
+    rho = parallel.largest(comm, float(np.max(points.density, initial=0.0)))
     mu = min(float(law.mu) for law in laws_of(material))
     ratio = rho * g * h / mu
     if ratio > PPP_WEIGHT_RATIO:

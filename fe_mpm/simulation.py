@@ -332,14 +332,6 @@ class Simulation:
         model_checks.warn_dilatant_averaging(material, self.spec, dynamic)
         model_checks.warn_static_fluid(material, keeps_shape, dynamic)
         model_checks.take_density(material, points)
-        model_checks.warn_ppp_against_weight(
-            mesh,
-            points,
-            material,
-            self.spec,
-            ppp_alpha,
-            None if body_force is None else body_force_at(body_force, 0.0, mesh.geometry.dim),
-        )
         model_checks.check_weight_of_initial_stress(
             mesh.comm,
             points,
@@ -437,6 +429,15 @@ class Simulation:
         if needs_facet_ghosts and not balance.has_facet_ghosts(mesh):
             mesh, facet_tags = self._with_facet_ghosts(mesh, facet_tags)
         self._set_grid(mesh, facet_tags)
+        model_checks.warn_ppp_against_weight(
+            mesh.comm,
+            self.tracker.sizes,
+            points,
+            material,
+            self.spec,
+            ppp_alpha,
+            None if body_force is None else body_force_at(body_force, 0.0, mesh.geometry.dim),
+        )
         self._add_time("setup", t0)
         self._track()  # once now, so a bad initial layout fails at set-up
         model_checks.check_distinct_points(self.mesh.comm, points)
