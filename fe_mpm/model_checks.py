@@ -505,8 +505,8 @@ def warn_ppp_against_weight(
 ) -> None:
     """Warn where PPP would resist a body's hydrostatic gradient; collective.
 
-    ``sizes`` are this rank's cells' longest edges (m, ``fe_mpm.tracker.Tracker.sizes``); the
-    largest over every rank is the h of the ratio ρ |b| h / G.
+    ``sizes`` are this rank's cells' longest edges (m, ``Tracker.sizes``); the largest
+    over every rank is the h of the ratio ``ρ |b| h / G``.
 
     PPP penalises the pressure's variation inside each cell, a linear pressure too,
     with weight α/G. Measured on a soft Neo-Hookean "water" (K = 2 MPa) in a tank 1 m
