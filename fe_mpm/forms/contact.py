@@ -60,6 +60,11 @@ KEPT_SLIP = 3.0
 #: Below this x = ``|d_T| / s``, tanh(x)/x is its series 1 − x²/3 (to round-off).
 SMALL_X = 1e-4
 
+#: Above this x, tanh(x) is 1 in double precision and tanh(x)/x is 1/x. Beyond
+#: x ≈ 710 UFL's derivative of tanh, 2 cosh x / (cosh 2x + 1), is inf/inf: a NaN in
+#: the Jacobian at every node that slid more than 710 slip scales in the iterate.
+LARGE_X = 20.0
+
 #: :func:`unloaded_tangent` holds an unloaded node along the wall with this share of
 #: μβ: μE/(10 h) at the default penalty (1000 E/h). Measured on a block resting on
 #: a wall (μ = 0.6, gravity ramped over 3 steps): level, the first step takes 3
@@ -124,7 +129,11 @@ def wall_traction(extension: ufl.core.expr.Expr, law: WallLaw) -> ufl.core.expr.
     if _sticking(law.friction):
         return push - ufl.conditional(touching, law.stiffness, 0.0) * tangential
     # −μ p_N tanh(x) d_T/|d_T| = −(μ p_N / s) (tanh(x)/x) d_T, tanh(x)/x → 1 at x → 0.
-    ratio = ufl.conditional(ufl.lt(x, SMALL_X), 1.0 - x**2 / 3.0, ufl.tanh(x) / x)
+    ratio = ufl.conditional(
+        ufl.lt(x, SMALL_X),
+        1.0 - x**2 / 3.0,
+        ufl.conditional(ufl.gt(x, LARGE_X), 1.0 / x, ufl.tanh(x) / x),
+    )
     return push - law.friction * pressure / law.slip_scale * ratio * tangential
 
 
