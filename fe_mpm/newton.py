@@ -57,6 +57,25 @@ def _weak(method: Callable) -> Callable:
     return call
 
 
+def _places_of_rows(W: dolfinx.fem.FunctionSpace, rows: np.ndarray) -> np.ndarray:
+    """Coordinates (k, 3) of the nodes of local rows ``rows`` of an unknown on ``W``.
+
+    Unrolled rows (a blocked or mixed unknown's), as PETSc numbers them.
+    """
+    if rows.size == 0:
+        return np.zeros((0, 3))
+    size = W.dofmap.index_map.size_local + W.dofmap.index_map.num_ghosts
+    places = np.full((size * W.dofmap.index_map_bs, 3), np.nan)
+    subspaces = [W.sub(i) for i in range(W.num_sub_spaces)] or [W]
+    for sub in subspaces:
+        V, dofs = sub.collapse() if sub is not W else (W, np.arange(places.shape[0]))
+        coordinates = V.tabulate_dof_coordinates()
+        dofs = np.asarray(dofs).ravel()
+        per_node = max(1, dofs.size // max(1, coordinates.shape[0]))
+        places[dofs] = coordinates[np.arange(dofs.size) // per_node]
+    return places[rows]
+
+
 class NewtonSolver:
     """SNES Newton for ``R(u) = 0`` with a tangent from the same UFL form.
 
@@ -146,6 +165,9 @@ class NewtonSolver:
         if linear_solver == "iterative":
             self._set_up_iterative(displacement or u.function_space, split)
         self._with_options(self.snes.setFromOptions)
+        #: Where the first iterate to assemble a non-finite residual or Jacobian since
+        #: :meth:`clear_nonfinite` did so, in words; "" if none did.
+        self.nonfinite = ""
         self.test = ForceTest(
             float(self._options["snes_rtol"]),
             float(self._options["snes_atol"]),
@@ -291,6 +313,8 @@ class NewtonSolver:
             if self._ghost is not None:  # its part of the lifting, G (g − x) on the bc dofs
                 self._ghost.full.multAdd(self._gap, b, b)
         fem_petsc.set_bc(b, self._bcs, x, -1.0)
+        if not self.nonfinite:
+            self._note_nonfinite("residual", np.flatnonzero(~np.isfinite(b.array_r)))
         self.test.displacement_norm = self._norm(b.array_r[rows])
         self.test.pressure_norm = self._norm(b.array_r[self._p_rows])
         self._add_time("assembly", t0)
@@ -324,8 +348,40 @@ class NewtonSolver:
             self._after_jacobian(A)
         if self._ghost is not None:
             A.axpy(1.0, self._ghost.constrained, PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
+        if not self.nonfinite and not np.isfinite(A.norm(PETSc.NormType.FROBENIUS)):
+            indptr, _, values = A.getValuesCSR()
+            bad = np.add.reduceat(~np.isfinite(values), indptr[:-1]) if values.size else []
+            self._note_nonfinite("Jacobian", np.flatnonzero(np.asarray(bad) > 0))
         self.test.round_off = self._round_off(A)
         self._add_time("assembly", t0)
+
+    def clear_nonfinite(self) -> None:
+        """Forget where an earlier solve met a non-finite residual or Jacobian."""
+        self.nonfinite = ""
+
+    def _note_nonfinite(self, what: str, rows: np.ndarray) -> None:
+        """Say in :attr:`nonfinite` which nodes' rows of ``what`` hold NaN or inf (collective).
+
+        ``rows``: this rank's owned rows that do. A NaN is a defect of a law or a
+        condition, or a cell turned inside out, not a step too long to converge: a
+        step that is cut for it then says so (2026-12-06: a frictional wall's
+        Jacobian held NaN beyond 710 slip scales, and the retry cut its steps
+        without a word).
+        """
+        comm = self.A.comm.tompi4py()
+        owned = self.u.function_space.dofmap.index_map.size_local
+        owned *= self.u.function_space.dofmap.index_map_bs
+        rows = rows[rows < owned]
+        count = comm.allreduce(int(rows.size))
+        if count == 0:
+            return
+        places = parallel.gathered(comm, _places_of_rows(self.u.function_space, rows[:1]).ravel())
+        first = places.reshape(-1, 3)[0] if places.size else np.full(3, np.nan)
+        self.nonfinite = (
+            f"the {what} held NaN or inf in {count} row{'' if count == 1 else 's'} "
+            f"(first near x = {np.round(first, 6).tolist()}): a law or a condition gave a "
+            "non-finite value there, or a cell turned inside out"
+        )
 
     def _round_off(self, A: PETSc.Mat) -> float:
         """The round-off floor of the displacement rows, ``ROUND_OFF_FACTOR`` ε (h ‖diag K‖ + ‖c‖).

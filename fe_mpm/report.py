@@ -229,6 +229,7 @@ def newton_failure(
     dynamic: bool = False,
     consistent_mass: bool = False,
     degree: int = 1,
+    nonfinite: str = "",
 ) -> ConvergenceError:
     """The error of a step whose Newton solves all failed.
 
@@ -236,6 +237,8 @@ def newton_failure(
     singular tangent: in a static run the hinged cells, if any (in a dynamic run the
     mass holds them); in a dynamic run with the consistent mass the cells with too few
     points to hold their nodes by it (``degree``: the displacement's, 1 or 2).
+    ``nonfinite``: where an iterate's residual or Jacobian held NaN or inf, in words
+    (:attr:`fe_mpm.newton.NewtonSolver.nonfinite`), or "".
     """
     norms = _norms_by_attempt(result)
     if not dynamic:
@@ -258,7 +261,7 @@ def newton_failure(
         f"{result.iterations} iteration{'' if result.iterations == 1 else 's'}: {ended}"
         f"{result.reason}; ‖R‖ history: {norms} "
         f"against the force scale {result.force_scale:.3e} (accepted: ‖R‖ <= "
-        f"{result.tolerance:.3e}). {diagnosis}"
+        f"{result.tolerance:.3e}). {nonfinite + '. ' if nonfinite else ''}{diagnosis}"
         "Points were not updated and nothing was written for this step."
     )
 

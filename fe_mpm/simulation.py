@@ -412,6 +412,7 @@ class Simulation:
         # Projection passes against the step's length: the longest step checked, and
         # whether the run was warned (once).
         self._passes_checked_dt, self._passes_warned = 0.0, False
+        self._nonfinite_warned = False  # said once: a NaN in a residual or Jacobian
         self._restart_dynamics = False  # points were added: accelerations anew
         self._csv_head: StepReport | None = None
         self._grid_is_a_step = True  # the grid's fields are the last step's (or zero)
@@ -1023,6 +1024,14 @@ class Simulation:
         result = self._solve(forms, R, J, bcs)
         finite = not parallel.any_rank(self.mesh.comm, not np.all(np.isfinite(self.w.x.array)))
         if not result.converged or not finite:
+            nonfinite = self._newton.nonfinite
+            if nonfinite and not self._nonfinite_warned:
+                warn(
+                    f"Newton's step {k} (t = {self.t:g} -> {t_new:g}): {nonfinite}. A "
+                    "shorter step is tried, as for any failed step, but this is a defect "
+                    "to look into, not a step too long (said once)."
+                )
+                self._nonfinite_warned = True
             raise newton_failure(
                 result,
                 k,
@@ -1034,6 +1043,7 @@ class Simulation:
                 self.dynamic,
                 self._given["mass"] == "consistent",
                 self.spec.u_degree,
+                nonfinite,
             )
         self.refresh_material(tangent=False)  # the converged iterate's, for reactions and history
         reactions = self.conditions.reactions(self._internal_force(R))
@@ -1302,6 +1312,8 @@ class Simulation:
                 coupling,
                 strain_field=self.spec.volume_average,
             )
+
+        self._newton.clear_nonfinite()
 
         def attempt(search: str | None, resume: bool) -> NewtonResult:
             if resume:

@@ -7,6 +7,7 @@ an iterate where the wall's nodes stick, slip and have left it.
 """
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -14,6 +15,7 @@ from layouts import geostatic_layer
 
 import fe_mpm
 from fe_mpm import model_checks
+from fe_mpm.forms import contact
 from fe_mpm.meshes import cell_centroids, rectangle_mesh
 from fe_mpm.verification import rates, taylor_remainders
 from fe_mpm.walls import PENALTY_FACTOR, SLIP_SCALE_FACTOR, RigidWalls
@@ -113,6 +115,24 @@ def test_a_block_sliding_a_cell_a_step_runs_at_its_step_and_slows_at_mu_g():
     assert len(reports) == steps
     t = dt * steps
     assert _slide(points) == pytest.approx(v0 * t - 0.5 * mu * G * t**2, rel=1e-4)
+
+
+def test_a_step_cut_for_a_nan_in_the_jacobian_says_so_and_where(monkeypatch):
+    """The fast block with the law's old tanh (the NaN beyond 710 slip scales put
+    back): the first step's Jacobian holds NaN at the wall's nodes, and the run
+    warns once, naming the Jacobian and a place on the wall (y = 0), before the
+    steps are cut. Until 2026-12-06 the cuts were silent (the progress bar showed
+    the shorter steps, nothing said why)."""
+    monkeypatch.setattr(contact, "LARGE_X", 1e300)
+    sim, points = _block(0.0, 0.3)
+    points.velocity[:, 0] = 8.0
+    with pytest.warns(UserWarning, match="said once") as caught:
+        reports = sim.run(t_end=0.1, n_steps=5, progress=False)
+    said = [str(w.message) for w in caught if "NaN" in str(w.message)]
+    assert len(said) == 1 and "the Jacobian held NaN or inf in" in said[0]
+    place = re.search(r"first near x = \[([^\]]*)\]", said[0]).group(1)
+    assert float(place.split(",")[1]) == pytest.approx(0.0, abs=1e-12)
+    assert len(reports) > 5  # cut, as before: the warning changes no answer
 
 
 def test_coulomb_wall_holds_a_block_below_its_friction_angle():
