@@ -63,6 +63,19 @@ class PointTracking:
         """No accepted step to hold the points in (set-up, restart)."""
         self._home = None
 
+    def crossed(self, cells: np.ndarray) -> bool:
+        """Whether a point lies in another cell, or on another rank, than at the last
+        accepted step (:meth:`remember`); False before the first (collective).
+
+        Args:
+            cells: Each point's cell now (n,), in the points' current order.
+        """
+        comm = self.tracker.mesh.comm
+        home = self._home
+        moved = home is not None and home.shape[0] == cells.size
+        moved = moved and bool(np.any((home[:, 0] != comm.rank) | (home[:, 1] != cells)))
+        return parallel.any_rank(comm, moved)
+
     @property
     def can_hold(self) -> bool:
         """Whether a retry can hold the points in the cells of the last accepted step."""
