@@ -64,8 +64,9 @@ class PointTracking:
         self._home = None
 
     def crossed(self, cells: np.ndarray) -> bool:
-        """Whether a point lies in another cell, or on another rank, than at the last
-        accepted step (:meth:`remember`); False before the first (collective).
+        """Whether a point lies in another cell or rank than at the last accepted step.
+
+        False before the first (:meth:`remember`); collective.
 
         Args:
             cells: Each point's cell now (n,), in the points' current order.
