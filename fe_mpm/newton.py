@@ -168,6 +168,11 @@ class NewtonSolver:
         #: Where the first iterate to assemble a non-finite residual or Jacobian since
         #: :meth:`clear_nonfinite` did so, in words; "" if none did.
         self.nonfinite = ""
+        #: Whether that was a Jacobian at an iterate whose residual was finite: a
+        #: derivative that failed, which no shorter step cures.
+        self.nonfinite_derivative = False
+        # The last residual's iterate (its 2-norm and sum) and whether it was finite.
+        self._last_residual: tuple[float, float, bool] | None = None
         self.test = ForceTest(
             float(self._options["snes_rtol"]),
             float(self._options["snes_atol"]),
@@ -313,8 +318,13 @@ class NewtonSolver:
             if self._ghost is not None:  # its part of the lifting, G (g − x) on the bc dofs
                 self._ghost.full.multAdd(self._gap, b, b)
         fem_petsc.set_bc(b, self._bcs, x, -1.0)
-        if not self.nonfinite:
-            self._note_nonfinite("residual", np.flatnonzero(~np.isfinite(b.array_r)))
+        bad = np.flatnonzero(~np.isfinite(b.array_r))
+        finite = not parallel.any_rank(self.A.comm.tompi4py(), bad.size > 0)
+        self._last_residual = (x.norm(), x.sum(), finite)
+        if not self.nonfinite and not finite:
+            self._note_nonfinite(
+                "residual", bad, "an iterate turned a point inside out, or a law failed there"
+            )
         self.test.displacement_norm = self._norm(b.array_r[rows])
         self.test.pressure_norm = self._norm(b.array_r[self._p_rows])
         self._add_time("assembly", t0)
@@ -351,22 +361,31 @@ class NewtonSolver:
         if not self.nonfinite and not np.isfinite(A.norm(PETSc.NormType.FROBENIUS)):
             indptr, _, values = A.getValuesCSR()
             bad = np.add.reduceat(~np.isfinite(values), indptr[:-1]) if values.size else []
-            self._note_nonfinite("Jacobian", np.flatnonzero(np.asarray(bad) > 0))
+            # At an iterate whose residual was finite, the derivative itself failed.
+            derivative = self._last_residual == (x.norm(), x.sum(), True)
+            self._note_nonfinite(
+                "Jacobian",
+                np.flatnonzero(np.asarray(bad) > 0),
+                "at an iterate whose residual was finite: a law's or a condition's "
+                "derivative failed there"
+                if derivative
+                else "a law or a condition failed there",
+            )
+            self.nonfinite_derivative = derivative
         self.test.round_off = self._round_off(A)
         self._add_time("assembly", t0)
 
     def clear_nonfinite(self) -> None:
         """Forget where an earlier solve met a non-finite residual or Jacobian."""
-        self.nonfinite = ""
+        self.nonfinite, self.nonfinite_derivative = "", False
 
-    def _note_nonfinite(self, what: str, rows: np.ndarray) -> None:
+    def _note_nonfinite(self, what: str, rows: np.ndarray, cause: str) -> None:
         """Say in :attr:`nonfinite` which nodes' rows of ``what`` hold NaN or inf (collective).
 
-        ``rows``: this rank's owned rows that do. A NaN is a defect of a law or a
-        condition, or a cell turned inside out, not a step too long to converge: a
-        step that is cut for it then says so (2026-12-06: a frictional wall's
-        Jacobian held NaN beyond 710 slip scales, and the retry cut its steps
-        without a word).
+        ``rows``: this rank's owned rows that do; ``cause``: what may have made them,
+        in words. A step cut for a failed derivative then says so (2026-12-06: a
+        frictional wall's Jacobian held NaN beyond 710 slip scales, and the retry
+        cut its steps without a word).
         """
         comm = self.A.comm.tompi4py()
         owned = self.u.function_space.dofmap.index_map.size_local
@@ -379,8 +398,7 @@ class NewtonSolver:
         first = places.reshape(-1, 3)[0] if places.size else np.full(3, np.nan)
         self.nonfinite = (
             f"the {what} held NaN or inf in {count} row{'' if count == 1 else 's'} "
-            f"(first near x = {np.round(first, 6).tolist()}): a law or a condition gave a "
-            "non-finite value there, or a cell turned inside out"
+            f"(first near x = {np.round(first, 6).tolist()}), {cause}"
         )
 
     def _round_off(self, A: PETSc.Mat) -> float:

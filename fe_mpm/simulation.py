@@ -412,7 +412,7 @@ class Simulation:
         # Projection passes against the step's length: the longest step checked, and
         # whether the run was warned (once).
         self._passes_checked_dt, self._passes_warned = 0.0, False
-        self._nonfinite_warned = False  # said once: a NaN in a residual or Jacobian
+        self._nonfinite_warned = False  # said once: a NaN in a Jacobian, not its residual
         self._crossing_warned = False  # said once: a static standard run's points crossed
         self._restart_dynamics = False  # points were added: accelerations anew
         self._csv_head: StepReport | None = None
@@ -1026,11 +1026,11 @@ class Simulation:
         finite = not parallel.any_rank(self.mesh.comm, not np.all(np.isfinite(self.w.x.array)))
         if not result.converged or not finite:
             nonfinite = self._newton.nonfinite
-            if nonfinite and not self._nonfinite_warned:
+            if self._newton.nonfinite_derivative and not self._nonfinite_warned:
                 warn(
                     f"Newton's step {k} (t = {self.t:g} -> {t_new:g}): {nonfinite}. A "
-                    "shorter step is tried, as for any failed step, but this is a defect "
-                    "to look into, not a step too long (said once)."
+                    "shorter step is tried, as for any failed step, but a derivative that "
+                    "fails is a defect to look into, not a step too long (said once)."
                 )
                 self._nonfinite_warned = True
             raise newton_failure(
