@@ -60,10 +60,9 @@ def _weak(method: Callable) -> Callable:
 def _places_of_rows(W: dolfinx.fem.FunctionSpace, rows: np.ndarray) -> np.ndarray:
     """Coordinates (k, 3) of the nodes of local rows ``rows`` of an unknown on ``W``.
 
-    Unrolled rows (a blocked or mixed unknown's), as PETSc numbers them.
+    Unrolled rows (a blocked or mixed unknown's), as PETSc numbers them. Collective
+    (collapsing a subspace is), so every rank calls it, with no rows or some.
     """
-    if rows.size == 0:
-        return np.zeros((0, 3))
     size = W.dofmap.index_map.size_local + W.dofmap.index_map.num_ghosts
     places = np.full((size * W.dofmap.index_map_bs, 3), np.nan)
     subspaces = [W.sub(i) for i in range(W.num_sub_spaces)] or [W]
