@@ -299,12 +299,18 @@ class ProgressBar:
                 bar_format="{l_bar}{bar}| {n:.0f}/{total_fmt} [{elapsed}<{remaining}{postfix}]",
             )
 
-    def update(self, report: StepReport, nominal: float) -> None:
-        """Count ``report``'s step as its share of the nominal step length ``nominal``."""
+    def update(self, report: StepReport, nominal: float, cuts: int = 0) -> None:
+        """Count ``report``'s step as its share of the nominal step length ``nominal``.
+
+        ``cuts``: how many step lengths the run has cut so far, shown once there is one
+        (until 2026-12-06 only the slower count told).
+        """
         if self._bar is not None:
             extra = (
                 {} if MPI.COMM_WORLD.size == 1 else {"imbalance": f"{report.point_imbalance:.2f}"}
             )
+            if cuts:
+                extra["cuts"] = cuts
             # Drawn with the count, not before it (it read "0/300 ... t=0.002" after step 1).
             self._bar.set_postfix(
                 t=f"{report.t:.4g}", newton=report.newton_iterations, refresh=False, **extra

@@ -894,7 +894,7 @@ class Simulation:
         floor = DEFAULT_MIN_STEP * nominal if self.min_step is None else self.min_step
         length = StepLength(nominal, floor, self._failure_advice)
         can_hold = not self.dynamic and self.domains is None  # pieces differ per attempt
-        bar, reports = ProgressBar(n_steps, progress), []
+        bar, reports, cuts = ProgressBar(n_steps, progress), [], 0
         before = self.newton_iterations_total
         try:
             while t_end - self.t > END_OF_RUN * nominal:
@@ -909,6 +909,7 @@ class Simulation:
                     )
                 except ConvergenceError as failure:
                     length.cut_after(failure)
+                    cuts += 1
                     continue
                 took = time.perf_counter() - started
                 spent = self.newton_iterations_total - before
@@ -923,7 +924,7 @@ class Simulation:
                 if report.repartitioned:
                     self._rebalance_now()
                 length.accepted()
-                bar.update(report, nominal)
+                bar.update(report, nominal, cuts)
         except ConvergenceError:
             # Raised on every rank together, the points as the last accepted step left
             # them: their frame and rows. (Not after PointsOutsideError: tracking may

@@ -17,6 +17,7 @@ import fe_mpm
 from fe_mpm import model_checks
 from fe_mpm.forms import contact
 from fe_mpm.meshes import cell_centroids, rectangle_mesh
+from fe_mpm.retry import StepLength
 from fe_mpm.verification import rates, taylor_remainders
 from fe_mpm.walls import PENALTY_FACTOR, SLIP_SCALE_FACTOR, RigidWalls
 
@@ -122,8 +123,9 @@ def test_a_step_cut_for_a_nan_in_the_jacobian_says_so_and_where(monkeypatch):
     back): the first step's Jacobian holds NaN at the wall's nodes where the
     residual is finite, and the run warns once, naming the Jacobian and a place on
     the wall (y = 0), before the steps are cut. (A residual that turns NaN, as at an
-    iterate that turns a point inside out, is named in the stop message only.) Until 2026-12-06 the cuts were silent (the progress bar showed
-    the shorter steps, nothing said why)."""
+    iterate that turns a point inside out, is named in the stop message only.)
+    Until 2026-12-06 the cuts were silent (the progress bar showed the shorter
+    steps, nothing said why)."""
     monkeypatch.setattr(contact, "LARGE_X", 1e300)
     sim, points = _block(0.0, 0.3)
     points.velocity[:, 0] = 8.0
@@ -135,6 +137,26 @@ def test_a_step_cut_for_a_nan_in_the_jacobian_says_so_and_where(monkeypatch):
     place = re.search(r"first near x = \[([^\]]*)\]", said[0]).group(1)
     assert float(place.split(",")[1]) == pytest.approx(0.0, abs=1e-12)
     assert len(reports) > 5  # cut, as before: the warning changes no answer
+
+
+def test_the_progress_bar_counts_the_cut_steps(monkeypatch, capsys):
+    """The same cut run with its progress bar: it shows ``cuts=`` with the number of
+    step lengths cut (until 2026-12-06 only the slower count told); a run that cuts
+    nothing shows none."""
+    monkeypatch.setattr(contact, "LARGE_X", 1e300)
+    cut, cuts = StepLength.cut_after, []
+    monkeypatch.setattr(StepLength, "cut_after", lambda self, f: (cuts.append(f), cut(self, f)))
+    sim, points = _block(0.0, 0.3)
+    points.velocity[:, 0] = 8.0
+    with pytest.warns(UserWarning):
+        sim.run(t_end=0.1, n_steps=5, progress=True)
+    bar = capsys.readouterr().err.replace("\r", "\n").strip().splitlines()[-1]
+    assert int(re.search(r"cuts=(\d+)", bar).group(1)) == len(cuts) > 0
+    monkeypatch.undo()
+    sim, points = _block(0.0, 0.3)
+    points.velocity[:, 0] = 8.0
+    sim.run(t_end=0.1, n_steps=5, progress=True)
+    assert "cuts=" not in capsys.readouterr().err
 
 
 def test_coulomb_wall_holds_a_block_below_its_friction_angle():
