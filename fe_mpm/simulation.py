@@ -775,8 +775,7 @@ class Simulation:
                 f"pathlib.Path), got {type(path).__name__}"
             )
         before = self.step_number
-        checkpoint.read(self, path)
-        self._check_supports_again = self._restart_dynamics = False
+        checkpoint.read(self, path)  # (with what add_points left due for the next step)
         if before > self.step_number:
             # This simulation had stepped past the checkpoint: those steps are undone
             # (found 2026-12-06 by a helper: the history read 1, 2, 3, 4, 3, 4), also
