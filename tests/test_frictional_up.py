@@ -151,6 +151,34 @@ def test_numpy_route_gives_the_compiled_blocks(monkeypatch):
         assert np.abs(a - b).max() <= 1e-10 * np.abs(a).max()
 
 
+@pytest.mark.parametrize("compiled", ["1", "0"])
+def test_a_wild_shear_beyond_the_apex_keeps_the_tangent_finite(monkeypatch, compiled):
+    """A virgin Mohr–Coulomb point (c = 100 Pa, φ = 30°) at a wild Newton iterate,
+    ΔF with entries up to 24 and det 1.28, in tension beyond the apex: its return is
+    the apex's with no stiffness at all (∂τ/∂ΔF* = 0), and the slope of δ in ΔF was
+    0/0, so the Jacobian held NaN and the step was cut (a punch in sand, 2026-12-06;
+    the NaN warning named it). Both routes now give finite blocks (the numpy return
+    lands with some stiffness at so wild a trial, so its slope is not 0), and the
+    volume's slope in τ̄_m is the spring's."""
+    monkeypatch.setenv("FE_MPM_COMPILED", compiled)
+    law = fe_mpm.MohrCoulomb(1e5, 0.3, 100.0, 30.0, 0.0)
+    dF = np.array(
+        [[[13.119303896218776, -23.7296029081052], [6.558122403380803, -11.764394299962149]]]
+    )
+    virgin = {
+        name: np.broadcast_to(np.asarray(f.initial, dtype=float), (1, *f.shape)).copy()
+        for name, f in law.history.items()
+    }
+    for mean in (200.0, 225.06, 500.0):
+        result = return_at_mean_stress(law, dF, np.array([mean]), virgin)
+        assert result.region[0] == BEYOND_APEX
+        ds_dF, ds_dm, dv_dF, dv_dm = result.tangent
+        assert all(np.all(np.isfinite(block)) for block in result.tangent)
+        if compiled == "1":  # its apex return is flat: no slope in ΔF
+            assert np.all(ds_dF == 0.0) and np.all(dv_dF == 0.0)
+        assert dv_dm[0] < 0.0
+
+
 def test_the_finite_difference_check_can_fail():
     """Negative controls: without the coupling ∂s/∂τ̄_m, or with the shift's part of
     ∂v/∂ΔF halved, the check fails (errors over the true blocks' largest entries)."""

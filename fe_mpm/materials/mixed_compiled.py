@@ -33,10 +33,12 @@ def _blocks_loop(D9, Fs, lam, spring, cols, out_s, out_sm, out_v, out_vm):
                 dev = D9[p, r, c] - m[c] if on_diagonal else D9[p, r, c]
                 acc += dev * Fs[p, c]
             devD_F[r] = acc / 3.0
-        for j in range(nc):
-            dd[j] = -lam[p] * m[cols[j]] / h
         # On the spring s is the apex's, whatever τ̄_m; δ follows τ̄_m at its stiffness.
         on_spring = spring[p] > 0.0
+        for j in range(nc):
+            # A trial so far out that the return is the apex's with no stiffness at
+            # all (D9 = 0, h = 0): δ gets no slope in ΔF there, not 0/0.
+            dd[j] = 0.0 if on_spring and h == 0.0 else -lam[p] * m[cols[j]] / h
         dd_tau = 1.0 / spring[p] if on_spring else 1.0 / h
         ds_tau = 0.0 if on_spring else 1.0 / h
         for r in range(9):
