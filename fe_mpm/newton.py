@@ -357,20 +357,23 @@ class NewtonSolver:
             self._after_jacobian(A)
         if self._ghost is not None:
             A.axpy(1.0, self._ghost.constrained, PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
-        if not self.nonfinite and not np.isfinite(A.norm(PETSc.NormType.FROBENIUS)):
+        # Checked until a failed derivative is found, even after a residual's NaN
+        # (a line search's inverted trial) was: that must not hide it.
+        if not self.nonfinite_derivative and not np.isfinite(A.norm(PETSc.NormType.FROBENIUS)):
             indptr, _, values = A.getValuesCSR()
-            bad = np.add.reduceat(~np.isfinite(values), indptr[:-1]) if values.size else []
+            row_of = np.repeat(np.arange(indptr.size - 1), np.diff(indptr))
+            bad = np.unique(row_of[~np.isfinite(values)])
             # At an iterate whose residual was finite, the derivative itself failed.
             derivative = self._last_residual == (x.norm(), x.sum(), True)
-            self._note_nonfinite(
+            noted = self._note_nonfinite(
                 "Jacobian",
-                np.flatnonzero(np.asarray(bad) > 0),
+                bad,
                 "at an iterate whose residual was finite: a law's or a condition's "
                 "derivative failed there"
                 if derivative
                 else "a law or a condition failed there",
             )
-            self.nonfinite_derivative = derivative
+            self.nonfinite_derivative = derivative and noted
         self.test.round_off = self._round_off(A)
         self._add_time("assembly", t0)
 
@@ -378,13 +381,14 @@ class NewtonSolver:
         """Forget where an earlier solve met a non-finite residual or Jacobian."""
         self.nonfinite, self.nonfinite_derivative = "", False
 
-    def _note_nonfinite(self, what: str, rows: np.ndarray, cause: str) -> None:
+    def _note_nonfinite(self, what: str, rows: np.ndarray, cause: str) -> bool:
         """Say in :attr:`nonfinite` which nodes' rows of ``what`` hold NaN or inf (collective).
 
         ``rows``: this rank's owned rows that do; ``cause``: what may have made them,
         in words. A step cut for a failed derivative then says so (2026-12-06: a
         frictional wall's Jacobian held NaN beyond 710 slip scales, and the retry
-        cut its steps without a word).
+        cut its steps without a word). Returns whether a rank had such a row (a
+        Frobenius norm can overflow on finite entries).
         """
         comm = self.A.comm.tompi4py()
         owned = self.u.function_space.dofmap.index_map.size_local
@@ -392,13 +396,14 @@ class NewtonSolver:
         rows = rows[rows < owned]
         count = comm.allreduce(int(rows.size))
         if count == 0:
-            return
+            return False
         places = parallel.gathered(comm, _places_of_rows(self.u.function_space, rows[:1]).ravel())
         first = places.reshape(-1, 3)[0] if places.size else np.full(3, np.nan)
         self.nonfinite = (
             f"the {what} held NaN or inf in {count} row{'' if count == 1 else 's'} "
             f"(first near x = {np.round(first, 6).tolist()}), {cause}"
         )
+        return True
 
     def _round_off(self, A: PETSc.Mat) -> float:
         """The round-off floor of the displacement rows, ``ROUND_OFF_FACTOR`` ε (h ‖diag K‖ + ‖c‖).

@@ -414,6 +414,7 @@ class Simulation:
         self._passes_checked_dt, self._passes_warned = 0.0, False
         self._nonfinite_warned = False  # said once: a NaN in a Jacobian, not its residual
         self._crossing_warned = False  # said once: a static standard run's points crossed
+        self._crossed_pending = False  # they had, before add_points remembered their cells
         self._restart_dynamics = False  # points were added: accelerations anew
         self._csv_head: StepReport | None = None
         self._grid_is_a_step = True  # the grid's fields are the last step's (or zero)
@@ -735,8 +736,16 @@ class Simulation:
             new.history[MATERIAL] = new.material.astype(np.float64)
         added = int(parallel.total(comm, len(new)))
         self.points.extend(new)
+        # The new points have no cell of a last step. Without their rows, migrating
+        # them to another rank indexed past the old points' (an IndexError on one
+        # rank, the other hung; a reviewer's two-rank script, 2026-12-06).
+        self.tracking.extend_home(len(new))
         layout = self._track(self.step_number, self.t)
         if self.step_number > 0:  # a retry may hold every point where it is now
+            if self._domains_would_do and not self._crossing_warned:
+                # Whether the old points crossed cells in the last step, which
+                # remembering their cells now would hide from the next step's check.
+                self._crossed_pending |= self.tracking.crossed(layout.cell)
             self.tracking.remember(layout.cell)
         self._check_supports_again = True
         # The new points' accelerations in equilibrium, as a run's first step gives
@@ -1028,8 +1037,8 @@ class Simulation:
             nonfinite = self._newton.nonfinite
             if self._newton.nonfinite_derivative and not self._nonfinite_warned:
                 warn(
-                    f"Newton's step {k} (t = {self.t:g} -> {t_new:g}): {nonfinite}. A "
-                    "shorter step is tried, as for any failed step, but a derivative that "
+                    f"Newton's step {k} (t = {self.t:g} -> {t_new:g}): {nonfinite}. run() "
+                    "retries and cuts such a step as any failed one, but a derivative that "
                     "fails is a defect to look into, not a step too long (said once)."
                 )
                 self._nonfinite_warned = True
@@ -1056,8 +1065,8 @@ class Simulation:
         walls = self.walls.finish_step()
         reactions.update({name: force.total for name, force in walls.items()})
         self._add_time("update", t0)
-        if self._domains_would_do and not self._crossing_warned:
-            self._warn_crossing(k, layout.cell)
+        if self._domains_would_do and not self._crossing_warned and self.spec.u_degree == 1:
+            self._warn_crossing(k, layout.cell)  # (P2/P1 has its own warning at step 2)
         self.tracking.remember(layout.cell)
         self.tracking.drop(self.points, self.markers, leaving, k, t_new)
         self.t, self.step_number = t_new, k
@@ -1266,14 +1275,14 @@ class Simulation:
         further than a Taylor–Hood solve after 20 load steps and 39 % after 80, where
         one step gives 0.2 %; every step converged and nothing was said.
         """
-        if not self.tracking.crossed(cells):
+        if not (self._crossed_pending or self.tracking.crossed(cells)):
             return
         self._crossing_warned = True
         warn(
             f"Static step {k}: points have crossed cells. In standard MPM a static answer "
             "then drifts with the number of load steps: a cantilever under its weight, "
-            "four cells deep, bent 31 % too far after 20 steps, where one step was within "
-            "0.3 % (docs/cell_crossing.md). point_domains=True cuts such drift (9 % there), "
+            "four cells deep, bent 31 % too far after 20 steps in u-p, where one step was "
+            "within 0.3 % (docs/limitations.md). point_domains=True cut that drift to 9 %, "
             "and an elastic body needs no more load steps than Newton does (said once)."
         )
 

@@ -74,8 +74,17 @@ class PointTracking:
         comm = self.tracker.mesh.comm
         home = self._home
         moved = home is not None and home.shape[0] == cells.size
-        moved = moved and bool(np.any((home[:, 0] != comm.rank) | (home[:, 1] != cells)))
+        if moved:  # (points added since, with no cell of a last step, do not count)
+            other = (home[:, 0] != comm.rank) | (home[:, 1] != cells)
+            moved = bool(np.any(other & (home[:, 1] >= 0)))
         return parallel.any_rank(comm, moved)
+
+    def extend_home(self, count: int) -> None:
+        """Give ``count`` points appended to the points rows with no cell of a last step."""
+        if self._home is not None and count:
+            rank = self.tracker.mesh.comm.rank
+            rows = np.column_stack([np.full(count, rank), np.full(count, -1)])
+            self._home = np.vstack([self._home, rows.astype(self._home.dtype)])
 
     @property
     def can_hold(self) -> bool:
