@@ -414,7 +414,6 @@ class Simulation:
         self._passes_checked_dt, self._passes_warned = 0.0, False
         self._nonfinite_warned = False  # said once: a NaN in a Jacobian, not its residual
         self._crossing_warned = False  # said once: a static standard run's points crossed
-        self._crossed_pending = False  # they had, before add_points remembered their cells
         self._restart_dynamics = False  # points were added: accelerations anew
         self._csv_head: StepReport | None = None
         self._grid_is_a_step = True  # the grid's fields are the last step's (or zero)
@@ -742,10 +741,6 @@ class Simulation:
         self.tracking.extend_home(len(new))
         layout = self._track(self.step_number, self.t)
         if self.step_number > 0:  # a retry may hold every point where it is now
-            if self._domains_would_do and not self._crossing_warned:
-                # Whether the old points crossed cells in the last step, which
-                # remembering their cells now would hide from the next step's check.
-                self._crossed_pending |= self.tracking.crossed(layout.cell)
             self.tracking.remember(layout.cell)
         self._check_supports_again = True
         # The new points' accelerations in equilibrium, as a run's first step gives
@@ -1066,7 +1061,7 @@ class Simulation:
         reactions.update({name: force.total for name, force in walls.items()})
         self._add_time("update", t0)
         if self._domains_would_do and not self._crossing_warned and self.spec.u_degree == 1:
-            self._warn_crossing(k, layout.cell)  # (P2/P1 has its own warning at step 2)
+            self._warn_crossing(k)  # (P2/P1 has its own warning at step 2)
         self.tracking.remember(layout.cell)
         self.tracking.drop(self.points, self.markers, leaving, k, t_new)
         self.t, self.step_number = t_new, k
@@ -1267,7 +1262,7 @@ class Simulation:
 
     # -- the phases of a step --------------------------------------------------
 
-    def _warn_crossing(self, k: int, cells: np.ndarray) -> None:
+    def _warn_crossing(self, k: int) -> None:
         """Warn, once, that a static standard run's points have begun to cross cells.
 
         Found 2026-12-06: a cantilever under its weight (L = 2 m, H = 0.25 m, mixed
@@ -1275,7 +1270,7 @@ class Simulation:
         further than a Taylor–Hood solve after 20 load steps and 39 % after 80, where
         one step gives 0.2 %; every step converged and nothing was said.
         """
-        if not (self._crossed_pending or self.tracking.crossed(cells)):
+        if not self._points_crossed_cells():  # (since their start: add_points hides nothing)
             return
         self._crossing_warned = True
         warn(

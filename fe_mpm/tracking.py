@@ -63,22 +63,6 @@ class PointTracking:
         """No accepted step to hold the points in (set-up, restart)."""
         self._home = None
 
-    def crossed(self, cells: np.ndarray) -> bool:
-        """Whether a point lies in another cell or rank than at the last accepted step.
-
-        False before the first (:meth:`remember`); collective.
-
-        Args:
-            cells: Each point's cell now (n,), in the points' current order.
-        """
-        comm = self.tracker.mesh.comm
-        home = self._home
-        moved = home is not None and home.shape[0] == cells.size
-        if moved:  # (points added since, with no cell of a last step, do not count)
-            other = (home[:, 0] != comm.rank) | (home[:, 1] != cells)
-            moved = bool(np.any(other & (home[:, 1] >= 0)))
-        return parallel.any_rank(comm, moved)
-
     def extend_home(self, count: int) -> None:
         """Give ``count`` points appended to the points rows with no cell of a last step."""
         if self._home is not None and count:
