@@ -170,8 +170,6 @@ class NewtonSolver:
         #: Whether that was a Jacobian at an iterate whose residual was finite: a
         #: derivative that failed, which no shorter step cures.
         self.nonfinite_derivative = False
-        # The last residual's iterate (its 2-norm and sum) and whether it was finite.
-        self._last_residual: tuple[float, float, bool] | None = None
         self.test = ForceTest(
             float(self._options["snes_rtol"]),
             float(self._options["snes_atol"]),
@@ -318,9 +316,7 @@ class NewtonSolver:
                 self._ghost.full.multAdd(self._gap, b, b)
         fem_petsc.set_bc(b, self._bcs, x, -1.0)
         bad = np.flatnonzero(~np.isfinite(b.array_r))
-        finite = not parallel.any_rank(self.A.comm.tompi4py(), bad.size > 0)
-        self._last_residual = (x.norm(), x.sum(), finite)
-        if not self.nonfinite and not finite:
+        if not self.nonfinite and parallel.any_rank(self.A.comm.tompi4py(), bad.size > 0):
             self._note_nonfinite(
                 "residual", bad, "an iterate turned a point inside out, or a law failed there"
             )
@@ -363,8 +359,11 @@ class NewtonSolver:
             indptr, _, values = A.getValuesCSR()
             row_of = np.repeat(np.arange(indptr.size - 1), np.diff(indptr))
             bad = np.unique(row_of[~np.isfinite(values)])
-            # At an iterate whose residual was finite, the derivative itself failed.
-            derivative = self._last_residual == (x.norm(), x.sum(), True)
+            # SNES's function vector holds the residual at this iterate: where it is
+            # finite, the derivative itself failed.
+            derivative = not parallel.any_rank(
+                self.A.comm.tompi4py(), not np.all(np.isfinite(self.b.array_r))
+            )
             noted = self._note_nonfinite(
                 "Jacobian",
                 bad,
