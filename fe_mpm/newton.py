@@ -67,9 +67,8 @@ def _places_of_rows(W: dolfinx.fem.FunctionSpace, rows: np.ndarray) -> np.ndarra
     places = np.full((size * W.dofmap.index_map_bs, 3), np.nan)
     subspaces = [W.sub(i) for i in range(W.num_sub_spaces)] or [W]
     for sub in subspaces:
-        V, dofs = sub.collapse() if sub is not W else (W, np.arange(places.shape[0]))
+        V, dofs = collapse(sub) if sub is not W else (W, np.arange(places.shape[0]))
         coordinates = V.tabulate_dof_coordinates()
-        dofs = np.asarray(dofs).ravel()
         per_node = max(1, dofs.size // max(1, coordinates.shape[0]))
         places[dofs] = coordinates[np.arange(dofs.size) // per_node]
     return places[rows]
