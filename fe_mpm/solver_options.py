@@ -75,21 +75,27 @@ LINEAR_SOLVERS = {
 
 
 def with_petsc_options(prefix: str, options: dict, configure) -> None:
-    """Call ``configure()`` with ``options`` under ``prefix`` in PETSc's database, then drop them.
+    """Call ``configure()`` with ``options`` under ``prefix`` in PETSc's database, then restore it.
 
-    ``configure`` is e.g. ``ksp.setFromOptions``; removing the options afterwards means
-    that no solver ever sees another's.
+    ``configure`` is e.g. ``ksp.setFromOptions``; putting the database back as it was
+    afterwards (each name removed, or given back the value it held before, e.g. from
+    the command line) means that no solver ever sees another's options.
     """
     opts = PETSc.Options()
-    opts.prefixPush(prefix)
-    for k, v in options.items():
-        opts[k] = v
+    # Full names throughout: PETSc's prefixPush applies to setting a value but not to
+    # clearing one, so options set under a pushed prefix could not be removed.
+    names = {f"{prefix}{key}": value for key, value in options.items()}
+    before = {name: opts.getString(name) for name in names if opts.hasName(name)}
+    for name, value in names.items():
+        opts[name] = value
     try:
         configure()
     finally:
-        for k in options:
-            del opts[k]
-        opts.prefixPop()
+        for name in names:
+            if name in before:
+                opts[name] = before[name]
+            else:
+                opts.delValue(name)
 
 
 def rigid_body_modes(V: dolfinx.fem.FunctionSpace, order: np.ndarray) -> PETSc.NullSpace:

@@ -44,7 +44,8 @@ FIRST_WALL_ID = 1000
 class WallForces:
     """The force a rigid wall put on the body at the end of a step.
 
-    In 2D forces are per unit thickness (N/m), else N.
+    In 2D forces are per unit thickness (N/m), else N. Under MPI every attribute is
+    the whole wall's, the same on every rank (gathered): do not sum them over ranks.
 
     Attributes:
         total: The whole force (g,).

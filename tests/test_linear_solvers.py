@@ -66,3 +66,36 @@ def test_unknown_linear_solver_is_named():
     mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (2, 2))
     with pytest.raises(ValueError, match="linear_solver"):
         fe_mpm.Simulation(mesh, fe_mpm.seed(mesh), fe_mpm.NeoHookean(1.0, 0.3), linear_solver="cg")
+
+
+def test_a_simulations_petsc_options_do_not_reach_the_next_one():
+    """PETSc's options database is left as it was found, by Newton and by the mass solve.
+
+    A user's ``petsc_options`` (here a monitor and an iteration limit) are set under the
+    solver's prefix while it configures and removed afterwards; an option that was
+    there before (as from the command line) keeps its value. Until 2026-12-06 every
+    option stayed in the database, so a later Simulation in the same script printed
+    the first one's SNES monitor.
+    """
+    from petsc4py import PETSc
+
+    opts = PETSc.Options()
+    opts["fe_mpm_u_snes_rtol"] = "1e-9"  # as if given on the command line
+    try:
+        before = opts.getAll()
+        mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (2, 2))
+        sim = fe_mpm.Simulation(
+            mesh,
+            fe_mpm.seed(mesh, 1, density=1000.0),
+            fe_mpm.NeoHookean(1e6, 0.3, 1000.0),
+            "u",
+            dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))],
+            body_force=(0.0, -9.81),
+            dynamic=True,
+            petsc_options={"snes_monitor_cancel": None, "snes_max_it": 7},
+        )
+        sim.step(1e-3)
+        assert sim._newton.snes.getTolerances()[3] == 7  # the option acted
+        assert opts.getAll() == before
+    finally:
+        opts.delValue("fe_mpm_u_snes_rtol")
