@@ -668,3 +668,35 @@ def test_a_static_standard_run_warns_once_when_its_points_cross_cells(options, w
     if warned_at is not None:
         assert said[0].startswith(f"Static step {warned_at}:")
         assert "point_domains=True" in said[0]
+
+
+def test_a_run_ends_its_steps_on_its_schedule_so_a_load_switches_where_asked():
+    """Ten steps of 0.1 end at 0.1, 0.2, 0.3, … exactly, not at sums of 0.1.
+
+    A load that doubles after t = 0.3 doubles in step 4: until 2026-12-06 step 3 ended
+    at 0.30000000000000004, so the body carried the doubled load a step early. A
+    second run from t = 0.3 keeps to its own schedule (0.45, 0.6, …) as well.
+    """
+    seen = []
+
+    def scale(t):
+        seen.append(t)
+        return 1.0 if t <= 0.3 else 2.0
+
+    mesh = _mesh()
+    sim = fe_mpm.Simulation(
+        mesh,
+        fe_mpm.seed(mesh, 1, density=RHO),
+        fe_mpm.NeoHookean(1e7, 0.3, RHO),
+        "u",
+        dirichlet=[_base()],
+        body_force=(0.0, -G),
+        body_force_scale=scale,
+        reactions={"base": lambda x: np.isclose(x[1], 0.0)},
+    )
+    reports = sim.run(0.3, 3, progress=False)
+    reports += sim.run(1.2, 6, progress=False)
+    weight = RHO * G * 1.0
+    assert [r.t for r in reports] == [0.1, 0.2, 0.3, 0.45, 0.6, 0.75, 0.9, 1.05, 1.2]
+    pushes = [r.reactions["base"][1] / weight for r in reports]
+    assert np.allclose(pushes, [1.0] * 3 + [2.0] * 6, rtol=1e-9)
