@@ -230,6 +230,7 @@ def newton_failure(
     consistent_mass: bool = False,
     degree: int = 1,
     nonfinite: str = "",
+    where: str = "",
 ) -> ConvergenceError:
     """The error of a step whose Newton solves all failed.
 
@@ -238,9 +239,12 @@ def newton_failure(
     mass holds them); in a dynamic run with the consistent mass the cells with too few
     points to hold their nodes by it (``degree``: the displacement's, 1 or 2).
     ``nonfinite``: where an iterate's residual or Jacobian held NaN or inf, in words
-    (:attr:`fe_mpm.newton.NewtonSolver.nonfinite`), or "".
+    (:attr:`fe_mpm.newton.NewtonSolver.nonfinite`), or "". ``where``: where the last
+    iterate is out of balance and moved most (:meth:`~fe_mpm.newton.NewtonSolver.where_it_failed`).
     """
     norms = _norms_by_attempt(result)
+    if nonfinite:  # a sentence of its own
+        nonfinite = f"{nonfinite[:1].upper()}{nonfinite[1:]}. "
     if not dynamic:
         diagnosis = hinge_diagnosis(mesh, layout, centroids)
         if not diagnosis:
@@ -261,7 +265,7 @@ def newton_failure(
         f"{result.iterations} iteration{'' if result.iterations == 1 else 's'}: {ended}"
         f"{result.reason}; ‖R‖ history: {norms} "
         f"against the force scale {result.force_scale:.3e} (accepted: ‖R‖ <= "
-        f"{result.tolerance:.3e}). {nonfinite + '. ' if nonfinite else ''}{diagnosis}"
+        f"{result.tolerance:.3e}). {nonfinite}{where}{diagnosis}"
         "Points were not updated and nothing was written for this step."
     )
 

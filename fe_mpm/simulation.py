@@ -1075,6 +1075,7 @@ class Simulation:
                 self._given["mass"] == "consistent",
                 self.spec.u_degree,
                 nonfinite,
+                self._newton.where_it_failed(),
             )
         self.refresh_material(tangent=False)  # the converged iterate's, for reactions and history
         reactions = self.conditions.reactions(self._internal_force(R))
