@@ -704,7 +704,8 @@ def test_a_run_ends_its_steps_on_its_schedule_so_a_load_switches_where_asked():
 
 def test_a_failed_step_names_where_it_is_out_of_balance_and_what_ran_away():
     """The stop message says where: the node of largest out-of-balance force and the
-    node the last iterate moved most, with how far.
+    node the last iterate moved most, with how far; and it quotes the forces in play
+    at the closest iterate.
 
     A cantilever 4 × 1 m clamped at x = 0, pulled down hard at its free end, Newton
     cut off after one iteration: the free end moved most. Until 2026-12-06 the message
@@ -732,3 +733,11 @@ def test_a_failed_step_names_where_it_is_out_of_balance_and_what_ran_away():
     assert float(moved.group(1)) == 4.0
     assert float(moved.group(3)) > 1.0  # pulled far out of the linear range
     assert re.search(r"largest out-of-balance force, [\d.e+-]+, acts at x = \[", message)
+    # The force scale quoted is the closest iterate's (here the start's, whose ‖R‖ is
+    # the load), not the diverged last one's (until 2026-12-06: 47 times larger).
+    history = re.search(
+        r"history: \[([\d.e+-]+), ([\d.e+-]+)\] against the force scale ([\d.e+-]+)", message
+    )
+    assert history is not None, message
+    first, last, scale = (float(history.group(k)) for k in (1, 2, 3))
+    assert last > 10 * first and scale == first
