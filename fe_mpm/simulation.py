@@ -16,7 +16,6 @@ the module that owns its state:
 
 from __future__ import annotations
 
-import math
 import os
 import time
 from collections.abc import Callable, Sequence
@@ -88,31 +87,6 @@ from fe_mpm.walls import RigidWalls, write_wall_forces
 END_OF_RUN = 1e-12
 #: A last step shorter than this fraction of the nominal step is merged into the one before.
 MERGE_LAST_STEP = 1e-9
-#: A step's end this close to one of the run's nominal step ends, as a fraction of the
-#: nominal step, is put on it (:func:`on_the_schedule`).
-ON_SCHEDULE = 1e-9
-
-
-def on_the_schedule(t: float, t_start: float, t_end: float, n_steps: int) -> float:
-    """``t``, or the nominal step end ``t_start + k (t_end − t_start) / n_steps`` it rounds to.
-
-    Summing step lengths drifts by round-off (ten steps of 0.1 end at
-    0.30000000000000004 after three), which moves a load that switches at t = 0.3 by a
-    whole step; the schedule's own times do not drift. A schedule time within a few
-    units in the last place of a short decimal (0.3 / 3 = 0.09999999999999999) is
-    that decimal, the number a script compares t with.
-    """
-    span = t_end - t_start
-    k = round((t - t_start) / span * n_steps)
-    if abs(t - t_start - k * span / n_steps) > ON_SCHEDULE * span / n_steps:
-        return t  # a cut step's end, between the nominal ones
-    if k == n_steps:
-        return t_end
-    scheduled = t_start + span * k / n_steps
-    decimal = float(f"{scheduled:.15g}")
-    return decimal if abs(decimal - scheduled) <= 4 * math.ulp(scheduled) else scheduled
-
-
 #: ``min_step`` when none is given: this fraction of the nominal step.
 DEFAULT_MIN_STEP = 1 / 1024
 
@@ -919,7 +893,7 @@ class Simulation:
         """
         n_steps = check_int("Simulation.run", "n_steps", n_steps, lo=1)
         check_range("Simulation.run", "t_end", t_end, lo=self.t, lo_open=True)
-        t_start, nominal = self.t, (t_end - self.t) / n_steps
+        nominal = (t_end - self.t) / n_steps
         floor = DEFAULT_MIN_STEP * nominal if self.min_step is None else self.min_step
         length = StepLength(nominal, floor, self._failure_advice)
         can_hold = not self.dynamic and self.domains is None  # pieces differ per attempt
@@ -927,7 +901,7 @@ class Simulation:
         before = self.newton_iterations_total
         try:
             while t_end - self.t > END_OF_RUN * nominal:
-                t_new = on_the_schedule(min(self.t + length.dt, t_end), t_start, t_end, n_steps)
+                t_new = min(self.t + length.dt, t_end)
                 if t_end - t_new < MERGE_LAST_STEP * nominal:
                     t_new = t_end
                 started = time.perf_counter()

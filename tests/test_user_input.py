@@ -670,38 +670,6 @@ def test_a_static_standard_run_warns_once_when_its_points_cross_cells(options, w
         assert "point_domains=True" in said[0]
 
 
-def test_a_run_ends_its_steps_on_its_schedule_so_a_load_switches_where_asked():
-    """Ten steps of 0.1 end at 0.1, 0.2, 0.3, … exactly, not at sums of 0.1.
-
-    A load that doubles after t = 0.3 doubles in step 4: until 2026-12-06 step 3 ended
-    at 0.30000000000000004, so the body carried the doubled load a step early. A
-    second run from t = 0.3 keeps to its own schedule (0.45, 0.6, …) as well.
-    """
-    seen = []
-
-    def scale(t):
-        seen.append(t)
-        return 1.0 if t <= 0.3 else 2.0
-
-    mesh = _mesh()
-    sim = fe_mpm.Simulation(
-        mesh,
-        fe_mpm.seed(mesh, 1, density=RHO),
-        fe_mpm.NeoHookean(1e7, 0.3, RHO),
-        "u",
-        dirichlet=[_base()],
-        body_force=(0.0, -G),
-        body_force_scale=scale,
-        reactions={"base": lambda x: np.isclose(x[1], 0.0)},
-    )
-    reports = sim.run(0.3, 3, progress=False)
-    reports += sim.run(1.2, 6, progress=False)
-    weight = RHO * G * 1.0
-    assert [r.t for r in reports] == [0.1, 0.2, 0.3, 0.45, 0.6, 0.75, 0.9, 1.05, 1.2]
-    pushes = [r.reactions["base"][1] / weight for r in reports]
-    assert np.allclose(pushes, [1.0] * 3 + [2.0] * 6, rtol=1e-9)
-
-
 def test_a_failed_step_names_where_it_is_out_of_balance_and_what_ran_away():
     """The stop message says where: the node of largest out-of-balance force and the
     node the last iterate moved most, with how far; and it quotes the forces in play
