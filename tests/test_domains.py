@@ -295,10 +295,11 @@ def test_a_block_squeezed_to_half_its_length_keeps_the_exact_platen_force(
     )
     reports = sim.run(1.0, steps, progress=False)
     # Every step runs, but how many get cut moves with round-off: the J2 block's last
-    # step ran uncut from t = 0.8999999999999999 and was cut once from t = 0.9 (step
-    # ends put on their schedule, 2026-12-06; backtracking stalls at 60 % of the
-    # force scale, full steps turn a point inside out). So the forces of every step
-    # taken are what is asserted, and at most one cut.
+    # step runs uncut from t = 0.8999999999999999 (the sum of nine steps of 0.1) and
+    # was cut once from t = 0.9 (tried 2026-12-06 with step ends put on the run's
+    # schedule; backtracking stalled at 60 % of the force scale, full steps turned a
+    # point inside out). So the forces of every step taken are what is asserted, and
+    # at most one cut.
     assert reports[-1].t == 1.0 and len(reports) <= steps + 1
     for report in reports:
         exact = scenes.platen_force_exact(law, 1.0 - 0.5 * report.t, dim, formulation)
