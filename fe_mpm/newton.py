@@ -408,8 +408,8 @@ class NewtonSolver:
         """Where the last iterate is furthest from balance and where it moved the grid most.
 
         In words, for a failed solve's message (collective): the displacement row of
-        largest |R| at the last residual, and the one of largest |Δu|, each with its
-        node's place. Newton that fails on a few nodes a sparsely filled cell barely
+        largest magnitude of the last residual, and that of the last increment Δu,
+        each with its node's place. Newton that fails on a few nodes a sparsely filled cell barely
         holds runs them away by metres (a punch in sand, 2026-12-06: one node moved
         16.6 m where the rest moved millimetres), and neither the residual history nor
         a hinge check says which.
