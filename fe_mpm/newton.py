@@ -396,12 +396,16 @@ class NewtonSolver:
         count = comm.allreduce(int(rows.size))
         if count == 0:
             return False
+        total = comm.allreduce(int(owned))
         places = parallel.gathered(comm, _places_of_rows(self.u.function_space, rows[:1]).ravel())
         first = places.reshape(-1, 3)[0] if places.size else np.full(3, np.nan)
-        self.nonfinite = (
-            f"the {what} held NaN or inf in {count} row{'' if count == 1 else 's'} "
-            f"(first near x = {np.round(first, 6).tolist()}), {cause}"
+        # Spread over most rows (a non-finite update), the first row's place is any place.
+        where = (
+            f"first near x = {np.round(first, 6).tolist()}"
+            if count <= total // 2
+            else "most of them: the place where it began is lost"
         )
+        self.nonfinite = f"the {what} held NaN or inf in {count} of {total} rows ({where}), {cause}"
         return True
 
     def where_it_failed(self) -> str:

@@ -294,3 +294,20 @@ def test_a_step_that_ends_on_a_non_finite_residual_quotes_the_last_finite_force_
         sim.run(1.0, 1, progress=False)
     scale = float(re.search(r"against the force scale ([0-9.e+-]+)", str(info.value))[1])
     assert scale > 0.0
+
+
+def test_a_nan_in_most_rows_is_not_placed_at_its_first_row():
+    """NaN in a few rows is placed at the first one's node; NaN in most rows (a
+    non-finite update spread by the linear solve) is not, since the first row is then
+    any row: a slope past failure named the grid's corner, far from its slip
+    (a helper, 2026-12-06). Both say how many rows of how many."""
+    sim, _ = _block(fe_mpm.NeoHookean(1e7, 0.3, RHO))
+    sim.step(1.0)
+    solver = sim._newton
+    total = solver.x.getLocalSize()
+    assert solver._note_nonfinite("residual", np.array([4]), "a cause")
+    assert re.search(rf"in 1 of {total} rows \(first near x = \[", solver.nonfinite)
+    assert solver._note_nonfinite("residual", np.arange(total), "a cause")
+    assert f"in {total} of {total} rows (most of them: the place where it began is lost)" in (
+        solver.nonfinite
+    )
