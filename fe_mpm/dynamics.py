@@ -189,7 +189,11 @@ class NewmarkDynamics:
             ksp.setOperators(M)
             ksp.setOptionsPrefix(self.PREFIX)
             with_petsc_options(self.PREFIX, self._solver_options, ksp.setFromOptions)
-            ksp.solve(rhs.x.petsc_vec, a0.x.petsc_vec)
+            with_petsc_options(  # the preconditioner's set-up reads options too
+                self.PREFIX,
+                self._solver_options,
+                lambda: ksp.solve(rhs.x.petsc_vec, a0.x.petsc_vec),
+            )
             if ksp.getConvergedReason() < 0:
                 raise ConvergenceError(
                     "step 1: the mass system of the initial acceleration did not converge "

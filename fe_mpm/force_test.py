@@ -69,8 +69,8 @@ class NewtonResult:
         reason: Why the solve ended, in words (e.g. ``"‖R‖ = 3.1e-12 of the force
             scale 1.234e+03"``), or PETSc's reason when it failed.
         residual_norms: ‖R‖ at each iterate (displacement and pressure rows).
-        force_scale: The forces in play at the last iterate whose forces were finite,
-            S (N; N/m in 2D).
+        force_scale: The forces in play, S (N; N/m in 2D): at the passing iterate of a
+            converged solve, at the iterate of smallest ‖R‖ of a failed one.
         tolerance: The largest ‖R‖ accepted at that scale (N).
         attempts: The line searches of the solves joined in ``residual_norms``, and
             how many of its entries each gave (:meth:`RetryLadder.solve` joins them);
@@ -87,7 +87,10 @@ class NewtonResult:
 
     @property
     def relative_residual(self) -> float:
-        """The last ‖R‖ over the force scale (inf when there are no forces)."""
+        """The last ‖R‖ over the force scale (inf when there are no forces).
+
+        Of a failed solve, over the scale of its closest iterate, not its last.
+        """
         final = self.residual_norms[-1] if self.residual_norms else np.inf
         return final / self.force_scale if self.force_scale > 0 else np.inf
 
@@ -177,12 +180,14 @@ class ForceTest:
         """SNES's convergence test: a ``PETSc.SNES.ConvergedReason`` for iterate ``it``."""
         _, _, fnorm = norms
         Reason = PETSc.SNES.ConvergedReason
+        if it == 0:  # a new solve, whether or not its start is finite
+            self.closest = (np.inf, 0.0)
         # Non-finite forces only in supported rows leave fnorm finite (the conditions
         # overwrite those rows): the reactions are not finite, so neither is the iterate.
         if not (np.isfinite(fnorm) and np.isfinite(self.internal)):
             self.verdict = "non-finite residual"
             return Reason.DIVERGED_FUNCTION_NANORINF
-        if it == 0 or fnorm < self.closest[0]:
+        if fnorm < self.closest[0]:
             self.closest = (fnorm, self.scale)
         pressure_ok = self.pressure_norm <= max(self.rtol, PRESSURE_ROUND_OFF) * self.volume
         if self.displacement_norm <= self.tolerance and pressure_ok:

@@ -262,9 +262,9 @@ class NewtonSolver:
         """The configured SNES line-search type (e.g. ``"basic"``)."""
         return self.snes.getLineSearch().getType()
 
-    def _with_options(self, configure) -> None:
-        """Call ``configure()`` with this solver's options in PETSc's database, then remove them."""
-        with_petsc_options(self._prefix, self._options, configure)
+    def _with_options(self, act) -> None:
+        """Call ``act()`` with this solver's options in PETSc's database, then restore it."""
+        with_petsc_options(self._prefix, self._options, act)
 
     def _fresh_ksp(self) -> None:
         """Give SNES a new linear solver, so no set-up survives from an older active set."""
@@ -412,11 +412,11 @@ class NewtonSolver:
         """Where the last iterate is furthest from balance and where it moved the grid most.
 
         In words, for a failed solve's message (collective): the displacement row of
-        largest magnitude of the last residual, and that of the last increment Δu,
-        each with its node's place. Newton that fails on a few nodes a sparsely filled cell barely
-        holds runs them away by metres (a punch in sand, 2026-12-06: one node moved
-        16.6 m where the rest moved millimetres), and neither the residual history nor
-        a hinge check says which.
+        largest magnitude of the last residual, and that of the last increment Δu
+        (one component each, not a node's vector), each with its node's place. Newton
+        that fails on a few nodes a sparsely filled cell barely holds runs them away by
+        metres (a punch in sand, 2026-12-06: one node moved 16.6 m where the rest moved
+        millimetres), and neither the residual history nor a hinge check says which.
         """
         comm = self.A.comm.tompi4py()
         found = []
@@ -437,9 +437,12 @@ class NewtonSolver:
             if np.isfinite(force)
             else ""
         )
+        if not np.isfinite(move):
+            return f"At the last iterate {balance}the grid's move was not finite at x = {at_move}. "
         return (
             f"At the last iterate {balance}the grid moved most at x = {at_move}, by "
-            f"{move:.3e} m ({move / self.test.length:.3g} times the grid's largest cell). "
+            f"{move:.3e} m along an axis ({move / self.test.length:.3g} times the grid's "
+            "largest cell). "
         )
 
     def _round_off(self, A: PETSc.Mat) -> float:
@@ -511,6 +514,7 @@ class NewtonSolver:
         self.test.loads = self._norm(self._loads.array_r[self._u_rows])
         self.test.volume = float(pressure_volume)
         self.test.verdict, self.test.passed = "", False
+        self.test.finite_internal = 0.0  # this solve's, not the last one's
         dolfinx.fem.petsc.assign(self.u, self.x)
         search = self.snes.getLineSearch()
         configured = search.getType()
@@ -518,7 +522,8 @@ class NewtonSolver:
             search.setType(line_search)
         t0 = time.perf_counter()
         try:
-            self.snes.solve(None, self.x)
+            # Under the options: the preconditioner's set-up reads some of them.
+            self._with_options(lambda: self.snes.solve(None, self.x))
         finally:
             search.setType(configured)
             self.iterations_total += self.snes.getIterationNumber()

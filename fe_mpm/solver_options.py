@@ -74,22 +74,25 @@ LINEAR_SOLVERS = {
 }
 
 
-def with_petsc_options(prefix: str, options: dict, configure) -> None:
-    """Call ``configure()`` with ``options`` under ``prefix`` in PETSc's database, then restore it.
+def with_petsc_options(prefix: str, options: dict, act) -> None:
+    """Call ``act()`` with ``options`` under ``prefix`` in PETSc's database, then restore it.
 
-    ``configure`` is e.g. ``ksp.setFromOptions``; putting the database back as it was
+    ``act`` is e.g. ``ksp.setFromOptions``, or a solve: PETSc reads some options only
+    when a solve sets its preconditioner up (a field split's inner solvers, MUMPS's
+    ICNTL), so solves run under the options too. Putting the database back as it was
     afterwards (each name removed, or given back the value it held before, e.g. from
-    the command line) means that no solver ever sees another's options.
+    the command line) means that no solver ever sees another's options. A key may
+    start with ``-``, as on PETSc's command line.
     """
     opts = PETSc.Options()
     # Full names throughout: PETSc's prefixPush applies to setting a value but not to
     # clearing one, so options set under a pushed prefix could not be removed.
-    names = {f"{prefix}{key}": value for key, value in options.items()}
+    names = {f"{prefix}{key.lstrip('-')}": value for key, value in options.items()}
     before = {name: opts.getString(name) for name in names if opts.hasName(name)}
-    for name, value in names.items():
-        opts[name] = value
     try:
-        configure()
+        for name, value in names.items():
+            opts[name] = value
+        act()
     finally:
         for name in names:
             if name in before:

@@ -311,3 +311,22 @@ def test_a_nan_in_most_rows_is_not_placed_at_its_first_row():
     assert f"in {total} of {total} rows (most of them: the place where it began is lost)" in (
         solver.nonfinite
     )
+
+
+def test_a_failed_solve_quotes_its_own_force_scale_even_from_a_non_finite_start():
+    """The scale a failed solve quotes is its closest iterate's, reset at each solve's
+    iterate 0 even when that iterate is not finite (a reviewer's case: solve 2 quoted
+    solve 1's scale)."""
+    test = ForceTest(rtol=1e-8, atol=0.0, max_it=5, length=1.0)
+    test.loads = 5e3
+    test.record_internal(0.0)
+    test.displacement_norm = 5e3
+    test(None, 0, (0.0, 0.0, 5e3))
+    test.record_internal(1e9)
+    test.displacement_norm = 1e9
+    test(None, 5, (0.0, 0.0, 1e9))  # diverged: the closest is iterate 0
+    assert test.reported_scale == 5e3
+    test.loads, test.finite_internal = 1e6, 0.0  # the next solve, as NewtonSolver.solve
+    test.record_internal(np.nan)
+    test(None, 0, (0.0, 0.0, np.nan))
+    assert test.reported_scale == 1e6
