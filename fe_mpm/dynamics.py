@@ -188,12 +188,12 @@ class NewmarkDynamics:
         try:
             ksp.setOperators(M)
             ksp.setOptionsPrefix(self.PREFIX)
-            with_petsc_options(self.PREFIX, self._solver_options, ksp.setFromOptions)
-            with_petsc_options(  # the preconditioner's set-up reads options too
-                self.PREFIX,
-                self._solver_options,
-                lambda: ksp.solve(rhs.x.petsc_vec, a0.x.petsc_vec),
-            )
+
+            def configure_and_solve() -> None:  # the preconditioner's set-up reads options too
+                ksp.setFromOptions()
+                ksp.solve(rhs.x.petsc_vec, a0.x.petsc_vec)
+
+            with_petsc_options(self.PREFIX, self._solver_options, configure_and_solve)
             if ksp.getConvergedReason() < 0:
                 raise ConvergenceError(
                     "step 1: the mass system of the initial acceleration did not converge "

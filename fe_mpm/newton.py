@@ -58,11 +58,11 @@ def _weak(method: Callable) -> Callable:
     return call
 
 
-def _places_of_rows(W: dolfinx.fem.FunctionSpace, rows: np.ndarray) -> np.ndarray:
-    """Coordinates (k, 3) of the nodes of local rows ``rows`` of an unknown on ``W``.
+def _row_places(W: dolfinx.fem.FunctionSpace) -> np.ndarray:
+    """Coordinates (k, 3) of the node of every local row of an unknown on ``W``.
 
     Unrolled rows (a blocked or mixed unknown's), as PETSc numbers them. Collective
-    (collapsing a subspace is), so every rank calls it, with no rows or some.
+    (collapsing a subspace is), so every rank calls it.
     """
     size = W.dofmap.index_map.size_local + W.dofmap.index_map.num_ghosts
     places = np.full((size * W.dofmap.index_map_bs, 3), np.nan)
@@ -72,7 +72,17 @@ def _places_of_rows(W: dolfinx.fem.FunctionSpace, rows: np.ndarray) -> np.ndarra
         coordinates = V.tabulate_dof_coordinates()
         per_node = max(1, dofs.size // max(1, coordinates.shape[0]))
         places[dofs] = coordinates[np.arange(dofs.size) // per_node]
-    return places[rows]
+    return places
+
+
+def _gathered_place(comm, places: np.ndarray, rows: np.ndarray) -> list[float]:
+    """The place (3,) of the first of ``rows`` on the first rank with one, on every rank.
+
+    Collective; rounded to 1e-6 m; NaN where no rank has a row.
+    """
+    gathered = parallel.gathered(comm, places[rows[:1]].ravel())
+    first = gathered.reshape(-1, 3)[0] if gathered.size else np.full(3, np.nan)
+    return (np.round(first, 6) + 0.0).tolist()  # + 0.0: no "-0.0"
 
 
 class NewtonSolver:
@@ -315,11 +325,12 @@ class NewtonSolver:
             if self._ghost is not None:  # its part of the lifting, G (g − x) on the bc dofs
                 self._ghost.full.multAdd(self._gap, b, b)
         fem_petsc.set_bc(b, self._bcs, x, -1.0)
-        bad = np.flatnonzero(~np.isfinite(b.array_r))
-        if not self.nonfinite and parallel.any_rank(self.A.comm.tompi4py(), bad.size > 0):
-            self._note_nonfinite(
-                "residual", bad, "an iterate turned a point inside out, or a law failed there"
-            )
+        if not self.nonfinite:  # the same on every rank: set collectively
+            bad = np.flatnonzero(~np.isfinite(b.array_r))
+            if parallel.any_rank(self.A.comm.tompi4py(), bad.size > 0):
+                self._note_nonfinite(
+                    "residual", bad, "an iterate turned a point inside out, or a law failed there"
+                )
         self.test.displacement_norm = self._norm(b.array_r[rows])
         self.test.pressure_norm = self._norm(b.array_r[self._p_rows])
         self._add_time("assembly", t0)
@@ -397,11 +408,10 @@ class NewtonSolver:
         if count == 0:
             return False
         total = comm.allreduce(int(owned))
-        places = parallel.gathered(comm, _places_of_rows(self.u.function_space, rows[:1]).ravel())
-        first = places.reshape(-1, 3)[0] if places.size else np.full(3, np.nan)
+        first = _gathered_place(comm, _row_places(self.u.function_space), rows)
         # Spread over most rows (a non-finite update), the first row's place is any place.
         where = (
-            f"first near x = {np.round(first, 6).tolist()}"
+            f"first near x = {first}"
             if count <= total // 2
             else "most of them: the place where it began is lost"
         )
@@ -419,7 +429,7 @@ class NewtonSolver:
         millimetres), and neither the residual history nor a hinge check says which.
         """
         comm = self.A.comm.tompi4py()
-        found = []
+        places, found = _row_places(self.u.function_space), []
         for vector in (self.b, self.x):
             values = np.abs(vector.array_r[self._u_rows])
             values[~np.isfinite(values)] = np.inf
@@ -428,8 +438,7 @@ class NewtonSolver:
                 (float(values[k]) if k >= 0 else -1.0, comm.rank), op=MPI.MAXLOC
             )
             rows = self._u_rows[[k]] if comm.rank == owner and k >= 0 else self._u_rows[:0]
-            place = parallel.gathered(comm, _places_of_rows(self.u.function_space, rows).ravel())
-            found.append((largest, (np.round(place.reshape(-1, 3)[0], 6) + 0.0).tolist()))
+            found.append((largest, _gathered_place(comm, places, rows)))
         (force, at_force), (move, at_move) = found
         # A residual that is not finite (a line-search trial) is named by `nonfinite`.
         balance = (
