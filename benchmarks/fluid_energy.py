@@ -11,9 +11,10 @@
 # water in a tank evolves where it should stay constant, apart from Bossak's
 # dissipation of the highest frequencies. It measures a defect of standard MPM on
 # fluids: a fluid under pressure gains energy as its points cross cells
-# (`--usual-pressure`), and what `fe_mpm.pressure_by_parts` (the default for a
-# fluid in u-p and in `--formulation u-nbva`) leaves of it. The numbers are in
-# `docs/limitations.md`.
+# (`--usual-pressure`), what `fe_mpm.pressure_by_parts` (the default for a
+# fluid in u-p and in `--formulation u-nbva`) leaves of it, and what point domains
+# (`--point-domains`, `Simulation(point_domains=True)`, the pressure's usual form)
+# leave. The numbers are in `docs/limitations.md`.
 #
 # **Scenes** (water, ρ₀ = 1000 kg/m³, K = 2 GPa, μ_v = 1e-3 Pa·s, `NewtonianFluid`;
 # a tank 1 m wide, slip walls; u-p without PPP, lumped mass, Bossak −0.3;
@@ -35,8 +36,8 @@
 #
 # Usage: `./run python benchmarks/fluid_energy.py --scene closed|open|slosh
 # [--n 40] [--t-end 1] [--dt 0.01] [--formulation up] [--gravity 9.81]
-# [--usual-pressure]`; `--plot docs/fluid_energy.png` runs all three scenes both ways
-# and plots the energies against time.
+# [--usual-pressure | --point-domains]`; `--plot docs/fluid_energy.png` runs all
+# three scenes the three ways and plots the energies against time.
 
 # +
 import argparse
@@ -53,10 +54,15 @@ RHO, K, VISCOSITY = 1000.0, 2.0e9, 1.0e-3
 WIDTH, DEPTH, SWIRL, AMPLITUDE = 1.0, 0.5, 0.05, 0.01
 
 
+#: The three ways of a run: the pressure's usual form, by parts (the default), and
+#: point domains (with the usual form: the two do not combine).
+WAYS = {"usual form": False, "by parts (default)": None, "point domains": "domains"}
+
+
 def build(
-    scene: str, n: int, gravity: float, formulation: str, by_parts: bool | None = None
+    scene: str, n: int, gravity: float, formulation: str, by_parts: bool | None | str = None
 ) -> fe_mpm.Simulation:
-    """The tank, its water and the simulation of one scene."""
+    """The tank, its water and the simulation of one scene (``by_parts``: one of :data:`WAYS`)."""
     h = WIDTH / n
     top = DEPTH if scene == "closed" else DEPTH + 0.1
     mesh = rectangle_mesh((0.0, 0.0), (WIDTH, top), (n, round(top / h)))
@@ -92,7 +98,8 @@ def build(
         dynamic=True,
         mass="lumped",
         bossak_alpha=-0.3,
-        pressure_by_parts=by_parts,
+        pressure_by_parts=None if by_parts == "domains" else by_parts,
+        point_domains=by_parts == "domains",
     )
 
 
@@ -113,7 +120,7 @@ def history(
     sim = build(scene, n, gravity, formulation, by_parts)
     start = energy(sim, scene, gravity)
     steps = round(t_end / dt)
-    form = "usual form" if by_parts is False else "by parts"
+    form = next(name for name, way in WAYS.items() if way == by_parts)
     print(f"{scene}, {form}: {len(sim.points)} points, n = {n}, Δt = {dt} s")
     print("     t   E/E0   fastest (m/s)   points per occupied cell")
     wall = time.perf_counter()
@@ -140,7 +147,7 @@ def history(
 
 
 def plot(curves: dict, path: str) -> None:
-    """E/E0 against t, one panel per scene, both forms of the pressure's force."""
+    """E/E0 against t, one panel per scene, one curve per way of :data:`WAYS`."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -153,10 +160,9 @@ def plot(curves: dict, path: str) -> None:
     }
     fig, axes = plt.subplots(1, len(titles), figsize=(13, 3.8))
     for ax, scene in zip(axes, titles, strict=True):
-        for (name, by_parts), (t, e) in curves.items():
+        for (name, way), (t, e) in curves.items():
             if name == scene:
-                label = "usual form" if by_parts is False else "by parts (default)"
-                ax.semilogy(t, np.abs(e), label=label)
+                ax.semilogy(t, np.abs(e), label=way)
         ax.axhline(1.0, color="grey", lw=0.8)
         ax.set_title(titles[scene])
         ax.set_xlabel("t (s)")
@@ -182,20 +188,28 @@ def main() -> None:
         help="the pressure's force in the usual form only (pressure_by_parts=False)",
     )
     parser.add_argument(
-        "--plot", metavar="PNG", help="run all three scenes both ways and plot E/E0 against t"
+        "--point-domains",
+        action="store_true",
+        help="point domains (point_domains=True), with the pressure's usual form",
+    )
+    parser.add_argument(
+        "--plot", metavar="PNG", help="run all three scenes the three ways; plot E/E0 against t"
     )
     args = parser.parse_args()
     warnings.simplefilter("ignore")
     options = (args.n, args.t_end, args.dt, args.gravity, args.formulation)
     if args.plot:
         curves = {
-            (scene, by_parts): history(scene, *options, by_parts)
+            (scene, way): history(scene, *options, by_parts)
             for scene in ("closed", "open", "slosh")
-            for by_parts in (False, None)
+            for way, by_parts in WAYS.items()
         }
         plot(curves, args.plot)
         return
-    history(args.scene, *options, False if args.usual_pressure else None)
+    if args.usual_pressure and args.point_domains:
+        parser.error("--usual-pressure and --point-domains: choose one")
+    way = "domains" if args.point_domains else (False if args.usual_pressure else None)
+    history(args.scene, *options, way)
     if args.scene == "slosh":
         k = math.pi / WIDTH
         period = 2 * math.pi / math.sqrt(args.gravity * k * math.tanh(k * DEPTH))

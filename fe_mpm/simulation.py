@@ -462,6 +462,7 @@ class Simulation:
                 self.spec.volume_average,
                 self._shared,
                 keeps_mean_increment(self.spec.u_degree, most),
+                keeps_no_shape=self._volume_of_pressure or self._volume_of_average,
             )
             if initial_stress is not None:
                 # The domains moved the points and carried their stress, affine in each

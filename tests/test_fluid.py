@@ -395,6 +395,44 @@ def test_a_vortex_under_its_own_pressure_keeps_its_energy_with_the_pressure_by_p
     assert vortex_energy(closed=False, by_parts=False) > 10.0
 
 
+@pytest.mark.parametrize("formulation", ["up", "u-nbva"])
+def test_a_fluid_point_keeps_no_shape_with_point_domains(formulation):
+    """With point domains a fluid point takes its pieces' volume change, and the
+    isotropic F of it, as it does without domains (:mod:`fe_mpm.materials.fluid`).
+    Until 2026-12-07 it kept its corners' map in u-p: its det F left the 1 − p/K of
+    its pressure by 1.7e-3 after two steps of this slosh (10 cells across), and on 20
+    cells by 0.54 by t = 1 s, when the surface blew up (E/E₀ = −14; on 40 cells
+    Newton failed at t = 0.36 s). Measured now: J = 1 − p/K to 4e-16 (u-p), F
+    isotropic to 1e-16."""
+    mesh = rectangle_mesh((0.0, 0.0), (1.0, 0.6), (10, 6))
+    points = fe_mpm.seed(
+        mesh, 6, density=1000.0, level_set=lambda x: 0.5 + 0.01 * np.cos(np.pi * x[0]) - x[1]
+    )
+    water = fe_mpm.NewtonianFluid(2.0e9, 1.0e-3, shear_scale=9.81e3, density=1000.0)
+    sim = fe_mpm.Simulation(
+        mesh,
+        points,
+        water,
+        formulation,
+        dirichlet=[
+            fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0) | np.isclose(x[0], 1.0), component=0),
+            fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0), component=1),
+        ],
+        body_force=(0.0, -9.81),
+        dynamic=True,
+        mass="lumped",
+        point_domains=True,
+    )
+    sim.run(0.02, 2, progress=False)
+    F = sim.points.F
+    J = np.linalg.det(F)
+    assert np.abs(F[:, 0, 1]).max() < 1e-14 and np.abs(F[:, 0, 0] - F[:, 1, 1]).max() < 1e-14
+    assert np.allclose(sim.points.volume, J * sim.points.mass / 1000.0, rtol=1e-13, atol=0)
+    if formulation == "up":
+        pressure_J = 1.0 + np.trace(sim.points.stress, axis1=1, axis2=2) / (3.0 * 2.0e9)
+        assert np.abs(J - pressure_J).max() < 1e-12
+
+
 def test_water_in_node_based_averaging_keeps_the_averaged_volume_and_its_energy(monkeypatch):
     """NB-VA (``u-nbva``) has no pressure field: a fluid point's pressure is the law's
     at its volume, and left to itself each point's volume drifts from its

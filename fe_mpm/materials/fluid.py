@@ -25,10 +25,12 @@ drain, measured: 0.62 of m/ρ after 1 s, single points compressed to J ≈ 0), a
 water at rest churns. So after every step a fluid point keeps the isotropic
 F = J^{1/g} I of its pressure, and its volume V₀ J (``keeps_shape = False``,
 :func:`fe_mpm.point_update.keep_volume_of_pressure`); its stress needs no more (the
-viscous term reads the step's ΔF). With point domains the points keep their corners'
-map instead (not measured for fluids). NB-VA (``"u-nbva"``) has no pressure field:
-there a fluid point keeps the isotropic F of the points' volume changes averaged at
-its place, their det F projected onto the nodes mass weighted and read back
+viscous term reads the step's ΔF). With point domains the same holds, each point
+taking its pieces' mean J (until 2026-12-07 it kept its corners' map: a slosh's
+points' det F left their pressure's by 0.4 % in 0.3 s and its surface blew up).
+NB-VA (``"u-nbva"``) has no pressure field: there a fluid point keeps the
+isotropic F of the points' volume changes averaged at its place, their det F
+projected onto the nodes mass weighted and read back
 (:func:`fe_mpm.point_update.volume_of_average`), so that its pressure, the law's at
 that volume, is as smooth as a field. Measured 2026-12-05: with each point's own
 volume a vortex under gravity in a closed tank gained 193 times its energy in 0.5 s
@@ -38,7 +40,8 @@ usual form; 230 000 times on 20 cells with the starting pressure by parts,
 average and the starting pressure by parts (:mod:`fe_mpm.pressure_by_parts`) the
 vortex keeps its energy (1.000 after 0.5 s; 0.996 on 20 cells) and the dam break
 passes its check. With point domains in NB-VA the pieces take the averaged volume
-and their points keep their corners' shape with it (no pressure by parts then):
+and their points keep it (no pressure by parts then; until 2026-12-07 with their
+corners' shape):
 water at rest 0.79 % of ρ g h₀ off hydrostatic at 4e-6 m/s after 100 steps, the
 20-cell closed vortex 0.79 of its energy after 0.5 s (u-p with domains 1.07; `/tmp`
 scripts around ``tests/test_fluid.py``'s scenes, 2026-12-05).
