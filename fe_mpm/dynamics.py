@@ -10,6 +10,7 @@ terms and the scheme are in :mod:`fe_mpm.forms.inertia`.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 
 from petsc4py import PETSc
@@ -234,6 +235,28 @@ class NewmarkDynamics:
             residual_at_rest, mass_matrix, layout, constrained, bary, preload
         )
         self.project(layout.cell, bary, points.mass, points.velocity, points.acceleration, dt)
+
+    def inertia_force_norm(self, w: np.ndarray) -> float:
+        """The size of the step's inertia forces at the grid unknown ``w`` (local values), N.
+
+        ``‖m_I ((1 − α_B) a_I + α_B ã_I + α_R v_I)‖`` over the owned nodes, with the
+        nodal masses m_I = Σ_p N_I(x_p) m_p of the step's projection (the row-sum
+        mass) and Newmark's a_{n+1}, v_{n+1} of the increment Δu in ``w``: the inertia
+        term of the residual with the lumped mass, a measure of its size with the
+        consistent one (N; N/m in 2D). Collective.
+        """
+        d, space = self.data, self.space
+        g = space.dofmap.index_map_bs
+        nodes = space.dofmap.index_map.size_local
+        du = w[self.u_dofs][: nodes * g].reshape(nodes, g)
+        v0 = d.v_n.x.array[: nodes * g].reshape(nodes, g)
+        a0 = d.a_n.x.array[: nodes * g].reshape(nodes, g)
+        a = float(d.c_a.value) * du - float(d.c_av.value) * v0 - float(d.c_aa.value) * a0
+        v = float(d.c_v.value) * du + float(d.c_vv.value) * v0 + float(d.c_va.value) * a0
+        alpha, damping = float(d.bossak.value), float(d.damping.value)
+        force = self.grid_mass[:nodes, None] * ((1.0 - alpha) * a + alpha * a0 + damping * v)
+        squares = float(np.einsum("ij,ij->", force, force))
+        return math.sqrt(space.mesh.comm.allreduce(squares))
 
     def updated_velocity(
         self,

@@ -194,6 +194,7 @@ class NewtonSolver:
         self._ghost = None
         self._extra_force = None
         self._before_residual: Callable[[], None] | None = None
+        self._inertia: Callable[[], float] | None = None
         self._after_jacobian: Callable[[PETSc.Mat], None] | None = None
         self._before_jacobian: Callable[[], None] | None = None
 
@@ -292,6 +293,9 @@ class NewtonSolver:
         dolfinx.fem.petsc.assign(x, self.u)
         if self._before_residual is not None:
             self._before_residual()  # it reads u (e.g. a return map at this iterate)
+        if self._inertia is not None:
+            inertia = self._inertia()
+            self.test.inertia = inertia if np.isfinite(inertia) else 0.0
         t0 = time.perf_counter()
         with b.localForm() as b_local:
             b_local.set(0.0)
@@ -484,6 +488,7 @@ class NewtonSolver:
         keep_best: bool = False,
         after_jacobian: Callable[[PETSc.Mat], None] | None = None,
         extra_force: PETSc.Vec | None = None,
+        inertia: Callable[[], float] | None = None,
     ) -> NewtonResult:
         """Solve from the current value of ``u``; on return ``u`` holds the last iterate.
 
@@ -500,6 +505,8 @@ class NewtonSolver:
         :mod:`fe_mpm.shared_increment`), the conditions' rows and columns left alone.
         ``extra_force`` is a force of the step that does not depend on Δu, added to
         every residual (the facet terms of :mod:`fe_mpm.pressure_by_parts`).
+        ``inertia()`` (collective) gives the size of the step's inertia forces at
+        the iterate in ``u`` (N), for :class:`ForceTest`'s scale; None in a static step.
 
         With ``pc_type redistribute`` every solve gets a fresh linear solver: the
         constrained dofs it removes change from step to step, but the matrix
@@ -508,6 +515,8 @@ class NewtonSolver:
         self._F, self._J, self._bcs, self._ghost = F, J, bcs, ghost
         self._extra_force = extra_force
         self._before_residual = before_residual
+        self._inertia = inertia
+        self.test.inertia = 0.0
         self._before_jacobian = before_jacobian
         self._after_jacobian = after_jacobian
         if self._options.get("pc_type") == "redistribute":

@@ -527,7 +527,9 @@ def merge(*sets: MaterialPoints) -> MaterialPoints:
 
     Raises:
         ValueError: No sets, sets of different dimensions, some seeded with a density
-            and some without, or sets holding different internal variables.
+            and some without, sets holding different internal variables, or a field of
+            a set with the wrong shape or a non-finite value (named: ``sets[1].velocity``;
+            until 2026-12-07 a velocity set as one vector failed in numpy's concatenate).
     """
     if not sets:
         raise ValueError("merge: no point sets given")
@@ -548,6 +550,9 @@ def merge(*sets: MaterialPoints) -> MaterialPoints:
             "in, or add new points to a running one with Simulation.add_points, which starts "
             "theirs at the law's initial values"
         )
+    for i, s in enumerate(sets):  # a script may have set these after seeding
+        s.check_state("merge", f"sets[{i}].")
+        s.check_motion("merge", f"sets[{i}].")
     history = {name: np.concatenate([s.history[name] for s in sets]) for name in sets[0].history}
     fields = {name: np.concatenate([getattr(s, name) for s in sets]) for name in PER_POINT_FIELDS}
     stepped = [s.simulated_to for s in sets if s.simulated_to is not None]

@@ -443,6 +443,9 @@ class Simulation:
         self._add_time("setup", t0)
         self._track()  # once now, so a bad initial layout fails at set-up
         model_checks.check_distinct_points(self.mesh.comm, points)
+        model_checks.warn_overfull_nodes(
+            self.mesh, points, self.tracker.barycentric(points.x, points.cell), self.tracker.volumes
+        )
         model_checks.check_passes_between_bodies(passes, bossak_alpha, self.mesh, points.cell)
         self.ghost = None
         #: Grid repartitions so far (:meth:`rebalance`).
@@ -1315,6 +1318,8 @@ class Simulation:
         current, pts = self._current, self.points
         volume = self.fields.pressure_volume(current.layout.cell, current.bary, pts.volume)
         hooks = {"loads": current.loads, "pressure_volume": volume}
+        if self.dynamic:
+            hooks["inertia"] = lambda: self.dynamics.inertia_force_norm(self.w.x.array)
         if forms.pointwise or self._shift is not None:
             hooks["before_residual"] = lambda: self.refresh_material(tangent=False)
             hooks["before_jacobian"] = self.refresh_material

@@ -93,8 +93,8 @@ def test_gravity_block_runs_four_steps_and_carries_its_weight(law, formulation, 
 def test_force_test_verdicts():
     """The verdicts of the test on its own: at iteration 0 a residual below 1e-10 of
     the forces passes (a step that starts in equilibrium), above it Newton goes on;
-    the pressure rows must pass too; NaN (in ‖R‖ or in the forces of supported rows)
-    and the iteration limit fail."""
+    the pressure rows must pass too; NaN (in ‖R‖ or in the forces of supported rows),
+    a floor that is not finite and the iteration limit fail."""
     Reason = PETSc.SNES.ConvergedReason
     test = ForceTest(rtol=1e-10, atol=0.0, max_it=25, length=1.0)
     test.loads = 100.0
@@ -121,6 +121,11 @@ def test_force_test_verdicts():
     assert empty(None, 0, (0.0, 0.0, 0.0)) == Reason.CONVERGED_FNORM_ABS
     empty.displacement_norm = 1e-300
     assert empty(None, 0, (0.0, 0.0, 1e-300)) == Reason.ITERATING
+    # An overflowing tangent puts the round-off floor at inf, which accepted any
+    # iterate until 2026-12-07 (a dynamic step of 1e-100 s, "within the floor inf N").
+    empty.round_off, empty.passed = np.inf, False
+    assert empty(None, 0, (0.0, 0.0, 1e300)) == Reason.DIVERGED_FUNCTION_NANORINF
+    assert not empty.passed
 
 
 def test_a_residual_grown_past_the_divergence_factor_stops_the_solve():

@@ -43,6 +43,7 @@ The form stays a particle sum and its tangent is the diagonal lumped matrix.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import ufl
@@ -96,8 +97,19 @@ class NewmarkData:
         return newmark_parameters(float(self.bossak.value))[1]
 
     def set_step(self, dt: float) -> None:
-        """Newmark's coefficients for a step of ``dt`` seconds (> 0) at the current α_B."""
+        """Newmark's coefficients for a step of ``dt`` seconds (> 0) at the current α_B.
+
+        Raises:
+            ValueError: A step so short that 1/(β Δt²) is not a finite number (a bare
+                ZeroDivisionError until 2026-12-07).
+        """
         beta, gamma = newmark_parameters(float(self.bossak.value))
+        if not 0.0 < beta * dt**2 < math.inf or not math.isfinite(1.0 / (beta * dt**2)):
+            raise ValueError(
+                f"Simulation: a dynamic step of {dt:.3g} s is too short for Newmark's rule "
+                f"(1/(β Δt²) is not a finite number); take steps of at least "
+                f"{math.sqrt(1.0 / (beta * 1e300)):.0e} s"
+            )
         self.c_a.value = 1.0 / (beta * dt**2)
         self.c_av.value = 1.0 / (beta * dt)
         self.c_aa.value = 0.5 / beta - 1.0
