@@ -75,6 +75,8 @@ class NewmarkDynamics:
             damping=dolfinx.fem.Constant(mesh, float(damping)),
         )
         self.grid_mass: np.ndarray | None = None
+        #: The keys of the options that PETSc has read in the mass solves so far.
+        self.read_options: set[str] = set()
         self._solver_options = {
             **LINEAR_SOLVERS[linear_solver, False],
             **{k: v for k, v in (petsc_options or {}).items() if not k.startswith("snes_")},
@@ -194,7 +196,9 @@ class NewmarkDynamics:
                 ksp.setFromOptions()
                 ksp.solve(rhs.x.petsc_vec, a0.x.petsc_vec)
 
-            with_petsc_options(self.PREFIX, self._solver_options, configure_and_solve)
+            with_petsc_options(
+                self.PREFIX, self._solver_options, configure_and_solve, self.read_options
+            )
             if ksp.getConvergedReason() < 0:
                 raise ConvergenceError(
                     "step 1: the mass system of the initial acceleration did not converge "

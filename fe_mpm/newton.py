@@ -153,6 +153,8 @@ class NewtonSolver:
         self.snes.setOptionsPrefix(prefix)
         self.A.setOptionsPrefix(f"{prefix}A_")
         self._prefix = prefix
+        #: The keys of the options that PETSc has read so far, for unread ones to be found.
+        self.read_options: set[str] = set()
         mixed = displacement is not None and displacement is not u.function_space
         self._options = {
             **NEWTON_OPTIONS,
@@ -275,7 +277,7 @@ class NewtonSolver:
 
     def _with_options(self, act) -> None:
         """Call ``act()`` with this solver's options in PETSc's database, then restore it."""
-        with_petsc_options(self._prefix, self._options, act)
+        with_petsc_options(self._prefix, self._options, act, self.read_options)
 
     def _fresh_ksp(self) -> None:
         """Give SNES a new linear solver, so no set-up survives from an older active set."""

@@ -358,6 +358,7 @@ class Simulation:
         if line_search == "auto":
             line_search = "bt" if self._plastic else "basic"
         self.petsc_options = {"snes_linesearch_type": line_search, **(petsc_options or {})}
+        self._given_petsc_options = dict(petsc_options or {})
         self.linear_solver = linear_solver
         if min_step is not None:  # a step of 0 s or less would be cut to for ever
             check_range("Simulation", "min_step", min_step, lo=0.0, lo_open=True)
@@ -1070,6 +1071,8 @@ class Simulation:
         self.tracking.remember(layout.cell)
         self.tracking.drop(self.points, self.markers, leaving, k, t_new)
         self.t, self.step_number = t_new, k
+        if k == 1:
+            self._warn_unread_options()
         report = StepReport.of_step(
             k, t_new, result, self._current, reactions, self.markers, self.tracking, self.conditions
         )
@@ -1423,6 +1426,33 @@ class Simulation:
             dt,
             preload,
         )
+
+    def _warn_unread_options(self) -> None:
+        """Warn, after the first step, of the user's ``petsc_options`` that PETSc never read.
+
+        A misspelt key (``snes_rtoll``) was ignored without a word (a helper's trapdoor,
+        2026-12-07); so is one meant for a solver the run does not use (MUMPS's ICNTL with
+        ``linear_solver="iterative"``). Every rank read the same options, so rank 0 says it.
+        """
+        given = {key.lstrip("-") for key in self._given_petsc_options}
+        read = set(self._newton.read_options) if self._newton is not None else set()
+        if self.dynamics is not None:
+            read |= self.dynamics.read_options
+        unread = sorted(given - read)
+        if unread:
+            hint = ""
+            if self.linear_solver == "direct" and any(
+                key.startswith(("mat_mumps", "pc_factor")) for key in unread
+            ):
+                hint = (
+                    " The direct solver's LU (MUMPS) lies behind PCREDISTRIBUTE and reads "
+                    "its options with the prefix redistribute_ (redistribute_mat_mumps_icntl_14)."
+                )
+            warn(
+                f"Simulation: petsc_options {unread} were not read by PETSc in the first "
+                "step: misspelt (PETSc's names, e.g. snes_rtol, ksp_type), or meant for a "
+                "solver this run does not use. They have no effect." + hint
+            )
 
     def _update_points(
         self, forms: StepForms, layout: SlotLayout, step: int, t: float, dt: float

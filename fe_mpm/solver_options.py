@@ -74,7 +74,7 @@ LINEAR_SOLVERS = {
 }
 
 
-def with_petsc_options(prefix: str, options: dict, act) -> None:
+def with_petsc_options(prefix: str, options: dict, act, read: set[str] | None = None) -> None:
     """Call ``act()`` with ``options`` under ``prefix`` in PETSc's database, then restore it.
 
     ``act`` is e.g. ``ksp.setFromOptions``, or a solve: PETSc reads some options only
@@ -82,18 +82,22 @@ def with_petsc_options(prefix: str, options: dict, act) -> None:
     ICNTL), so solves run under the options too. Putting the database back as it was
     afterwards (each name removed, or given back the value it held before, e.g. from
     the command line) means that no solver ever sees another's options. A key may
-    start with ``-``, as on PETSc's command line.
+    start with ``-``, as on PETSc's command line. The keys that PETSc read while
+    ``act()`` ran are added to ``read`` (without their ``-``), if given.
     """
     opts = PETSc.Options()
     # Full names throughout: PETSc's prefixPush applies to setting a value but not to
     # clearing one, so options set under a pushed prefix could not be removed.
-    names = {f"{prefix}{key.lstrip('-')}": value for key, value in options.items()}
+    names_of = {key: f"{prefix}{key.lstrip('-')}" for key in options}
+    names = {names_of[key]: value for key, value in options.items()}
     before = {name: opts.getString(name) for name in names if opts.hasName(name)}
     try:
         for name, value in names.items():
             opts[name] = value
         act()
     finally:
+        if read is not None:
+            read.update(key.lstrip("-") for key in options if opts.used(names_of[key]))
         for name in names:
             if name in before:
                 opts[name] = before[name]

@@ -6,6 +6,8 @@ to leave Newton's history unchanged, so both the answer and the iteration count 
 compared with MUMPS's.
 """
 
+import warnings
+
 import numpy as np
 import pytest
 from newton_rates import quadratic
@@ -99,8 +101,48 @@ def test_a_simulations_petsc_options_do_not_reach_the_next_one():
             dynamic=True,
             petsc_options={"snes_monitor_cancel": None, "-snes_max_it": 7},  # as typed
         )
-        sim.step(1e-3)
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")  # both keys were read: no warning
+            sim.step(1e-3)
         assert sim._newton.snes.getTolerances()[3] == 7  # the option acted
         assert opts.getAll() == before
     finally:
         opts.delValue("fe_mpm_u_snes_rtol")
+
+
+def test_petsc_options_that_petsc_never_reads_warn_after_the_first_step():
+    """Found 2026-12-07: misspelt keys (``snes_rtoll``) were ignored without a word.
+    After the first step the user's keys that PETSc read neither in Newton's solves nor
+    in the mass solve are named, once; a key for a solver the run does not use
+    (MUMPS's ICNTL with the iterative solver, or without the direct solver's prefix
+    ``redistribute_``, where it never acted either) is named too."""
+    mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (2, 2))
+
+    def simulation(options, solver="direct"):
+        return fe_mpm.Simulation(
+            mesh,
+            fe_mpm.seed(mesh, 1, density=1000.0),
+            fe_mpm.NeoHookean(1e6, 0.3, 1000.0),
+            "u",
+            dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))],
+            body_force=(0.0, -9.81),
+            linear_solver=solver,
+            petsc_options=options,
+        )
+
+    sim = simulation({"snes_rtoll": 1e-3, "-snes_max_it": 9, "ksp_typo": "cg"})
+    with pytest.warns(UserWarning, match=r"\['ksp_typo', 'snes_rtoll'\] were not read by PETSc"):
+        sim.step(0.5)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # once only
+        sim.step(1.0)
+    sim = simulation({"mat_mumps_icntl_14": 50}, solver="iterative")
+    with pytest.warns(UserWarning, match=r"\['mat_mumps_icntl_14'\] were not read"):
+        sim.step(1.0)
+    # The direct solver's MUMPS sits behind PCREDISTRIBUTE: its options take that prefix.
+    sim = simulation({"mat_mumps_icntl_14": 50})
+    with pytest.warns(UserWarning, match=r"with the prefix redistribute_"):
+        sim.step(1.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # read by MUMPS during the solve
+        simulation({"redistribute_mat_mumps_icntl_14": 50}).step(1.0)
