@@ -91,8 +91,10 @@ def geostatic_stress(
             f"geostatic_stress: K0 must be one number or one per point ({len(points)}), "
             f"got shape {K0.shape}"
         )
-    if not (np.all(np.isfinite(K0)) and np.all(K0 >= 0.0)):
-        raise ValueError(f"geostatic_stress: K0 must be >= 0, got {K0.min(initial=np.nan)!r}")
+    bad = ~(np.isfinite(K0) & (K0 >= 0.0))
+    if np.any(bad):
+        first = float(np.ravel(K0)[np.flatnonzero(np.ravel(bad))[0]])
+        raise ValueError(f"geostatic_stress: K0 must be a finite number >= 0, got {first:g}")
     if not np.isfinite(surface):
         raise ValueError(f"geostatic_stress: surface must be a finite height (m), got {surface!r}")
     depth = surface - points.x[:, -1]

@@ -188,8 +188,11 @@ def test_bad_initial_stress_is_refused_with_the_field_named():
     law = fe_mpm.DruckerPrager(E, NU, cohesion=1e4, friction_angle=30.0, density=RHO)
     with pytest.raises(ValueError, match="surface must be >= every point's height"):
         fe_mpm.geostatic_stress(points, 0.1, G, K0)
-    with pytest.raises(ValueError, match="K0 must be >= 0"):
+    # The value named (until 2026-12-07 "got np.float64(nan)", whatever it was).
+    with pytest.raises(ValueError, match="K0 must be a finite number >= 0, got -0.1"):
         fe_mpm.geostatic_stress(points, H, G, -0.1)
+    with pytest.raises(ValueError, match="K0 must be a finite number >= 0, got -0.5"):
+        fe_mpm.geostatic_stress(points, H, G, np.where(points.x[:, 0] > 0.0, -0.5, K0))
     with pytest.raises(ValueError, match="gravity must be > 0"):
         fe_mpm.geostatic_stress(points, H, 0.0, K0)
     with pytest.raises(ValueError, match="surface must be a finite height"):
