@@ -141,6 +141,7 @@ class GridConditions:
         mesh.topology.create_connectivity(fdim, fdim + 1)
 
         self.dirichlet = []  # (spec, value Function, DirichletBC)
+        self._conflict_warned = False
         self.dirichlet_nodes = []  # grid nodes of each condition's facets
         for k, spec in enumerate(dirichlet):
             dim, entities = dirichlet_entities(mesh, spec.where, facet_tags, f"Dirichlet {k}")
@@ -260,8 +261,48 @@ class GridConditions:
                 bs = value.function_space.dofmap.bs
                 value.x.array.reshape(-1, bs)[:] = increment.reshape(-1)
         self.set_loads(t_new)
+        if not self._conflict_warned:
+            self._warn_conflicts(t_old, t_new)
         pins = self.fields.pin_unsupported(occupied, zone_cells)
         return [bc for _, _, bc in self.dirichlet] + pins
+
+    def _warn_conflicts(self, t_old: float, t_new: float) -> None:
+        """Warn once (collective) where two conditions prescribe different increments.
+
+        On a dof that two conditions hold, the later one in the list wins: a new user's
+        trapdoor, lowered beside a fixed base, moved its edge nodes by −9.6 mm or
+        −0.4 mm depending on which came last, without a word (2026-12-07).
+        """
+        n = self.fields.w.x.array.size
+        owned = self.fields.W.dofmap.index_map.size_local * self.fields.W.dofmap.index_map_bs
+        values = []
+        for _, _, bc in self.dirichlet:
+            x = np.full(n, np.nan)
+            bc.set(x)
+            values.append(x[:owned])
+        clash = None
+        for i in range(len(values)):
+            for j in range(i + 1, len(values)):
+                both = ~np.isnan(values[i]) & ~np.isnan(values[j])
+                if not np.any(both):
+                    continue
+                a, b = values[i][both], values[j][both]
+                scale = max(float(np.abs(a).max()), float(np.abs(b).max()))
+                differ = int(np.count_nonzero(np.abs(a - b) > 1e-12 * scale))
+                if differ and clash is None:
+                    clash = (i, j, differ)
+        comm = self.mesh.comm
+        clash = parallel.first_given(comm, clash)
+        if clash is None:
+            return
+        self._conflict_warned = True
+        i, j, differ = clash
+        warn(
+            f"Simulation: Dirichlet {i} and Dirichlet {j} prescribe different increments on "
+            f"{differ} dof(s) that both hold (the step t = {t_old:g} → {t_new:g}): the later "
+            "in the list wins there. Give the nodes they share (a trapdoor's edge beside a "
+            "fixed base) to one of them."
+        )
 
     def set_loads(self, t: float) -> None:
         """Set the grid tractions and the body force to their values at time ``t``.

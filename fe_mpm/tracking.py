@@ -235,9 +235,12 @@ class PointTracking:
                     first + ". The grid does not move with the body: leave empty cells "
                     "wherever it may go (a face on the grid's edge bulges out of it unless "
                     "a Dirichlet condition holds it), or pass points_leaving='drop' to "
-                    "remove what flies off. Where a condition holds that edge, the step "
-                    "moved the nodes beside it by more than their cells, turning those "
-                    "cells over: take shorter steps."
+                    "remove what flies off. Where a condition holds that edge: if it moves "
+                    "the edge outwards (a lowered trapdoor, a settling base), the body it "
+                    "holds goes out with it, however short the steps: put the moving "
+                    "condition on facets inside the grid, with empty cells beyond them; if it "
+                    "holds the edge still, the step moved the nodes beside it by more than "
+                    "their cells, turning those cells over: take shorter steps."
                 ),
             )
         warn(first + "; dropped.")

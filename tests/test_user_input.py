@@ -739,3 +739,58 @@ def test_a_failed_step_names_where_it_is_out_of_balance_and_what_ran_away():
     assert history is not None, message
     first, last, scale = (float(history.group(k)) for k in (1, 2, 3))
     assert last > 10 * first and scale == first
+
+
+def test_a_support_lowered_out_of_the_grid_says_to_move_it_inside():
+    """Found 2026-12-07 (a new user's trapdoor): a grid Dirichlet that lowers the grid's
+    bottom edge carries the body out through it, however short the steps, and the
+    message advised shorter steps only. It now names the moving edge's remedy too."""
+    mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.5), (4, 6))
+    cells = np.flatnonzero(cell_centroids(mesh)[:, 1] < 1.0)
+    base = lambda x: np.isclose(x[1], 0.0)  # noqa: E731
+    sim = fe_mpm.Simulation(
+        mesh,
+        fe_mpm.seed(mesh, 1, cells=cells, density=1800.0),
+        fe_mpm.NeoHookean(1e6, 0.3),
+        "u",
+        dirichlet=[
+            fe_mpm.Dirichlet(base, value=lambda t: -0.1 * t, component=1),
+            fe_mpm.Dirichlet(base, component=0),
+            fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0) | np.isclose(x[0], 1.0), component=0),
+        ],
+        body_force=(0.0, -9.81),
+    )
+    with pytest.raises(fe_mpm.PointsOutsideError, match="if it moves the edge outwards"):
+        sim.run(1.0, 10, progress=False)
+
+
+def test_two_supports_that_move_the_same_nodes_differently_warn():
+    """Found 2026-12-07 (a new user's trapdoor): a trapdoor lowered beside a fixed base
+    shares its edge nodes with it, and the later condition in the list silently won
+    there. Different increments on a dof that two conditions hold now warn, once; the
+    same increment (a corner held by a base and a roller) does not."""
+    mesh = rectangle_mesh((0.0, 0.0), (2.0, 1.0), (4, 2))
+    base = lambda x: np.isclose(x[1], 0.0)  # noqa: E731
+    trapdoor = lambda x: np.isclose(x[1], 0.0) & (x[0] <= 1.0 + 1e-9)  # noqa: E731
+    roller = fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0), component=0)
+
+    def simulation(conditions):
+        return fe_mpm.Simulation(
+            mesh,
+            fe_mpm.seed(mesh, 3, density=1000.0),
+            fe_mpm.NeoHookean(1e6, 0.3),
+            dirichlet=conditions,
+            body_force=(0.0, -9.81),
+        )
+
+    sim = simulation(
+        [fe_mpm.Dirichlet(base), fe_mpm.Dirichlet(trapdoor, value=lambda t: -1e-3 * t, component=1)]
+    )
+    with pytest.warns(
+        UserWarning, match=r"Dirichlet 0 and Dirichlet 1 prescribe different .* on 3 dof"
+    ):
+        sim.step(0.5)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        sim.step(1.0)  # once
+        simulation([fe_mpm.Dirichlet(base), roller]).step(1.0)
