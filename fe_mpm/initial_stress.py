@@ -31,9 +31,12 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
+from mpi4py import MPI
+
 import numpy as np
 import numpy.typing as npt
 
+from fe_mpm import parallel
 from fe_mpm.checks import check_range
 from fe_mpm.errors import warn
 from fe_mpm.materials.spectral import deviator, from_principal, spectral_decomposition
@@ -77,6 +80,10 @@ def geostatic_stress(
     Returns:
         Cauchy stresses (Pa), shape ``(n, 3, 3)``, compression negative.
 
+    Collective over ``MPI.COMM_WORLD`` (every rank calls it with its own points): it
+    warns where the surface lies more than a point spacing above the highest point
+    of all ranks.
+
     Raises:
         ValueError: ``gravity`` ≤ 0, ``K0`` < 0 or not one per point, ``surface`` not
             finite, a point above it or below the layers, ``density`` or a layer's
@@ -104,6 +111,7 @@ def geostatic_stress(
             f"geostatic_stress: point {p} lies {-depth[p]:.3g} m above the surface "
             f"{surface:g} m; surface must be >= every point's height"
         )
+    _warn_gap_below(points, surface, depth)
     depth = np.maximum(depth, 0.0)
     if layers is not None:
         if density is not None:
@@ -117,6 +125,29 @@ def geostatic_stress(
     for axis in range(3):
         stress[:, axis, axis] = vertical if axis == g - 1 else K0 * vertical
     return stress
+
+
+def _warn_gap_below(points: MaterialPoints, surface: float, depth: np.ndarray) -> None:
+    """Warn where the surface lies more than a point spacing above the highest point.
+
+    The stress then assumes ground above the body that it does not have: unless a load
+    stands for it (a surcharge), the top starts far out of balance. A new user's
+    ``surface=2.0`` for a layer 1 m deep was taken without a word (2026-12-07).
+    Collective.
+    """
+    comm = MPI.COMM_WORLD
+    gap = parallel.smallest(comm, float(depth.min(initial=np.inf)))
+    spacing = parallel.largest(
+        comm, float(np.median(points.volume)) ** (1.0 / points.gdim) if len(points) else 0.0
+    )
+    if np.isfinite(gap) and gap > max(spacing, 1e-12 * max(1.0, abs(surface))):
+        warn(
+            f"geostatic_stress: the highest point lies {gap:.3g} m below the surface "
+            f"{surface:g} m, more than the points' spacing ({spacing:.3g} m): the stress "
+            "assumes ground above them that the body does not have, so unless a load "
+            "stands for it (a surcharge) the top starts out of balance. Give the height "
+            "of the body's own top."
+        )
 
 
 def _own_density(points: MaterialPoints, density: float | None) -> np.ndarray | float:

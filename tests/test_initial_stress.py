@@ -188,6 +188,13 @@ def test_bad_initial_stress_is_refused_with_the_field_named():
     law = fe_mpm.DruckerPrager(E, NU, cohesion=1e4, friction_angle=30.0, density=RHO)
     with pytest.raises(ValueError, match="surface must be >= every point's height"):
         fe_mpm.geostatic_stress(points, 0.1, G, K0)
+    # A surface above the body's top: the top starts out of balance (a new user's
+    # surface=2.0 on a layer 1 m deep, taken silently until 2026-12-07).
+    with pytest.warns(UserWarning, match="the highest point lies .* below the surface"):
+        fe_mpm.geostatic_stress(points, H + 1.0, G, K0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        fe_mpm.geostatic_stress(points, H, G, K0)
     # The value named (until 2026-12-07 "got np.float64(nan)", whatever it was).
     with pytest.raises(ValueError, match="K0 must be a finite number >= 0, got -0.1"):
         fe_mpm.geostatic_stress(points, H, G, -0.1)
