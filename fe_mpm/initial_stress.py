@@ -51,6 +51,7 @@ def geostatic_stress(
     K0: float | npt.ArrayLike,
     density: float | None = None,
     layers: Sequence[tuple[float, float]] | None = None,
+    comm: MPI.Comm | None = None,
 ) -> np.ndarray:
     r"""The stress at rest of level ground: σ_v = −g ∫ ρ dz over the depth above, σ_h = K₀ σ_v.
 
@@ -76,13 +77,16 @@ def geostatic_stress(
         layers: Layered ground, ``[(thickness, density), ...]`` from the surface down
             (m, kg/m³, each > 0); every point must lie within them. Not with
             ``density``.
+        comm: The communicator over which the points are spread (the grid's,
+            ``mesh.comm``), for the warning below; then every rank of it calls this
+            function. None (the default) communicates nothing and warns only in a
+            serial run (under ``mpiexec`` one rank's points cannot tell where the top is).
 
     Returns:
         Cauchy stresses (Pa), shape ``(n, 3, 3)``, compression negative.
 
-    Collective over ``MPI.COMM_WORLD`` (every rank calls it with its own points): it
-    warns where the surface lies more than a point spacing above the highest point
-    of all ranks.
+    It warns where the surface lies more than a point spacing above the highest point
+    (of every rank's, with ``comm``).
 
     Raises:
         ValueError: ``gravity`` ≤ 0, ``K0`` < 0 or not one per point, ``surface`` not
@@ -105,13 +109,13 @@ def geostatic_stress(
     if not np.isfinite(surface):
         raise ValueError(f"geostatic_stress: surface must be a finite height (m), got {surface!r}")
     depth = surface - points.x[:, -1]
+    _warn_gap_below(points, surface, depth, comm)  # before a rank may raise alone
     if len(depth) and depth.min() < -1e-12 * max(1.0, abs(surface)):
         p = int(np.argmin(depth))
         raise ValueError(
             f"geostatic_stress: point {p} lies {-depth[p]:.3g} m above the surface "
             f"{surface:g} m; surface must be >= every point's height"
         )
-    _warn_gap_below(points, surface, depth)
     depth = np.maximum(depth, 0.0)
     if layers is not None:
         if density is not None:
@@ -127,15 +131,20 @@ def geostatic_stress(
     return stress
 
 
-def _warn_gap_below(points: MaterialPoints, surface: float, depth: np.ndarray) -> None:
+def _warn_gap_below(
+    points: MaterialPoints, surface: float, depth: np.ndarray, comm: MPI.Comm | None
+) -> None:
     """Warn where the surface lies more than a point spacing above the highest point.
 
     The stress then assumes ground above the body that it does not have: unless a load
     stands for it (a surcharge), the top starts far out of balance. A new user's
     ``surface=2.0`` for a layer 1 m deep was taken without a word (2026-12-07).
-    Collective.
+    Collective over ``comm``; with None, serial runs only.
     """
-    comm = MPI.COMM_WORLD
+    if comm is None:
+        if MPI.COMM_WORLD.size > 1:
+            return
+        comm = MPI.COMM_SELF
     gap = parallel.smallest(comm, float(depth.min(initial=np.inf)))
     spacing = parallel.largest(
         comm, float(np.median(points.volume)) ** (1.0 / points.gdim) if len(points) else 0.0

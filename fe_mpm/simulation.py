@@ -359,6 +359,7 @@ class Simulation:
             line_search = "bt" if self._plastic else "basic"
         self.petsc_options = {"snes_linesearch_type": line_search, **(petsc_options or {})}
         self._given_petsc_options = dict(petsc_options or {})
+        self._options_checked = not self._given_petsc_options
         self.linear_solver = linear_solver
         if min_step is not None:  # a step of 0 s or less would be cut to for ever
             check_range("Simulation", "min_step", min_step, lo=0.0, lo_open=True)
@@ -1071,7 +1072,8 @@ class Simulation:
         self.tracking.remember(layout.cell)
         self.tracking.drop(self.points, self.markers, leaving, k, t_new)
         self.t, self.step_number = t_new, k
-        if k == 1:
+        if not self._options_checked and self._newton and self._newton.iterations_total:
+            self._options_checked = True  # after the first step that solved a system
             self._warn_unread_options()
         report = StepReport.of_step(
             k, t_new, result, self._current, reactions, self.markers, self.tracking, self.conditions
@@ -1428,7 +1430,10 @@ class Simulation:
         )
 
     def _warn_unread_options(self) -> None:
-        """Warn, after the first step, of the user's ``petsc_options`` that PETSc never read.
+        """Warn of the user's ``petsc_options`` that PETSc has not read by now.
+
+        Called after the first step that took a Newton iteration: a step that starts in
+        equilibrium solves nothing, and MUMPS reads its options only when it factorises.
 
         A misspelt key (``snes_rtoll``) was ignored without a word (a helper's trapdoor,
         2026-12-07); so is one meant for a solver the run does not use (MUMPS's ICNTL with
@@ -1450,8 +1455,9 @@ class Simulation:
                 )
             warn(
                 f"Simulation: petsc_options {unread} were not read by PETSc in the first "
-                "step: misspelt (PETSc's names, e.g. snes_rtol, ksp_type), or meant for a "
-                "solver this run does not use. They have no effect." + hint
+                "step that solved a system: misspelt (PETSc's names, e.g. snes_rtol, "
+                "ksp_type), or meant for a solver this run does not use. They have no "
+                "effect." + hint
             )
 
     def _update_points(

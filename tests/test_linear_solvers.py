@@ -146,3 +146,15 @@ def test_petsc_options_that_petsc_never_reads_warn_after_the_first_step():
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # read by MUMPS during the solve
         simulation({"redistribute_mat_mumps_icntl_14": 50}).step(1.0)
+        # A first step in equilibrium solves nothing: it is judged after the next one.
+        sim = fe_mpm.Simulation(
+            mesh,
+            fe_mpm.seed(mesh, 1, density=1000.0),
+            fe_mpm.NeoHookean(1e6, 0.3, 1000.0),
+            dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))],
+            body_force=(0.0, -9.81),
+            body_force_scale=lambda t: max(0.0, t - 1.0),
+            petsc_options={"redistribute_mat_mumps_icntl_14": 50},
+        )
+        assert sim.step(1.0).newton_iterations == 0
+        sim.step(2.0)
