@@ -75,6 +75,21 @@ def test_unknown_linear_solver_is_named():
         fe_mpm.Simulation(mesh, fe_mpm.seed(mesh), fe_mpm.NeoHookean(1.0, 0.3), linear_solver="cg")
 
 
+def _block_on_its_base(petsc_options: dict, **options) -> fe_mpm.Simulation:
+    """A 1 m square of 2 × 2 cells, one point each, under gravity on its base."""
+    mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (2, 2))
+    return fe_mpm.Simulation(
+        mesh,
+        fe_mpm.seed(mesh, 1, density=1000.0),
+        fe_mpm.NeoHookean(1e6, 0.3, 1000.0),
+        "u",
+        dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))],
+        body_force=(0.0, -9.81),
+        petsc_options=petsc_options,
+        **options,
+    )
+
+
 def test_a_simulations_petsc_options_do_not_reach_the_next_one():
     """PETSc's options database is left as it was found, by Newton and by the mass solve.
 
@@ -90,16 +105,9 @@ def test_a_simulations_petsc_options_do_not_reach_the_next_one():
     opts["fe_mpm_u_snes_rtol"] = "1e-9"  # as if given on the command line
     try:
         before = opts.getAll()
-        mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (2, 2))
-        sim = fe_mpm.Simulation(
-            mesh,
-            fe_mpm.seed(mesh, 1, density=1000.0),
-            fe_mpm.NeoHookean(1e6, 0.3, 1000.0),
-            "u",
-            dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))],
-            body_force=(0.0, -9.81),
-            dynamic=True,
-            petsc_options={"snes_monitor_cancel": None, "-snes_max_it": 7},  # as typed
+        sim = _block_on_its_base(
+            {"snes_monitor_cancel": None, "-snes_max_it": 7},
+            dynamic=True,  # as typed
         )
         with warnings.catch_warnings():
             warnings.simplefilter("error")  # both keys were read: no warning
@@ -116,19 +124,9 @@ def test_petsc_options_that_petsc_never_reads_warn_after_the_first_step():
     in the mass solve are named, once; a key for a solver the run does not use
     (MUMPS's ICNTL with the iterative solver, or without the direct solver's prefix
     ``redistribute_``, where it never acted either) is named too."""
-    mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (2, 2))
 
     def simulation(options, solver="direct"):
-        return fe_mpm.Simulation(
-            mesh,
-            fe_mpm.seed(mesh, 1, density=1000.0),
-            fe_mpm.NeoHookean(1e6, 0.3, 1000.0),
-            "u",
-            dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))],
-            body_force=(0.0, -9.81),
-            linear_solver=solver,
-            petsc_options=options,
-        )
+        return _block_on_its_base(options, linear_solver=solver)
 
     sim = simulation({"snes_rtoll": 1e-3, "-snes_max_it": 9, "ksp_typo": "cg"})
     with pytest.warns(UserWarning, match=r"\['ksp_typo', 'snes_rtoll'\] were not read by PETSc"):
@@ -147,14 +145,9 @@ def test_petsc_options_that_petsc_never_reads_warn_after_the_first_step():
         warnings.simplefilter("error")  # read by MUMPS during the solve
         simulation({"redistribute_mat_mumps_icntl_14": 50}).step(1.0)
         # A first step in equilibrium solves nothing: it is judged after the next one.
-        sim = fe_mpm.Simulation(
-            mesh,
-            fe_mpm.seed(mesh, 1, density=1000.0),
-            fe_mpm.NeoHookean(1e6, 0.3, 1000.0),
-            dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))],
-            body_force=(0.0, -9.81),
+        sim = _block_on_its_base(
+            {"redistribute_mat_mumps_icntl_14": 50},
             body_force_scale=lambda t: max(0.0, t - 1.0),
-            petsc_options={"redistribute_mat_mumps_icntl_14": 50},
         )
         assert sim.step(1.0).newton_iterations == 0
         sim.step(2.0)
