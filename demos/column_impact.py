@@ -328,7 +328,7 @@ if not args.no_output and rank0:
 # `R_pk_over_nominal_step`). One run's verdict says little: with `--dt` scaled by
 # 0.9 to 1.1 the same scene gave R_pk 4.7–16.8 and R_ss 0.41–1.51 and failed all
 # seven times (2026-12-06, night); judge several steps' runs together. With
-# `--point-domains` (2026-12-07, the same five step lengths 0.9–1.1 × nominal) the
+# `--point-domains` (2026-12-07, five of those step lengths, 0.9–1.1 × nominal) the
 # steady force stays at 28.2–31.7 kN, R_pk at 3.56–6.83 and R_ss at 0.80–0.81 where
 # H_act is 1.25 m, and the check passes in four runs of five (at 0.9 × the pile ends
 # a row higher, H_act = 1.5 m, and R_ss = 0.50); each run takes 2–6 times as long.
