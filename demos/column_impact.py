@@ -212,9 +212,13 @@ history = []
 
 def massive_height() -> float:
     """Mast's H_act (m): the face area of the grid nodes with mass, over the face's width."""
+    # sim.mesh, not grid: under mpiexec with point domains the Simulation rebuilt the
+    # grid with more ghost cells, and the points' cells are the new grid's (read from
+    # grid, 2 ranks gave H_act = 1.75 m where one gave 1.25 m, with the same forces).
     occupied = np.unique(points.cell[points.cell >= 0])
-    nodes = grid.geometry.x[np.unique(grid.geometry.dofmaps[0][occupied])]
-    x = np.unique(parallel.gathered(grid.comm, nodes.reshape(-1)).reshape(-1, 3), axis=0)
+    mesh = sim.mesh
+    nodes = mesh.geometry.x[np.unique(mesh.geometry.dofmaps[0][occupied])]
+    x = np.unique(parallel.gathered(mesh.comm, nodes.reshape(-1)).reshape(-1, 3), axis=0)
     on_face = np.isclose(x[:, 0], x_face) & (x[:, 1] < face_width + tol)
     y = x[on_face, 1]
     on_edge = np.isclose(y, 0.0) | np.isclose(y, face_width)
