@@ -118,6 +118,44 @@ def test_a_free_body_that_vibrates_is_converged_against_its_own_forces():
     assert "within the floor" not in report.converged_reason
 
 
+@pytest.mark.parametrize("formulation", ["u", "up"])
+def test_the_inertia_norm_of_the_force_scale_is_the_lumped_inertia_force(formulation):
+    """In a body with no stiffness to speak of, every residual's forces other than the
+    loads are its inertia alone, so with the lumped mass ‖R + f_ext‖ must equal
+    :meth:`~fe_mpm.dynamics.NewmarkDynamics.inertia_force_norm` at every iterate,
+    Bossak's α and Rayleigh damping included (the review's check of 2026-12-07: equal to
+    12 digits in u, u-p, u-nbva)."""
+    mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (10, 10))
+    box = lambda x: np.minimum.reduce([x[0] - 0.3, 0.7 - x[0], x[1] - 0.3, 0.7 - x[1]])  # noqa: E731
+    points = fe_mpm.seed(mesh, 3, density=1000.0, level_set=box)
+    x, y = points.x.T
+    points.velocity = np.column_stack([0.5 - y + 0.3 * x**2, x - 0.5])  # a spin and a shear
+    sim = fe_mpm.Simulation(
+        mesh,
+        points,
+        fe_mpm.NeoHookean(1e-9, 0.3, 1000.0),
+        formulation,
+        dynamic=True,
+        mass="lumped",
+        bossak_alpha=-0.2,
+        damping=2.0,
+    )
+    sim.step(0.01)
+    test, pairs = sim._newton.test, []
+    record = test.record_internal
+
+    def recorded(norm):
+        record(norm)
+        pairs.append((test.internal, sim.dynamics.inertia_force_norm(sim.w.x.array)))
+
+    test.record_internal = recorded
+    sim.step(0.02)
+    internal, inertia = np.array(pairs).T
+    # Iterate 0 (1876 N/m here) to 1e-9; once Newton has converged both are round-off.
+    assert internal[0] > 1e3 and inertia[0] == pytest.approx(internal[0], rel=1e-9)
+    assert np.all(np.maximum(internal[1:], inertia[1:]) < 1e-12 * internal[0])
+
+
 def test_a_dynamic_step_too_short_for_newmarks_rule_is_refused_by_name():
     """Found 2026-12-07: ``run(1e-300, 1)`` ended in a bare ZeroDivisionError from
     1/(β Δt²); it is now refused, saying how short a step may be."""
