@@ -261,7 +261,7 @@ class GridConditions:
                 bs = value.function_space.dofmap.bs
                 value.x.array.reshape(-1, bs)[:] = increment.reshape(-1)
         self.set_loads(t_new)
-        if not self._conflict_warned:
+        if len(self.dirichlet) > 1 and not self._conflict_warned:  # the same on every rank
             self._warn_conflicts(t_old, t_new)
         pins = self.fields.pin_unsupported(occupied, zone_cells)
         return [bc for _, _, bc in self.dirichlet] + pins
