@@ -20,7 +20,8 @@ from fe_mpm.checks import check_finite, check_int, check_range
 from fe_mpm.parallel import any_rank
 
 #: A boundary point in an empty cell reads an occupied neighbour's field up to this
-#: far outside it (the least barycentric coordinate there): half a cell. The default
+#: far outside it (the least barycentric coordinate there, and in distance this many
+#: of its largest heights, :meth:`~fe_mpm.tracker.Tracker.within_reach`): half a cell. The default
 #: of ``PointDirichlet(reach=)``, and the reach of every ``PointTraction`` point.
 SNAP_REACH = 0.5
 
@@ -418,8 +419,9 @@ class PointDirichlet:
         penalty: Penalty stiffness β (Pa/m), > 0. About 10³ E/h (E Young's modulus,
             h cell size) keeps the gap negligible and the tangent well conditioned.
         reach: How far outside the material's cells a point still acts, in
-            barycentric units of the nearest occupied cell, ≥ 0: one number or one
-            per point. A body's surface lies between its points, often in a cell
+            barycentric units of the nearest occupied cell and, as a distance, in
+            that cell's largest heights, ≥ 0: one number or one per point. A
+            body's surface lies between its points, often in a cell
             whose points have moved on, so a point up to half a cell out (0.5, the
             default) reads that cell's field extrapolated. Points inside a rigid
             body need 0: one read half a cell out holds the cell's gradient too,

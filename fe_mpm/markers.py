@@ -38,8 +38,11 @@ class Markers:
         """The markers' names, in the order they were added."""
         return list(self._entries)
 
-    def add(self, name: str, x: np.ndarray, points_x: np.ndarray) -> None:
-        """Add a marker at ``x`` (g,), hosted by the nearest of the points ``points_x`` (n, g)."""
+    def add(self, name: str, x: np.ndarray, points_x: np.ndarray) -> float:
+        """Add a marker at ``x`` (g,), hosted by the nearest of the points ``points_x`` (n, g).
+
+        Returns the distance to its host (m), the same on every rank.
+        """
         distance = np.linalg.norm(points_x - x, axis=1)
         nearest = parallel.smallest(self.comm, float(distance.min(initial=np.inf)))
         # Points as near as the nearest to round-off (a symmetric seeding has many): the
@@ -53,6 +56,7 @@ class Markers:
             rank = min((p, r) for r, p in enumerate(offers) if p is not None)[1]
             host = host if rank == self.comm.rank else -1
         self._entries[name] = (x.copy(), host)  # a copy: the caller's array must not move
+        return nearest
 
     def position(self, name: str) -> np.ndarray:
         """Current position of the marker ``name``, a copy, shape (g,)."""

@@ -382,6 +382,30 @@ def check_shared_increment(shared: bool, point_domains: bool, spec: FormulationS
         )
 
 
+def check_facet_tags(mesh: dolfinx.mesh.Mesh, facet_tags) -> None:
+    """Refuse ``facet_tags`` that are not tags of the grid's facets.
+
+    Cell tags given there were found only once a condition selected facets by tag
+    (``find()`` gives cell indices); a model whose conditions all use markers ran on
+    without a word (a helper, 2026-12-07).
+    """
+    if facet_tags is None:
+        return
+    fdim = mesh.topology.dim - 1
+    dim = getattr(facet_tags, "dim", None)
+    if dim is None or not hasattr(facet_tags, "find"):
+        raise TypeError(
+            f"Simulation: facet_tags must be dolfinx MeshTags of the grid's facets, got "
+            f"{type(facet_tags).__name__}"
+        )
+    if dim != fdim:
+        raise ValueError(
+            f"Simulation: facet_tags has entities of dimension {dim} but the facets of this "
+            f"{mesh.topology.dim}D mesh have dimension {fdim}; cell tags cannot select "
+            "boundary facets (pass the facet tags of model_to_mesh, data.facet_tags)"
+        )
+
+
 def pressure_by_parts(
     given: bool | None, keeps_shape: bool, point_domains: bool, spec: FormulationSpec
 ) -> bool:
@@ -749,6 +773,71 @@ def check_weight_of_initial_stress(
             "what the stress holds up. Give it with seed(..., density=...) or the law's "
             "density=... (or set points.mass); geostatic_stress(..., density=...) only "
             "builds the stress."
+        )
+
+
+#: An initial stress is out of balance with the body force where the weight it holds up
+#: (−div σ, fitted linearly over the points) and the body's weight ρ̄ b differ by more
+#: than this share of the larger...
+UNBALANCED_SHARE = 0.5
+#: ... and that difference over the body's extent exceeds this share of its largest
+#: stress: gravity on a small sample under a large confining stress is no mistake.
+UNBALANCED_STRESS_SHARE = 0.1
+
+
+def warn_unbalanced_initial_stress(
+    comm, points: MaterialPoints, stress: np.ndarray, body_force
+) -> None:
+    """Warn where an initial stress does not hold up the body force's weight.
+
+    At rest div σ + ρ b = 0. The stress's gradient is fitted as a linear field over
+    the points (least squares, weighted by volume, over all ranks), and the weight it
+    holds up, −div σ (N/m³), is compared with the mean ρ̄ b. A 3D user who built
+    ``geostatic_stress`` (vertical z) and gave gravity as ``(0, -9.81, 0)``, the
+    habit of 2D, had a layer whose base carried none of its weight, every step
+    converged (a helper, 2026-12-07); gravity upward, or a stress of the wrong
+    sign, doubles the weight instead.
+
+    Args:
+        comm: The grid's communicator.
+        points: This rank's points, at their start.
+        stress: Their Cauchy stresses (n, 3, 3), Pa.
+        body_force: Body force per unit mass (g,), m/s², or None.
+    """
+    g = points.gdim
+    b = np.zeros(g) if body_force is None else np.asarray(body_force, dtype=float)[:g]
+    x, v = points.x[:, :g], points.volume
+    design = np.concatenate([np.ones((x.shape[0], 1)), x], axis=1)  # (n, g+1)
+    sigma = np.asarray(stress, dtype=float)[:, :g, :g].reshape(-1, g * g)
+    normal = parallel.total(comm, np.einsum("n,na,nb->ab", v, design, design))
+    moments = parallel.total(comm, np.einsum("n,na,ns->as", v, design, sigma))
+    mass, volume = parallel.total(comm, np.array([points.mass.sum(), v.sum()]))
+    lo = parallel.smallest(comm, x.min(axis=0, initial=np.inf))
+    hi = parallel.largest(comm, x.max(axis=0, initial=-np.inf))
+    largest = parallel.largest(comm, float(np.abs(sigma).max(initial=0.0)))
+    if volume <= 0.0:
+        return
+    # lstsq: a layer of points in a plane leaves a gradient across it undetermined (0).
+    fit = np.linalg.lstsq(normal, moments, rcond=1e-12)[0]
+    gradient = fit[1:].T.reshape(g, g, g)  # [i, j, k] = ∂σ_ij/∂x_k
+    held = -np.einsum("ijj->i", gradient)
+    weight = mass / volume * b
+    gap = float(np.linalg.norm(held - weight))
+    scale = max(float(np.linalg.norm(held)), float(np.linalg.norm(weight)))
+    extent = float(np.max(hi - lo))
+    if gap > UNBALANCED_SHARE * scale and gap * extent > UNBALANCED_STRESS_SHARE * largest > 0:
+
+        def vector(v: np.ndarray) -> str:
+            return "(" + ", ".join(f"{c:.4g}" for c in np.where(abs(v) > 1e-9 * scale, v, 0)) + ")"
+
+        warn(
+            "Simulation: initial_stress is out of balance with body_force: the stress "
+            f"holds up a weight of {vector(held)} N/m³ (its fitted −div σ), the body "
+            f"weighs {vector(weight)} N/m³ (ρ̄ b). Check that "
+            "the body force points along the stress's vertical (geostatic_stress takes "
+            "the last coordinate as vertical: z in 3D, y in 2D), downwards, and that the "
+            "stress is compressive; a stress from an earlier stage in equilibrium "
+            "under other loads may be fine."
         )
 
 

@@ -379,12 +379,18 @@ def seed(
     if parallel.total(mesh.comm, num_cells) == 0:
         raise ValueError("seed: the mesh has no cells")
     ref_pts, ref_wts = _rule_with_count(cell_type, per_cell)
+    chosen = cells is not None
     if cells is None:
         cells = np.arange(num_cells, dtype=np.int32)
     else:
         cells = _cells(cells, num_cells, cell_map.num_ghosts)
     if parallel.total(mesh.comm, cells.size) == 0:
-        raise ValueError("seed: no cells to seed")
+        raise ValueError(
+            "seed: cells is empty on every rank: no cells to seed (is the tag in "
+            "cell_tags.find(tag) one the grid has? np.unique(cell_tags.values) lists them)"
+            if chosen
+            else "seed: the grid has no cells to seed"
+        )
 
     X = mesh.geometry.x[:, : mesh.geometry.dim]
     nodes = X[mesh.geometry.dofmaps[0][cells]]  # (nc, tdim+1, g)

@@ -313,6 +313,7 @@ class Simulation:
         model_checks.check_ranges(max_step_cells, ppp_alpha, damping, output_every)
         model_checks.check_ppp(ppp_alpha, FORMULATIONS[formulation])
         model_checks.check_output_dir(output_dir)
+        model_checks.check_facet_tags(mesh, facet_tags)
         model_checks.check_dynamics(dynamic, formulation, damping, mass, bossak_alpha)
         if dynamic:  # before any point migrates; step() checks again (set after this)
             _check_points(mesh.comm, points.check_motion)
@@ -342,6 +343,12 @@ class Simulation:
         if initial_stress is not None:  # refused on every rank if on one
             parallel.check_together(
                 mesh.comm, start_stressed, points, material, initial_stress, self.spec.pressure
+            )
+            model_checks.warn_unbalanced_initial_stress(
+                mesh.comm,
+                points,
+                initial_stress,
+                None if body_force is None else body_force_at(body_force, 0.0, mesh.geometry.dim),
             )
         for name, h in material.history.items():
             points.history.setdefault(name, h.initial_values(len(points)))
@@ -602,9 +609,21 @@ class Simulation:
         if name in self.markers.names or name in self._force_names:
             used = "another marker" if name in self.markers.names else "a force"
             raise ValueError(f"Simulation.add_marker: {name!r} already names {used}")
-        if not parallel.any_rank(self.mesh.comm, self.tracker.locate(xm[None, :])[0] >= 0):
+        cell = self.tracker.locate(xm[None, :])[0]
+        if not parallel.any_rank(self.mesh.comm, cell >= 0):
             raise PointsOutsideError(f"marker {name!r} at {xm} is outside the grid")
-        self.markers.add(name, xm, self.points.x)
+        distance = self.markers.add(name, xm, self.points.x)
+        # A mistyped coordinate inside the grid would follow a far host's motion extended
+        # over the distance, without a word (a helper's cantilever tip, 2026-12-07).
+        size = parallel.largest(
+            self.mesh.comm, float(self.tracker.sizes[cell]) if cell >= 0 else 0.0
+        )
+        if distance > size:
+            warn(
+                f"Simulation.add_marker: marker {name!r} at {xm} lies {distance:.3g} m from "
+                f"the nearest material point, more than its cell's size ({size:.3g} m): it "
+                "follows that point's motion extended over the distance. Is it on the body?"
+            )
 
     def remove_points(self, remove: npt.ArrayLike) -> int:
         """Remove this rank's points where ``remove`` is true, between steps (excavation).

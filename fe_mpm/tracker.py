@@ -110,6 +110,7 @@ class Tracker:
         self._node_cells = None  # node -> cells (CSR), built on first need
         self._global_nodes = None  # nodes sorted by global index, built on first need
         self._vertex_neighbours = None  # built on first need
+        self._heights = None  # each cell's largest height (m), built on first need
         #: Vertices of every cell, shape (nc, t+1, g) in m.
         self.cell_vertices = nodes
         # The same nudge on every rank: the smallest cell of the whole grid.
@@ -227,8 +228,9 @@ class Tracker:
             cells: Their cells (n,), from :meth:`locate`.
             allowed: Boolean mask over all cells.
             tol: How far outside an allowed cell a point may be, in barycentric
-                units: one number or one per point (n,); a point on a facet
-                (``ON_FACET`` out) always counts.
+                units and, as a distance, in the cell's largest heights
+                (:meth:`within_reach`): one number or one per point (n,); a point
+                on a facet (``ON_FACET`` out) always counts.
 
         Returns:
             Cells (n,): the allowed cell, or -1 where none is close enough.
@@ -237,9 +239,25 @@ class Tracker:
         tol = np.maximum(np.broadcast_to(tol, cells.shape), ON_FACET)
         for i in np.flatnonzero((out < 0) & (cells >= 0)):
             score, cell = self._best_allowed(x[i], self._nodes_of[cells[i]], allowed)
-            if score >= -tol[i]:
+            if score >= -tol[i] and self.within_reach(x[i : i + 1], np.array([cell]), tol[i])[0]:
                 out[i] = cell
         return out
+
+    def within_reach(self, x: np.ndarray, cells: np.ndarray, tol: float | np.ndarray) -> np.ndarray:
+        """Whether points ``x`` (n, g) lie within ``tol`` times their cell's height of it.
+
+        The distance from each point to its cell in ``cells`` (n,), against ``tol``
+        times the cell's largest height (m). A least barycentric coordinate of
+        −tol puts a point that distance out across a facet from the vertex
+        opposite, but a cell that only shares a vertex or an edge with the point's
+        own can hold a point far off with a mild one (a tetrahedron whose facets
+        run nearly along the line to the point): this bounds the distance itself.
+        """
+        if self._heights is None:
+            self._heights = 1.0 / np.linalg.norm(self.p1_gradients, axis=2).min(axis=1)
+        nearest = nearest_in_simplices(x, self.cell_vertices[cells])
+        tol = np.maximum(np.broadcast_to(tol, cells.shape), ON_FACET)
+        return np.linalg.norm(x - nearest, axis=1) <= tol * self._heights[cells]
 
     def _best_allowed(
         self, x: np.ndarray, nodes: np.ndarray, allowed: np.ndarray
@@ -325,6 +343,10 @@ class Tracker:
             winner[i] = preferred(x[i], scores[:, i], centroids[:, i])
         close = scores[winner, np.arange(n)] >= -np.maximum(np.broadcast_to(tol, (n,)), ON_FACET)
         snapped = found & ~taken & close & (winner == rank)
+        if snapped.any():
+            mine = np.flatnonzero(snapped)
+            tol_n = np.broadcast_to(tol, (n,))
+            snapped[mine] = self.within_reach(x[mine], choice[mine], tol_n[mine])
         out[snapped] = choice[snapped]
         return out, found
 

@@ -1,5 +1,6 @@
 """Bad input fails early with a message that names the field and the valid range."""
 
+import warnings
 from types import SimpleNamespace
 
 from mpi4py import MPI
@@ -587,6 +588,7 @@ def test_laws_keep_the_checked_floats():
         (dict(cells=[-1]), ValueError, r"seed: cells must lie in \[0, 7\]"),
         (dict(cells=[[1, 2]]), ValueError, r"seed: cells must be a 1-D array .*shape \(1, 2\)"),
         (dict(cells=3), ValueError, r"seed: cells must be a 1-D array .*shape \(\)"),
+        (dict(cells=[]), ValueError, r"seed: cells is empty on every rank: no cells to seed"),
         (dict(per_cell=2.5), TypeError, "seed: per_cell must be an int, got 2.5"),
         (dict(per_cell="3"), TypeError, "seed: per_cell must be an int, got '3'"),
         (dict(per_cell=True), TypeError, "seed: per_cell must be an int, got True"),
@@ -702,6 +704,15 @@ def test_cell_tags_cannot_select_boundary_facets():
     )
     with pytest.raises(ValueError, match=match):
         boundary_facets(mesh, 1, cell_tags)
+    # In a Simulation at once, though every condition selects by marker (a helper's
+    # 3D box, 2026-12-07, ran on without a word).
+    points = fe_mpm.seed(mesh, 3)
+    law = fe_mpm.NeoHookean(1.0, 0.3)
+    bottom = fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))
+    with pytest.raises(ValueError, match="Simulation: " + match):
+        fe_mpm.Simulation(mesh, points, law, dirichlet=[bottom], facet_tags=cell_tags)
+    with pytest.raises(TypeError, match="facet_tags must be dolfinx MeshTags .* got ndarray"):
+        fe_mpm.Simulation(mesh, points, law, dirichlet=[bottom], facet_tags=cells)
 
 
 _XB = np.array([[0.2, 0.5], [0.6, 0.5]])
@@ -919,3 +930,20 @@ def test_a_boundary_condition_that_selects_nothing_or_takes_the_wrong_size_is_na
     with pytest.raises(ValueError, match="Dirichlet 0: value must be one number or a vector"):
         sim.run(1.0, 1, progress=False)
     assert sim.step_number == 0
+
+
+def test_a_marker_far_from_the_body_is_warned():
+    """A marker follows the affine motion of its nearest point. A cantilever's tip typed
+    as (0.9, 0.4), nine cells from the beam but inside the grid, was taken without a
+    word, and would report that point's motion extended over the distance (a helper,
+    2026-12-07). A marker on the body, or within a cell of it, is not warned."""
+    mesh = rectangle_mesh((0.0, 0.0), (4.0, 1.0), (8, 2))
+    points = fe_mpm.seed(mesh, 3)
+    points.keep(points.x[:, 0] < 1.0)
+    sim = fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1.0, 0.3))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        sim.add_marker("corner", (1.0, 1.0))
+        sim.add_marker("beside", (1.5, 0.5))
+    with pytest.warns(UserWarning, match=r"marker 'typo' at \[3.5 0.5\] lies 2.58 m from the"):
+        sim.add_marker("typo", (3.5, 0.5))

@@ -365,3 +365,40 @@ def test_layered_ground_starts_at_rest_with_its_layers_stress():
         fe_mpm.geostatic_stress(points, 2.0, G, K0, density=1.0, layers=[(2.0, 1.0)])
     with pytest.raises(ValueError, match="K0 must be one number or one per point"):
         fe_mpm.geostatic_stress(points, 2.0, G, np.ones(3), layers=[(2.0, 1.0)])
+
+
+def _imbalance_warnings(grid, points, stress, body_force) -> list[str]:
+    """The out-of-balance warnings a Simulation gives at its set-up."""
+    law = fe_mpm.MohrCoulomb(E, NU, cohesion=1e4, friction_angle=30.0, density=RHO)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        fe_mpm.Simulation(grid, points, law, body_force=body_force, initial_stress=stress)
+    return [str(w.message) for w in caught if "out of balance" in str(w.message)]
+
+
+def test_a_geostatic_stress_under_gravity_along_another_axis_is_warned():
+    """A 3D layer's ``geostatic_stress`` holds up a weight along −z; gravity given as
+    (0, −9.81, 0), the habit of 2D, left its base carrying none of the weight, every
+    step converged and nothing said so (a helper, 2026-12-07). Gravity upwards, or a
+    stress of the wrong sign, is warned too; the layer's own gravity is not, nor a
+    small sample's weight under a large confining stress."""
+    from mpi4py import MPI
+
+    from fe_mpm._dolfinx import dolfinx
+
+    tetrahedra = dolfinx.mesh.CellType.tetrahedron
+    box = dolfinx.mesh.create_box(MPI.COMM_WORLD, [[0, 0, 0], [2, 1, 1]], [4, 2, 2], tetrahedra)
+    points = fe_mpm.seed(box, 4, density=RHO)
+    stress = fe_mpm.geostatic_stress(points, 1.0, G, K0)
+    assert not _imbalance_warnings(box, points, stress, (0.0, 0.0, -G))
+    (message,) = _imbalance_warnings(box, points, stress, (0.0, -G, 0.0))
+    assert "holds up a weight of (0, 0, -2e+04) N/m³" in message
+    assert "weighs (0, -2e+04, 0) N/m³" in message
+    assert _imbalance_warnings(box, points, stress, (0.0, 0.0, G))
+    assert _imbalance_warnings(box, points, -stress, (0.0, 0.0, -G))
+    assert _imbalance_warnings(box, points, stress, None)
+    grid = rectangle_mesh((0.0, 0.0), (W, H), (8, 4))
+    flat = fe_mpm.seed(grid, 3, density=RHO)
+    assert not _imbalance_warnings(grid, flat, fe_mpm.geostatic_stress(flat, H, G, K0), (0.0, -G))
+    confined = np.broadcast_to(-1e6 * np.eye(3), (len(flat), 3, 3)).copy()
+    assert not _imbalance_warnings(grid, flat, confined, (0.0, -G))

@@ -287,3 +287,53 @@ def test_p2_platen_points_read_far_outside_the_body_are_warned_about(fitted):
             assert "Fit the grid's lines" in far[0]
         else:
             assert far == [], far
+
+
+def _footing_force_across_a_gap(gap: float) -> float:
+    """The vertical force (N) of a rough 0.5 m square footing whose 16 points start
+    ``gap`` above a 3D soil box's top (gmsh tetrahedra of 0.25 m, 4 points each, a
+    fixed base) and move down 0.02 m in one step."""
+    import gmsh
+
+    from fe_mpm.meshes.gmsh_session import gmsh_session, to_dolfinx
+
+    with gmsh_session("box") as model:
+        soil = model.occ.addBox(0, 0, 0, 2.0, 1.0, 1.0)
+        whole = model.occ.addBox(0, 0, 0, 2.0, 1.0, 1.5)
+        model.occ.fragment([(3, whole)], [(3, soil)])
+        model.occ.synchronize()
+        volumes = [v for _, v in model.getEntities(3)]
+        below = [v for v in volumes if model.occ.getCenterOfMass(3, v)[2] < 1.0]
+        model.addPhysicalGroup(3, below, tag=1)
+        model.addPhysicalGroup(3, [v for v in volumes if v not in below], tag=2)
+        gmsh.option.setNumber("Mesh.MeshSizeMin", 0.25)
+        gmsh.option.setNumber("Mesh.MeshSizeMax", 0.25)
+        model.mesh.generate(3)
+        data = to_dolfinx(model, 3)
+    points = fe_mpm.seed(data.mesh, 4, cells=data.cell_tags.find(1), density=1800.0)
+    side = (np.arange(4) + 0.5) * 0.125 - 0.25
+    X, Y = np.meshgrid(1.0 + side, 0.5 + side, indexing="ij")
+    base = np.column_stack([X.ravel(), Y.ravel(), np.full(X.size, 1.0 + gap)])
+    footing = fe_mpm.PointDirichlet(
+        "footing", base, np.full(16, 0.125**2), lambda t: (0.0, 0.0, -0.02 * t), penalty=8e10
+    )
+    sim = fe_mpm.Simulation(
+        data.mesh,
+        points,
+        fe_mpm.NeoHookean(20e6, 0.3, 1800.0),
+        dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[2], 0.0))],
+        point_dirichlet=[footing],
+    )
+    return float(sim.run(1.0, 1, progress=False)[-1].reactions["footing"][2])
+
+
+def test_a_footing_a_cell_above_the_soil_does_not_grip_it():
+    """A point reads an occupied cell's field up to half a cell out (``reach``), but the
+    least barycentric coordinate of a tetrahedron that only shares a vertex with the
+    point's cell can be mild far off: a footing 0.2 m above a soil box of 0.25 m cells
+    (4/5 of a cell), lowered 0.02 m, pushed it down with 42 % of the force it takes in
+    contact, without a word (a helper's 3D footing, 2026-12-07). The distance is now
+    bounded too, by half the largest height of the cell read."""
+    touching = _footing_force_across_a_gap(0.0)
+    assert touching < -1e5
+    assert _footing_force_across_a_gap(0.2) == 0.0
