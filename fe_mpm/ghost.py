@@ -18,6 +18,8 @@ every rank picks the same facets; each facet is assembled by the rank that owns 
 
 from __future__ import annotations
 
+from petsc4py import PETSc
+
 import dolfinx.fem.petsc as fem_petsc
 import numpy as np
 import ufl
@@ -72,7 +74,8 @@ class GhostStabilisation:
         mu: The shear modulus μ of the material (Pa).
 
     Attributes:
-        pattern: The penalty over every interior facet (a sparsity pattern).
+        pattern: The penalty over the step's facets (a bilinear form, the pattern
+            the step's matrix must hold as well).
         full: G on the step's facets (PETSc matrix).
         constrained: The same with the Dirichlet rows and columns zeroed.
         facets: The step's ghost facets that this rank owns and assembles (local indices).
@@ -110,14 +113,16 @@ class GhostStabilisation:
         self._cell_map = cell_map
         self._cell_values = dolfinx.la.vector(cell_map, bs=2)  # fill, count
         self._force = dolfinx.fem.Function(W)
-        self.pattern = self._bind(self._interior)
+        self.facets = np.zeros(0, dtype=np.int32)
+        self.pattern = self._bind(self.facets)
         self.full = fem_petsc.create_matrix(self.pattern)
         self.constrained = fem_petsc.create_matrix(self.pattern)
         for matrix in (self.full, self.constrained):
-            # Set every entry once, or PETSc drops those the first step leaves unset.
-            fem_petsc.assemble_matrix(matrix, self.pattern)
             matrix.assemble()
-        self.facets = np.zeros(0, dtype=np.int32)
+        #: Whether the last :meth:`update` changed the facets on some rank, so that
+        #: the step's matrix needs the new :attr:`pattern` (collective: the same on
+        #: every rank).
+        self.changed = True
         self._tied = np.zeros(0, dtype=np.int32)
 
     def _bind(self, facets: np.ndarray) -> dolfinx.fem.Form:
@@ -154,6 +159,7 @@ class GhostStabilisation:
         poor = (fill < POORLY_FILLED * (1.0 - FILL_MARGIN)) | (count < min_points)
         a, b = self._cells[:, 0], self._cells[:, 1]
         ghost = (count[a] > 0) & (count[b] > 0) & (poor[a] | poor[b])
+        previous = self.facets
         self.facets = self._links[ghost & self._owned]
         edges = self._cells[ghost]
         tied = np.unique(edges)
@@ -163,11 +169,22 @@ class GhostStabilisation:
             held = self._held(edges, count >= min_points)
             tied = tied[held[tied]]
         self._tied = tied
-        form = self._bind(self.facets)
-        for matrix, conditions, diagonal in ((self.full, [], 1.0), (self.constrained, bcs, 0.0)):
-            matrix.zeroEntries()
-            fem_petsc.assemble_matrix(matrix, form, bcs=conditions, diag=diagonal)
-            matrix.assemble()
+        changed = not np.array_equal(self.facets, previous)
+        self.changed = self.changed or parallel.any_rank(self._comm, changed)
+        # The matrices hold the step's facets only: over every interior facet their
+        # explicit zeros reached the step's matrix, and MUMPS factorised them.
+        self.pattern = self._bind(self.facets)
+        self.destroy()
+        self.full = fem_petsc.create_matrix(self.pattern)
+        fem_petsc.assemble_matrix(self.full, self.pattern)
+        self.full.assemble()
+        # A Dirichlet dof's zeroed row and column, and its zero diagonal, may lie
+        # outside the facets' pattern: zeros make no entries here (a subset of
+        # the step's matrix, which holds the whole pattern).
+        self.constrained = fem_petsc.create_matrix(self.pattern)
+        self.constrained.setOption(PETSc.Mat.Option.IGNORE_ZERO_ENTRIES, True)
+        fem_petsc.assemble_matrix(self.constrained, self.pattern, bcs=bcs, diag=0.0)
+        self.constrained.assemble()
 
     def _with_ghosts(self, values: np.ndarray) -> np.ndarray:
         """Per-cell values (owned cells, 2) extended to the ghosts by their owners."""

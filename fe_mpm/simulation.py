@@ -1354,11 +1354,11 @@ class Simulation:
         if self._shift is not None:
             self._shift.hold(bcs)
             hooks["after_jacobian"] = self._shift.correct
+        coupling = None if self.ghost is None else self.ghost.pattern
         if self._newton is None:  # its matrix has the pattern of every cell of the grid
             prefix = f"fe_mpm_{self.formulation.replace('-', '_')}_"
             pattern = forms.jacobian.bind_cells(np.arange(self.tracker.num_cells, dtype=np.int32))
             options = (self.petsc_options, self.timings, self.linear_solver, self.fields.U)
-            coupling = None if self.ghost is None else self.ghost.pattern
             size = parallel.largest(self.mesh.comm, float(self.tracker.sizes.max()))
             self._newton = NewtonSolver(
                 self.w,
@@ -1369,6 +1369,10 @@ class Simulation:
                 coupling,
                 strain_field=self.spec.volume_average,
             )
+        elif self.ghost is not None and self.ghost.changed:  # and the step's ghost facets
+            self._newton.couple(coupling)
+        if self.ghost is not None:
+            self.ghost.changed = False
 
         self._newton.clear_nonfinite()
 
