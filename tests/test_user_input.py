@@ -801,3 +801,31 @@ def test_two_supports_that_move_the_same_nodes_differently_warn():
         warnings.simplefilter("error")
         sim.step(1.0)  # once
         simulation([fe_mpm.Dirichlet(base), roller]).step(1.0)
+
+
+def test_a_serial_run_limits_numpys_blas_to_one_thread(monkeypatch):
+    """numpy's OpenBLAS kept a thread per core in a serial run, and with a second busy
+    process on a 2-core machine its dot products took 900 times as long (a vector of
+    50 000 entries, 7.7 ms); Cook with point domains ran in 15–16 s instead of 8
+    (2026-12-07). A Simulation now limits numpy's BLAS to one thread, unless the
+    user chose a count in the environment."""
+    from threadpoolctl import threadpool_info, threadpool_limits
+
+    def numpy_threads() -> list[int]:
+        return [
+            lib["num_threads"]
+            for lib in threadpool_info()
+            if lib["user_api"] == "blas" and "numpy" in lib["filepath"]
+        ]
+
+    for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+        monkeypatch.delenv(name, raising=False)
+    mesh = fe_mpm.meshes.rectangle_mesh((0.0, 0.0), (1.0, 1.0), (2, 2), comm=MPI.COMM_SELF)
+    with threadpool_limits(limits=2, user_api="blas"):
+        assert numpy_threads() and set(numpy_threads()) == {2}
+        fe_mpm.Simulation(mesh, fe_mpm.seed(mesh, 1), fe_mpm.NeoHookean(1.0, 0.3))
+        assert set(numpy_threads()) == {1}
+        monkeypatch.setenv("OPENBLAS_NUM_THREADS", "2")
+        threadpool_limits(limits=2, user_api="blas")
+        fe_mpm.Simulation(mesh, fe_mpm.seed(mesh, 1), fe_mpm.NeoHookean(1.0, 0.3))
+        assert set(numpy_threads()) == {2}
