@@ -554,7 +554,8 @@ def test_a_geostatic_layer_under_empty_cells_runs_in_dynamics_with_domains():
     a millimetre (`tests/test_initial_stress.py`), and its top domains rise into the
     empty cells above, where a sliver of a domain holds the cell's far nodes with
     almost no consistent mass. Without a ghost penalty (the dynamic default until
-    2026-12-06) the run stopped in its third step on a NaN residual (measured); with
+    2026-12-06) the run stopped in its third step on a NaN residual (measured then;
+    since fixed elsewhere, it runs without the penalty too, 2026-12-07); with
     the dynamic default γ = 0.001 it runs its five steps and stays near rest (fastest
     point 4.6e-3 m/s, the PPP's stir; bound 2e-2)."""
     grid, points, law, at_rest = geostatic_layer()
