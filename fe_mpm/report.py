@@ -319,7 +319,9 @@ class ProgressBar:
             self._bar.set_postfix(
                 t=f"{report.t:.4g}", newton=report.newton_iterations, refresh=False, **extra
             )
-            self._bar.update(report.dt / nominal)
+            # Summed step shares overshoot the total by round-off (tqdm then warns of
+            # clamping at the last step, as the copper Taylor bar's runs did).
+            self._bar.update(max(0.0, min(report.dt / nominal, self._bar.total - self._bar.n)))
 
     def close(self) -> None:
         """Close the bar, leaving its last state."""

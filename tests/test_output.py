@@ -330,3 +330,22 @@ def test_a_grid_cut_by_create_submesh_writes_its_output_and_refuses_a_checkpoint
     with pytest.raises(ValueError, match="no original cell indices.*create_submesh"):
         sim.checkpoint(tmp_path / "checkpoints")
     assert not list(tmp_path.glob("checkpoints/*"))  # no half-made folder left
+
+
+def test_the_progress_bar_ends_at_its_total_when_the_step_shares_overshoot_it():
+    """Each step counts as its share of the nominal step, and shares summed from step
+    times overshoot the total by round-off: tqdm warned of clamping at the last step
+    (the copper Taylor bar's runs, found by a helper, 2026-12-07)."""
+    import warnings
+    from types import SimpleNamespace
+
+    from fe_mpm.report import ProgressBar
+
+    bar = ProgressBar(10)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for k in range(10):
+            step = (k + 1) * 0.1 - k * 0.1  # 0.1 give or take an ulp or two
+            bar.update(SimpleNamespace(t=0.1 * k, dt=step * (1 + 1e-12), newton_iterations=1), 0.1)
+        bar.close()
+    assert bar._bar.n == 10
