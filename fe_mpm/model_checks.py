@@ -807,24 +807,29 @@ def warn_unbalanced_initial_stress(
     g = points.gdim
     b = np.zeros(g) if body_force is None else np.asarray(body_force, dtype=float)[:g]
     x, v = points.x[:, :g], points.volume
-    design = np.concatenate([np.ones((x.shape[0], 1)), x], axis=1)  # (n, g+1)
-    sigma = np.asarray(stress, dtype=float)[:, :g, :g].reshape(-1, g * g)
-    normal = parallel.total(comm, np.einsum("n,na,nb->ab", v, design, design))
-    moments = parallel.total(comm, np.einsum("n,na,ns->as", v, design, sigma))
     mass, volume = parallel.total(comm, np.array([points.mass.sum(), v.sum()]))
     lo = parallel.smallest(comm, x.min(axis=0, initial=np.inf))
     hi = parallel.largest(comm, x.max(axis=0, initial=-np.inf))
+    sigma = np.asarray(stress, dtype=float)[:, :g, :g].reshape(-1, g * g)
     largest = parallel.largest(comm, float(np.abs(sigma).max(initial=0.0)))
     if volume <= 0.0:
         return
+    extent = float(np.max(hi - lo))
+    # About the centre and over the extent: raw coordinates of a georeferenced grid
+    # (x near 5e5 m) left the normal matrix so ill-conditioned that the fit lost the
+    # vertical gradient and a layer at rest was warned (the review, 2026-12-07).
+    centre = parallel.total(comm, v @ x) / volume
+    scaled = (x - centre) / max(extent, np.finfo(float).tiny)
+    design = np.concatenate([np.ones((x.shape[0], 1)), scaled], axis=1)  # (n, g+1)
+    normal = parallel.total(comm, np.einsum("n,na,nb->ab", v, design, design))
+    moments = parallel.total(comm, np.einsum("n,na,ns->as", v, design, sigma))
     # lstsq: a layer of points in a plane leaves a gradient across it undetermined (0).
     fit = np.linalg.lstsq(normal, moments, rcond=1e-12)[0]
-    gradient = fit[1:].T.reshape(g, g, g)  # [i, j, k] = ∂σ_ij/∂x_k
+    gradient = fit[1:].T.reshape(g, g, g) / max(extent, np.finfo(float).tiny)  # ∂σ_ij/∂x_k
     held = -np.einsum("ijj->i", gradient)
     weight = mass / volume * b
     gap = float(np.linalg.norm(held - weight))
     scale = max(float(np.linalg.norm(held)), float(np.linalg.norm(weight)))
-    extent = float(np.max(hi - lo))
     if gap > UNBALANCED_SHARE * scale and gap * extent > UNBALANCED_STRESS_SHARE * largest > 0:
 
         def vector(v: np.ndarray) -> str:

@@ -238,8 +238,8 @@ class Tracker:
         out = np.where(allowed[np.maximum(cells, 0)] & (cells >= 0), cells, -1).astype(np.int32)
         tol = np.maximum(np.broadcast_to(tol, cells.shape), ON_FACET)
         for i in np.flatnonzero((out < 0) & (cells >= 0)):
-            score, cell = self._best_allowed(x[i], self._nodes_of[cells[i]], allowed)
-            if score >= -tol[i] and self.within_reach(x[i : i + 1], np.array([cell]), tol[i])[0]:
+            score, cell = self._best_allowed(x[i], self._nodes_of[cells[i]], allowed, tol[i])
+            if score >= -tol[i]:
                 out[i] = cell
         return out
 
@@ -260,17 +260,23 @@ class Tracker:
         return np.linalg.norm(x - nearest, axis=1) <= tol * self._heights[cells]
 
     def _best_allowed(
-        self, x: np.ndarray, nodes: np.ndarray, allowed: np.ndarray
+        self, x: np.ndarray, nodes: np.ndarray, allowed: np.ndarray, tol: float
     ) -> tuple[float, int]:
         """The allowed cell at ``nodes`` that holds the point ``x`` (g,) best.
 
-        Among the allowed cells at any of the (local) ``nodes``, the one whose
-        smallest barycentric coordinate at ``x`` is largest: (that coordinate, the
-        cell); (−inf, −1) if none.
+        Among the allowed cells at any of the (local) ``nodes`` that lie within reach
+        of ``x`` (:meth:`within_reach` with ``tol``), the one whose smallest
+        barycentric coordinate at ``x`` is largest: (that coordinate, the cell);
+        (−inf, −1) if none. (Taking the best coordinate first and asking its reach
+        after left a point with no cell where another lay within reach, the review
+        of 2026-12-07.)
         """
         owner, starts = self._cells_of_nodes()
         candidates = np.unique(np.concatenate([owner[starts[v] : starts[v + 1]] for v in nodes]))
         candidates = candidates[allowed[candidates]]
+        if candidates.size:
+            near = np.repeat(x[None, :], candidates.size, axis=0)
+            candidates = candidates[self.within_reach(near, candidates, tol)]
         if candidates.size == 0:
             return -np.inf, -1
         lam = self.barycentric(np.repeat(x[None, :], candidates.size, axis=0), candidates)
@@ -324,6 +330,7 @@ class Tracker:
         nodes[mine] = index_map.local_to_global(local).reshape(-1, k)
         nodes = parallel.largest(comm, nodes)
         score, choice = np.full(n, -np.inf), np.full(n, -1, dtype=np.int32)
+        tol_n = np.maximum(np.broadcast_to(tol, (n,)), ON_FACET)
         centroid = np.zeros((n, self.centroids.shape[1]))
         order, sorted_globals = self._nodes_by_global_index()
         starts = self._cells_of_nodes()[1]
@@ -332,7 +339,7 @@ class Tracker:
             local_nodes = order[at][sorted_globals[at] == nodes[i]]
             local_nodes = local_nodes[local_nodes < starts.size - 1]
             if local_nodes.size:
-                score[i], choice[i] = self._best_allowed(x[i], local_nodes, allowed)
+                score[i], choice[i] = self._best_allowed(x[i], local_nodes, allowed, tol_n[i])
                 if choice[i] >= 0:
                     centroid[i] = self.centroids[choice[i]]
         scores = np.array(comm.allgather(score))  # (ranks, n)
@@ -343,10 +350,6 @@ class Tracker:
             winner[i] = preferred(x[i], scores[:, i], centroids[:, i])
         close = scores[winner, np.arange(n)] >= -np.maximum(np.broadcast_to(tol, (n,)), ON_FACET)
         snapped = found & ~taken & close & (winner == rank)
-        if snapped.any():
-            mine = np.flatnonzero(snapped)
-            tol_n = np.broadcast_to(tol, (n,))
-            snapped[mine] = self.within_reach(x[mine], choice[mine], tol_n[mine])
         out[snapped] = choice[snapped]
         return out, found
 

@@ -402,3 +402,9 @@ def test_a_geostatic_stress_under_gravity_along_another_axis_is_warned():
     assert not _imbalance_warnings(grid, flat, fe_mpm.geostatic_stress(flat, H, G, K0), (0.0, -G))
     confined = np.broadcast_to(-1e6 * np.eye(3), (len(flat), 3, 3)).copy()
     assert not _imbalance_warnings(grid, flat, confined, (0.0, -G))
+    # Georeferenced coordinates: fitted on raw ones, the gradient was lost (the review).
+    far = rectangle_mesh((5e5, 6e6), (5e5 + W, 6e6 + H), (8, 4))
+    shifted = fe_mpm.seed(far, 3, density=RHO)
+    at_rest = fe_mpm.geostatic_stress(shifted, 6e6 + H, G, K0)
+    assert not _imbalance_warnings(far, shifted, at_rest, (0.0, -G))
+    assert _imbalance_warnings(far, shifted, at_rest, (0.0, G))

@@ -312,3 +312,26 @@ def test_a_point_held_equally_by_two_cells_takes_the_nearer_whatever_their_order
     for order in ([0, 1], [1, 0]):
         assert order[preferred(np.zeros(2), np.zeros(2), level[order])] == 1  # x 0 < 1
     assert preferred(x, np.array([-0.5, -0.1]), centroids[:2]) == 1
+
+
+def test_a_point_past_a_vertex_takes_the_allowed_cell_within_its_reach():
+    """A boundary point snaps to an allowed cell within its reach both ways: least
+    barycentric coordinate ≥ −tol and distance ≤ tol times the cell's largest height.
+    Taking the best coordinate first and asking its distance after left this point
+    with no cell, where another allowed cell lay within reach (the review of
+    2026-12-07: 6–8 % of the points the distance newly refused on 2D grids)."""
+    from mpi4py import MPI
+
+    mesh = dolfinx.mesh.create_unit_square(
+        MPI.COMM_SELF, 8, 8, diagonal=dolfinx.mesh.DiagonalType.right
+    )
+    tracker = Tracker(mesh)
+    allowed = np.linalg.norm(tracker.centroids - 0.5, axis=1) < 0.3
+    x = np.array([[0.20493903, 0.33160294]])
+    cells, _ = tracker.locate_with_ties(x)
+    assert not allowed[cells[0]]
+    (cell,) = tracker.snap_to(x, cells, allowed, 0.5)
+    assert cell >= 0 and allowed[cell]
+    assert tracker.barycentric(x, np.array([cell])).min() >= -0.5
+    assert tracker.within_reach(x, np.array([cell]), 0.5)[0]
+    assert tracker.claim(x, allowed, 0.5)[0][0] == cell
