@@ -131,6 +131,10 @@ s = 0.5 * a_roll * t**2
 error = float(np.sqrt(np.sum((s - s_h) ** 2)))  # Eq. 4.44 over the steps
 relative = float(s_h[-1] / s[-1] - 1.0)
 rolling = float(-spin[-1] * R / speed[-1])  # 1 when it rolls without slipping
+# The contact sticks and slips from step to step, so ωR/v at one instant swings (0.67
+# to 1.27 over the second half on R/10): its mean over the second half judges the roll.
+late = t >= 0.5 * t[-1]
+rolling_mean = float(np.mean(-spin[late] * R / speed[late]))
 wall = time.perf_counter() - START
 iterations = [r.newton_iterations for r in reports]
 n_points = int(parallel.total(grid.comm, len(points)))
@@ -141,7 +145,7 @@ print(
 print(
     f"  slide {s_h[-1]:.5f} m at t = {t[-1]:.3f} s; rolling {s[-1]:.5f} m "
     f"({100 * relative:+.1f} %), sliding {0.5 * g * math.sin(θ) * t[-1] ** 2:.5f} m; "
-    f"ωR/v = {rolling:.3f}"
+    f"ωR/v = {rolling:.3f}, its mean over the second half {rolling_mean:.3f}"
 )
 print(
     f"  Eq. 4.44 error over {t.size} instants: {error:.3g} m; Newton per step mean "
@@ -158,18 +162,23 @@ print(
 # disk rolls 11.7 % short of ½ a t², on h = R/20 5.6 % (first order in h). The check:
 # within 10 % of the rolling distance on R/20 and finer, 15 % on coarser grids. A
 # disk that slid would be 50 % ahead; one glued to the grid 100 % short. And it must
-# roll: ωR/v ≥ 0.8 (0.87 on R/10, 0.95 on R/20). Just above μ = tan θ / 3 a disk that
-# slipped (ωR/v = 0.73 at μ = 0.2, θ = 30°, R/10) came within 2.1 % of the rolling
-# distance, its slip making up for the grid's drag, and passed until 2026-12-06.
+# roll: ωR/v, averaged over the second half of the run, ≥ 0.85 (measured 2026-12-07:
+# 0.988 on R/10, 0.994 on R/20; with point domains 0.970–0.988, and 0.951 on R/20
+# with their dynamic ghost penalty). Just above μ = tan θ / 3 a disk that slipped
+# (μ = 0.2, θ = 30°, R/10: mean 0.723, never above 0.793) came within 2.1 % of the
+# rolling distance, its slip making up for the grid's drag, and passed until
+# 2026-12-06. Until 2026-12-07 the check took ωR/v at the last instant (≥ 0.8), which
+# swings with the contact's stick and slip: 0.87 on R/10, and 0.805 on R/20 with
+# domains, whose mean is 0.951.
 
 # +
 TOLERANCE = 0.10 if R / h >= 20 - 1e-9 else 0.15
-MIN_SPIN = 0.8
-passed = bool(abs(relative) <= TOLERANCE and rolling >= MIN_SPIN)
+MIN_SPIN = 0.85
+passed = bool(abs(relative) <= TOLERANCE and rolling_mean >= MIN_SPIN)
 print(
     f"check: slide vs ½ (⅔ g sin θ) t² (rolling without slip): {100 * relative:+.1f} % "
-    f"({'<=' if abs(relative) <= TOLERANCE else '>'} {100 * TOLERANCE:.0f} %), ωR/v = "
-    f"{rolling:.3f} ({'>=' if rolling >= MIN_SPIN else '<'} {MIN_SPIN}): "
+    f"({'<=' if abs(relative) <= TOLERANCE else '>'} {100 * TOLERANCE:.0f} %), mean ωR/v "
+    f"= {rolling_mean:.3f} ({'>=' if rolling_mean >= MIN_SPIN else '<'} {MIN_SPIN}): "
     f"{'PASS' if passed else 'FAIL'}"
 )
 if args.json:
@@ -181,6 +190,7 @@ if args.json:
                 "slide_m": float(s_h[-1]),
                 "rolling_m": float(s[-1]),
                 "spin_ratio": rolling,
+                "spin_ratio_mean": rolling_mean,
                 "points": n_points,
                 "steps": len(reports),
                 "newton_iterations_mean": float(np.mean(iterations)),
@@ -192,6 +202,6 @@ if args.json:
 if passed is False:
     sys.exit(
         f"rolling_disk.py: the disk rolled {100 * relative:+.1f} % from ½ a t² with "
-        f"ωR/v = {rolling:.3f}"
+        f"ωR/v = {rolling_mean:.3f} over the second half"
     )
 # -
