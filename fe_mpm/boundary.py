@@ -284,6 +284,21 @@ class Pressure:
         return _scale_at("Pressure", self.scale, t) * self.value
 
 
+def refuse_tags_of_other_entities(mesh: dolfinx.mesh.Mesh, facet_tags, owner: str = "") -> None:
+    """Refuse ``facet_tags`` whose entities are not the grid's facets (e.g. cell tags).
+
+    Their ``find()`` would give cell indices, taken for facet indices without a word.
+    ``owner`` begins the message (``"Simulation: "``).
+    """
+    tdim = mesh.topology.dim
+    if facet_tags.dim != tdim - 1:
+        raise ValueError(
+            f"{owner}facet_tags has entities of dimension {facet_tags.dim} but the facets "
+            f"of this {tdim}D mesh have dimension {tdim - 1}; cell tags cannot select "
+            "boundary facets (pass the facet tags of model_to_mesh, data.facet_tags)"
+        )
+
+
 def boundary_facets(
     mesh: dolfinx.mesh.Mesh,
     where: Where,
@@ -300,14 +315,9 @@ def boundary_facets(
         ValueError: ``facet_tags`` does not tag facets (e.g. cell tags), a tag
             is given without facet tags, or nothing is selected.
     """
-    tdim = mesh.topology.dim
-    fdim = tdim - 1
-    if facet_tags is not None and facet_tags.dim != fdim:
-        # find() would return cell indices, taken for facet indices without a word.
-        raise ValueError(
-            f"facet_tags has entities of dimension {facet_tags.dim} but the facets of this "
-            f"{tdim}D mesh have dimension {fdim}; cell tags cannot select boundary facets"
-        )
+    fdim = mesh.topology.dim - 1
+    if facet_tags is not None:
+        refuse_tags_of_other_entities(mesh, facet_tags)
     if callable(where):
         facets = dolfinx.mesh.locate_entities_boundary(mesh, fdim, _checked_marker(owner, where))
     else:

@@ -106,7 +106,7 @@ class GhostStabilisation:
         first = offsets[self._links]
         self._cells = np.column_stack([facet_cells.array[first], facet_cells.array[first + 1]])
         self._owned = self._links < owned
-        self._interior = self._links[self._owned]
+        self._interior = self._links[self._owned]  # every owned interior facet (for checks)
         cell_map = mesh.topology.index_map(tdim)
         self._owned_cells = cell_map.size_local
         self._num_cells = cell_map.size_local + cell_map.num_ghosts

@@ -20,7 +20,7 @@ import numpy as np
 from fe_mpm import parallel
 from fe_mpm._dolfinx import dolfinx
 from fe_mpm.bodies import bodies_of_cells, count_bodies
-from fe_mpm.boundary import PointDirichlet, RigidWall
+from fe_mpm.boundary import PointDirichlet, RigidWall, refuse_tags_of_other_entities
 from fe_mpm.checks import check_choice, check_int, check_range
 from fe_mpm.errors import warn
 from fe_mpm.formulations import FORMULATIONS, FormulationSpec
@@ -391,19 +391,12 @@ def check_facet_tags(mesh: dolfinx.mesh.Mesh, facet_tags) -> None:
     """
     if facet_tags is None:
         return
-    fdim = mesh.topology.dim - 1
-    dim = getattr(facet_tags, "dim", None)
-    if dim is None or not hasattr(facet_tags, "find"):
+    if not (hasattr(facet_tags, "dim") and hasattr(facet_tags, "find")):
         raise TypeError(
             f"Simulation: facet_tags must be dolfinx MeshTags of the grid's facets, got "
             f"{type(facet_tags).__name__}"
         )
-    if dim != fdim:
-        raise ValueError(
-            f"Simulation: facet_tags has entities of dimension {dim} but the facets of this "
-            f"{mesh.topology.dim}D mesh have dimension {fdim}; cell tags cannot select "
-            "boundary facets (pass the facet tags of model_to_mesh, data.facet_tags)"
-        )
+    refuse_tags_of_other_entities(mesh, facet_tags, "Simulation: ")
 
 
 def pressure_by_parts(
@@ -815,17 +808,18 @@ def warn_unbalanced_initial_stress(
     if volume <= 0.0:
         return
     extent = float(np.max(hi - lo))
+    length = max(extent, np.finfo(float).tiny)  # a single point has no extent
     # About the centre and over the extent: raw coordinates of a georeferenced grid
     # (x near 5e5 m) left the normal matrix so ill-conditioned that the fit lost the
     # vertical gradient and a layer at rest was warned (the review, 2026-12-07).
     centre = parallel.total(comm, v @ x) / volume
-    scaled = (x - centre) / max(extent, np.finfo(float).tiny)
+    scaled = (x - centre) / length
     design = np.concatenate([np.ones((x.shape[0], 1)), scaled], axis=1)  # (n, g+1)
     normal = parallel.total(comm, np.einsum("n,na,nb->ab", v, design, design))
     moments = parallel.total(comm, np.einsum("n,na,ns->as", v, design, sigma))
     # lstsq: a layer of points in a plane leaves a gradient across it undetermined (0).
     fit = np.linalg.lstsq(normal, moments, rcond=1e-12)[0]
-    gradient = fit[1:].T.reshape(g, g, g) / max(extent, np.finfo(float).tiny)  # ∂σ_ij/∂x_k
+    gradient = fit[1:].T.reshape(g, g, g) / length  # [i, j, k] = ∂σ_ij/∂x_k
     held = -np.einsum("ijj->i", gradient)
     weight = mass / volume * b
     gap = float(np.linalg.norm(held - weight))

@@ -333,11 +333,12 @@ class Simulation:
         model_checks.warn_dilatant_averaging(material, self.spec, dynamic)
         model_checks.warn_static_fluid(material, keeps_shape, dynamic)
         model_checks.take_density(material, points)
+        # The body force at the start, checked here (its length, finite components).
+        start_body_force = (
+            None if body_force is None else body_force_at(body_force, 0.0, mesh.geometry.dim)
+        )
         model_checks.check_weight_of_initial_stress(
-            mesh.comm,
-            points,
-            initial_stress is not None,
-            None if body_force is None else body_force_at(body_force, 0.0, mesh.geometry.dim),
+            mesh.comm, points, initial_stress is not None, start_body_force
         )
         self._started_stressed = initial_stress is not None
         if initial_stress is not None:  # refused on every rank if on one
@@ -345,10 +346,7 @@ class Simulation:
                 mesh.comm, start_stressed, points, material, initial_stress, self.spec.pressure
             )
             model_checks.warn_unbalanced_initial_stress(
-                mesh.comm,
-                points,
-                initial_stress,
-                None if body_force is None else body_force_at(body_force, 0.0, mesh.geometry.dim),
+                mesh.comm, points, initial_stress, start_body_force
             )
         for name, h in material.history.items():
             points.history.setdefault(name, h.initial_values(len(points)))
@@ -447,7 +445,7 @@ class Simulation:
             material,
             self.spec,
             ppp_alpha,
-            None if body_force is None else body_force_at(body_force, 0.0, mesh.geometry.dim),
+            start_body_force,
         )
         self._add_time("setup", t0)
         self._track()  # once now, so a bad initial layout fails at set-up
