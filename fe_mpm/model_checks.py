@@ -769,6 +769,34 @@ def check_weight_of_initial_stress(
         )
 
 
+def warn_placeholder_density(comm, points: MaterialPoints, body_force, dynamic: bool) -> None:
+    """Warn where points that weigh or move carry seed's placeholder density, 1 kg/m³.
+
+    Given neither to :func:`~fe_mpm.seed` nor to the law, the density is 1 kg/m³. Under
+    a body force or in dynamics that is rarely meant: a new user's debris flow of
+    2000 kg/m³ pushed its bed with 24 N/m instead of about 100 kN/m, and nothing said
+    so (2026-12-07). A script that means 1 kg/m³ says so with ``density=1.0``.
+    """
+    weighs = body_force is not None and (
+        callable(body_force) or np.any(np.asarray(body_force, dtype=float) != 0.0)
+    )
+    placeholder = (
+        (weighs or dynamic)
+        and len(points) > 0
+        and not points.density_given
+        # masses a script set by hand after seeding are its own
+        and np.allclose(points.mass, points.volume / np.linalg.det(points.F), rtol=1e-12)
+    )
+    if parallel.any_rank(comm, bool(placeholder)):
+        moves = "a body force acts on them" if weighs else "the run is dynamic"
+        warn(
+            f"Simulation: {moves}, but the points have no density (neither "
+            "seed(..., density=...) nor the law's density= was given), so they carry "
+            "seed's placeholder, 1 kg/m³: a soil of 2000 kg/m³ would weigh and push its "
+            "walls 2000 times less. Give the density, or density=1.0 if 1 kg/m³ is meant."
+        )
+
+
 #: An initial stress is out of balance with the body force where the weight it holds up
 #: (−div σ, fitted linearly over the points) and the body's weight ρ̄ b differ by more
 #: than this share of the larger...

@@ -64,6 +64,12 @@ class StepReport:
             :meth:`Simulation.run <fe_mpm.Simulation.run>`; 0 for a direct ``step``.
         walls: The force of each rigid wall on the body, name ->
             :class:`~fe_mpm.walls.WallForces` (normal, tangential, node by node).
+        grid_kinetic_energy: In dynamics, the kinetic energy of the grid's velocity at
+            ``t`` (J; J/m in 2D; 0 in static runs): the motion the body carries. The
+            points' ``kinetic_energy()`` is at least this, and also counts velocity
+            the grid never sees, which a body at rest can keep for ever (see
+            :meth:`fe_mpm.dynamics.NewmarkDynamics.grid_kinetic_energy`): judge rest by
+            this one.
     """
 
     step: int
@@ -85,6 +91,7 @@ class StepReport:
     lost_load: dict[str, float] = field(default_factory=dict)
     failed_iterations: int = 0
     walls: dict[str, WallForces] = field(default_factory=dict)
+    grid_kinetic_energy: float = 0.0
 
     @classmethod
     def of_step(

@@ -340,6 +340,7 @@ class Simulation:
         model_checks.check_weight_of_initial_stress(
             mesh.comm, points, initial_stress is not None, start_body_force
         )
+        model_checks.warn_placeholder_density(mesh.comm, points, body_force, dynamic)
         self._started_stressed = initial_stress is not None
         if initial_stress is not None:  # refused on every rank if on one
             parallel.check_together(
@@ -1075,6 +1076,9 @@ class Simulation:
                 self._newton.where_it_failed(),
             )
         self.refresh_material(tangent=False)  # the converged iterate's, for reactions and history
+        grid_energy = (
+            0.0 if self.dynamics is None else self.dynamics.grid_kinetic_energy(self.w.x.array)
+        )
         reactions = self.conditions.reactions(self._internal_force(R))
         # Update the points (the last check may still reject the step); the grid is reset.
         t0 = time.perf_counter()
@@ -1095,7 +1099,7 @@ class Simulation:
         report = StepReport.of_step(
             k, t_new, result, self._current, reactions, self.markers, self.tracking, self.conditions
         )
-        report.walls = walls
+        report.walls, report.grid_kinetic_energy = walls, grid_energy
         self.history.append(report)
         if self._writes_csv:  # (with domains the output is set aside in the step)
             self._unwritten.append(report)

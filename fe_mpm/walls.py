@@ -422,7 +422,7 @@ class RigidWalls:
             normal_part = float(total @ wall.normal)
             forces[wall.spec.name] = WallForces(
                 total=total,
-                normal=-normal_part,
+                normal=0.0 - normal_part,  # not −0.0 on a wall nothing touches
                 tangential=total - normal_part * wall.normal,
                 nodes=parallel.gathered(comm, coords[touching].reshape(-1)).reshape(-1, g),
                 nodal=parallel.gathered(comm, nodal[touching].reshape(-1)).reshape(-1, g),

@@ -947,3 +947,42 @@ def test_a_marker_far_from_the_body_is_warned():
         sim.add_marker("beside", (1.5, 0.5))
     with pytest.warns(UserWarning, match=r"marker 'typo' at \[3.5 0.5\] lies 2.58 m from the"):
         sim.add_marker("typo", (3.5, 0.5))
+
+
+def test_points_without_a_density_that_weigh_or_move_are_warned():
+    """Given neither to seed nor to the law, the density is 1 kg/m³. A new user's debris
+    flow (2026-12-07) forgot it and read a bed force of 24 N/m where its 2000 kg/m³ soil
+    pushed with about 100 kN/m, without a word. Under gravity or in dynamics it is now
+    warned; a density given anywhere, or masses set by hand, are not."""
+    mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (2, 2))
+    law = fe_mpm.NeoHookean(1e6, 0.3)
+    gravity = (0.0, -9.81)
+    for options in (
+        dict(body_force=gravity),
+        dict(body_force=lambda t: gravity),
+        dict(dynamic=True),
+    ):
+        with pytest.warns(UserWarning, match=r"no density .* placeholder, 1 kg/m³"):
+            fe_mpm.Simulation(mesh, fe_mpm.seed(mesh, 1), law, **options)
+    weighed = fe_mpm.seed(mesh, 1)
+    weighed.mass *= 2000.0
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        fe_mpm.Simulation(mesh, fe_mpm.seed(mesh, 1), law)  # nothing weighs or moves
+        fe_mpm.Simulation(mesh, fe_mpm.seed(mesh, 1, density=1.0), law, body_force=gravity)
+        dense = fe_mpm.NeoHookean(1e6, 0.3, density=2000.0)
+        fe_mpm.Simulation(mesh, fe_mpm.seed(mesh, 1), dense, dynamic=True)
+        fe_mpm.Simulation(mesh, weighed, law, body_force=gravity)
+
+
+@pytest.mark.parametrize("law", [fe_mpm.DruckerPrager, fe_mpm.MohrCoulomb])
+def test_a_friction_angle_that_looks_like_radians_is_warned(law):
+    """Angles are in degrees. A new user's φ = 0.5236 (30° in radians) ran as a soil of
+    half a degree, without a word (2026-12-07): an angle in (0, π/2] is warned, with
+    the degrees it would be; 2° and 0 are not."""
+    with pytest.warns(UserWarning, match=r"friction_angle is in degrees, .* give 30"):
+        law(1e7, 0.3, cohesion=0.0, friction_angle=0.5236)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        law(1e7, 0.3, cohesion=0.0, friction_angle=2.0)
+        law(1e7, 0.3, cohesion=10.0, friction_angle=0.0)

@@ -395,6 +395,8 @@ def test_a_body_leaves_a_wall_and_the_wall_lets_go():
     assert np.min(points.x[:, 1] - points.x0[:, 1]) > 0.0  # everything has lifted
     last = sim.history[-1].walls["base"]
     assert np.all(last.total == 0.0) and last.normal == 0.0
+    # +0.0: a user's CSV and printouts showed "-0.0" for walls nothing touched (2026-12-07).
+    assert math.copysign(1.0, last.normal) == 1.0
     assert np.all(sim.walls.walls[0].extension.x.array == 0.0)
 
 

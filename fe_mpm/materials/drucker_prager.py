@@ -211,7 +211,7 @@ class DruckerPrager(_ConeLaw):
     def __post_init__(self) -> None:
         self._check_moduli()
         self._check("cohesion", lo=0.0)
-        self._check("friction_angle", lo=0.0, hi=90.0, hi_open=True)
+        self._check_angle("friction_angle", lo=0.0, hi=90.0, hi_open=True)
         self._check("dilatancy_angle", lo=0.0, hi=self.friction_angle)
         self._check("hardening", lo=0.0)
         if self.match not in MATCHES:
@@ -288,7 +288,7 @@ class SmoothCapDruckerPrager(_ConeLaw):
 
     def __post_init__(self) -> None:
         self._check_moduli()
-        self._check("friction_angle", lo=0.0, hi=90.0, lo_open=True, hi_open=True)
+        self._check_angle("friction_angle", lo=0.0, hi=90.0, lo_open=True, hi_open=True)
         self._check("deviatoric_strength", lo=0.0, lo_open=True)
         self._check("associativity", lo=0.0, hi=1.0)
 

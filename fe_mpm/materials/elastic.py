@@ -2,13 +2,20 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 import ufl
 
 from fe_mpm.checks import check_range
+from fe_mpm.errors import warn
 from fe_mpm.materials.state import HistoryField, PointState
+
+#: A friction angle (degrees) in (0, this] is most likely radians given for degrees:
+#: π/2 rad is 90°. A new user's φ = 0.5236 ran as a cohesionless soil at half a degree,
+#: without a word (2026-12-07).
+RADIAN_LIKE_ANGLE = math.pi / 2
 
 
 class CheckedFields:
@@ -21,6 +28,17 @@ class CheckedFields:
         """
         value = check_range(type(self).__name__, field, getattr(self, field), **bounds)
         object.__setattr__(self, field, value)  # the laws are frozen dataclasses
+
+    def _check_angle(self, field: str, **bounds: float | bool) -> None:
+        """Check an angle in degrees as :meth:`_check` does, and warn if it looks like radians."""
+        self._check(field, **bounds)
+        value = getattr(self, field)
+        if 0.0 < value <= RADIAN_LIKE_ANGLE:
+            warn(
+                f"{type(self).__name__}: {field} is in degrees, and {value:g}° is under "
+                f"{RADIAN_LIKE_ANGLE:.4g}°; if {value:g} is radians, give "
+                f"{math.degrees(value):.4g}"
+            )
 
     def _check_density(self) -> None:
         """The density is None (the points give it) or > 0."""

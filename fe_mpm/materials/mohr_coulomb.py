@@ -66,7 +66,7 @@ class MohrCoulomb(LinearisedStress, IsotropicModuli):
     def __post_init__(self) -> None:
         self._check_moduli()
         self._check("cohesion", lo=0.0)
-        self._check("friction_angle", lo=0.0, hi=90.0, hi_open=True)
+        self._check_angle("friction_angle", lo=0.0, hi=90.0, hi_open=True)
         self._check("dilatancy_angle", lo=0.0, hi=self.friction_angle)
         if self.friction_angle == 0.0 and self.cohesion == 0.0:
             raise ValueError(
