@@ -15,7 +15,10 @@
   running: ``-O0`` compiles the largest (3D P2/P1) in 2.5 s instead of 13 s at ``-O1``
   and 39 s at DOLFINx's default ``-O2``. The demos run long on few forms, so they keep
   ``-O1``. No level changes a result: none reorders floating-point operations (no
-  ``-ffast-math``). Users keep DOLFINx's default.
+  ``-ffast-math``). Users keep DOLFINx's default. A worker that finds another
+  compiling the same form waits for it up to the options' ``timeout``: DOLFINx's 10 s
+  ran out on a machine loaded nine-fold (a 3D form of Mast's laws, 2026-12-07), so
+  the suite waits up to :data:`JIT_TIMEOUT` seconds.
 - fe_mpm is imported first: the dolfinx-solver-real wheel must be imported before
   dolfinx, petsc4py and mpi4py, and fe_mpm takes care of that.
 - Test order (:func:`pytest_collection_modifyitems`): under xdist the ``slow``
@@ -37,12 +40,16 @@ os.environ.setdefault("MPIR_CVAR_CH4_PROGRESS_THROTTLE", "1")
 os.environ.setdefault("MPIR_CVAR_CH4_PROGRESS_THROTTLE_NO_PROGRESS_COUNT", "100")
 
 
+#: Seconds a process waits for another's compile of the same form (DOLFINx: 10).
+JIT_TIMEOUT = 300
+
+
 def _jit_config(*flags: str) -> str:
     """A temporary XDG_CONFIG_HOME whose DOLFINx JIT options add ``flags`` to the C compiler."""
     config = Path(tempfile.mkdtemp(prefix="fe_mpm_jit_"))
     (config / "dolfinx").mkdir()
     (config / "dolfinx" / "dolfinx_jit_options.json").write_text(
-        json.dumps({"cffi_extra_compile_args": [*flags, "-g0"]})
+        json.dumps({"cffi_extra_compile_args": [*flags, "-g0"], "timeout": JIT_TIMEOUT})
     )
     atexit.register(shutil.rmtree, config, ignore_errors=True)
     return str(config)
