@@ -92,7 +92,7 @@ def cell_crossing() -> None:
         block = np.flatnonzero(
             (c[:, 0] > 0.2) & (c[:, 0] < 1.0) & (c[:, 1] > 0.2) & (c[:, 1] < 1.0)
         )
-        points = fe_mpm.seed(mesh, per_cell=per_cell, cells=block)
+        points = fe_mpm.seed(mesh, per_cell=per_cell, density=1.0, cells=block)  # kg/m³
         velocity = np.array([0.37, 0.23])
         points.velocity[:] = velocity
         sim = fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(E, 0.3), dynamic=True)

@@ -780,20 +780,23 @@ def warn_placeholder_density(comm, points: MaterialPoints, body_force, dynamic: 
     weighs = body_force is not None and (
         callable(body_force) or np.any(np.asarray(body_force, dtype=float) != 0.0)
     )
-    placeholder = (
-        (weighs or dynamic)
-        and len(points) > 0
-        and not points.density_given
-        # masses a script set by hand after seeding are its own
-        and np.allclose(points.mass, points.volume / np.linalg.det(points.F), rtol=1e-12)
-    )
-    if parallel.any_rank(comm, bool(placeholder)):
-        moves = "a body force acts on them" if weighs else "the run is dynamic"
+    # Point by point: in zones of several laws those whose law gives a density have it,
+    # the others keep the placeholder; masses a script set by hand are its own.
+    light = 0
+    if (weighs or dynamic) and not points.density_given:
+        reference_volume = points.volume / np.linalg.det(points.F)
+        light = int(
+            np.count_nonzero(np.isclose(points.mass, reference_volume, rtol=1e-12, atol=0.0))
+        )
+    light = parallel.total(comm, light)
+    if light:
+        moves = "a body force is given" if weighs else "the run is dynamic"
         warn(
-            f"Simulation: {moves}, but the points have no density (neither "
-            "seed(..., density=...) nor the law's density= was given), so they carry "
-            "seed's placeholder, 1 kg/m³: a soil of 2000 kg/m³ would weigh and push its "
-            "walls 2000 times less. Give the density, or density=1.0 if 1 kg/m³ is meant."
+            f"Simulation: {moves}, but {light} point(s) have no density (neither "
+            "seed(..., density=...) nor their law's density= was given), so they carry "
+            "seed's placeholder, 1 kg/m³: a soil of 2000 kg/m³ would weigh, push its walls "
+            "and resist acceleration 2000 times less. Give the density, or density=1.0 if "
+            "1 kg/m³ is meant."
         )
 
 

@@ -65,11 +65,14 @@ class StepReport:
         walls: The force of each rigid wall on the body, name ->
             :class:`~fe_mpm.walls.WallForces` (normal, tangential, node by node).
         grid_kinetic_energy: In dynamics, the kinetic energy of the grid's velocity at
-            ``t`` (J; J/m in 2D; 0 in static runs): the motion the body carries. The
-            points' ``kinetic_energy()`` is at least this, and also counts velocity
-            the grid never sees, which a body at rest can keep for ever (see
+            ``t`` over all ranks (J; J/m in 2D; 0 in static runs): the motion the body
+            carries. The points' energy (``points.kinetic_energy()`` summed over the
+            ranks) also counts velocity the grid never sees, which a body at rest can
+            keep for ever (see
             :meth:`fe_mpm.dynamics.NewmarkDynamics.grid_kinetic_energy`): judge rest by
-            this one.
+            this one. While the body moves the two differ by a few per cent either
+            way (the row-sum masses count a little more energy than the points of a
+            smooth motion carry).
     """
 
     step: int

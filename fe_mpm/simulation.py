@@ -1077,7 +1077,9 @@ class Simulation:
             )
         self.refresh_material(tangent=False)  # the converged iterate's, for reactions and history
         grid_energy = (
-            0.0 if self.dynamics is None else self.dynamics.grid_kinetic_energy(self.w.x.array)
+            0.0
+            if self.dynamics is None
+            else self.dynamics.grid_kinetic_energy(self.w.x.array, bcs, dt)
         )
         reactions = self.conditions.reactions(self._internal_force(R))
         # Update the points (the last check may still reject the step); the grid is reset.

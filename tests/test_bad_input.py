@@ -962,10 +962,16 @@ def test_points_without_a_density_that_weigh_or_move_are_warned():
         dict(body_force=lambda t: gravity),
         dict(dynamic=True),
     ):
-        with pytest.warns(UserWarning, match=r"no density .* placeholder, 1 kg/m³"):
+        with pytest.warns(UserWarning, match=r"8 point\(s\) have no density .* placeholder"):
             fe_mpm.Simulation(mesh, fe_mpm.seed(mesh, 1), law, **options)
+    # Two laws, one with a density: the other's points are the light ones (a reviewer).
+    zoned = fe_mpm.seed(mesh, 1)
+    zoned.material[:4] = 1
+    laws = [law, fe_mpm.NeoHookean(1e6, 0.3, density=2000.0)]
+    with pytest.warns(UserWarning, match=r"4 point\(s\) have no density"):
+        fe_mpm.Simulation(mesh, zoned, laws, body_force=gravity)
     weighed = fe_mpm.seed(mesh, 1)
-    weighed.mass *= 2000.0
+    weighed.mass *= 1.0 + 1e-9  # set by hand: the script's own
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         fe_mpm.Simulation(mesh, fe_mpm.seed(mesh, 1), law)  # nothing weighs or moves
@@ -975,14 +981,27 @@ def test_points_without_a_density_that_weigh_or_move_are_warned():
         fe_mpm.Simulation(mesh, weighed, law, body_force=gravity)
 
 
-@pytest.mark.parametrize("law", [fe_mpm.DruckerPrager, fe_mpm.MohrCoulomb])
-def test_a_friction_angle_that_looks_like_radians_is_warned(law):
+@pytest.mark.parametrize(
+    "law, smallest",
+    [
+        (fe_mpm.DruckerPrager, 0.0),
+        (fe_mpm.MohrCoulomb, 0.0),
+        (
+            lambda E, nu, cohesion, friction_angle: fe_mpm.MatsuokaNakai.constant(
+                E, nu, friction_angle, cohesion
+            ),
+            2.0,  # its angle lies in (0, 90)
+        ),
+    ],
+    ids=["drucker-prager", "mohr-coulomb", "matsuoka-nakai"],
+)
+def test_a_friction_angle_that_looks_like_radians_is_warned(law, smallest):
     """Angles are in degrees. A new user's φ = 0.5236 (30° in radians) ran as a soil of
     half a degree, without a word (2026-12-07): an angle in (0, π/2] is warned, with
     the degrees it would be; 2° and 0 are not."""
-    with pytest.warns(UserWarning, match=r"friction_angle is in degrees, .* give 30"):
+    with pytest.warns(UserWarning, match=r"(friction_angle|a0) is in degrees, .* give 30"):
         law(1e7, 0.3, cohesion=0.0, friction_angle=0.5236)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         law(1e7, 0.3, cohesion=0.0, friction_angle=2.0)
-        law(1e7, 0.3, cohesion=10.0, friction_angle=0.0)
+        law(1e7, 0.3, cohesion=10.0, friction_angle=smallest)

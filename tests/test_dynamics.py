@@ -132,6 +132,15 @@ def test_the_grid_kinetic_energy_counts_the_motion_the_grid_carries_and_not_the_
     assert all(r.grid_kinetic_energy < 1e-25 for r in reports)
     assert np.max(np.abs(points.x - points.x0)) < 1e-14
 
+    # Held nodes move at their prescribed rate, here none: Newmark's own v_{n+1} there,
+    # −ṽ, counted the projection's energy (a reviewer, 2026-12-07).
+    points = fe_mpm.seed(mesh, per_cell=6, density=2.0)
+    points.velocity[:] = (0.5, -0.25)
+    held = [fe_mpm.Dirichlet(lambda x: np.full(x.shape[1], True))]
+    sim = fe_mpm.Simulation(mesh, points, law, dynamic=True, dirichlet=held)
+    (report,) = sim.run(t_end=0.01, n_steps=1, progress=False)
+    assert report.grid_kinetic_energy == 0.0
+
 
 def test_a_free_body_that_vibrates_is_converged_against_its_own_forces():
     """No loads, no supports: a block stretched by 5 % springs back. Its stresses

@@ -393,7 +393,7 @@ class ModifiedDruckerPrager(_ConeLaw):
     def __post_init__(self) -> None:
         self._check_moduli()
         self._check("a4", lo=0.0, hi=90.0, hi_open=True)
-        self._check("a0", lo=self.a4, hi=90.0, hi_open=True)
+        self._check_angle("a0", lo=self.a4, hi=90.0, hi_open=True)
         for name in ("a1", "a2", "a3", "a5", "apex_stress"):
             self._check(name, lo=0.0)
         if self.a1 > 0.0 and self.a3 == 0.0:

@@ -12,7 +12,7 @@ from fe_mpm.checks import check_range
 from fe_mpm.errors import warn
 from fe_mpm.materials.state import HistoryField, PointState
 
-#: A friction angle (degrees) in (0, this] is most likely radians given for degrees:
+#: A friction angle (degrees; Mast's a0) in (0, this] is most likely radians given for degrees:
 #: π/2 rad is 90°. A new user's φ = 0.5236 ran as a cohesionless soil at half a degree,
 #: without a word (2026-12-07).
 RADIAN_LIKE_ANGLE = math.pi / 2
