@@ -211,10 +211,12 @@ t, H, L, energy = np.array(history).T
 # enter and leave that strip, and stands still between them while the sand still
 # flows (that rule stopped a = 2 at 0.20 s, with L at 0.93 of its later 1.22). Here
 # t_f is the first time after its peak that the kinetic energy falls below 5 % of
-# it, and H_f and L_f are taken there. Without damping the deposit keeps ringing
-# (at a = 2 its kinetic energy stays near 0.017 J/m, 3 % of the peak), and l keeps
-# drifting with points crossing the strip (1.22 to 1.38 from 0.36 to 0.61 s) while
-# the front stands.
+# it, and H_f and L_f are taken there. The points' energy then stays near 0.015 J/m
+# at a = 2 (2 % of the peak) for good, while the grid's falls to 2e-6 J/m
+# (`StepReport.grid_kinetic_energy`, measured 2026-12-07): the points keep velocity
+# that the projection averages to zero at every node, which moves nothing
+# (docs/dynamics.md, "Energy"). l keeps drifting with points crossing the strip
+# (1.22 to 1.38 from 0.36 to 0.61 s) while the front stands.
 
 # +
 peak = int(np.argmax(energy))
