@@ -222,6 +222,7 @@ def falling_block(mass, steps, restore=None, supported=True, **options):
         "corner": sim.marker("corner").tolist(),
         "height": total(points.x[:, 1] * points.mass),
         "stress": total(points.stress[:, 1, 1] * points.volume),
+        "grid energy": [r.grid_kinetic_energy for r in reports],
         "seeded": seeded,
         "migrated": sum(r.migrated_points for r in reports),
         # Rank 0 alone reads the count, as a user's `if rank == 0: print(...)` does; it
@@ -858,7 +859,8 @@ def test_a_block_falling_onto_the_base_in_dynamics_gives_the_serial_answer(tmp_p
     part of the grid (some ranks start with no points) falls onto the clamped base and
     yields (consistent mass, 4 steps of 0.05 s; lumped, 10; consistent with the
     velocity projected in 8 passes, 4). Measured against serial: iterations equal,
-    marker, mass-weighted height and integrated stress to 1e-14 relative, also on 2
+    marker, mass-weighted height, integrated stress and the grid's kinetic energy
+    after each step to 1e-14 relative, also on 2
     ranks; on 3 ranks points cross to other ranks.
 
     Then the lumped run on 2 ranks with a checkpoint after its fifth step, restored on
@@ -887,6 +889,9 @@ def _check_fall(got: dict, want: dict, iterations: list, case) -> None:
     assert got["iterations"] == iterations, case
     for key in ("corner", "height", "stress"):
         assert np.allclose(got[key], want[key], rtol=1e-10, atol=0), (case, key)
+    # The grid's kinetic energy, summed over the ranks' owned nodes (measured 3e-16).
+    steps = len(got["grid energy"])
+    assert np.allclose(got["grid energy"], want["grid energy"][-steps:], rtol=1e-10, atol=0), case
 
 
 def test_points_that_fall_out_of_the_grid_are_dropped_on_every_rank_as_in_serial(tmp_path):
