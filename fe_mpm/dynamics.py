@@ -258,7 +258,7 @@ class NewmarkDynamics:
         return math.sqrt(self.space.mesh.comm.allreduce(squares))
 
     def grid_kinetic_energy(self, w: np.ndarray, bcs: list, dt: float) -> float:
-        """½ Σ_I m_I |v_I|² of the grid's velocity at the step's end (J; J/m in 2D).
+        """The kinetic energy ``½ Σ_I m_I |v_I|²`` of the grid at the step's end (J; J/m in 2D).
 
         Newmark's v_{n+1} of the increment in ``w`` (local values), except at the
         nodes the step's ``bcs`` hold, which move at their prescribed rate Δu/Δt
