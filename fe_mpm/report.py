@@ -158,8 +158,9 @@ def write_steps(history: list[StepReport], path: str | Path, first: int = 0) -> 
     """Write one CSV row per step of ``history``: what a load–displacement curve needs.
 
     Columns: ``step, t, dt, newton_iterations, relative_residual, force_scale,
-    occupied_cells``, then each reaction's components (``{name}_x``, in N, per unit
-    thickness in 2D) and each marker's position (``{name}_x``, m): those the run's
+    occupied_cells, grid_kinetic_energy``, then each reaction's components
+    (``{name}_x``, in N, per unit thickness in 2D) and each marker's position
+    (``{name}_x``, m): those the run's
     first step reports (a marker added later is not written). Every rank's reports
     carry the same numbers, so call it on one.
 
@@ -185,6 +186,7 @@ def write_steps(history: list[StepReport], path: str | Path, first: int = 0) -> 
         "relative_residual",
         "force_scale",
         "occupied_cells",
+        "grid_kinetic_energy",
     ]
     vectors = [("reactions", name) for name in head.reactions]
     vectors += [("markers", name) for name in head.markers]

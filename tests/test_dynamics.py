@@ -101,7 +101,9 @@ def test_free_flight_through_several_cells_in_one_step():
     assert all("within the floor" in r.converged_reason for r in reports)
 
 
-def test_the_grid_kinetic_energy_counts_the_motion_the_grid_carries_and_not_the_points_noise():
+def test_the_grid_kinetic_energy_counts_the_motion_the_grid_carries_and_not_the_points_noise(
+    tmp_path,
+):
     """``StepReport.grid_kinetic_energy`` is ½ Σ m_I |v_I|² of the grid's velocity. A
     free block in uniform flight carries ½ M v² in both measures. A velocity that the
     mass-weighted projection averages to zero at every node (six points a triangle
@@ -112,9 +114,11 @@ def test_the_grid_kinetic_energy_counts_the_motion_the_grid_carries_and_not_the_
     law = fe_mpm.NeoHookean(1e3, 0.3)
     points = fe_mpm.seed(mesh, per_cell=6, density=2.0)
     points.velocity[:] = (0.5, -0.25)
-    sim = fe_mpm.Simulation(mesh, points, law, dynamic=True)
+    sim = fe_mpm.Simulation(mesh, points, law, dynamic=True, output_dir=tmp_path)
     (report,) = sim.run(t_end=0.01, n_steps=1, progress=False)
     assert report.grid_kinetic_energy == pytest.approx(0.5 * 2.0 * (0.5**2 + 0.25**2), rel=1e-12)
+    steps = np.genfromtxt(tmp_path / "steps.csv", delimiter=",", names=True)
+    assert float(steps["grid_kinetic_energy"]) == report.grid_kinetic_energy  # its column
 
     points = fe_mpm.seed(mesh, per_cell=6, density=2.0)
     space = dolfinx.fem.functionspace(mesh, ("Lagrange", 1))
