@@ -232,11 +232,8 @@ class NewmarkDynamics:
         constrain (Dirichlet and unsupported nodes) get a₀ = 0. ``points`` are the
         material points, whose acceleration is set; ``dt`` is the first step's length (s).
         """
-        constrained = np.zeros(self.n_unknowns, dtype=bool)
-        for bc in bcs:
-            constrained[bc.dof_indices()[0]] = True
         points.acceleration = self.initial_acceleration(
-            residual_at_rest, mass_matrix, layout, constrained, bary, preload
+            residual_at_rest, mass_matrix, layout, self._held(bcs), bary, preload
         )
         self.project(layout.cell, bary, points.mass, points.velocity, points.acceleration, dt)
 
@@ -250,7 +247,7 @@ class NewmarkDynamics:
         consistent one (N; N/m in 2D). Collective.
         """
         d = self.data
-        a0, a, v = self._owned_newmark(w)
+        _, a0, a, v = self._owned_newmark(w)
         alpha, damping = float(d.bossak.value), float(d.damping.value)
         mass = self.grid_mass[: len(a), None]
         force = mass * ((1.0 - alpha) * a + alpha * a0 + damping * v)
@@ -268,19 +265,23 @@ class NewmarkDynamics:
         projection averages to zero, which a deposit at rest kept for ever (1.7 % of
         its peak energy, where this fell to 2e-5 of it). Collective.
         """
-        _, _, v = self._owned_newmark(w)
-        g = v.shape[1]
-        held = np.zeros(self.n_unknowns, dtype=bool)
-        for bc in bcs:
-            held[bc.dof_indices()[0]] = True
-        held = held[self.u_dofs][: v.size].reshape(v.shape)
-        du = w[self.u_dofs][: v.size].reshape(-1, g)
+        du, _, _, v = self._owned_newmark(w)
+        held = self._held(bcs)[self.u_dofs][: v.size].reshape(v.shape)
         v = np.where(held, du / dt, v)
         energy = 0.5 * float(self.grid_mass[: len(v)] @ np.einsum("ij,ij->i", v, v))
         return self.space.mesh.comm.allreduce(energy)
 
-    def _owned_newmark(self, w: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """ã_n, and Newmark's a_{n+1}, v_{n+1} of the increment in ``w``, at the owned nodes."""
+    def _held(self, bcs: list) -> np.ndarray:
+        """Which dofs of ``w`` (local values) the step's ``bcs`` constrain (bool)."""
+        held = np.zeros(self.n_unknowns, dtype=bool)
+        for bc in bcs:
+            held[bc.dof_indices()[0]] = True
+        return held
+
+    def _owned_newmark(
+        self, w: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Δu in ``w``, ã_n, and Newmark's a_{n+1}, v_{n+1} of it, at the owned nodes."""
         d, space = self.data, self.space
         g = space.dofmap.index_map_bs
         nodes = space.dofmap.index_map.size_local
@@ -289,7 +290,7 @@ class NewmarkDynamics:
         a0 = d.a_n.x.array[: nodes * g].reshape(nodes, g)
         a = float(d.c_a.value) * du - float(d.c_av.value) * v0 - float(d.c_aa.value) * a0
         v = float(d.c_v.value) * du + float(d.c_vv.value) * v0 + float(d.c_va.value) * a0
-        return a0, a, v
+        return du, a0, a, v
 
     def updated_velocity(
         self,

@@ -276,10 +276,11 @@ class Tracker:
         candidates = candidates[allowed[candidates]]
         if candidates.size:
             near = np.repeat(x[None, :], candidates.size, axis=0)
-            candidates = candidates[self.within_reach(near, candidates, tol)]
+            reach = self.within_reach(near, candidates, tol)
+            candidates, near = candidates[reach], near[reach]
         if candidates.size == 0:
             return -np.inf, -1
-        lam = self.barycentric(np.repeat(x[None, :], candidates.size, axis=0), candidates)
+        lam = self.barycentric(near, candidates)
         best = preferred(x, lam.min(axis=1), self.centroids[candidates])
         return float(lam[best].min()), int(candidates[best])
 
@@ -348,7 +349,7 @@ class Tracker:
         winner = np.argmax(scores, axis=0)
         for i in np.flatnonzero(found & ~taken):
             winner[i] = preferred(x[i], scores[:, i], centroids[:, i])
-        close = scores[winner, np.arange(n)] >= -np.maximum(np.broadcast_to(tol, (n,)), ON_FACET)
+        close = scores[winner, np.arange(n)] >= -tol_n
         snapped = found & ~taken & close & (winner == rank)
         out[snapped] = choice[snapped]
         return out, found
