@@ -186,7 +186,7 @@ try:
         dynamic=True,
         mass="lumped",
         bossak_alpha=args.bossak_alpha,
-        points_leaving="raise" if args.point_domains else "drop",
+        points_leaving="drop",
         point_domains=args.point_domains,
         initial_stress=(
             fe_mpm.geostatic_stress(points, H_b, g, K0) if args.start == "geostatic" else None

@@ -55,7 +55,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -120,6 +120,8 @@ class Pieces:
             domain's nearest piece's.
         corner_bary: The corners' barycentric coordinates there (n × (d + 1), d + 1), outside
             [0, 1] for a corner outside that cell.
+        left: The domains that have left the grid (indices), which have no pieces:
+            only where points that leave are dropped (``points_leaving="drop"``).
     """
 
     owner: np.ndarray
@@ -128,6 +130,22 @@ class Pieces:
     x: np.ndarray
     corner_cell: np.ndarray
     corner_bary: np.ndarray
+    left: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+
+    def kept(self, keep: np.ndarray) -> Pieces:
+        """The pieces of the domains ``keep`` (n,) bool, renumbered as the kept points are."""
+        v = self.corner_bary.shape[1]  # corners per domain
+        new_index = np.cumsum(keep) - 1
+        mine = keep[self.owner]
+        corners = np.repeat(keep, v)
+        return Pieces(
+            owner=new_index[self.owner[mine]],
+            cell=self.cell[mine],
+            share=self.share[mine],
+            x=self.x[mine],
+            corner_cell=self.corner_cell[corners],
+            corner_bary=self.corner_bary[corners],
+        )
 
 
 def share_weighted_mean(
@@ -243,10 +261,15 @@ class PointDomains:
             pieces' increments ΔF instead of its corners' affine map (see
             :func:`keeps_mean_increment`; its volume then no longer follows its
             domain's area exactly).
+        drop_leaving: Whether a point whose domain leaves the grid (less than
+            :data:`MIN_INSIDE` of it inside after a step) is dropped with it
+            (``points_leaving="drop"``); else the step stops the run.
 
     Attributes:
         corners: The domains' vertices (n, d + 1, d) in m.
         active: True while the pieces take a step in the points' place.
+        marker_hosts: The markers' host points (name → index), set before a step: a
+            step that would carry a host's domain out of the grid is refused.
     """
 
     def __init__(
@@ -258,6 +281,7 @@ class PointDomains:
         shared: bool = False,
         mean_increment: bool = False,
         keeps_no_shape: bool = False,
+        drop_leaving: bool = False,
     ):
         self.corners = _inside_the_grid(
             points, initial_domains(points, tracker.cell_vertices), tracker
@@ -267,7 +291,9 @@ class PointDomains:
         self.shared = shared
         self.mean_increment = mean_increment
         self.keeps_no_shape = keeps_no_shape
+        self.drop_leaving = drop_leaving
         self.active = False
+        self.marker_hosts: dict[str, int] = {}
         self._pieces: Pieces | None = None  # those of the step being taken
         self._moved = self.corners  # the corners after that step, once it converged
         self._next: Pieces | None = None  # the pieces of the moved corners
@@ -346,13 +372,17 @@ class PointDomains:
         """Each domain cut by the cells it covers (see :meth:`_cut`)."""
         return self._cut(self.corners, tracker, guess)
 
-    def _cut(self, corners: np.ndarray, tracker: Tracker, guess: np.ndarray) -> Pieces:
+    def _cut(
+        self, corners: np.ndarray, tracker: Tracker, guess: np.ndarray, may_leave: bool = False
+    ) -> Pieces:
         """Each domain with ``corners`` (n, d + 1, d) cut by the cells it covers.
 
         Args:
             corners: The domains' corners.
             tracker: The grid's tracker.
             guess: A cell near each domain (n,), where the searches start.
+            may_leave: Whether a domain less than :data:`MIN_INSIDE` inside the grid
+                is left without pieces (listed in ``Pieces.left``) instead of raising.
 
         Returns:
             The pieces, and where the corners are.
@@ -364,7 +394,8 @@ class PointDomains:
         keeps the pieces inside, and its point's volume is shared among them.
 
         Raises:
-            PointsOutsideError: Less than half of a domain is inside the grid.
+            PointsOutsideError: Less than half of a domain is inside the grid (unless
+                ``may_leave``).
             ConvergenceError: A domain's pieces do not add up to it (a degenerate one).
         """
         n, v, g = corners.shape
@@ -407,7 +438,8 @@ class PointDomains:
         # another rank's cells past this rank's ghosts, between corners that are not.
         short = covered < 1.0 - COVERAGE_TOL
         self._short = corners[short], covered[short] * domain_area[short]
-        if np.any(covered < MIN_INSIDE):
+        left = covered < MIN_INSIDE if may_leave else np.zeros(n, dtype=bool)
+        if np.any(covered[~left] < MIN_INSIDE):
             p = int(np.argmin(covered))
             raise PointsOutsideError(
                 f"the domain of point {p} (corners {corners[p].tolist()}) has left the "
@@ -417,7 +449,7 @@ class PointDomains:
         # grid's edge between its corners (a grid with a notch): like one with a
         # corner outside, it keeps the pieces inside.
         wrong = np.abs(covered - 1.0) > COVERAGE_TOL
-        wrong &= ~(partly_outside | short) | (covered > 1.0)
+        wrong &= (~(partly_outside | short) | (covered > 1.0)) & ~left
         if np.any(wrong):  # only round-off on a degenerate domain can get here
             p = int(np.flatnonzero(wrong)[0])
             raise ConvergenceError(
@@ -425,15 +457,15 @@ class PointDomains:
                 "area: it has degenerated"
             )
         # A round-off sliver is dropped; the domain's other pieces share its area.
-        keep = area > MIN_SHARE * domain_area[owner]
+        keep = (area > MIN_SHARE * domain_area[owner]) & ~left[owner]
         owner, cell, area, rule = owner[keep], cell[keep], area[keep], rule[keep]
         # A corner moves with the field of its own cell: the same for every domain that
         # shares it, so the domains keep tiling the body. Past the grid's edge it
         # reads the field of its domain's nearest piece, extended (its polynomial).
         corner_cell = corner_cells
-        if np.any(outside):
+        if np.any(outside & ~np.repeat(left, v)):
             corner_cell = np.where(
-                outside, _corner_cells(corners, tracker, owner, cell), corner_cells
+                outside, _corner_cells(corners, tracker, owner, cell, guess), corner_cells
             )
         # Each piece's rule has q points of equal weight, each a sub-point.
         q = rule.shape[1]
@@ -447,6 +479,7 @@ class PointDomains:
             x=x,
             corner_cell=corner_cell,
             corner_bary=tracker.barycentric(corners.reshape(-1, g), corner_cell),
+            left=np.flatnonzero(left),
         )
 
     def _cells_meeting(
@@ -607,12 +640,48 @@ class PointDomains:
             # then fails this step, which a shorter step may avoid.
             try:
                 guess = self._pieces.cell[_heaviest(self._pieces, n)]
-                self._next = self._cut(moved, tracker, guess)
+                self._next = self._cut(moved, tracker, guess, may_leave=self.drop_leaving)
+                error = self._hosts_leaving(self._next.left, step, t)
             except PointsOutsideError as err:
                 error = PointsOutsideError(f"{err} (step {step}, t = {t:g})")
             except ConvergenceError as err:
                 error = ConvergenceError(f"{err} in step {step} (t = {t:g}). Nothing was updated.")
         parallel.raise_together(tracker.mesh.comm, self._beyond_ghosts(tracker) or error)
+
+    def _hosts_leaving(self, left: np.ndarray, step: int, t: float) -> PointsOutsideError | None:
+        """The error of a step that would carry a marker's host point out with its domain."""
+        gone = set(left.tolist())
+        hosted = [name for name, host in self.marker_hosts.items() if host in gone]
+        if not hosted:
+            return None
+        return PointsOutsideError(
+            f"the host point of marker {hosted[0]!r} left the grid at step {step} (t = {t:g}): "
+            "points_leaving='drop' removes points, but a marker moves with its host point; "
+            "put markers on material that stays in the grid. Nothing was updated."
+        )
+
+    def drop_left(
+        self, points: MaterialPoints, markers: Markers, tracking, step: int, t: float
+    ) -> None:
+        """Drop the points whose domains the step carried out of the grid (after :meth:`gather`).
+
+        With ``points_leaving="drop"`` a domain less than :data:`MIN_INSIDE` inside the
+        grid after a step goes with its point, its mass and momentum: ``tracking``
+        (:class:`~fe_mpm.tracking.PointTracking`) removes the points with a warning and
+        counts them, and the pieces cut ahead for the next step lose their rows.
+        Collective.
+        """
+        left = self._next.left if self._next is not None else np.zeros(0, dtype=np.int64)
+        if not parallel.any_rank(tracking.tracker.mesh.comm, left.size > 0):
+            return
+        keep = np.ones(len(self.corners), dtype=bool)
+        keep[left] = False
+        self.corners = self.corners[keep]
+        self._drawn_quality = self._drawn_quality[keep]
+        self._next = self._next.kept(keep)
+        self._moved = self.corners
+        self._ready = (self.corners, self._next)
+        tracking.drop(points, markers, left, step, t)
 
     def _beyond_ghosts(self, tracker: Tracker) -> ConvergenceError | None:
         """The error of a domain that reaches past this rank's cells into another rank's.
@@ -708,7 +777,7 @@ class PointDomains:
             # slosh, where 1 − p/K moves by 3e-6) until the surface blew up.
             keep_volume_of_pressure(points, mean(np.linalg.det(sub.F)))
         points.velocity, points.acceleration = mean(sub.velocity), mean(sub.acceleration)
-        points.cell = self._next.cell[_heaviest(self._next, n)]  # where most of it lies
+        points.cell = _heaviest_cells(self._next, n)  # where most of it lies
         self._ready = (corners, self._next)
 
     def _history(self, points: MaterialPoints, sub: MaterialPoints, dF: np.ndarray, law) -> dict:
@@ -840,6 +909,7 @@ def step_with_domains(sim, t_new: float, rebin: bool):
         moved = domains.migrate(points, markers, tracker)
     sim.tracking.migrated = moved
     sub = domains.sample(points, sim.domain_tracker)
+    domains.marker_hosts = markers.hosts()
     sim.points, sim.markers, sim.output, domains.active = sub, Markers(), None, True
     sim.tracker = sim.domain_tracker  # the pieces' cells include this rank's ghosts
     try:
@@ -849,6 +919,7 @@ def step_with_domains(sim, t_new: float, rebin: bool):
         sim.tracker = tracker
     domains.gather(points, sub, markers, sim.material)
     sim.tracking.forget()  # it remembers the pieces' cells, not the points'
+    domains.drop_left(points, markers, sim.tracking, report.step, report.t)
     # Now, so that between steps the points lie in owned cells, as without domains.
     report.migrated_points += domains.migrate(points, markers, tracker)
     report.markers = markers.positions()
@@ -905,10 +976,16 @@ def _no_short(shape: tuple) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _corner_cells(
-    corners: np.ndarray, tracker: Tracker, owner: np.ndarray, cell: np.ndarray
+    corners: np.ndarray, tracker: Tracker, owner: np.ndarray, cell: np.ndarray, guess: np.ndarray
 ) -> np.ndarray:
-    """For every corner (n × (d + 1),), the cell of its domain's piece it is least outside of."""
+    """For every corner (n × (d + 1),), the cell of its domain's piece it is least outside of.
+
+    A domain without pieces (one that has left the grid, to be dropped) keeps its
+    ``guess`` (n,).
+    """
     n, v, g = corners.shape
+    if len(owner) == 0:
+        return np.repeat(guess, v).astype(np.int32)
     lam = tracker.barycentric(corners[owner].reshape(-1, g), np.repeat(cell, v))
     inside = lam.reshape(-1, v, v).min(axis=2)  # (pieces, corner)
     # Equally good cells (a corner past the grid's edge above a facet between two)
@@ -916,10 +993,12 @@ def _corner_cells(
     # number, which differs with the number of ranks.
     inside = np.round(inside, CORNER_TIE_DIGITS)
     centroids = tuple(tracker.centroids[cell].T[::-1])
-    corner_cell = np.empty((n, v), dtype=np.int32)
+    corner_cell = np.repeat(guess[:, None], v, axis=1).astype(np.int32)
+    has = np.bincount(owner, minlength=n) > 0
     for j in range(v):
         order = np.lexsort((*centroids, -inside[:, j], owner))  # by domain, the best first
-        corner_cell[:, j] = cell[order[np.searchsorted(owner[order], np.arange(n))]]
+        first = np.searchsorted(owner[order], np.flatnonzero(has))
+        corner_cell[has, j] = cell[order[first]]
     return corner_cell.reshape(-1)
 
 
@@ -927,6 +1006,18 @@ def _heaviest(pieces: Pieces, n: int) -> np.ndarray:
     """The index of each of the ``n`` points' heaviest piece (n,)."""
     by_weight = np.lexsort((-pieces.share, pieces.owner))  # by point, the heaviest first
     return by_weight[np.searchsorted(pieces.owner[by_weight], np.arange(n))]
+
+
+def _heaviest_cells(pieces: Pieces, n: int) -> np.ndarray:
+    """The cell of each of the ``n`` points' heaviest piece (n,).
+
+    −1 for a domain without pieces, one that has left the grid (:attr:`Pieces.left`).
+    """
+    cells = np.full(n, -1, dtype=np.int32)
+    has = np.flatnonzero(np.bincount(pieces.owner, minlength=n) > 0)
+    by_weight = np.lexsort((-pieces.share, pieces.owner))  # by point, the heaviest first
+    cells[has] = pieces.cell[by_weight[np.searchsorted(pieces.owner[by_weight], has)]]
+    return cells
 
 
 def _replaced(

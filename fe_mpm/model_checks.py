@@ -341,10 +341,9 @@ def check_domains(
     point_domains: bool,
     ghost_penalty: float | None,
     points: MaterialPoints,
-    points_leaving: str,
     spec: FormulationSpec,
 ) -> None:
-    """Point domains: on or off, P2 in 2D only, with every point kept.
+    """Point domains: on or off, P2 in 2D only.
 
     Ghost penalty: γ ≥ 0.
     """
@@ -356,11 +355,6 @@ def check_domains(
         raise NotImplementedError(
             "Simulation: point_domains on tetrahedra works with P1 displacements "
             "(formulation 'u' or 'up') for now, not with P2 ('up-p2p1')"
-        )
-    if point_domains and points_leaving != "raise":
-        raise ValueError(
-            "Simulation: point_domains needs points_leaving='raise': a point whose "
-            "domain leaves the grid cannot take its step"
         )
 
 
@@ -1078,7 +1072,6 @@ def _axis_name(axis: np.ndarray) -> str:
 
 def domains_would_be_taken(
     points: MaterialPoints,
-    points_leaving: str,
     spec: FormulationSpec,
     pressure_by_parts_given: bool | None,
     keeps_shape: bool,
@@ -1089,7 +1082,7 @@ def domains_would_be_taken(
     that advice to turn domains on follows their refusals as they change.
     """
     try:
-        check_domains(True, None, points, points_leaving, spec)
+        check_domains(True, None, points, spec)
         pressure_by_parts(pressure_by_parts_given, keeps_shape, True, spec)
     except (ValueError, NotImplementedError):
         return False

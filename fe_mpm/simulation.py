@@ -149,7 +149,8 @@ class Simulation:
         petsc_options: Overrides of the Newton options (:data:`fe_mpm.newton.NEWTON_OPTIONS`)
             and of the linear solver's (:data:`fe_mpm.newton.LINEAR_SOLVERS`).
         points_leaving: ``"raise"`` (default) stops when points leave the grid; ``"drop"``
-            removes them with a warning and counts them in ``dropped``.
+            removes them with a warning and counts them in ``dropped`` (with point
+            domains: a point whose domain is less than half inside after a step).
         output_dir: Folder for ParaView output (``particles.pvd``, ``grid.bp``),
             ``steps.csv`` with every step's time, Newton iterations, reactions and
             markers (:func:`fe_mpm.report.write_steps`: a load–displacement curve),
@@ -320,7 +321,7 @@ class Simulation:
         self.spec = FORMULATIONS[formulation]
         self._volume_of_pressure = self.spec.pressure and not keeps_shape
         self._volume_of_average = self.spec.volume_average and not keeps_shape
-        model_checks.check_domains(point_domains, ghost_penalty, points, points_leaving, self.spec)
+        model_checks.check_domains(point_domains, ghost_penalty, points, self.spec)
         model_checks.check_shared_increment(shared_increment, point_domains, self.spec)
         self._pressure_by_parts = model_checks.pressure_by_parts(
             pressure_by_parts, keeps_shape, point_domains, self.spec
@@ -404,7 +405,7 @@ class Simulation:
             not point_domains
             and not dynamic
             and model_checks.domains_would_be_taken(
-                points, points_leaving, self.spec, pressure_by_parts, keeps_shape
+                points, self.spec, pressure_by_parts, keeps_shape
             )
         )
         self.tracking: PointTracking | None = None
@@ -474,6 +475,7 @@ class Simulation:
                 self._shared,
                 keeps_mean_increment(self.spec.u_degree, most),
                 keeps_no_shape=self._volume_of_pressure or self._volume_of_average,
+                drop_leaving=points_leaving == "drop",
             )
             if initial_stress is not None:
                 # The domains moved the points and carried their stress, affine in each
@@ -1513,7 +1515,13 @@ class Simulation:
             bary = self._current.bary
             J = volume_of_average(self.fields.Q[0], layout.cell, bary, pts.mass, own, step, t)
         # With points_leaving="drop": found before anything moves, dropped once it has.
-        leaving = self.tracking.leaving(pts, self.markers, pts.x + new.du, step, t)
+        # A domain's sub-points are not dropped: its point goes if the domain leaves
+        # (PointDomains.drop_left).
+        leaving = (
+            np.zeros(0, dtype=np.int64)
+            if self.domains is not None
+            else self.tracking.leaving(pts, self.markers, pts.x + new.du, step, t)
+        )
         apply_update(pts, new, self.markers, self.dynamics, dt, rm and rm.result.history)
         if self._volume_of_pressure or self._volume_of_average:
             keep_volume_of_pressure(pts, J)

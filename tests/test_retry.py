@@ -193,7 +193,7 @@ def test_a_run_with_point_domains_and_no_ghost_penalty_says_so_when_it_stops(gam
         ({"dynamic": True}, False),
         ({"point_domains": True, "ghost_penalty": 0.1}, False),
         ({"pressure_by_parts": True}, False),  # refused with domains
-        ({"points_leaving": "drop"}, False),  # refused with domains
+        ({"points_leaving": "drop"}, True),  # taken with domains since 2026-12-07
     ],
 )
 def test_a_static_standard_run_that_stops_names_point_domains(options, names_domains):
