@@ -137,6 +137,9 @@ class _Wall:
         self.normal, self.offset = wall_plane(mesh, facets, owner)
         corners = mesh.geometry.x[dolfinx.mesh.entities_to_geometry(mesh, fdim, facets), :g]
         sizes = np.linalg.norm(corners[:, 1] - corners[:, 0], axis=1)  # an edge of each facet
+        # Each facet once: given by tag, a wall holds the tagged facets of ghost cells too
+        # (point domains ask for two layers of them), which the ranks that own them count.
+        sizes = sizes[facets < mesh.topology.index_map(fdim).size_local]
         count = parallel.total(mesh.comm, int(sizes.size))
         h = parallel.total(mesh.comm, float(sizes.sum())) / count
         self.penalty = spec.penalty if spec.penalty is not None else PENALTY_FACTOR * E / h
