@@ -690,6 +690,7 @@ def _cantilever(steps: int, gravity: float = 1.3, add_after: int = 0, **options)
         ({"gravity": 1.3e-4}, None),
         ({"add_after": 1}, 2),
         ({"point_domains": True}, None),
+        ({"walls": [fe_mpm.RigidWall("floor", lambda x: np.isclose(x[1], -0.75))]}, 2),
     ],
 )
 def test_a_static_standard_run_warns_once_when_its_points_cross_cells(options, warned_at):
@@ -699,12 +700,17 @@ def test_a_static_standard_run_warns_once_when_its_points_cross_cells(options, w
     naming point domains. Under a load 10⁴ times smaller no point crosses a cell in
     its 20 steps, and it does not warn; nor with point domains. A cell of points
     added after the first step does not hide the crossing (until a reviewer's script,
-    add_points remembered the cells the points had crossed into)."""
+    add_points remembered the cells the points had crossed into). With a rigid wall
+    it does not advise fewer steps: the contact is found step by step (a new user's
+    Hertz contact came 9 % wide in one step, 2 % in 20; 2026-12-07)."""
     said = _cantilever(20, **options)
     assert len(said) == (0 if warned_at is None else 1)
     if warned_at is not None:
         assert said[0].startswith(f"Static step {warned_at}:")
         assert "point_domains=True" in said[0]
+        walls = "walls" in options
+        assert ("needs no more load steps than Newton" in said[0]) != walls
+        assert ("contact is found step by step" in said[0]) == walls
 
 
 def test_a_failed_step_names_where_it_is_out_of_balance_and_what_ran_away():

@@ -8,6 +8,7 @@ an iterate where the wall's nodes stick, slip and have left it.
 
 import math
 import re
+import warnings
 
 import numpy as np
 import pytest
@@ -398,6 +399,65 @@ def test_a_body_leaves_a_wall_and_the_wall_lets_go():
     # +0.0: a user's CSV and printouts showed "-0.0" for walls nothing touched (2026-12-07).
     assert math.copysign(1.0, last.normal) == 1.0
     assert np.all(sim.walls.walls[0].extension.x.array == 0.0)
+
+
+@pytest.mark.parametrize(
+    ("base", "held"),
+    [
+        ("roller", None),
+        (
+            "clamped",
+            "1 of its 16 grid nodes (the first at x = [0.0, 0.0]) are also held by Dirichlet 0 ",
+        ),
+        (
+            "clamped and a roller on the wall",
+            "16 of its 16 grid nodes (the first at x = [0.0, 0.0]) are also held by "
+            "Dirichlet 0 and Dirichlet 1 ",
+        ),
+    ],
+)
+def test_a_wall_says_which_of_its_nodes_a_condition_holds_and_reports_the_rest(base, held):
+    """A layer 2 m deep at rest (K₀ = ν/(1 − ν)) against a smooth wall on cells of
+    0.2 m: on a roller base, which holds the wall's corner node across the wall's
+    normal only, the wall reports ½ K₀ γ H² (to 5.5e-5, the springs' give). Where a
+    Dirichlet condition also holds some of the wall's nodes along its normal, the
+    condition's reaction carries the push there and the wall's force leaves it out:
+    9.7 % short on a clamped base, nothing with a roller on the wall's own face. Until
+    2026-12-07 nothing said so (a new user's retaining wall)."""
+    grid = rectangle_mesh((0.0, 0.0), (4.0, 3.0), (20, 15))
+    points = fe_mpm.seed(
+        grid, 3, density=1800.0, cells=np.flatnonzero(cell_centroids(grid)[:, 1] < 2.0)
+    )
+    K0 = 0.3 / 0.7
+    left, right = (lambda x, a=a: np.isclose(x[0], a) for a in (0.0, 4.0))
+    supports = {
+        "roller": [fe_mpm.Dirichlet(on_base, component=1)],
+        "clamped": [fe_mpm.Dirichlet(on_base)],
+        "clamped and a roller on the wall": [
+            fe_mpm.Dirichlet(on_base),
+            fe_mpm.Dirichlet(left, component=0),
+        ],
+    }[base]
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        sim = fe_mpm.Simulation(
+            grid,
+            points,
+            fe_mpm.MohrCoulomb(20e6, 0.3, 1e3, 30.0),
+            "u",
+            dirichlet=[*supports, fe_mpm.Dirichlet(right, component=0)],
+            walls=[fe_mpm.RigidWall("wall", left)],
+            body_force=(0.0, -G),
+            initial_stress=fe_mpm.geostatic_stress(points, surface=2.0, gravity=G, K0=K0),
+        )
+    said = [str(w.message) for w in caught if "RigidWall 'wall'" in str(w.message)]
+    push = sim.run(0.01, 1, progress=False)[-1].walls["wall"].normal
+    at_rest = 0.5 * K0 * 1800.0 * G * 2.0**2
+    if held is None:
+        assert said == [] and push == pytest.approx(at_rest, rel=1e-4)
+    else:
+        assert len(said) == 1 and held in said[0] and "leaves that node's share out" in said[0]
+        assert push < (0.95 if "wall" not in base else 1e-9) * at_rest
 
 
 @pytest.mark.parametrize(
