@@ -54,6 +54,8 @@ class WallForces:
         nodes: Positions of the wall's grid nodes that carry a force (k, g), m.
         nodal: The force at each of them (k, g).
         direction: The wall's unit normal n (g,), pointing into the wall.
+        areas: Each of those nodes' share of the wall's face (k,): m² (m in 2D), the
+            weights of the vertex rule that integrates the springs.
     """
 
     total: np.ndarray
@@ -62,6 +64,16 @@ class WallForces:
     nodes: np.ndarray
     nodal: np.ndarray
     direction: np.ndarray
+    areas: np.ndarray
+
+    @property
+    def pressure(self) -> np.ndarray:
+        """The push at each node over its share of the face (k,), Pa: a contact pressure.
+
+        Node by node it scatters about the pressure it stands for (read its moments or
+        a fitted profile; ``docs/simulation.md``).
+        """
+        return -(self.nodal @ self.direction) / self.areas
 
 
 def wall_plane(mesh: dolfinx.mesh.Mesh, facets: np.ndarray, owner: str) -> tuple[np.ndarray, float]:
@@ -455,8 +467,8 @@ class RigidWalls:
         forces = {}
         g, comm = self.mesh.geometry.dim, self.mesh.comm
         owned, coords = self.space.dofmap.index_map.size_local, self.coordinates
-        for wall, kept, traction, force in zip(
-            self.walls, self._kept, self._traction, self._forces, strict=True
+        for wall, kept, traction, force, area_form in zip(
+            self.walls, self._kept, self._traction, self._forces, self._areas, strict=True
         ):
             self._converged.x.array[:] = 0.0
             self._converged.interpolate(traction, cells0=wall.cells)
@@ -472,6 +484,8 @@ class RigidWalls:
             nodal = b.array.reshape(-1, g)
             mine = wall.dofs[wall.dofs < owned]
             touching = mine[np.abs(nodal[mine]).sum(axis=1) > 0.0]
+            area = dolfinx.fem.assemble_vector(area_form)
+            area.scatter_reverse(dolfinx.la.InsertMode.add)
             total = np.array([parallel.total(comm, float(nodal[mine, c].sum())) for c in range(g)])
             normal_part = float(total @ wall.normal)
             forces[wall.spec.name] = WallForces(
@@ -481,6 +495,7 @@ class RigidWalls:
                 nodes=parallel.gathered(comm, coords[touching].reshape(-1)).reshape(-1, g),
                 nodal=parallel.gathered(comm, nodal[touching].reshape(-1)).reshape(-1, g),
                 direction=wall.normal.copy(),
+                areas=parallel.gathered(comm, area.array[touching]),
             )
         return forces
 
@@ -559,6 +574,29 @@ def write_wall_forces(history: Sequence, path: str | Path, first: int = 0) -> Pa
                 ",".join([str(report.step), repr(report.t), name, *map(repr, map(float, values))])
             )
     return write_csv_rows(path, header, lines, first)
+
+
+def write_wall_distribution(report, path: str | Path) -> Path:
+    """Write each wall's force node by node after one step as CSV; returns the path.
+
+    Columns: ``wall, x, y[, z], F_x, F_y[, F_z], push, area, pressure``: the node's
+    position (m), its force on the body (N; N/m in 2D), the push −F·n, its share of
+    the face (m²; m in 2D) and the push over it (Pa), from
+    :class:`WallForces`. Every rank's report carries the whole walls, so call it on one.
+
+    Args:
+        report: A :class:`~fe_mpm.StepReport` (``Simulation.history[-1]``: the end).
+        path: The CSV file to write.
+    """
+    g = next((f.nodes.shape[1] for f in report.walls.values()), 0)
+    header = ["wall", *"xyz"[:g], *(f"F_{c}" for c in "xyz"[:g]), "push", "area", "pressure"]
+    lines = []
+    for name, force in report.walls.items():
+        push = -force.nodal @ force.direction
+        for row in zip(force.nodes, force.nodal, push, force.areas, force.pressure, strict=True):
+            values = [*row[0], *row[1], *row[2:]]
+            lines.append(",".join([name, *map(repr, map(float, values))]))
+    return write_csv_rows(path, header, lines, 0)
 
 
 def plot_wall_forces(history: Sequence, path: str | Path, pyplot) -> Path:
