@@ -66,7 +66,7 @@ from fe_mpm.errors import ConvergenceError, PointsOutsideError
 from fe_mpm.markers import Markers
 from fe_mpm.materials.route import compiled_module
 from fe_mpm.materials.spectral import embedded_3d
-from fe_mpm.migration import migrate
+from fe_mpm.migration import migrate, owning_ranks, send
 from fe_mpm.particles import MaterialPoints
 from fe_mpm.point_update import apply_update, keep_volume_of_pressure
 from fe_mpm.step_forms import PointUpdate
@@ -350,8 +350,10 @@ class PointDomains:
         lies in (on one rank too: a domain redrawn at the next step is centred in it),
         looked for in the owned cells of ``tracker``, and the point is sent with its
         domain's corners to the rank that owns it. A point that lies in no rank's cell
-        (its domain reaching past the grid's edge) stays, in its heaviest piece's
-        cell. Returns how many points moved between ranks (all ranks together).
+        (its domain reaching past the grid's edge) goes to the rank that owns the cell
+        of a place of its domain inside the grid (:meth:`_strays_home`), or stays
+        where none is found, in its heaviest piece's cell. Returns how many points
+        moved between ranks (all ranks together).
         """
         cells, ties = tracker.locate_with_ties(points.x, points.cell)
         if tracker.mesh.comm.size == 1:
@@ -363,10 +365,61 @@ class PointDomains:
             [self.corners.reshape(n, v * g), self._drawn_quality, points.cell.astype(float)]
         )
         cells, moved, carried = migrate(points, markers, tracker, cells, carried, ties)
+        cells, strays, carried = self._strays_home(points, markers, tracker, cells, carried)
         self.corners = np.ascontiguousarray(carried[:, : v * g]).reshape(-1, v, g)
         self._drawn_quality = carried[:, v * g].copy()
         points.cell = np.where(cells >= 0, cells, carried[:, -1].astype(np.int32)).astype(np.int32)
-        return moved
+        return moved + strays
+
+    def _strays_home(
+        self,
+        points: MaterialPoints,
+        markers: Markers,
+        tracker: Tracker,
+        cells: np.ndarray,
+        carried: np.ndarray,
+    ) -> tuple[np.ndarray, int, np.ndarray]:
+        """Send each point in no rank's cell to a rank that holds its domain's inside.
+
+        A kept point may lie past the grid's edge while most of its domain is inside;
+        it stayed on the rank it was on, which after a restart on more ranks (a serial
+        checkpoint read on two) held none of the cells its domain covers, and the next
+        step stopped as if the domain had stretched past the ghost cells (a helper's
+        outflow, 2026-12-07). Its domain's corners and the midpoints between them and
+        the point are tried in turn; the first that some rank owns sends the point
+        there, and gives its cell on arrival (the last column of ``carried``).
+        Collective. Returns the cells, the points sent and ``carried``, as
+        :func:`~fe_mpm.migration.migrate` does.
+        """
+        comm, (_, v, g) = tracker.mesh.comm, self.corners.shape
+        stray = np.flatnonzero(cells < 0)
+        if not parallel.any_rank(comm, stray.size > 0):
+            return cells, 0, carried
+
+        def probes(x: np.ndarray, corners: np.ndarray) -> np.ndarray:
+            """Places of each domain to try, inside first (k, 2 (d + 1), g)."""
+            return np.concatenate([0.5 * (x[:, None, :] + corners), corners], axis=1)
+
+        corners = carried[stray, : v * g].reshape(-1, v, g)
+        tried = probes(points.x[stray], corners)
+        owner = owning_ranks(tracker, tried.reshape(-1, g)).reshape(len(stray), 2 * v)
+        found = owner >= 0
+        first = np.argmax(found, axis=1)
+        destination = np.where(found.any(axis=1), owner[np.arange(len(stray)), first], comm.rank)
+        away = destination != comm.rank
+        kept = len(points) - int(np.count_nonzero(away))
+        cells, sent, carried = send(
+            points, markers, tracker, cells, stray[away], destination[away], carried
+        )
+        # An arrival in no cell here takes the cell of its first place this rank holds
+        # (the sender's cell number means nothing here); those that stayed keep theirs.
+        arrived = kept + np.flatnonzero(cells[kept:] < 0)
+        tried = probes(points.x[arrived], carried[arrived, : v * g].reshape(-1, v, g))
+        held = tracker.locate(tried.reshape(-1, g)).reshape(len(arrived), 2 * v)
+        has = held >= 0
+        cell = held[np.arange(len(arrived)), np.argmax(has, axis=1)]
+        carried[arrived[has.any(axis=1)], -1] = cell[has.any(axis=1)]
+        return cells, sent, carried
 
     def pieces(self, tracker: Tracker, guess: np.ndarray) -> Pieces:
         """Each domain cut by the cells it covers (see :meth:`_cut`)."""
@@ -531,8 +584,22 @@ class PointDomains:
         """The pieces of the step being taken."""
         return self._pieces
 
-    def sample(self, points: MaterialPoints, tracker: Tracker) -> MaterialPoints:
-        """A sub-point for every piece of every domain, with its share of the point's state."""
+    def sample(
+        self,
+        points: MaterialPoints,
+        tracker: Tracker,
+        markers: Markers | None = None,
+        tracking=None,
+        step: int = 0,
+        t: float = 0.0,
+    ) -> MaterialPoints:
+        """A sub-point for every piece of every domain, with its share of the point's state.
+
+        With ``points_leaving="drop"``, a domain that a flip or redraw at the step's
+        start left less than half inside the grid goes with its point before the step
+        (through ``tracking`` and ``markers``, as :meth:`drop_left` does; ``step`` and
+        ``t`` are the step's, for the warning).
+        """
         self._reset_distorted(points, tracker)
         ready, self._ready = self._ready, None
         self._short, error = _no_short(self.corners.shape), None
@@ -540,10 +607,15 @@ class PointDomains:
             if ready is not None and np.array_equal(ready[0], self.corners):
                 p = ready[1]
             else:  # none yet, or cut for corners that have changed since (a reset, migration)
-                p = self.pieces(tracker, points.cell)
+                may_leave = self.drop_leaving and tracking is not None
+                p = self._cut(self.corners, tracker, points.cell, may_leave=may_leave)
         except (PointsOutsideError, ConvergenceError) as err:
             error = err
         parallel.raise_together(tracker.mesh.comm, self._beyond_ghosts(tracker) or error)
+        if tracking is not None:
+            self._next = p
+            self.drop_left(points, markers, tracking, step, t)
+            p, self._ready = self._next, None
         self._pieces = p
         sub = MaterialPoints(
             p.x,
@@ -908,7 +980,9 @@ def step_with_domains(sim, t_new: float, rebin: bool):
     if parallel.any_rank(tracker.mesh.comm, bool(np.any(points.cell < 0))):
         moved = domains.migrate(points, markers, tracker)
     sim.tracking.migrated = moved
-    sub = domains.sample(points, sim.domain_tracker)
+    sub = domains.sample(
+        points, sim.domain_tracker, markers, sim.tracking, sim.step_number + 1, t_new
+    )
     domains.marker_hosts = markers.hosts()
     sim.points, sim.markers, sim.output, domains.active = sub, Markers(), None, True
     sim.tracker = sim.domain_tracker  # the pieces' cells include this rank's ghosts

@@ -295,8 +295,11 @@ class RigidWalls:
             count = parallel.total(comm, int(held.sum()))
             if not count:
                 continue
-            first = places[held][0].round(6).tolist() if np.any(held) else None
-            first = parallel.first_given(comm, first)
+            # The example: the least held node by its coordinates, whatever the ranks.
+            mine_held = np.round(places[held] / wall.size, 8) * wall.size  # not −0.0, 1e-18
+            least = mine_held[np.lexsort(mine_held.T[::-1])[0]] if len(mine_held) else None
+            everyone = [x for x in comm.allgather(least) if x is not None]
+            first = (0.0 + min(everyone, key=tuple).round(6)).tolist()
             total = parallel.total(comm, len(mine))
             messages.append(
                 f"RigidWall {wall.spec.name!r}: {count} of its {total} grid nodes (the first "
@@ -501,7 +504,12 @@ class RigidWalls:
 
 
 def _at_any_of(places: np.ndarray, nodes: np.ndarray, size: float) -> np.ndarray:
-    """Which of ``places`` (k, g) coincide with one of ``nodes`` (m, g), to 1e-8 of ``size``."""
+    """Which of ``places`` (k, g) are one of ``nodes`` (m, g): the same grid nodes.
+
+    Compared on coordinates rounded to 1e-8 of ``size``: the P1 dofs' coordinates and
+    the geometry's are the same numbers (the basis is exactly 0 and 1 at the nodes),
+    so this is an exact match that rounding boundaries cannot split.
+    """
     if not len(places) or not len(nodes):
         return np.zeros(len(places), dtype=bool)
     tol = 1e-8 * size

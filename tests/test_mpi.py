@@ -231,6 +231,31 @@ def falling_block(mass, steps, restore=None, supported=True, **options):
         "remaining": int(parallel.total(MPI.COMM_WORLD, len(points))),
     }
 
+def outflow(folder, write):
+    # Water pouring out of a grid's open end with point domains, dropped as it leaves;
+    # after 80 steps a kept point lies past the grid's edge, its domain mostly inside.
+    grid = meshes.rectangle_mesh((0.0, 0.0), (0.30, 0.14), (15, 7))
+    centre = meshes.cell_centroids(grid)
+    column = np.flatnonzero((centre[:, 0] < 0.10) & (centre[:, 1] < 0.10))
+    points = fe_mpm.seed(grid, 3, density=1000.0, cells=column)
+    water = fe_mpm.NewtonianFluid(2.0e6, 1.0e-3, shear_scale=2 * 1000.0 * 9.81 * 0.1,
+                                  density=1000.0)
+    sim = fe_mpm.Simulation(
+        grid, points, water, "up", body_force=(0.0, -9.81), dynamic=True, mass="lumped",
+        dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0), component=0),
+                   fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0), component=1)],
+        bossak_alpha=-0.3, points_leaving="drop", point_domains=True,
+        checkpoint_dir=folder / "outflow" if write else None, checkpoint_every=80)
+    if write:
+        sim.run(0.2, 80, progress=False)
+    else:
+        sim.restore(folder / "outflow" / "step_000080")
+    outside = int(parallel.total(MPI.COMM_WORLD, int(np.sum(points.x[:, 0] > 0.30))))
+    sim.run(sim.t + 0.0025, 1, progress=False)
+    total = lambda a: float(parallel.total(MPI.COMM_WORLD, float(np.sum(a))))
+    return {"outside": outside, "dropped": sim.dropped, "mass": total(points.mass),
+            "x": total(points.mass * points.x[:, 0]), "y": total(points.mass * points.x[:, 1])}
+
 def facet_block(steps):
     # A block whose points all lie on facets: every edge's midpoint and the diagonals'.
     h, xs = 0.25, []
@@ -349,6 +374,8 @@ try:
         result = falling_block("lumped", 5, checkpoint_dir=folder / "ck", checkpoint_every=5)
     elif case == "restore checkpoint":
         result = falling_block("lumped", 5, restore=folder / "ck")
+    elif case in ("outflow write", "outflow restore"):
+        result = outflow(folder, case == "outflow write")
     elif case == "leaving":
         cook("up", 8, 4, load=5 / 16, margin=0)
         result = "finished"
@@ -895,6 +922,22 @@ def test_a_block_falling_onto_the_base_in_dynamics_gives_the_serial_answer(tmp_p
     for ranks in (3, 1):
         for got in _run(tmp_path, "restore checkpoint", ranks):
             _check_fall(got, want, want["iterations"][5:], ranks)
+
+
+def test_a_serial_checkpoint_with_a_point_past_the_grids_edge_goes_on_on_two_ranks(tmp_path):
+    """Water pours out of the grid's open end with point domains (points dropped as
+    their domains leave). At the checkpoint of step 80, written on one rank, a kept
+    point lies past the grid's edge (its domain more than half inside). Restored on two
+    ranks, such a point lay in no rank's cells and stayed on the rank that read it,
+    which held none of its domain's cells, and the next step stopped as if the domain
+    had stretched past the ghost cells (a helper's outflow, 2026-12-07). Now it goes to
+    a rank that holds its domain's inside, and step 81 gives the serial answer."""
+    (serial,) = _run(tmp_path, "outflow write", 1)
+    assert serial["outside"] > 0 and serial["dropped"] > 0
+    for got in _run(tmp_path, "outflow restore", 2):
+        assert got["outside"] == serial["outside"] and got["dropped"] == serial["dropped"]
+        for key in ("mass", "x", "y"):
+            assert got[key] == pytest.approx(serial[key], rel=1e-10), key
 
 
 def _check_fall(got: dict, want: dict, iterations: list, case) -> None:

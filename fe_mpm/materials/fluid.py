@@ -122,7 +122,8 @@ class NewtonianFluid(CheckedFields):
             raise ValueError(
                 "NewtonianFluid: this scene needs shear_scale (G*, Pa, > 0), which stands "
                 "for the shear modulus a fluid lacks: a RigidWall without a penalty of its "
-                "own, ppp_alpha > 0 or a ghost penalty scale by it. Give it, e.g. "
+                "own, ppp_alpha > 0 or a ghost penalty scale by it (point_domains=True "
+                "takes a weak ghost penalty by default, ghost_penalty=0 none). Give it, e.g. "
                 "NewtonianFluid(..., shear_scale=2 * rho * g * depth) as the demos do."
             )
         return self.shear_scale
