@@ -172,6 +172,15 @@ class MaterialPoints:
                     f"{owner}: {prefix}{name} must have shape {shape}, got {np.shape(value)}"
                 )
             check_finite(owner, prefix + name, value, what="point")
+        for name, value in self.history.items():
+            # A script's own per-point field (a tag set to None crashed deep inside the
+            # domains' tiling; a helper's excavation, 2026-12-07).
+            if not isinstance(value, np.ndarray) or value.shape[:1] != (n,):
+                raise ValueError(
+                    f"{owner}: {prefix}history[{name!r}] must be a numpy array with one row "
+                    f"per point, shape ({n}, ...), got {type(value).__name__} of shape "
+                    f"{np.shape(value)}"
+                )
         self._refuse_bad_values(owner, prefix)
 
     def _refuse_bad_values(self, owner: str = "MaterialPoints", prefix: str = "") -> None:

@@ -316,6 +316,7 @@ class Simulation:
         model_checks.check_output_dir(output_dir)
         model_checks.check_facet_tags(mesh, facet_tags)
         model_checks.check_dynamics(dynamic, formulation, damping, mass, bossak_alpha)
+        model_checks.warn_trapezoid_on_walls(dynamic, walls, bossak_alpha)
         if dynamic:  # before any point migrates; step() checks again (set after this)
             _check_points(mesh.comm, points.check_motion)
         self.spec = FORMULATIONS[formulation]

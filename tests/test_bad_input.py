@@ -690,6 +690,18 @@ def test_point_fields_set_after_seeding_are_checked_at_set_up(field, value, matc
         fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1e6, 0.3), body_force=(0.0, -1.0))
 
 
+@pytest.mark.parametrize("value", [None, [1, 2], np.zeros(3)])
+def test_a_scripts_own_history_field_must_hold_a_row_per_point(value):
+    """A tag set to None crashed point domains' tiling with an AttributeError on
+    'dtype' (a helper's excavation, 2026-12-07): now set-up names the field."""
+    mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (2, 2))
+    points = fe_mpm.seed(mesh, 1, density=1.0)
+    points.history["tag"] = value
+    match = r"Simulation: points.history\['tag'\] must be a numpy array with one row per point"
+    with pytest.raises(ValueError, match=match):
+        fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1e6, 0.3), point_domains=True)
+
+
 # --- 4. boundary conditions ---------------------------------------------------------------
 
 
