@@ -169,8 +169,10 @@ class Simulation:
             default 0 (the thesis uses 1.5 for the granular collapse).
         bossak_alpha: Bossak's α_B in [−1/3, 0], dynamic only: numerical dissipation of
             the modes the step cannot resolve (a reaction that rings from step to step),
-            second-order accurate. 0 (default) is the thesis's trapezoidal rule, which
-            dissipates nothing; Kratos MPM's documentation shows its Bossak scheme with −0.3.
+            second-order accurate. 0 (the default, None) is the thesis's trapezoidal
+            rule, which dissipates nothing; left None in a dynamic run with rigid walls
+            it warns (a body landing on a wall can gain energy under it); Kratos MPM's
+            documentation shows its Bossak scheme with −0.3.
             Take −0.3 where a body lands on a rigid wall (released unstressed, or
             dropped): it rings on the wall's springs at a frequency no step resolves,
             and on a frictional wall the ringing walks it (a block at rest on a 30°
@@ -272,7 +274,7 @@ class Simulation:
         ppp_alpha: float | None = None,
         dynamic: bool = False,
         damping: float = 0.0,
-        bossak_alpha: float = 0.0,
+        bossak_alpha: float | None = None,
         projection_passes: int = 1,
         mass: str = "consistent",
         reactions: dict[str, int | Callable] | None = None,
@@ -315,8 +317,11 @@ class Simulation:
         model_checks.check_ppp(ppp_alpha, FORMULATIONS[formulation])
         model_checks.check_output_dir(output_dir)
         model_checks.check_facet_tags(mesh, facet_tags)
+        alpha_left = bossak_alpha is None  # the trapezoidal rule, not chosen
+        bossak_alpha = 0.0 if alpha_left else bossak_alpha
         model_checks.check_dynamics(dynamic, formulation, damping, mass, bossak_alpha)
-        model_checks.warn_trapezoid_on_walls(dynamic, walls, bossak_alpha)
+        if alpha_left:
+            model_checks.warn_trapezoid_on_walls(dynamic, walls)
         if dynamic:  # before any point migrates; step() checks again (set after this)
             _check_points(mesh.comm, points.check_motion)
         self.spec = FORMULATIONS[formulation]
