@@ -753,7 +753,7 @@ class PointDomains:
         self._next = self._next.kept(keep)
         self._moved = self.corners
         self._ready = (self.corners, self._next)
-        tracking.drop(points, markers, left, step, t)
+        tracking.drop(points, markers, left, step, t, domains=True)
 
     def _beyond_ghosts(self, tracker: Tracker) -> ConvergenceError | None:
         """The error of a domain that reaches past this rank's cells into another rank's.

@@ -157,7 +157,15 @@ class PointTracking:
         parallel.raise_together(comm, error)
         return lost
 
-    def drop(self, points: MaterialPoints, markers: Markers, lost: np.ndarray, step: int, t: float):
+    def drop(
+        self,
+        points: MaterialPoints,
+        markers: Markers,
+        lost: np.ndarray,
+        step: int,
+        t: float,
+        domains: bool = False,
+    ):
         """Remove the points :meth:`leaving` found, now that the step has moved them out.
 
         Left to the next step's tracking, the points that the last step of a run
@@ -171,13 +179,16 @@ class PointTracking:
             lost: This rank's leaving points, from :meth:`leaving`.
             step: The step, for the warning.
             t: Its end time, for the warning.
+            domains: Whether the points go with their domains (less than half of each
+                inside the grid), which the warning then says: such a point itself may
+                still lie inside.
         """
         if self.points_leaving != "drop":
             return
         if parallel.any_rank(self.tracker.mesh.comm, lost.size > 0):
             cells = np.array(points.cell, copy=True)  # the step's, for those kept
             cells[lost] = -1
-            points.cell = self._drop(points, markers, cells, lost, _when(step, t))
+            points.cell = self._drop(points, markers, cells, lost, _when(step, t), domains)
 
     def lay_out(self, cells: np.ndarray, step: int = 0, t: float = 0.0) -> SlotLayout:
         """The slot layout of points in ``cells`` (n,), found already (the domains' pieces).
@@ -216,6 +227,7 @@ class PointTracking:
         cells: np.ndarray,
         outside: np.ndarray,
         where: str,
+        domains: bool = False,
     ) -> np.ndarray:
         """Refuse, or remove with a warning, the points outside the grid; the kept cells.
 
@@ -224,7 +236,7 @@ class PointTracking:
         """
         comm = self.tracker.mesh.comm
         count = int(parallel.total(comm, int(outside.size)))
-        first = _outside_message(points, outside, where, count) if outside.size else None
+        first = _outside_message(points, outside, where, count, domains) if outside.size else None
         if comm.size > 1:  # the lowest rank that has one gives the example
             first = parallel.first_given(comm, first)
             first += f" (in none of the {comm.size} MPI ranks' cells)"
@@ -262,8 +274,15 @@ class PointTracking:
         return cells[keep]
 
 
-def _outside_message(points: MaterialPoints, outside: np.ndarray, where: str, count: int) -> str:
+def _outside_message(
+    points: MaterialPoints, outside: np.ndarray, where: str, count: int, domains: bool = False
+) -> str:
     first = outside[0]
+    if domains:  # the point itself may still lie inside (a helper's column impact)
+        return (
+            f"{count} material point(s) left the grid with their domains (less than half "
+            f"of each inside) at {where}; first: point {first} at x = {points.x[first]}"
+        )
     return (
         f"{count} material point(s) left the grid at {where}; first: "
         f"point {first} at x = {points.x[first]}"
