@@ -62,7 +62,7 @@ import numpy as np
 from fe_mpm import parallel
 from fe_mpm.clipping import piece_rule, simplex_volumes
 from fe_mpm.domain_flips import flip_distorted
-from fe_mpm.errors import ConvergenceError, PointsOutsideError
+from fe_mpm.errors import ConvergenceError, MarkerHostLeftError, PointsOutsideError
 from fe_mpm.markers import Markers
 from fe_mpm.materials.route import compiled_module
 from fe_mpm.materials.spectral import embedded_3d
@@ -720,13 +720,13 @@ class PointDomains:
                 error = ConvergenceError(f"{err} in step {step} (t = {t:g}). Nothing was updated.")
         parallel.raise_together(tracker.mesh.comm, self._beyond_ghosts(tracker) or error)
 
-    def _hosts_leaving(self, left: np.ndarray, step: int, t: float) -> PointsOutsideError | None:
+    def _hosts_leaving(self, left: np.ndarray, step: int, t: float) -> MarkerHostLeftError | None:
         """The error of a step that would carry a marker's host point out with its domain."""
         gone = set(left.tolist())
         hosted = [name for name, host in self.marker_hosts.items() if host in gone]
         if not hosted:
             return None
-        return PointsOutsideError(
+        return MarkerHostLeftError(
             f"the host point of marker {hosted[0]!r} left the grid at step {step} (t = {t:g}): "
             "points_leaving='drop' removes points, but a marker moves with its host point; "
             "put markers on material that stays in the grid. Nothing was updated."

@@ -15,6 +15,13 @@ class PointsOutsideError(RuntimeError):
     """Material points left the background grid."""
 
 
+class MarkerHostLeftError(PointsOutsideError):
+    """A step would carry a marker's host point out of the grid.
+
+    Refused before anything moved, so the run still writes the steps it accepted.
+    """
+
+
 def warn(message: str) -> None:
     """A ``UserWarning`` attributed to the user's line that called into fe_mpm.
 

@@ -46,7 +46,7 @@ from fe_mpm.domains import (
     step_with_domains,
 )
 from fe_mpm.dynamics import NewmarkDynamics
-from fe_mpm.errors import ConvergenceError, PointsOutsideError, warn
+from fe_mpm.errors import ConvergenceError, MarkerHostLeftError, PointsOutsideError, warn
 from fe_mpm.forms.mixed_up import PPPData, PressureFloor
 from fe_mpm.formulations import FORMULATIONS, GridFields
 from fe_mpm.ghost import GhostStabilisation
@@ -962,11 +962,12 @@ class Simulation:
                     self._rebalance_now()
                 length.accepted()
                 bar.update(report, nominal, cuts)
-        except ConvergenceError:
+        except (ConvergenceError, MarkerHostLeftError):
             # Raised on every rank together, the points as the last accepted step left
-            # them: their frame and rows. (Not after PointsOutsideError: tracking may
-            # have sent points to other ranks before it stopped, their cells not yet
-            # renumbered.)
+            # them: their frame and rows (a marker's host refused before anything moved
+            # too; until 2026-12-07 a helper's run lost its last accepted steps' rows
+            # there). Not after any other PointsOutsideError: tracking may have sent
+            # points to other ranks before it stopped, their cells not yet renumbered.
             self._write_output(force=True)
             raise
         finally:

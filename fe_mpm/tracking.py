@@ -15,7 +15,7 @@ import numpy as np
 
 from fe_mpm import parallel
 from fe_mpm._dolfinx import dolfinx
-from fe_mpm.errors import ConvergenceError, PointsOutsideError, warn
+from fe_mpm.errors import ConvergenceError, MarkerHostLeftError, PointsOutsideError, warn
 from fe_mpm.formulations import FormulationSpec
 from fe_mpm.markers import Markers
 from fe_mpm.migration import migrate, owning_ranks, send
@@ -149,7 +149,7 @@ class PointTracking:
         gone = [name for name, host in markers.hosts().items() if host in lost_set]
         error = None
         if gone:
-            error = PointsOutsideError(
+            error = MarkerHostLeftError(
                 f"the host point of marker {gone[0]!r} left the grid at {_when(step, t)}: "
                 "points_leaving='drop' removes points, but a marker moves with its host "
                 "point; put markers on material that stays in the grid"

@@ -96,7 +96,7 @@ def test_points_outside_are_reported_and_concave_grids_use_the_tree():
     assert cells[2] == -1 and cells[3] == -1
 
 
-def _translating_block(points_leaving):
+def _translating_block(points_leaving, **options):
     mesh = rectangle_mesh((0.0, 0.0), (2.0, 1.0), (8, 4))
     centroid_x = mesh.geometry.x[mesh.geometry.dofmaps[0], 0].mean(axis=1)
     points = fe_mpm.seed(mesh, per_cell=1, cells=np.flatnonzero(centroid_x > 1.0))
@@ -108,6 +108,7 @@ def _translating_block(points_leaving):
         fe_mpm.NeoHookean(E=1.0, nu=0.3),
         dirichlet=[move],
         points_leaving=points_leaving,
+        **options,
     )
     return sim, points
 
@@ -148,6 +149,25 @@ def test_a_marker_whose_host_is_dropped_stops_the_run_saying_when_and_why():
     with pytest.raises(fe_mpm.PointsOutsideError, match=message):
         sim.step(1.0)
     assert np.array_equal(points.x, x0) and sim.step_number == 0  # nothing was updated
+
+
+@pytest.mark.parametrize("domains", [False, True])
+def test_a_run_stopped_by_a_markers_host_writes_the_steps_it_accepted(tmp_path, domains):
+    """The host leaves in step 2, refused before anything moves; the run had accepted
+    step 1, whose row and frame an output every 10 steps had not written yet. Until
+    2026-12-07 they were lost (a helper's outflow ended its steps.csv three steps
+    short); now the run writes them before it stops, as after Newton's failure."""
+    sim, points = _translating_block(
+        "drop", output_dir=tmp_path, output_every=10, point_domains=domains
+    )
+    sim.add_marker("middle", [1.3, 0.5])  # carried out by the second step, not the first
+    with pytest.warns(UserWarning, match=r"left the grid (with their domains .*)?at step 1"):
+        with pytest.raises(fe_mpm.PointsOutsideError, match="marker 'middle' left the grid"):
+            sim.run(2.0, 2, progress=False)
+    assert sim.step_number == 1
+    steps = np.genfromtxt(tmp_path / "steps.csv", delimiter=",", names=True)
+    assert np.atleast_1d(steps["step"]).tolist() == [1]
+    assert (tmp_path / "particles.pvd").read_text().count("timestep=") == 2  # t = 0 and 1
 
 
 def test_markers_follow_their_hosts_renumbered_after_a_drop():
