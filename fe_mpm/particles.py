@@ -326,7 +326,9 @@ def seed(
     Args:
         mesh: An affine simplex mesh (triangles or tetrahedra) covering the body.
         per_cell: Points per cell; any size of a basix Gauss rule (triangles:
-            1, 3, 6, 7, 12, ...; tetrahedra: 1, 4, 24, 57, ...).
+            1, 3, 6, 7, 12, ...; tetrahedra: 1, 4, 24, 57, ...). On triangles 1, 3
+            and 12 sit where Kratos MPM's ``MATERIAL_POINTS_PER_ELEMENT`` puts them; 6
+            is another rule than Kratos's.
         density: Mass density ρ₀ (kg/m³), > 0. None takes the law's ``density``
             when the simulation starts (1 if the law has none either); give it
             here to seed zones of different densities (see :func:`merge`).
