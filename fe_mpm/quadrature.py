@@ -55,7 +55,12 @@ SLOT_CHANGE_SAVING = 0.8
 
 
 #: What too many points in one cell means, and what to do: material points by default.
-MATERIAL_POINTS = ("material points", "refine the background grid")
+MATERIAL_POINTS = (
+    "material points",
+    "refine the background grid, or seed fewer points per cell (seed(level_set=...) puts "
+    "per_cell points on each piece of a cell its level sets cut, many in a cell that "
+    "several faces cut)",
+)
 
 
 def bucket(count: int, what: tuple[str, str] = MATERIAL_POINTS) -> int:

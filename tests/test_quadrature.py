@@ -205,7 +205,8 @@ def test_slot_count_balances_empty_slots_against_entities():
     with pytest.raises(
         ValueError,
         match=f"{too_many} material points in one cell exceeds the "
-        f"supported {SLOT_BUCKETS[-1]}; refine the background",
+        f"supported {SLOT_BUCKETS[-1]}; refine the background grid, or seed fewer points "
+        r"per cell \(seed\(level_set=...\) puts",  # a helper's cube cut by six faces
     ):
         bucket(too_many)
 
