@@ -317,6 +317,22 @@ def test_point_domains_drop_the_points_whose_domains_leave_the_grid():
     assert np.allclose(points.x, sim.domains.corners.mean(axis=1), atol=1e-12)
 
 
+def test_a_domain_found_outside_at_a_steps_start_goes_before_the_step():
+    """A domain that something at a step's start (a flip or redraw at the grid's
+    edge) left less than half inside is dropped with its point before the step, not
+    stopped on as "extend the grid" (a reviewer's reading, 2026-12-07). Here one
+    domain is moved out of the grid by hand, its cut-ahead pieces forgotten."""
+    sim, points = _translated_block()
+    sim.domains.corners = sim.domains.corners.copy()
+    sim.domains.corners[0] += [5.0, 0.0]  # far past the grid's right edge
+    sim.domains._ready = None
+    n0, x1 = len(points), points.x[1:].copy()
+    with pytest.warns(UserWarning, match=r"1 material point\(s\) left the grid with their dom"):
+        sim.step(0.01)  # 6 mm to the right: no other domain leaves
+    assert sim.dropped == 1 and len(points) == n0 - 1
+    assert np.allclose(points.x, x1 + [0.006, 0.0], atol=1e-12)
+
+
 def test_a_marker_whose_domain_leaves_the_grid_stops_the_run_with_nothing_updated():
     """A marker moves with its host point, so a step that would carry the host's
     domain out of the grid is refused before anything moves, naming the marker."""
