@@ -171,8 +171,8 @@ class Simulation:
             the modes the step cannot resolve (a reaction that rings from step to step),
             second-order accurate. 0 (the default, None) is the thesis's trapezoidal
             rule, which dissipates nothing; left None in a dynamic run with rigid walls
-            it warns (a body landing on a wall can gain energy under it); Kratos MPM's
-            documentation shows its Bossak scheme with −0.3.
+            it warns (a body landing on a wall can gain energy under it). Kratos MPM's
+            implicit dynamic solver defaults to Bossak with −0.3.
             Take −0.3 where a body lands on a rigid wall (released unstressed, or
             dropped): it rings on the wall's springs at a frequency no step resolves,
             and on a frictional wall the ringing walks it (a block at rest on a 30°

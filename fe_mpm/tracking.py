@@ -239,7 +239,8 @@ class PointTracking:
         first = _outside_message(points, outside, where, count, domains) if outside.size else None
         if comm.size > 1:  # the lowest rank that has one gives the example
             first = parallel.first_given(comm, first)
-            first += f" (in none of the {comm.size} MPI ranks' cells)"
+            if not domains:  # (a point whose domain went may still lie in a cell)
+                first += f" (in none of the {comm.size} MPI ranks' cells)"
         if self.points_leaving == "raise":
             parallel.raise_together(
                 comm,
