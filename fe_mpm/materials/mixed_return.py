@@ -448,12 +448,14 @@ def _blocks(D9, Fs, lam, spring, cols):
     with np.errstate(invalid="ignore", divide="ignore"):
         ddelta_dF = -lam[:, None] * m[:, cols] / h[:, None]
         ddelta_dtau = 1.0 / np.where(on_spring, spring, h)
+        # Taken on the spring's points as 0, whose h may be 0 (below): no 0/0 warning
+        # (with numpy 2.5 the numpy return lands as flat as the compiled one there).
+        ds_dtau = np.where(on_spring[:, None], 0.0, devD_F / h[:, None])
     # A point on the spring whose trial was so far out that its return is the apex's
     # with no stiffness at all (D9 = 0, h = 0): δ gets no slope in ΔF, not 0/0 (a wild
     # iterate of a punch in Mohr-Coulomb sand put NaN in the Jacobian, 2026-12-06).
     ddelta_dF[on_spring & (h == 0.0)] = 0.0
     ds_dF = devD[:, :, cols] * lam[:, None, None] + devD_F[:, :, None] * ddelta_dF[:, None, :]
-    ds_dtau = np.where(on_spring[:, None], 0.0, devD_F / h[:, None])
     return ds_dF, ds_dtau, -ddelta_dF, -ddelta_dtau
 
 
