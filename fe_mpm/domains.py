@@ -62,7 +62,7 @@ import numpy as np
 from fe_mpm import parallel
 from fe_mpm.clipping import piece_rule, simplex_volumes
 from fe_mpm.domain_flips import flip_distorted
-from fe_mpm.errors import ConvergenceError, MarkerHostLeftError, PointsOutsideError
+from fe_mpm.errors import ConvergenceError, PointsOutsideError
 from fe_mpm.markers import Markers
 from fe_mpm.materials.route import compiled_module
 from fe_mpm.materials.spectral import embedded_3d
@@ -72,6 +72,7 @@ from fe_mpm.point_update import apply_update, keep_volume_of_pressure
 from fe_mpm.step_forms import PointUpdate
 from fe_mpm.tilings import initial_domains, shape_quality, shrunk_cells
 from fe_mpm.tracker import Tracker
+from fe_mpm.tracking import hosts_leaving
 
 #: A domain's pieces must add up to its area to this relative tolerance.
 COVERAGE_TOL = 1e-9
@@ -597,7 +598,7 @@ class PointDomains:
 
         With ``points_leaving="drop"``, a domain that a flip or redraw at the step's
         start left less than half inside the grid goes with its point before the step
-        (through ``tracking`` and ``markers``, as :meth:`drop_left` does; ``step`` and
+        (through ``tracking`` and ``markers``, :meth:`_dropped`; ``step`` and
         ``t`` are the step's, for the warning).
         """
         self._reset_distorted(points, tracker)
@@ -613,9 +614,7 @@ class PointDomains:
             error = err
         parallel.raise_together(tracker.mesh.comm, self._beyond_ghosts(tracker) or error)
         if tracking is not None:
-            self._next = p
-            self.drop_left(points, markers, tracking, step, t)
-            p, self._ready = self._next, None
+            p = self._dropped(p, points, markers, tracking, step, t)
         self._pieces = p
         sub = MaterialPoints(
             p.x,
@@ -711,26 +710,14 @@ class PointDomains:
             # The next step's pieces, now: a domain that degenerates or leaves the grid
             # then fails this step, which a shorter step may avoid.
             try:
-                guess = self._pieces.cell[_heaviest(self._pieces, n)]
+                guess = self._pieces.cell[_heaviest(self._pieces, np.arange(n))]
                 self._next = self._cut(moved, tracker, guess, may_leave=self.drop_leaving)
-                error = self._hosts_leaving(self._next.left, step, t)
+                error = hosts_leaving(self.marker_hosts, self._next.left, step, t)
             except PointsOutsideError as err:
                 error = PointsOutsideError(f"{err} (step {step}, t = {t:g})")
             except ConvergenceError as err:
                 error = ConvergenceError(f"{err} in step {step} (t = {t:g}). Nothing was updated.")
         parallel.raise_together(tracker.mesh.comm, self._beyond_ghosts(tracker) or error)
-
-    def _hosts_leaving(self, left: np.ndarray, step: int, t: float) -> MarkerHostLeftError | None:
-        """The error of a step that would carry a marker's host point out with its domain."""
-        gone = set(left.tolist())
-        hosted = [name for name, host in self.marker_hosts.items() if host in gone]
-        if not hosted:
-            return None
-        return MarkerHostLeftError(
-            f"the host point of marker {hosted[0]!r} left the grid at step {step} (t = {t:g}): "
-            "points_leaving='drop' removes points, but a marker moves with its host point; "
-            "put markers on material that stays in the grid. Nothing was updated."
-        )
 
     def drop_left(
         self, points: MaterialPoints, markers: Markers, tracking, step: int, t: float
@@ -738,22 +725,29 @@ class PointDomains:
         """Drop the points whose domains the step carried out of the grid (after :meth:`gather`).
 
         With ``points_leaving="drop"`` a domain less than :data:`MIN_INSIDE` inside the
-        grid after a step goes with its point, its mass and momentum: ``tracking``
-        (:class:`~fe_mpm.tracking.PointTracking`) removes the points with a warning and
-        counts them, and the pieces cut ahead for the next step lose their rows.
+        grid after a step goes with its point, its mass and momentum (:meth:`_dropped`),
+        and the pieces cut ahead for the next step lose their rows. Collective.
+        """
+        self._next = self._dropped(self._next, points, markers, tracking, step, t)
+        self._ready = (self.corners, self._next)
+
+    def _dropped(
+        self, pieces: Pieces, points: MaterialPoints, markers: Markers, tracking, step, t
+    ) -> Pieces:
+        """The ``pieces`` of the domains kept, the points of those that left dropped.
+
+        ``tracking`` (:class:`~fe_mpm.tracking.PointTracking`) removes the points of
+        ``pieces.left`` with a warning and counts them; the domains lose their rows.
         Collective.
         """
-        left = self._next.left if self._next is not None else np.zeros(0, dtype=np.int64)
-        if not parallel.any_rank(tracking.tracker.mesh.comm, left.size > 0):
-            return
+        if not parallel.any_rank(tracking.tracker.mesh.comm, pieces.left.size > 0):
+            return pieces
         keep = np.ones(len(self.corners), dtype=bool)
-        keep[left] = False
+        keep[pieces.left] = False
         self.corners = self.corners[keep]
         self._drawn_quality = self._drawn_quality[keep]
-        self._next = self._next.kept(keep)
-        self._moved = self.corners
-        self._ready = (self.corners, self._next)
-        tracking.drop(points, markers, left, step, t, domains=True)
+        tracking.drop(points, markers, pieces.left, step, t, domains=True)
+        return pieces.kept(keep)
 
     def _beyond_ghosts(self, tracker: Tracker) -> ConvergenceError | None:
         """The error of a domain that reaches past this rank's cells into another rank's.
@@ -1076,10 +1070,10 @@ def _corner_cells(
     return corner_cell.reshape(-1)
 
 
-def _heaviest(pieces: Pieces, n: int) -> np.ndarray:
-    """The index of each of the ``n`` points' heaviest piece (n,)."""
+def _heaviest(pieces: Pieces, owners: np.ndarray) -> np.ndarray:
+    """The index of the heaviest piece of each point of ``owners`` (k,), which have pieces."""
     by_weight = np.lexsort((-pieces.share, pieces.owner))  # by point, the heaviest first
-    return by_weight[np.searchsorted(pieces.owner[by_weight], np.arange(n))]
+    return by_weight[np.searchsorted(pieces.owner[by_weight], owners)]
 
 
 def _heaviest_cells(pieces: Pieces, n: int) -> np.ndarray:
@@ -1089,8 +1083,7 @@ def _heaviest_cells(pieces: Pieces, n: int) -> np.ndarray:
     """
     cells = np.full(n, -1, dtype=np.int32)
     has = np.flatnonzero(np.bincount(pieces.owner, minlength=n) > 0)
-    by_weight = np.lexsort((-pieces.share, pieces.owner))  # by point, the heaviest first
-    cells[has] = pieces.cell[by_weight[np.searchsorted(pieces.owner[by_weight], has)]]
+    cells[has] = pieces.cell[_heaviest(pieces, has)]
     return cells
 
 

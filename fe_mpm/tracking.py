@@ -145,16 +145,7 @@ class PointTracking:
             # rank, whose cells do not hold it, it has left, as migrate() finds it.
             owner = owning_ranks(self.tracker, moved[lost])
             lost = lost[(owner < 0) | (owner == comm.rank)]
-        lost_set = set(lost.tolist())
-        gone = [name for name, host in markers.hosts().items() if host in lost_set]
-        error = None
-        if gone:
-            error = MarkerHostLeftError(
-                f"the host point of marker {gone[0]!r} left the grid at {_when(step, t)}: "
-                "points_leaving='drop' removes points, but a marker moves with its host "
-                "point; put markers on material that stays in the grid"
-            )
-        parallel.raise_together(comm, error)
+        parallel.raise_together(comm, hosts_leaving(markers.hosts(), lost, step, t))
         return lost
 
     def drop(
@@ -273,6 +264,26 @@ class PointTracking:
         if parallel.total(comm, len(points)) == 0:
             raise PointsOutsideError(f"all material points have left the grid at {where}")
         return cells[keep]
+
+
+def hosts_leaving(
+    hosts: dict[str, int], lost: np.ndarray, step: int, t: float
+) -> MarkerHostLeftError | None:
+    """The error of a step that would carry a marker's host out of the grid, or None.
+
+    ``hosts``: each marker's host point on this rank (name → index); ``lost``: the
+    points (or, with point domains, the domains) the step would carry out. Raised
+    before anything moves, so nothing was updated.
+    """
+    lost_set = set(lost.tolist())
+    gone = [name for name, host in hosts.items() if host in lost_set]
+    if not gone:
+        return None
+    return MarkerHostLeftError(
+        f"the host point of marker {gone[0]!r} left the grid at {_when(step, t)}: "
+        "points_leaving='drop' removes points, but a marker moves with its host point; "
+        "put markers on material that stays in the grid. Nothing was updated."
+    )
 
 
 def _outside_message(

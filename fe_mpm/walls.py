@@ -240,10 +240,16 @@ class RigidWalls:
         v = ufl.TestFunction(self.space)
         points = self.space.element.interpolation_points
         self._kept, self._traction, self._forces = [], [], []
-        # Each node's share of a wall's area by the vertex rule (for preload).
-        self._areas = [
-            dolfinx.fem.form(ufl.TestFunction(gaps) * wall.ds_tagged) for wall in self.walls
-        ]
+        # Each node's share of a wall's area by the vertex rule (preload, and the
+        # pressure node by node), at the owned nodes: the grid is reset every step, so
+        # they are the same all run long (a repartition builds the walls anew).
+        self._areas = []
+        for wall in self.walls:
+            area = dolfinx.fem.assemble_vector(
+                dolfinx.fem.form(ufl.TestFunction(gaps) * wall.ds_tagged)
+            )
+            area.scatter_reverse(dolfinx.la.InsertMode.add)
+            self._areas.append(area.array.copy())
         self._next = dolfinx.fem.Function(self.space)
         self._converged = dolfinx.fem.Function(self.space)  # a wall's traction at the end
         for wall in self.walls:
@@ -295,11 +301,10 @@ class RigidWalls:
             count = parallel.total(comm, int(held.sum()))
             if not count:
                 continue
-            # The example: the least held node by its coordinates, whatever the ranks.
-            mine_held = np.round(places[held] / wall.size, 8) * wall.size  # not −0.0, 1e-18
-            least = mine_held[np.lexsort(mine_held.T[::-1])[0]] if len(mine_held) else None
-            everyone = [x for x in comm.allgather(least) if x is not None]
-            first = (0.0 + min(everyone, key=tuple).round(6)).tolist()
+            # The example: the least held node by its coordinates, whatever the ranks
+            # (rounded as printed, so that −0.0 and 1e-18 are 0 and sort as 0).
+            least = min(map(tuple, (0.0 + places[held].round(6)).tolist()), default=None)
+            first = list(min(x for x in comm.allgather(least) if x is not None))
             total = parallel.total(comm, len(mine))
             messages.append(
                 f"RigidWall {wall.spec.name!r}: {count} of its {total} grid nodes (the first "
@@ -410,12 +415,9 @@ class RigidWalls:
         fixed = constrained.reshape(-1, g)[same]
         owned = self.space.dofmap.index_map.size_local
         changed = False
-        for wall, area_form in zip(self.walls, self._areas, strict=True):
-            area = dolfinx.fem.assemble_vector(area_form)
-            area.scatter_reverse(dolfinx.la.InsertMode.add)
-            area.scatter_forward()
+        for wall, area in zip(self.walls, self._areas, strict=True):
             nodes = wall.dofs[wall.dofs < owned]
-            a = area.array[nodes]
+            a = area[nodes]
             held = np.any(fixed[nodes][:, np.abs(wall.normal) > 0.0], axis=1)
             touching = (wall.gap.x.array[nodes] == 0.0) & (a > 0.0) & ~held
             nodes, a = nodes[touching], a[touching]
@@ -470,7 +472,7 @@ class RigidWalls:
         forces = {}
         g, comm = self.mesh.geometry.dim, self.mesh.comm
         owned, coords = self.space.dofmap.index_map.size_local, self.coordinates
-        for wall, kept, traction, force, area_form in zip(
+        for wall, kept, traction, force, area in zip(
             self.walls, self._kept, self._traction, self._forces, self._areas, strict=True
         ):
             self._converged.x.array[:] = 0.0
@@ -487,8 +489,6 @@ class RigidWalls:
             nodal = b.array.reshape(-1, g)
             mine = wall.dofs[wall.dofs < owned]
             touching = mine[np.abs(nodal[mine]).sum(axis=1) > 0.0]
-            area = dolfinx.fem.assemble_vector(area_form)
-            area.scatter_reverse(dolfinx.la.InsertMode.add)
             total = np.array([parallel.total(comm, float(nodal[mine, c].sum())) for c in range(g)])
             normal_part = float(total @ wall.normal)
             forces[wall.spec.name] = WallForces(
@@ -498,7 +498,7 @@ class RigidWalls:
                 nodes=parallel.gathered(comm, coords[touching].reshape(-1)).reshape(-1, g),
                 nodal=parallel.gathered(comm, nodal[touching].reshape(-1)).reshape(-1, g),
                 direction=wall.normal.copy(),
-                areas=parallel.gathered(comm, area.array[touching]),
+                areas=parallel.gathered(comm, area[touching]),
             )
         return forces
 
