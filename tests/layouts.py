@@ -1,7 +1,9 @@
-"""Random material-point layouts for the verification tests."""
+"""Random material-point layouts and small scenes shared by the verification tests."""
 
 import numpy as np
 
+import fe_mpm
+from fe_mpm.meshes import cell_centroids, rectangle_mesh
 from fe_mpm.particles import MaterialPoints
 from fe_mpm.tracker import Tracker
 
@@ -67,3 +69,22 @@ def base_and_rollers(width: float) -> list:
         fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0)),
         fe_mpm.Dirichlet(sides, component=0),
     ]
+
+
+def translating_block(points_leaving: str, per_cell: int = 1, **options):
+    """Points in the right half of a 2 × 1 grid of 8 × 4 cells, every node moved 0.6 t
+    to the right (a Neo-Hookean block translated rigidly out through the grid's right
+    edge); ``options`` go to ``Simulation``. Returns the simulation and its points."""
+    mesh = rectangle_mesh((0.0, 0.0), (2.0, 1.0), (8, 4))
+    cells = np.flatnonzero(cell_centroids(mesh)[:, 0] > 1.0)
+    points = fe_mpm.seed(mesh, per_cell=per_cell, cells=cells)
+    everywhere = lambda x: np.ones(x.shape[1], dtype=bool)  # noqa: E731
+    sim = fe_mpm.Simulation(
+        mesh,
+        points,
+        fe_mpm.NeoHookean(E=1.0, nu=0.3),
+        dirichlet=[fe_mpm.Dirichlet(everywhere, value=lambda t: (0.6 * t, 0.0))],
+        points_leaving=points_leaving,
+        **options,
+    )
+    return sim, points

@@ -7,7 +7,7 @@ import meshio
 import numpy as np
 import pytest
 from dolfinx.mesh import CellType, create_box, create_submesh
-from layouts import base_and_rollers, embed_3d, geostatic_layer
+from layouts import base_and_rollers, embed_3d, geostatic_layer, translating_block
 
 import fe_mpm
 from fe_mpm import domain_flips, meshes, scenes
@@ -273,20 +273,8 @@ def _share_left_of(corners, x_max):
 
 
 def _translated_block(markers=()):
-    """Three points per cell in the right half of a 2 × 1 grid, every node moved 0.6 t
-    to the right: the domains translate rigidly, out through the grid's right edge."""
-    mesh = meshes.rectangle_mesh((0.0, 0.0), (2.0, 1.0), (8, 4))
-    centre = meshes.cell_centroids(mesh)
-    points = fe_mpm.seed(mesh, per_cell=3, density=1.0, cells=np.flatnonzero(centre[:, 0] > 1.0))
-    everywhere = lambda x: np.ones(x.shape[1], dtype=bool)  # noqa: E731
-    sim = fe_mpm.Simulation(
-        mesh,
-        points,
-        fe_mpm.NeoHookean(E=1.0, nu=0.3),
-        dirichlet=[fe_mpm.Dirichlet(everywhere, value=lambda t: (0.6 * t, 0.0))],
-        points_leaving="drop",
-        point_domains=True,
-    )
+    """Three points per cell translated out through the grid's edge, with domains."""
+    sim, points = translating_block("drop", per_cell=3, point_domains=True)
     for name, x in markers:
         sim.add_marker(name, x)
     return sim, points

@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+from layouts import translating_block
 
 import fe_mpm
 from fe_mpm._dolfinx import dolfinx
@@ -96,25 +97,8 @@ def test_points_outside_are_reported_and_concave_grids_use_the_tree():
     assert cells[2] == -1 and cells[3] == -1
 
 
-def _translating_block(points_leaving, **options):
-    mesh = rectangle_mesh((0.0, 0.0), (2.0, 1.0), (8, 4))
-    centroid_x = mesh.geometry.x[mesh.geometry.dofmaps[0], 0].mean(axis=1)
-    points = fe_mpm.seed(mesh, per_cell=1, cells=np.flatnonzero(centroid_x > 1.0))
-    everywhere = lambda x: np.ones(x.shape[1], dtype=bool)  # noqa: E731
-    move = fe_mpm.Dirichlet(everywhere, value=lambda t: (0.6 * t, 0.0))
-    sim = fe_mpm.Simulation(
-        mesh,
-        points,
-        fe_mpm.NeoHookean(E=1.0, nu=0.3),
-        dirichlet=[move],
-        points_leaving=points_leaving,
-        **options,
-    )
-    return sim, points
-
-
 def test_point_leaving_the_grid_raises_with_step_and_position():
-    sim, points = _translating_block("raise")
+    sim, points = translating_block("raise")
     sim.step(1.0)  # moves the block 0.6 to the right: its right part leaves the grid
     message = r"left the grid at step 2 \(t = 2\).*point \d+ at x = "
     with pytest.raises(fe_mpm.PointsOutsideError, match=message):
@@ -126,7 +110,7 @@ def test_points_leaving_the_grid_can_be_dropped_with_a_count():
     so the last step of a run leaves none behind (until 2026-12-06 they were dropped
     by the next step's tracking: a block thrown out of its grid ended its run with 12
     of its 48 leavers still among its points and in its output)."""
-    sim, points = _translating_block("drop")
+    sim, points = translating_block("drop")
     n0 = len(points)
     with pytest.warns(UserWarning, match=r"left the grid at step 1 \(t = 1\)"):
         sim.step(1.0)
@@ -139,7 +123,7 @@ def test_a_marker_whose_host_is_dropped_stops_the_run_saying_when_and_why():
     """Found on a new user's two-rank run (2026-12-05), which stopped with the bare
     "the host point of marker 'top' left the grid": the message now names the step and
     says that a marker needs its host."""
-    sim, points = _translating_block("drop")
+    sim, points = translating_block("drop")
     sim.add_marker("edge", [1.9, 0.4])  # on a point that the first step carries out
     message = (
         r"^the host point of marker 'edge' left the grid at step 1 \(t = 1\): "
@@ -157,7 +141,7 @@ def test_a_run_stopped_by_a_markers_host_writes_the_steps_it_accepted(tmp_path, 
     step 1, whose row and frame an output every 10 steps had not written yet. Until
     2026-12-07 they were lost (a helper's outflow ended its steps.csv three steps
     short); now the run writes them before it stops, as after Newton's failure."""
-    sim, points = _translating_block(
+    sim, points = translating_block(
         "drop", output_dir=tmp_path, output_every=10, point_domains=domains
     )
     sim.add_marker("middle", [1.3, 0.5])  # carried out by the second step, not the first
