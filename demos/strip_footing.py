@@ -127,7 +127,8 @@ rank0 = parallel.print_on_rank_zero()  # every rank runs this script; one prints
 # empty strip, a refined zone seeded with `--points-near` points per cell, the rest
 # with `--points-far`, merged with `fe_mpm.merge`), the Tresca soil
 # (`fe_mpm.MohrCoulomb.tresca`), the footing points (`meshes.footing_points`, as a
-# `fe_mpm.PointDirichlet` with a penalty of 1e3 E/h by default) and the rollers.
+# `fe_mpm.PointDirichlet`, whose penalty the scene sets to 1e3 E/h unless told; the
+# class itself takes no default) and the rollers.
 
 # +
 try:

@@ -94,6 +94,11 @@ def body_force_at(body_force, t: float, g: int) -> np.ndarray:
     return np.asarray(value, dtype=float)
 
 
+#: A moving grid Dirichlet warns once it has moved its nodes further than this many
+#: times the smallest cell beside them.
+MOVED_PAST_CELLS = 1.0
+
+
 def follow_the_body(label: str) -> str:
     """What carries the load of the grid condition ``label`` on the body instead."""
     kind = "PointPressure" if label.startswith("Pressure") else "PointTraction"
@@ -143,16 +148,26 @@ class GridConditions:
         self.dirichlet = []  # (spec, value Function, DirichletBC)
         self._conflict_warned = False
         self.dirichlet_nodes = []  # grid nodes of each condition's facets
+        # How far each condition has moved its nodes (m), and the size of the smallest
+        # cell beside them: a condition that moves them further than that no longer
+        # holds the body's face (MOVED_PAST_CELLS).
+        self._travel = np.zeros(len(dirichlet))
+        self._cell_beside = np.full(len(dirichlet), np.inf)
+        self._travel_warned = np.zeros(len(dirichlet), dtype=bool)
+        self._value_dofs = []  # each condition's entries of its value Function
         for k, spec in enumerate(dirichlet):
             dim, entities = dirichlet_entities(mesh, spec.where, facet_tags, f"Dirichlet {k}")
             if spec.component is not None:
                 check_range(f"Dirichlet {k}", "component", spec.component, lo=0, hi=g - 1)
             if spec.profile is None and not callable(spec.value):
                 _check_dirichlet_size(k, spec, spec.at(0.0).size, g)
-            self.dirichlet.append((spec, *self._dirichlet_bc(spec.component, dim, entities)))
+            value, bc, value_dofs = self._dirichlet_bc(spec.component, dim, entities)
+            self.dirichlet.append((spec, value, bc))
+            self._value_dofs.append(value_dofs)
             self.dirichlet_nodes.append(
                 np.unique(dolfinx.mesh.entities_to_geometry(mesh, dim, entities))
             )
+            self._cell_beside[k] = _smallest_cell_beside(mesh, dim, entities)
 
         self.tractions = []  # (spec, Constant)
         self.traction_terms = []
@@ -211,16 +226,21 @@ class GridConditions:
         self._body_force_scale = body_force_scale
 
     def _dirichlet_bc(self, component: int | None, dim: int, entities: np.ndarray):
-        """The value Function of a condition and its DirichletBC on the ``dim``-entities."""
+        """A condition's value Function, its DirichletBC and its entries of the value.
+
+        On the ``dim``-entities ``entities``; the entries index the value Function's
+        array (unrolled), where the condition's increment is set.
+        """
         target, is_sub = constrained_space(self.fields.U, component)
         if is_sub:
             collapsed, _ = target.collapse()
             value = dolfinx.fem.Function(collapsed)
             dofs = dolfinx.fem.locate_dofs_topological((target, collapsed), dim, entities)
-            return value, dolfinx.fem.dirichletbc(value, dofs, target)
+            return value, dolfinx.fem.dirichletbc(value, dofs, target), dofs[1]
         value = dolfinx.fem.Function(target)
         dofs = dolfinx.fem.locate_dofs_topological(target, dim, entities)
-        return value, dolfinx.fem.dirichletbc(value, dofs)
+        bs = target.dofmap.bs  # blocks here, unrolled entries of a collapsed space above
+        return value, dolfinx.fem.dirichletbc(value, dofs), (dofs[:, None] * bs + np.arange(bs))
 
     @property
     def loads_or_supports(self) -> bool:
@@ -260,11 +280,41 @@ class GridConditions:
                 _check_dirichlet_size(k, spec, increment.size, self.mesh.geometry.dim)
                 bs = value.function_space.dofmap.bs
                 value.x.array.reshape(-1, bs)[:] = increment.reshape(-1)
+        self._warn_travel(t_new)
         self.set_loads(t_new)
         if len(self.dirichlet) > 1 and not self._conflict_warned:  # the same on every rank
             self._warn_conflicts(t_old, t_new)
         pins = self.fields.pin_unsupported(occupied, zone_cells)
         return [bc for _, _, bc in self.dirichlet] + pins
+
+    def _warn_travel(self, t_new: float) -> None:
+        """Warn once per condition (collective) that has moved its nodes past a cell.
+
+        The grid is reset after every step, so a moving condition stays on the same
+        nodes while the body's face moves on: it then holds whatever material lies
+        there. A new user's strip pulled to three times its length by a grid
+        ``Dirichlet`` (40 cells) ended at x = 1.985 m for 3 m, its force 65 % over and
+        then 29 % under the exact one, and nothing was said (2026-12-07).
+        """
+        if not self.dirichlet:
+            return
+        steps = np.zeros(len(self.dirichlet))
+        for k, (_, value, _) in enumerate(self.dirichlet):
+            moved = np.abs(value.x.array[self._value_dofs[k].ravel()])
+            steps[k] = float(moved.max(initial=0.0))  # the largest component
+        self._travel += parallel.largest(self.mesh.comm, steps)
+        for k in np.flatnonzero(
+            (self._travel > MOVED_PAST_CELLS * self._cell_beside) & ~self._travel_warned
+        ):
+            self._travel_warned[k] = True
+            warn(
+                f"Dirichlet {k} has moved its grid nodes by {self._travel[k]:.3g} m by "
+                f"t = {t_new:g}, more than the cells beside them ({self._cell_beside[k]:.3g} "
+                "m): the grid is reset after every step, so the condition stays on the "
+                "same nodes while the body moves on, and it holds whatever lies there now. "
+                "A support or a pull that follows the body is a PointDirichlet "
+                "(meshes.facet_points gives its points)."
+            )
 
     def _warn_conflicts(self, t_old: float, t_new: float) -> None:
         """Warn once (collective) where two conditions prescribe different increments.
@@ -384,6 +434,20 @@ class GridConditions:
             name: np.array([parallel.total(comm, float(b[d[d < owned]].sum())) for d in comps])
             for name, comps in self.reaction_dofs.items()
         }
+
+
+def _smallest_cell_beside(mesh: dolfinx.mesh.Mesh, dim: int, entities: np.ndarray) -> float:
+    """The size (m) of the smallest cell touching the ``dim``-entities, over the ranks.
+
+    The size is the cell's longest edge; inf where no cell touches them.
+    """
+    tdim = mesh.topology.dim
+    mesh.topology.create_connectivity(dim, tdim)
+    cells = dolfinx.mesh.compute_incident_entities(
+        mesh.topology, np.asarray(entities, dtype=np.int32), dim, tdim
+    )
+    size = float(dolfinx.cpp.mesh.h(mesh._cpp_object, tdim, cells).min(initial=np.inf))
+    return float(parallel.smallest(mesh.comm, size))
 
 
 def _check_dirichlet_size(k: int, spec, size: int, g: int) -> None:

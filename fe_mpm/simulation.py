@@ -1320,12 +1320,17 @@ class Simulation:
         # With walls the contact is found step by step (each node's gap at the step's
         # start): a disk pressed on a wall took a contact width 9 % over Hertz's in one
         # step and 2 % in 20 (a new user's scene, 2026-12-07), so fewer steps are no cure.
-        advice = (
-            "A rigid wall's contact is found step by step, though, so a scene with walls "
-            "needs its steps for that"
-            if self.walls
-            else "An elastic body needs no more load steps than Newton does"
-        )
+        # A law with a history follows its load path, so fewer steps are no cure there
+        # either (a J2 plate with a hole was told of elastic bodies; 2026-12-07).
+        if self.walls:
+            advice = (
+                "A rigid wall's contact is found step by step, though, so a scene with "
+                "walls needs its steps for that"
+            )
+        elif self.material.history:
+            advice = "A law with a history follows its load path, so it needs its steps"
+        else:
+            advice = "An elastic body needs no more load steps than Newton does"
         warn(
             f"Static step {k}: points have crossed cells. In standard MPM a static answer "
             "then drifts with the number of load steps: a cantilever under its weight, "

@@ -80,6 +80,26 @@ def test_returned_stress_lies_on_the_yield_surface_and_hardens_at_H(hardening):
         assert np.allclose(norms, SQRT_2_3 * mat.yield_stress, rtol=1e-14)
 
 
+def test_a_point_left_on_the_yield_surface_starts_its_next_step_elastic_whatever_round_off():
+    """Round-off above or below the surface must not choose the tangent: before the
+    tolerance, a J2 plate with a hole in u-p on 2 ranks took other Newton iterations
+    than in serial from its fourth step (a helper's scene, 2026-12-07), and with the
+    basic line search ended 58 % away in stress."""
+    mat = fe_mpm.J2Plasticity(**STEEL)
+    driver = MaterialDriver(mat, n=3)
+    F = np.repeat(shear(0.01), 3, axis=0)
+    driver.step(F)  # plastic: every point ends on the surface
+    assert np.all(driver.history["plastic_strain"] > 0)
+    # A few ulps inside and outside, and a millionth inside (surely elastic).
+    for point, scale in enumerate([1 - 1e-14, 1 + 1e-14, 1 - 1e-6]):
+        driver.history["be_bar"][point] *= scale
+    at_start = driver.evaluate(F)  # the next step's first iterate: ΔF = I
+    D = at_start["tangent"]
+    for point in (0, 1):
+        assert np.allclose(D[point], D[2], rtol=0, atol=1e-5 * np.abs(D).max()), point
+    assert np.array_equal(at_start["plastic_strain"], driver.history["plastic_strain"])
+
+
 def test_plastic_flow_is_isochoric_in_the_trial_measure():
     """The return changes only dev b̄ᵉ: tr b̄ᵉ is that of the trial state (Algorithm 3)."""
     mat = fe_mpm.J2Plasticity(**STEEL)

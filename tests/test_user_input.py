@@ -653,7 +653,9 @@ def test_a_static_u_nbva_run_of_a_dilatant_soil_warns(psi, warned):
     assert bool(said) == warned
 
 
-def _cantilever(steps: int, gravity: float = 1.3, add_after: int = 0, **options) -> list[str]:
+def _cantilever(
+    steps: int, gravity: float = 1.3, add_after: int = 0, law=None, **options
+) -> list[str]:
     """A cantilever 2 m x 0.25 m under its weight, four cells deep, three points a cell:
     the crossing warnings its static run gives over ``steps`` load steps (with a cell
     of points added on its top after step ``add_after``, if not 0)."""
@@ -665,7 +667,7 @@ def _cantilever(steps: int, gravity: float = 1.3, add_after: int = 0, **options)
     sim = fe_mpm.Simulation(
         grid,
         points,
-        fe_mpm.NeoHookean(1000.0, 0.3),
+        law or fe_mpm.NeoHookean(1000.0, 0.3),
         "up",
         dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0))],
         body_force=(0.0, -gravity),
@@ -691,6 +693,7 @@ def _cantilever(steps: int, gravity: float = 1.3, add_after: int = 0, **options)
         ({"add_after": 1}, 2),
         ({"point_domains": True}, None),
         ({"walls": [fe_mpm.RigidWall("floor", lambda x: np.isclose(x[1], -0.75))]}, 2),
+        ({"law": fe_mpm.J2Plasticity(1000.0, 0.3, yield_stress=1e6)}, 2),
     ],
 )
 def test_a_static_standard_run_warns_once_when_its_points_cross_cells(options, warned_at):
@@ -702,15 +705,17 @@ def test_a_static_standard_run_warns_once_when_its_points_cross_cells(options, w
     added after the first step does not hide the crossing (until a reviewer's script,
     add_points remembered the cells the points had crossed into). With a rigid wall
     it does not advise fewer steps: the contact is found step by step (a new user's
-    Hertz contact came 9 % wide in one step, 2 % in 20; 2026-12-07)."""
+    Hertz contact came 9 % wide in one step, 2 % in 20; 2026-12-07); nor with a law
+    that has a history (a J2 plate with a hole was told of elastic bodies, 2026-12-07)."""
     said = _cantilever(20, **options)
     assert len(said) == (0 if warned_at is None else 1)
     if warned_at is not None:
         assert said[0].startswith(f"Static step {warned_at}:")
         assert "point_domains=True" in said[0]
-        walls = "walls" in options
-        assert ("needs no more load steps than Newton" in said[0]) != walls
+        walls, history = "walls" in options, "law" in options
+        assert ("needs no more load steps than Newton" in said[0]) != (walls or history)
         assert ("contact is found step by step" in said[0]) == walls
+        assert ("follows its load path" in said[0]) == history
 
 
 def test_a_failed_step_names_where_it_is_out_of_balance_and_what_ran_away():
@@ -835,3 +840,46 @@ def test_a_serial_run_limits_numpys_blas_to_one_thread(monkeypatch):
         threadpool_limits(limits=2, user_api="blas")
         fe_mpm.Simulation(mesh, fe_mpm.seed(mesh, 1), fe_mpm.NeoHookean(1.0, 0.3))
         assert set(numpy_threads()) == {2}
+
+
+@pytest.mark.parametrize("formulation", ["u", "up"])
+@pytest.mark.parametrize(
+    "pull, warned",
+    [
+        (dict(value=lambda t: 0.25 * t, component=0), True),
+        (dict(value=lambda t: 0.1 * t, component=0), False),
+        # Large away from the held nodes, where it acts on nothing: no warning.
+        (dict(profile=lambda x, t: 0.1 * t + 9.0 * t * (x[0] < 0.5), component=0), False),
+        (dict(profile=lambda x, t: 0.25 * t + 0.0 * x[0], component=0), True),
+        (dict(value=lambda t: (0.25 * t, 0.0)), True),  # both components held
+        (dict(value=lambda t: (0.1 * t, 0.0)), False),
+    ],
+)
+def test_a_grid_dirichlet_that_moves_its_nodes_past_a_cell_warns_once(formulation, pull, warned):
+    """A new user's strip pulled to three times its length by a grid Dirichlet ended
+    at x = 1.985 m for 3 m, its force 65 % over and then 29 % under the exact one, and
+    nothing was said (2026-12-07): the condition stays on its nodes, the body moves on.
+    Now a condition that has moved its nodes further than the cells beside them
+    (0.141 m here) warns, once, naming PointDirichlet; a pull of 0.1 m does not."""
+    mesh = rectangle_mesh((0.0, 0.0), (3.0, 0.5), (30, 5))
+    points = fe_mpm.seed(mesh, 1, density=1.0)
+    points.keep(points.x[:, 0] < 1.0)
+    sim = fe_mpm.Simulation(
+        mesh,
+        points,
+        fe_mpm.NeoHookean(1e3, 0.3),
+        formulation,
+        dirichlet=[
+            fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0), component=0),
+            fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0), component=1),
+            fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 1.0), **pull),
+        ],
+    )
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        sim.run(1.0, 5, progress=False)
+    said = [str(w.message) for w in caught if "moved its grid nodes" in str(w.message)]
+    assert len(said) == int(warned), said
+    if warned:
+        assert said[0].startswith("Dirichlet 2 has moved its grid nodes by 0.15 m by t = 0.6")
+        assert "PointDirichlet" in said[0]

@@ -34,6 +34,7 @@ import numpy as np
 import ufl
 
 from fe_mpm.materials.elastic import IsotropicModuli, embed_3d, in_plane
+from fe_mpm.materials.principal_return import YIELD_TOLERANCE
 from fe_mpm.materials.spectral import deviator, norm
 from fe_mpm.materials.state import HistoryField, PointState
 
@@ -84,7 +85,10 @@ class J2Plasticity(IsotropicModuli):
         radius = _SQRT_2_3 * (self.yield_stress + self.hardening * state.history["plastic_strain"])
         f_trial = norm - radius
         mu_bar = self.mu * ufl.tr(b_trial) / 3.0
-        plastic = ufl.gt(f_trial, 0.0)
+        # A point left on the surface by the last step starts the next at f = 0 up to
+        # round-off, which differs between partitions: without the tolerance its first
+        # tangent did too, and a J2 plate in u-p on 2 ranks left the serial path.
+        plastic = ufl.gt(f_trial, YIELD_TOLERANCE * radius)
         # Both branches are compiled; ‖s_tr‖ only divides where it exceeds the radius > 0.
         dgamma = ufl.conditional(
             plastic, f_trial / (2.0 * mu_bar + 2.0 * self.hardening / 3.0), 0.0
