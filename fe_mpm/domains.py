@@ -493,7 +493,7 @@ class PointDomains:
         short = covered < 1.0 - COVERAGE_TOL
         self._short = corners[short], covered[short] * domain_area[short]
         left = covered < MIN_INSIDE if may_leave else np.zeros(n, dtype=bool)
-        if np.any(covered[~left] < MIN_INSIDE):
+        if not may_leave and np.any(covered < MIN_INSIDE):
             p = int(np.argmin(covered))
             raise PointsOutsideError(
                 f"the domain of point {p} (corners {corners[p].tolist()}) has left the "
@@ -710,7 +710,7 @@ class PointDomains:
             # The next step's pieces, now: a domain that degenerates or leaves the grid
             # then fails this step, which a shorter step may avoid.
             try:
-                guess = self._pieces.cell[_heaviest(self._pieces, np.arange(n))]
+                guess = _heaviest_cells(self._pieces, n)  # every domain of the step has pieces
                 self._next = self._cut(moved, tracker, guess, may_leave=self.drop_leaving)
                 error = hosts_leaving(self.marker_hosts, self._next.left, step, t)
             except PointsOutsideError as err:
@@ -1070,12 +1070,6 @@ def _corner_cells(
     return corner_cell.reshape(-1)
 
 
-def _heaviest(pieces: Pieces, owners: np.ndarray) -> np.ndarray:
-    """The index of the heaviest piece of each point of ``owners`` (k,), which have pieces."""
-    by_weight = np.lexsort((-pieces.share, pieces.owner))  # by point, the heaviest first
-    return by_weight[np.searchsorted(pieces.owner[by_weight], owners)]
-
-
 def _heaviest_cells(pieces: Pieces, n: int) -> np.ndarray:
     """The cell of each of the ``n`` points' heaviest piece (n,).
 
@@ -1083,7 +1077,8 @@ def _heaviest_cells(pieces: Pieces, n: int) -> np.ndarray:
     """
     cells = np.full(n, -1, dtype=np.int32)
     has = np.flatnonzero(np.bincount(pieces.owner, minlength=n) > 0)
-    cells[has] = pieces.cell[_heaviest(pieces, has)]
+    by_weight = np.lexsort((-pieces.share, pieces.owner))  # by point, the heaviest first
+    cells[has] = pieces.cell[by_weight[np.searchsorted(pieces.owner[by_weight], has)]]
     return cells
 
 

@@ -148,6 +148,7 @@ class GridConditions:
         self.dirichlet = []  # (spec, value Function, DirichletBC)
         self._conflict_warned = False
         self.dirichlet_nodes = []  # grid nodes of each condition's facets
+        self.dirichlet_entities = []  # (dim, entities) each condition holds
         # How far each condition has moved its nodes (m), and the size of the smallest
         # cell beside them: a condition that moves them further than that no longer
         # holds the body's face (MOVED_PAST_CELLS).
@@ -167,6 +168,7 @@ class GridConditions:
             self.dirichlet_nodes.append(
                 np.unique(dolfinx.mesh.entities_to_geometry(mesh, dim, entities))
             )
+            self.dirichlet_entities.append((dim, entities))
             self._cell_beside[k] = _smallest_cell_beside(mesh, dim, entities)
 
         self.tractions = []  # (spec, Constant)

@@ -281,20 +281,25 @@ class RigidWalls:
             One message per wall that shares nodes, naming the wall, the conditions, how
             many of its nodes they hold and where the first is.
         """
-        comm, g = self.mesh.comm, self.mesh.geometry.dim
+        comm = self.mesh.comm
         owned = self.space.dofmap.index_map.size_local
+        # The walls' nodes that each condition's entities hold (blocked, as wall.dofs).
+        condition_dofs = [
+            dolfinx.fem.locate_dofs_topological(self.space, dim, entities)
+            for dim, entities in conditions.dirichlet_entities
+        ]
         messages = []
         for wall in self.walls:
             mine = wall.dofs[wall.dofs < owned]
             places = self.coordinates[mine]
             held, by = np.zeros(len(mine), dtype=bool), []
-            for k, ((spec, _, _), nodes) in enumerate(
-                zip(conditions.dirichlet, conditions.dirichlet_nodes, strict=True)
+            for k, ((spec, _, _), dofs) in enumerate(
+                zip(conditions.dirichlet, condition_dofs, strict=True)
             ):
                 along = spec.component is None or abs(wall.normal[spec.component]) > PLANE_TOLERANCE
                 if not along:
                     continue
-                there = _at_any_of(places, self.mesh.geometry.x[nodes, :g], wall.size)
+                there = np.isin(mine, dofs)
                 if parallel.any_rank(comm, bool(np.any(there))):
                     by.append(f"Dirichlet {k}")
                 held |= there
@@ -501,21 +506,6 @@ class RigidWalls:
                 areas=parallel.gathered(comm, area[touching]),
             )
         return forces
-
-
-def _at_any_of(places: np.ndarray, nodes: np.ndarray, size: float) -> np.ndarray:
-    """Which of ``places`` (k, g) are one of ``nodes`` (m, g): the same grid nodes.
-
-    Compared on coordinates rounded to 1e-8 of ``size``: the P1 dofs' coordinates and
-    the geometry's are the same numbers (the basis is exactly 0 and 1 at the nodes),
-    so this is an exact match that rounding boundaries cannot split.
-    """
-    if not len(places) or not len(nodes):
-        return np.zeros(len(places), dtype=bool)
-    tol = 1e-8 * size
-    key = lambda x: {tuple(p) for p in np.round(x / tol).astype(np.int64)}  # noqa: E731
-    known = key(nodes)
-    return np.array([tuple(p) in known for p in np.round(places / tol).astype(np.int64)])
 
 
 def _same_nodes(coordinates: np.ndarray, space) -> np.ndarray:
