@@ -6,9 +6,10 @@ import numpy as np
 
 from fe_mpm import parallel
 from fe_mpm._dolfinx import dolfinx
+from fe_mpm.errors import warn
 
 
-def body_labels(cell_nodes: np.ndarray) -> np.ndarray:
+def body_labels(cell_nodes: np.ndarray, nodes: int | None = None) -> np.ndarray:
     """A label per cell, the same for cells joined through shared nodes, (cells,).
 
     Hooks each cell's nodes to their lowest label and halves the paths to the roots
@@ -17,15 +18,20 @@ def body_labels(cell_nodes: np.ndarray) -> np.ndarray:
 
     Args:
         cell_nodes: The nodes of each cell (cells, nodes per cell), any integers.
+        nodes: If given, the nodes are already numbered 0 … ``nodes`` − 1 (a rank's
+            local nodes), which spares renumbering them (most of the time on 10⁵ cells).
 
     Returns:
         Each cell's body, numbered 0, 1, … in order of first appearance.
     """
     if cell_nodes.shape[0] == 0:
         return np.zeros(0, dtype=np.int64)
-    nodes, local = np.unique(cell_nodes, return_inverse=True)
-    local = local.reshape(cell_nodes.shape)
-    parent = np.arange(nodes.size)
+    if nodes is None:
+        numbered, local = np.unique(cell_nodes, return_inverse=True)
+        local, nodes = local.reshape(cell_nodes.shape), numbered.size
+    else:
+        local = cell_nodes
+    parent = np.arange(nodes)
     while True:
         roots = parent[local]
         lowest = roots.min(axis=1)
@@ -50,7 +56,11 @@ def _gathered_globally(comm, index_map, local: np.ndarray) -> np.ndarray:
 def bodies_of_cells(mesh: dolfinx.mesh.Mesh, cells: np.ndarray) -> tuple[np.ndarray, int]:
     """The body of each of this rank's occupied cells, and how many bodies there are.
 
-    As :func:`count_bodies` (collective; gathers the occupied cells' nodes).
+    Each rank finds the bodies of its own cells; only the nodes that ranks share
+    travel, with the local body they belong to, and every rank joins the local
+    bodies that meet at one (collective). So the cost per rank grows with its cells
+    and the partition's interface, not with the whole grid: cheap enough for a check
+    at every static step (:meth:`Simulation.step` looks for a body that tore).
 
     Args:
         mesh: The grid.
@@ -60,12 +70,51 @@ def bodies_of_cells(mesh: dolfinx.mesh.Mesh, cells: np.ndarray) -> tuple[np.ndar
         ``np.unique(cells[cells >= 0])``'s bodies (numbered alike on every rank), and
         the number of bodies over all ranks.
     """
-    occupied = np.unique(cells[cells >= 0])
-    nodes = mesh.geometry.dofmaps[0][occupied]
-    labels = body_labels(_gathered_globally(mesh.comm, mesh.geometry.index_map(), nodes))
-    counts = mesh.comm.allgather(occupied.size) if mesh.comm.size > 1 else [occupied.size]
-    start = int(sum(counts[: mesh.comm.rank]))
-    return labels[start : start + occupied.size], int(labels.max(initial=-1)) + 1
+    dofmap = mesh.geometry.dofmaps[0]
+    nodes = dofmap[_each_once(cells, dofmap.shape[0])]
+    local = body_labels(nodes, mesh.geometry.x.shape[0])
+    comm = mesh.comm
+    if comm.size == 1:
+        return local, int(local.max(initial=-1)) + 1
+    here = int(local.max(initial=-1)) + 1
+    first = comm.exscan(here) or 0  # (exscan leaves rank 0's None)
+    everywhere = comm.allreduce(here)
+    index_map = mesh.geometry.index_map()
+    at_shared = _shared_nodes(index_map)[nodes]
+    meeting = np.column_stack(
+        [
+            index_map.local_to_global(nodes[at_shared].astype(np.int32)),
+            first + np.broadcast_to(local[:, None], nodes.shape)[at_shared],
+        ]
+    )
+    meeting = parallel.gathered(comm, meeting.astype(np.int64))
+    # A table of "cells" that body_labels joins through shared "nodes": one row per
+    # local body (itself twice, so it counts alone), one per (shared node, local body),
+    # the nodes numbered after the bodies.
+    itself = np.repeat(np.arange(everywhere, dtype=np.int64)[:, None], 2, axis=1)
+    joins = np.column_stack([meeting[:, 1], everywhere + meeting[:, 0]])
+    body = body_labels(np.vstack([itself, joins]))[:everywhere]
+    return body[first + local], int(body.max(initial=-1)) + 1
+
+
+def _each_once(cells: np.ndarray, count: int) -> np.ndarray:
+    """``np.unique(cells[cells >= 0])`` for cells numbered below ``count``, in linear time."""
+    seen = np.zeros(count, dtype=bool)
+    seen[cells[cells >= 0]] = True
+    return np.flatnonzero(seen)
+
+
+def _shared_nodes(index_map) -> np.ndarray:
+    """Whether each of this rank's nodes is on another rank too, (local nodes,) bool.
+
+    Its ghosts, and the owned nodes that other ranks ghost (collective).
+    """
+    count = dolfinx.la.vector(index_map, 1, dtype=np.int32)
+    count.array[index_map.size_local :] = 1
+    count.scatter_reverse(dolfinx.la.InsertMode.add)
+    shared = count.array > 0
+    shared[index_map.size_local :] = True
+    return shared
 
 
 def count_bodies(mesh: dolfinx.mesh.Mesh, cells: np.ndarray) -> int:
@@ -121,3 +170,75 @@ def joined_at_a_node(mesh: dolfinx.mesh.Mesh, cells: np.ndarray) -> np.ndarray |
         return None
     where = np.flatnonzero(flat_nodes == shared[0])[0]
     return coordinates.reshape(-1, g)[where]
+
+
+class TearWatch:
+    """Warns, once, when a static run's material comes apart into more bodies.
+
+    A static run's laws have no fracture, so material that splits is the grid losing
+    hold of points: standard MPM ties two points only through the cells they share,
+    and a strip stretched until its points lie more than a cell apart tore, lost the
+    force across the gap (1e-9 N of 2.7e5 at λ = 3) and converged in every step (a
+    new user's scene, 2026-12-07). Point domains tile the body and kept that strip
+    whole to within 0.003 %.
+
+    Attributes:
+        bodies_at_start: How many bodies the material formed at the first step, or
+            at the first step after points were added or removed (None before).
+        warned: Whether the run was warned.
+    """
+
+    def __init__(self) -> None:
+        self.bodies_at_start: int | None = None
+        self.warned = False
+
+    def look(
+        self, mesh: dolfinx.mesh.Mesh, occupied: np.ndarray, t: float, *, anew: bool, domains: bool
+    ) -> None:
+        """Count the bodies the material forms now and warn if there are more (collective).
+
+        Args:
+            mesh: The grid.
+            occupied: This rank's occupied cells (local indices; repeats and -1 ignored).
+            t: The time the points have reached (s).
+            anew: Count from here (the first step, or points were added or removed).
+            domains: Whether the points carry domains (the advice differs).
+        """
+        if self.warned:
+            return  # said once; the count costs a pass over the occupied cells
+        occupied = _each_once(occupied, mesh.geometry.dofmaps[0].shape[0])
+        body, count = bodies_of_cells(mesh, occupied)
+        if anew or self.bodies_at_start is None:
+            self.bodies_at_start = count
+            return
+        if count <= self.bodies_at_start:
+            return
+        self.warned = True
+        cells = parallel.total(mesh.comm, np.bincount(body, minlength=count))
+        least = int(np.argmin(cells))
+        g = mesh.geometry.dim
+        corners = mesh.geometry.x[mesh.geometry.dofmaps[0][occupied[body == least]], :g]
+        lo = parallel.smallest(mesh.comm, corners.reshape(-1, g).min(axis=0, initial=np.inf))
+        hi = parallel.largest(mesh.comm, corners.reshape(-1, g).max(axis=0, initial=-np.inf))
+        if domains:
+            advice = (
+                "Point domains tile the body, so a gap means that domains redrawn when "
+                "they distorted no longer meet"
+            )
+        else:
+            advice = (
+                "Standard MPM ties points only through the cells they share: a body "
+                "stretched until its points lie more than a cell apart tears, and the "
+                "force across the gap is lost while every step converges. "
+                "point_domains=True keeps a stretched body whole"
+            )
+        warn(
+            f"By t = {t:g} the material had come apart: its occupied cells form {count} "
+            f"groups that share no node, where there were {self.bodies_at_start} at the "
+            f"start (cells in each: {cells.tolist() if count <= 6 else '…'}; the "
+            f"smallest lies in the box from {lo.round(6).tolist()} to "
+            f"{hi.round(6).tolist()}). A static run's laws do not fracture, so this is "
+            f"the grid letting go. {advice}. Bodies that touch at the start count "
+            "as one: the grid's nodes glue them, with no contact between them, until "
+            "they part (docs/user_scenes.md, Supports and loads; said once)."
+        )

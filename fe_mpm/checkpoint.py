@@ -171,6 +171,8 @@ def write(sim, directory: str | Path) -> Path:
                 # What add_points / remove_points left for the next step to do.
                 "restart_dynamics": sim._restart_dynamics,
                 "check_supports_again": sim._check_supports_again,
+                "bodies_at_start": sim._tears.bodies_at_start,
+                "tear_warned": sim._tears.warned,
                 "pieces": pieces,
                 "shared_sha256": _save(partial / "shared.npz", shared),
             }
@@ -283,6 +285,8 @@ def read(sim, path: str | Path) -> None:
     # accelerations and support check are still due (absent before 2026-12-06).
     sim._restart_dynamics = bool(state.get("restart_dynamics", False))
     sim._check_supports_again = bool(state.get("check_supports_again", False))
+    sim._tears.bodies_at_start = state.get("bodies_at_start")  # (absent before 2026-12-07)
+    sim._tears.warned = bool(state.get("tear_warned", False))
     sim.tracking._nslot = state["slots"]
     sim.tracking.dropped = int(state["dropped"])  # the total, on every rank
     if sim.domains is not None:

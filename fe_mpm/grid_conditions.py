@@ -149,10 +149,12 @@ class GridConditions:
         self._conflict_warned = False
         self.dirichlet_nodes = []  # grid nodes of each condition's facets
         self.dirichlet_entities = []  # (dim, entities) each condition holds
-        # How far each condition has moved its nodes (m), and the size of the smallest
-        # cell beside them: a condition that moves them further than that no longer
-        # holds the body's face (MOVED_PAST_CELLS).
-        self._travel = np.zeros(len(dirichlet))
+        # How far each condition has moved each of its entries over the accepted steps
+        # (m, signed) and with the step being tried, and the size of the smallest cell
+        # beside them: a condition that moves them further than that no longer holds
+        # the body's face (MOVED_PAST_CELLS).
+        self._moved: list[np.ndarray] = []
+        self._moving: list[np.ndarray] = []
         self._cell_beside = np.full(len(dirichlet), np.inf)
         self._travel_warned = np.zeros(len(dirichlet), dtype=bool)
         self._value_dofs = []  # each condition's entries of its value Function
@@ -300,23 +302,39 @@ class GridConditions:
         """
         if not self.dirichlet:
             return
-        steps = np.zeros(len(self.dirichlet))
-        for k, (_, value, _) in enumerate(self.dirichlet):
-            moved = np.abs(value.x.array[self._value_dofs[k].ravel()])
-            steps[k] = float(moved.max(initial=0.0))  # the largest component
-        self._travel += parallel.largest(self.mesh.comm, steps)
+        if not self._moved:
+            self._moved = [np.zeros(dofs.size) for dofs in self._value_dofs]
+        # Signed: the body's face lies where the accepted steps took it, however many
+        # tries a step took (a retried step added each try's increment until a helper's
+        # trapdoor, cut three times, was told 0.127 m for 0.030 m; 2026-12-07).
+        self._moving = [
+            moved + value.x.array[dofs.ravel()]
+            for moved, (_, value, _), dofs in zip(
+                self._moved, self.dirichlet, self._value_dofs, strict=True
+            )
+        ]
+        here = [float(np.abs(moving).max(initial=0.0)) for moving in self._moving]
+        travel = parallel.largest(self.mesh.comm, np.array(here))  # the largest component
         for k in np.flatnonzero(
-            (self._travel > MOVED_PAST_CELLS * self._cell_beside) & ~self._travel_warned
+            (travel > MOVED_PAST_CELLS * self._cell_beside) & ~self._travel_warned
         ):
             self._travel_warned[k] = True
             warn(
-                f"Dirichlet {k} has moved its grid nodes by {self._travel[k]:.3g} m by "
+                f"Dirichlet {k} has moved its grid nodes by {travel[k]:.3g} m by "
                 f"t = {t_new:g}, more than the cells beside them ({self._cell_beside[k]:.3g} "
                 "m): the grid is reset after every step, so the condition stays on the "
                 "same nodes while the body moves on, and it holds whatever lies there now. "
                 "A support or a pull that follows the body is a PointDirichlet "
                 "(meshes.facet_points gives its points)."
             )
+
+    def accept_travel(self) -> None:
+        """Count the step just tried into how far each condition has moved its nodes.
+
+        Called once the step is accepted: a step retried shorter imposes its increment
+        again from the same start, and only the try that was kept moved the body.
+        """
+        self._moved = self._moving
 
     def _warn_conflicts(self, t_old: float, t_new: float) -> None:
         """Warn once (collective) where two conditions prescribe different increments.

@@ -28,6 +28,7 @@ import numpy.typing as npt
 
 from fe_mpm import balance, checkpoint, model_checks, parallel
 from fe_mpm._dolfinx import dolfinx
+from fe_mpm.bodies import TearWatch
 from fe_mpm.boundary import (
     Dirichlet,
     PointDirichlet,
@@ -429,6 +430,7 @@ class Simulation:
         self._passes_checked_dt, self._passes_warned = 0.0, False
         self._nonfinite_warned = False  # said once: a NaN in a Jacobian, not its residual
         self._crossing_warned = False  # said once: a static standard run's points crossed
+        self._tears = TearWatch()  # static runs: the material came apart (said once)
         self._restart_dynamics = False  # points were added: accelerations anew
         self._csv_head: StepReport | None = None
         self._grid_is_a_step = True  # the grid's fields are the last step's (or zero)
@@ -972,6 +974,12 @@ class Simulation:
             raise
         finally:
             bar.close()
+        if reports and not self.dynamic and self.domains is None:
+            # Each step counts the bodies at its start: the last step's tear is
+            # counted here, where the points lie now (a helper's strip tore in its
+            # last step and was not told).
+            cells = self.tracker.locate(self.points.x, self.points.cell)
+            self._tears.look(self.mesh, cells, self.t, anew=False, domains=False)
         self._write_output(force=True)
         return reports
 
@@ -1053,6 +1061,14 @@ class Simulation:
                 self.conditions, self._boundary, layout.occupied, self.walls
             )
             self._check_supports_again = False  # checked: not again until points change
+        if not self.dynamic:  # (in dynamics a splash or a grain may fly off)
+            self._tears.look(
+                self.mesh,
+                layout.occupied,
+                self.t,
+                anew=supports_due,
+                domains=self.domains is not None,
+            )
         if self.dynamics is not None and (k == 1 or self._restart_dynamics):
             # Equilibrium at the step's start: the grid loads there (the boundary
             # points' loads stay at its end; repacked, they were lost from the step).
@@ -1106,6 +1122,7 @@ class Simulation:
         self.tracking.remember(layout.cell)
         self.tracking.drop(self.points, self.markers, leaving, k, t_new)
         self.t, self.step_number = t_new, k
+        self.conditions.accept_travel()
         if not self._options_checked and self._newton and self._newton.iterations_total:
             self._options_checked = True  # after the first step that solved a system
             self._warn_unread_options()

@@ -296,8 +296,7 @@ class RigidWalls:
             for k, ((spec, _, _), dofs) in enumerate(
                 zip(conditions.dirichlet, condition_dofs, strict=True)
             ):
-                along = spec.component is None or abs(wall.normal[spec.component]) > PLANE_TOLERANCE
-                if not along:
+                if spec.component is not None and not _along(wall.normal)[spec.component]:
                     continue
                 there = np.isin(mine, dofs)
                 if parallel.any_rank(comm, bool(np.any(there))):
@@ -423,7 +422,7 @@ class RigidWalls:
         for wall, area in zip(self.walls, self._areas, strict=True):
             nodes = wall.dofs[wall.dofs < owned]
             a = area[nodes]
-            held = np.any(fixed[nodes][:, np.abs(wall.normal) > 0.0], axis=1)
+            held = np.any(fixed[nodes][:, _along(wall.normal)], axis=1)
             touching = (wall.gap.x.array[nodes] == 0.0) & (a > 0.0) & ~held
             nodes, a = nodes[touching], a[touching]
             e = wall.extension.x.array.reshape(-1, g)
@@ -506,6 +505,15 @@ class RigidWalls:
                 areas=parallel.gathered(comm, area[touching]),
             )
         return forces
+
+
+def _along(normal: np.ndarray) -> np.ndarray:
+    """The components a wall's normal has, (g,) bool.
+
+    A condition that holds one of them at a node on the wall holds the body against
+    the wall there (its reaction carries the push, not the wall's spring).
+    """
+    return np.abs(normal) > PLANE_TOLERANCE
 
 
 def _same_nodes(coordinates: np.ndarray, space) -> np.ndarray:

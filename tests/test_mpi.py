@@ -333,8 +333,30 @@ def wall_block(steps, repartition=False, graded=False, **options):
         "local points": len(points),
     }
 
+def bodies():
+    # Blobs of occupied cells chosen by a smooth field of their midpoints (so alike on
+    # every rank count), with each cell's body as the distributed count gives it.
+    from fe_mpm.bodies import bodies_of_cells
+    found = {}
+    for dim in (2, 3):
+        comm = MPI.COMM_WORLD
+        mesh = (dolfinx.mesh.create_unit_square(comm, 24, 24) if dim == 2
+                else dolfinx.mesh.create_unit_cube(comm, 8, 8, 8))
+        owned = np.arange(mesh.topology.index_map(dim).size_local, dtype=np.int32)
+        middle = dolfinx.mesh.compute_midpoints(mesh, dim, owned)[:, :dim]
+        for seed in range(4):
+            waves = np.random.default_rng(seed).normal(size=(4, dim)) * 6
+            field = sum(np.sin(middle @ k + i) for i, k in enumerate(waves))
+            cells = owned[field > 0.8 + 0.1 * seed]
+            body, count = bodies_of_cells(mesh, cells)
+            found[f"{dim} {seed}"] = {"count": count, "cells": middle[field > 0.8 + 0.1 * seed]
+                                      .round(9).tolist(), "body": body.tolist()}
+    return found
+
 try:
-    if case == "cook":
+    if case == "bodies":
+        result = bodies()
+    elif case == "cook":
         result = {f"{f} {n} {k}": cook(f, n, k) for f, n, k in
                   (("u", 16, 1), ("up", 16, 1), ("up", 8, 4), ("u", 8, 4), ("u-nbva", 8, 4))}
         result["output"] = cook("up", 8, 2, output_dir=folder / f"out{MPI.COMM_WORLD.size}")
@@ -1157,6 +1179,25 @@ def test_boundary_points_act_on_one_rank_each_and_give_the_serial_answer(tmp_pat
         assert result["cook"]["load"] == pytest.approx([0.0, 5.0], abs=1e-12)
     assert serial["footing"]["q"][-1] > 2 * serial["footing"]["q"][0]  # the soil yields
     assert runs[0]["cook"]["migrated"] > 0 and runs[0]["footing"]["migrated"] > 0
+
+
+def test_the_bodies_counted_on_three_ranks_are_the_serial_ones(tmp_path):
+    """Only the nodes that ranks share travel (fe_mpm/bodies.py), and the bodies found
+    are the serial ones: the same count, and the same cells together."""
+    serial = _run(tmp_path, "bodies", 1)[0]
+    ranks = _run(tmp_path, "bodies", 3)
+    for key, alone in serial.items():
+        assert all(rank[key]["count"] == alone["count"] for rank in ranks), key
+        body_at = {tuple(c): b for c, b in zip(alone["cells"], alone["body"], strict=True)}
+        pairs = {
+            (body_at[tuple(c)], b)
+            for rank in ranks
+            for c, b in zip(rank[key]["cells"], rank[key]["body"], strict=True)
+        }
+        assert len(body_at) == sum(len(rank[key]["cells"]) for rank in ranks), key
+        # One to one: each serial body is one distributed body, and no two share one.
+        assert len(pairs) == alone["count"] == len({b for _, b in pairs}), key
+    assert sorted(alone["count"] for alone in serial.values()) != [1] * len(serial)
 
 
 def test_serial_meshes_run_independently_on_each_rank(tmp_path):

@@ -127,8 +127,10 @@ class MohrCoulomb(LinearisedStress, IsotropicModuli):
         b_n = history["be"]
         b = F3 @ b_n @ np.swapaxes(F3, 1, 2)
         x, Q = spectral_decomposition(b)
-        # An inverted trial step gives nan here; it propagates to the residual,
-        # where Newton reports it (DIVERGED_FUNCTION_NANORINF) with the step.
+        # b = ΔF bₙ ΔFᵀ stays positive definite for an inverted trial (det ΔF < 0),
+        # so its stress is finite (a helper's Newton iterates had det ΔF = −0.54):
+        # a step that ends inverted is refused at the update (checked_update). Only
+        # det ΔF = 0 gives nan, which Newton reports (DIVERGED_FUNCTION_NANORINF).
         with np.errstate(invalid="ignore", divide="ignore"):
             strain = 0.5 * np.log(x)
             surface = self.surface
