@@ -173,18 +173,20 @@ def joined_at_a_node(mesh: dolfinx.mesh.Mesh, cells: np.ndarray) -> np.ndarray |
 
 
 class TearWatch:
-    """Warns, once, when a static run's material comes apart into more bodies.
+    """Warns, once, when a run's material comes apart into more bodies.
 
-    A static run's laws have no fracture, so material that splits is the grid losing
-    hold of points: standard MPM ties two points only through the cells they share,
-    and a strip stretched until its points lie more than a cell apart tore, lost the
-    force across the gap (1e-9 N of 2.7e5 at λ = 3) and converged in every step (a
-    new user's scene, 2026-12-07). Point domains tile the body and kept that strip
-    whole to within 0.003 %.
+    Watched in static runs and in dynamic runs of elastic solids (in a plastic or
+    fluid flow a grain or a splash may fly off): their laws have no fracture, so
+    material that splits is the grid losing hold of points. Standard MPM ties two
+    points only through the cells they share, and a strip stretched until its points
+    lie more than a cell apart tore, lost the force across the gap (1e-9 N of 2.7e5
+    at λ = 3) and converged in every step (a new user's scene, 2026-12-07). Point
+    domains tile the body and kept that strip whole to within 0.003 %.
 
     Attributes:
         bodies_at_start: How many bodies the material formed at the first step, or
-            at the first step after points were added or removed (None before).
+            at the first step after points were added or removed (None until then:
+            :meth:`Simulation.add_points` and ``remove_points`` set it so).
         warned: Whether the run was warned.
     """
 
@@ -193,7 +195,7 @@ class TearWatch:
         self.warned = False
 
     def look(
-        self, mesh: dolfinx.mesh.Mesh, occupied: np.ndarray, t: float, *, anew: bool, domains: bool
+        self, mesh: dolfinx.mesh.Mesh, occupied: np.ndarray, t: float, *, domains: bool
     ) -> None:
         """Count the bodies the material forms now and warn if there are more (collective).
 
@@ -201,14 +203,13 @@ class TearWatch:
             mesh: The grid.
             occupied: This rank's occupied cells (local indices; repeats and -1 ignored).
             t: The time the points have reached (s).
-            anew: Count from here (the first step, or points were added or removed).
             domains: Whether the points carry domains (the advice differs).
         """
         if self.warned:
             return  # said once; the count costs a pass over the occupied cells
         occupied = _each_once(occupied, mesh.geometry.dofmaps[0].shape[0])
         body, count = bodies_of_cells(mesh, occupied)
-        if anew or self.bodies_at_start is None:
+        if self.bodies_at_start is None:  # the first step, or points added or removed
             self.bodies_at_start = count
             return
         if count <= self.bodies_at_start:
@@ -237,8 +238,8 @@ class TearWatch:
             f"groups that share no node, where there were {self.bodies_at_start} at the "
             f"start (cells in each: {cells.tolist() if count <= 6 else '…'}; the "
             f"smallest lies in the box from {lo.round(6).tolist()} to "
-            f"{hi.round(6).tolist()}). A static run's laws do not fracture, so this is "
-            f"the grid letting go. {advice}. Bodies that touch at the start count "
+            f"{hi.round(6).tolist()}). The laws here do not fracture, so this is the "
+            f"grid letting go. {advice}. Bodies that touch at the start count "
             "as one: the grid's nodes glue them, with no contact between them, until "
             "they part (docs/user_scenes.md, Supports and loads; said once)."
         )

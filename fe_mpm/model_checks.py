@@ -666,6 +666,30 @@ def warn_dilatant_averaging(material, spec: FormulationSpec, dynamic: bool) -> N
         )
 
 
+def warn_plastic_locking(material, spec: FormulationSpec) -> None:
+    """Warn where the plain ``u`` form has a law whose plastic flow keeps the volume.
+
+    P1 cells of the u form have one volume change each, which isochoric flow cannot
+    follow: a helper's thick sphere in J2 under internal pressure (h = 0.15 a,
+    2026-12-07) moved 11 % less than Hill's solution at 0.9 times his limit
+    pressure, where u-p was within 0.7 %, and carried 1.2 times it without a word.
+    """
+    if spec.pressure or spec.volume_average or spec.u_degree != 1:
+        return
+    locking = [
+        law
+        for law in laws_of(material)
+        if law.history and getattr(law, "keeps_shape", True) and not _dilates(law)
+    ]
+    if locking:
+        warn(
+            f"Simulation: 'u' with {type(locking[0]).__name__}, whose plastic flow keeps "
+            "the volume: the u form locks under such flow (a thick J2 sphere under "
+            "internal pressure moved 11 % too little at 0.9 times its limit pressure, "
+            "where 'up' was within 1 %); take 'up' (docs/materials.md)"
+        )
+
+
 def check_law(material, spec: FormulationSpec, formulation: str) -> None:
     """Refuse a law that lacks what the law protocol or the formulation asks for.
 

@@ -36,8 +36,9 @@ class StepReport:
         dt: Length of the step (s).
         reactions: Force each requested boundary exerts on the body, name -> (g,)
             (N, per unit thickness in 2D).
-        held_points: Points integrated in their last step's cell instead of the
-            one they are in (nonzero only in a step retried without re-binning).
+        held_points: How many points were integrated in their last step's cell
+            instead of the one they are in, over all ranks (nonzero only in a step
+            retried without re-binning).
         migrated_points: Points that moved to another MPI rank's cells before the
             step and were sent there (all ranks together; 0 on one rank).
         point_imbalance: The most points a rank held in the step over the mean per

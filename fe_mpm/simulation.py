@@ -339,6 +339,7 @@ class Simulation:
         )
         model_checks.check_law(material, self.spec, formulation)
         model_checks.warn_dilatant_averaging(material, self.spec, dynamic)
+        model_checks.warn_plastic_locking(material, self.spec)
         model_checks.warn_static_fluid(material, keeps_shape, dynamic)
         model_checks.take_density(material, points)
         # The body force at the start, checked here (its length, finite components).
@@ -365,6 +366,9 @@ class Simulation:
             points.history.pop(MATERIAL, None)
         #: Whether the law keeps internal variables (plasticity), besides a point's law.
         self._plastic = bool(set(material.history) - {MATERIAL})
+        # Elastic solids do not come apart, static or not; in dynamics a splash or a
+        # grain of a plastic or fluid body may fly off, so only those are watched.
+        self._watches_tears = not dynamic or (keeps_shape and not self._plastic)
         #: The number of laws: NB-VA averages each zone's volume change on its own.
         self._zones = len(material.laws) if MATERIAL in material.history else 1
         self.mesh, self.points, self.material = mesh, points, material
@@ -430,7 +434,7 @@ class Simulation:
         self._passes_checked_dt, self._passes_warned = 0.0, False
         self._nonfinite_warned = False  # said once: a NaN in a Jacobian, not its residual
         self._crossing_warned = False  # said once: a static standard run's points crossed
-        self._tears = TearWatch()  # static runs: the material came apart (said once)
+        self._tears = TearWatch()  # the material came apart (said once)
         self._restart_dynamics = False  # points were added: accelerations anew
         self._csv_head: StepReport | None = None
         self._grid_is_a_step = True  # the grid's fields are the last step's (or zero)
@@ -690,6 +694,7 @@ class Simulation:
         self.points.keep(keep)
         self.tracking.keep(keep)
         self._check_supports_again = True  # what is left may hang free
+        self._tears.bodies_at_start = None  # counted anew at the next step
         return removed
 
     def add_points(self, new: MaterialPoints) -> int:
@@ -779,6 +784,7 @@ class Simulation:
         if self.step_number > 0:  # a retry may hold every point where it is now
             self.tracking.remember(layout.cell)
         self._check_supports_again = True
+        self._tears.bodies_at_start = None  # counted anew at the next step
         # The new points' accelerations in equilibrium, as a run's first step gives
         # (from 0, a body added in free fall lagged g Δt / 2 behind for ever).
         self._restart_dynamics = self.dynamic
@@ -974,12 +980,12 @@ class Simulation:
             raise
         finally:
             bar.close()
-        if reports and not self.dynamic and self.domains is None:
+        if reports and self._watches_tears and self.domains is None:
             # Each step counts the bodies at its start: the last step's tear is
             # counted here, where the points lie now (a helper's strip tore in its
             # last step and was not told).
             cells = self.tracker.locate(self.points.x, self.points.cell)
-            self._tears.look(self.mesh, cells, self.t, anew=False, domains=False)
+            self._tears.look(self.mesh, cells, self.t, domains=False)
         self._write_output(force=True)
         return reports
 
@@ -1061,12 +1067,11 @@ class Simulation:
                 self.conditions, self._boundary, layout.occupied, self.walls
             )
             self._check_supports_again = False  # checked: not again until points change
-        if not self.dynamic:  # (in dynamics a splash or a grain may fly off)
+        if self._watches_tears:
             self._tears.look(
                 self.mesh,
                 layout.occupied,
                 self.t,
-                anew=supports_due,
                 domains=self.domains is not None,
             )
         if self.dynamics is not None and (k == 1 or self._restart_dynamics):

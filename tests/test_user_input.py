@@ -919,3 +919,31 @@ def test_a_grid_dirichlet_retried_shorter_counts_only_the_tries_kept():
     assert len(calls) == 2 * len(reports) and reports[-1].t == pytest.approx(1.0)
     assert not [w for w in caught if "moved its grid nodes" in str(w.message)]
     assert points.x[:, 0].max() == pytest.approx(1.1 - 0.05, abs=0.03)
+
+
+@pytest.mark.parametrize(
+    "law, warned",
+    [
+        (fe_mpm.J2Plasticity(1.0, 0.3, 0.1, 0.0), {"u"}),
+        (fe_mpm.MohrCoulomb(1.0, 0.3, 0.1, 30.0, 0.0), {"u"}),
+        (fe_mpm.MohrCoulomb(1.0, 0.3, 0.1, 30.0, 10.0), set()),  # it dilates
+        (fe_mpm.NeoHookean(1.0, 0.3), set()),
+    ],
+)
+def test_the_u_form_with_plastic_flow_at_constant_volume_is_warned_that_it_locks(law, warned):
+    """A helper's thick J2 sphere in the u form moved 11 % less than Hill's solution at
+    0.9 times his limit pressure (u-p within 0.7 %) and carried 1.2 times it, without a
+    word (2026-12-07). The u form is now told, once, at set-up; u-p and u-nbva not."""
+    mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (2, 2))
+    told = set()
+    for formulation in ("u", "up", "u-nbva"):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            fe_mpm.Simulation(mesh, fe_mpm.seed(mesh, 1), law, formulation)
+        said = [str(w.message) for w in caught if "the u form locks" in str(w.message)]
+        if said:
+            assert len(said) == 1 and said[0].startswith(
+                f"Simulation: 'u' with {type(law).__name__}"
+            )
+            told.add(formulation)
+    assert told == warned
