@@ -35,18 +35,22 @@ class ParticleWriter:
         comm: The communicator of the points' grid.
     """
 
-    def __init__(self, folder: str | Path, name: str = "particles", comm: MPI.Comm = MPI.COMM_SELF):
+    def __init__(
+        self,
+        folder: str | Path,
+        name: str = "particles",
+        comm: MPI.Comm = MPI.COMM_SELF,
+        clear: bool = True,
+    ):
         self.folder = Path(folder)
         self.comm = comm
+        self.name = name
         error = None
         if comm.rank == 0:
             try:
                 self.folder.mkdir(parents=True, exist_ok=True)
-                for pattern in ("", "_r*"):  # from an earlier run into the same folder
-                    for stale in self.folder.glob(
-                        f"{name}_[0-9][0-9][0-9][0-9][0-9][0-9]{pattern}.vtu"
-                    ):
-                        stale.unlink()
+                if clear:
+                    self._clear_stale()
             except OSError as err:  # e.g. a file of that name: say so on every rank
                 error = OSError(
                     f"output folder {str(self.folder)!r} cannot be created or cleaned: "
@@ -55,8 +59,28 @@ class ParticleWriter:
         # The folder exists and is clean before any rank writes; or every rank stops
         # (found 2026-12-06 by a helper: rank 0 stopped and rank 1 waited for ever).
         parallel.raise_together(comm, error)
-        self.name = name
         self._entries: list[tuple[float, list[str]]] = []
+
+    def _clear_stale(self) -> None:
+        """Remove the frames an earlier run left in the folder (rank 0)."""
+        for pattern in ("", "_r*"):
+            for stale in self.folder.glob(
+                f"{self.name}_[0-9][0-9][0-9][0-9][0-9][0-9]{pattern}.vtu"
+            ):
+                stale.unlink()
+
+    def clear(self) -> None:
+        """Remove the frames an earlier run left in the folder; collective.
+
+        For a writer made with ``clear=False``, before its first frame.
+        """
+        error = None
+        if self.comm.rank == 0:
+            try:
+                self._clear_stale()
+            except OSError as err:
+                error = OSError(f"output folder {str(self.folder)!r} cannot be cleaned: {err}")
+        parallel.raise_together(self.comm, error)
 
     @property
     def pvd(self) -> Path:
@@ -124,12 +148,23 @@ class ParticleWriter:
             "  <Collection>",
         ]
         lines += [
-            f'    <DataSet timestep="{t:.10g}" part="{part}" file={quoteattr(f)}/>'
+            f'    <DataSet timestep="{_exact(t)}" part="{part}" file={quoteattr(f)}/>'
             for t, names in self._entries
             for part, f in enumerate(names)
         ]
         lines += ["  </Collection>", "</VTKFile>", ""]
         self.pvd.write_text("\n".join(lines))
+
+
+def _exact(t: float) -> str:
+    """``t`` as the shortest text that reads back to the same double (``0.5``, ``0``).
+
+    The grid's VTX files and ``steps.csv`` hold the exact double; written to ten digits
+    the frames' times differed from theirs (0.075 against 0.07500000000000001, a
+    helper's check, 2026-12-07).
+    """
+    text = repr(float(t))
+    return text[:-2] if text.endswith(".0") else text
 
 
 class DomainWriter(ParticleWriter):
@@ -141,8 +176,14 @@ class DomainWriter(ParticleWriter):
     domains stretch or were redrawn. Under MPI, pieces per rank as for the points.
     """
 
-    def __init__(self, folder: str | Path, name: str = "domains", comm: MPI.Comm = MPI.COMM_SELF):
-        super().__init__(folder, name, comm)
+    def __init__(
+        self,
+        folder: str | Path,
+        name: str = "domains",
+        comm: MPI.Comm = MPI.COMM_SELF,
+        clear: bool = True,
+    ):
+        super().__init__(folder, name, comm, clear)
 
     def write(
         self, t: float, points: MaterialPoints, corners: np.ndarray, **fields: np.ndarray

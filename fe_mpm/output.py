@@ -70,6 +70,28 @@ def _clear_earlier_run(folder: Path, domains: bool) -> None:
             path.unlink()
 
 
+#: What a run writes in its output folder (:func:`_set_aside`).
+_RUN_FILES = re.compile(
+    r"steps\.csv|walls\.csv|grid(_pressure)?(_\d+)?\.bp|(particles|domains)\.pvd"
+    r"|(particles|domains)_\d{6}(_r\d+)?\.vtu"
+)
+
+
+def _set_aside(folder: Path, step: int) -> Path | None:
+    """Move the run files in ``folder`` into a new subfolder; None if there are none."""
+    found = [path for path in folder.glob("*") if _RUN_FILES.fullmatch(path.name)]
+    if not found:
+        return None
+    kept, k = folder / f"before_restore_at_step_{step}", 1
+    while kept.exists():
+        k += 1
+        kept = folder / f"before_restore_at_step_{step}_{k}"
+    kept.mkdir()
+    for path in found:
+        path.rename(kept / path.name)
+    return kept
+
+
 class SimulationOutput:
     """The files of one run, written every ``every`` steps and at the ends.
 
@@ -89,19 +111,48 @@ class SimulationOutput:
         self.folder, self.fields, self.every = Path(folder).resolve(), fields, int(every)
         self._written_step = -1
         comm = fields.W.mesh.comm
-        error = None
+        # The folder is made now; what an earlier run left there is cleared at the
+        # first frame, so that a run restored in a new process can set it aside first
+        # (until 2026-12-07 a helper's job, killed and restored, lost its first frames).
+        self._points = ParticleWriter(self.folder, comm=comm, clear=False)
+        self._domains = DomainWriter(self.folder, comm=comm, clear=False) if domains else None
+        self.started = False  # whether a frame was written (the files are this run's)
+        self._grids = 0  # grids written so far: a repartition starts another
+        self._writers: list = []
+        _OPEN[:] = [ref for ref in _OPEN if ref() is not None]
+        _OPEN.append(weakref.ref(self))
+
+    def _start(self) -> None:
+        """Clear what an earlier run left in the folder and open the grid's files (collective)."""
+        comm, error = self.fields.W.mesh.comm, None
         if comm.rank == 0:
             try:
-                _clear_earlier_run(self.folder, domains)
+                _clear_earlier_run(self.folder, self._domains is not None)
             except OSError as err:
                 error = OSError(f"Simulation: cannot clear {self.folder} of an earlier run: {err}")
         parallel.raise_together(comm, error)
-        self._points = ParticleWriter(self.folder, comm=comm)
-        self._domains = DomainWriter(self.folder, comm=comm) if domains else None
-        self._grids = 0  # grids written so far: a repartition starts another
+        self._points.clear()
+        if self._domains is not None:
+            self._domains.clear()
         self._open_grid()
-        _OPEN[:] = [ref for ref in _OPEN if ref() is not None]
-        _OPEN.append(weakref.ref(self))
+        self.started = True
+
+    def set_aside_earlier_run(self, step: int) -> Path | None:
+        """Move an earlier run's files into a subfolder before this run writes any; collective.
+
+        A run restored from a checkpoint in a new process would otherwise clear the
+        frames and rows of the run it continues. Returns the subfolder
+        (``before_restore_at_step_N``, numbered on if taken), or None if there was
+        nothing to keep.
+        """
+        comm, error, kept = self.fields.W.mesh.comm, None, None
+        if comm.rank == 0:
+            try:
+                kept = _set_aside(self.folder, step)
+            except OSError as err:
+                error = OSError(f"Simulation.restore: cannot keep the earlier output: {err}")
+        parallel.raise_together(comm, error)
+        return comm.bcast(kept, root=0) if comm.size > 1 else kept
 
     def _open_grid(self) -> None:
         """The grid files of the current grid: grid.bp, or grid_N.bp for the N-th repartition."""
@@ -124,6 +175,9 @@ class SimulationOutput:
         ``grid_2.bp``, ...); the points' series continues.
         """
         self.close()
+        if not self.started:  # nothing written on the old grid: grid.bp is this one's
+            self.fields = fields
+            return
         self.fields, self._grids = fields, self._grids + 1
         self._open_grid()
 
@@ -162,6 +216,8 @@ class SimulationOutput:
         """
         if step == self._written_step or (not force and step % self.every):
             return False
+        if not self.started:
+            self._start()
         self._written_step = step
         # The grid's input numbering, the same on any number of ranks (a rank's own
         # index differs between partitions and after a repartition).

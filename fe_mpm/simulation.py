@@ -822,6 +822,16 @@ class Simulation:
             )
         before = self.step_number
         checkpoint.read(self, path)  # (with what add_points left due for the next step)
+        if self.output is not None and not self.output.started:
+            # A new process continuing a run: its output folder holds that run's frames
+            # and rows, which this run's first frame would clear.
+            kept = self.output.set_aside_earlier_run(self.step_number)
+            if kept is not None:
+                warn(
+                    f"Simulation.restore: the output already in {self.output.folder} "
+                    f"(frames, steps.csv) is kept in {kept}; this run writes its own "
+                    f"from step {self.step_number} (t = {self.t:g}) on"
+                )
         if before > self.step_number:
             # This simulation had stepped past the checkpoint: those steps are undone
             # (found 2026-12-06 by a helper: the history read 1, 2, 3, 4, 3, 4), also
@@ -1036,8 +1046,10 @@ class Simulation:
         if not self.dynamic and self.step_number == 0:
             self._warn_static_velocities()
         self._check_point_count()
-        if self.step_number == 0:  # written once: the output skips a step it has written
-            self._write_output(force=True)  # the initial state as the t = 0 frame
+        if self.step_number == 0 or (self.output is not None and not self.output.started):
+            # The state the run starts from as its first frame: t = 0, or a restored
+            # step (written once: the output skips a step it has written).
+            self._write_output(force=True)
         self._grid_is_a_step = False  # until the step is accepted: an attempt's iterate
         if self.domains is not None:
             report = step_with_domains(self, t_new, rebin)

@@ -98,6 +98,50 @@ def test_a_simulation_restored_to_an_earlier_step_forgets_the_steps_after_it(tmp
     assert [float(t) for t in re.findall(r'timestep="([^"]+)"', pvd)] == [0.0, 0.05]
 
 
+def test_a_run_restored_in_a_new_process_keeps_the_earlier_output_and_starts_at_its_step(
+    tmp_path,
+):
+    """Found 2026-12-07 by a helper: a job killed after step 6 and restored from its
+    step-4 checkpoint by the same script (a new Simulation, the same output_dir) cleared
+    the frames t = 0 … 0.75 and the CSV rows 1-6 without a word, and its own series
+    began after the restored step. Now the earlier files are moved into a subfolder,
+    with a warning, and the new series begins with the restored state."""
+    out = tmp_path / "out"
+    sim = falling_block(output_dir=out, checkpoint_dir=tmp_path / "ck", checkpoint_every=2)
+    sim.run(0.075, 3, progress=False)  # "killed" after step 3; checkpoint at step 2
+    sim.close()
+    earlier = {path.name: path.read_bytes() for path in out.iterdir() if path.is_file()}
+    again = falling_block(output_dir=out)  # the same script, in a new process
+    with pytest.warns(UserWarning, match=r"before_restore_at_step_2; this run writes its own"):
+        again.restore(tmp_path / "ck")
+    kept = out / "before_restore_at_step_2"
+    for name, content in earlier.items():
+        if not name.endswith(".bp"):  # (ADIOS2's are folders)
+            assert (kept / name).read_bytes() == content, name
+    assert (kept / "grid.bp").is_dir()
+    again.run(0.1, 2, progress=False)
+    again.close()
+    pvd = (out / "particles.pvd").read_text()
+    times = [float(t) for t in re.findall(r'timestep="([^"]+)"', pvd)]
+    assert times == pytest.approx([0.05, 0.075, 0.1], rel=1e-12, abs=0)
+    steps = np.genfromtxt(out / "steps.csv", delimiter=",", names=True)
+    assert list(steps["step"]) == [3, 4]
+    # The frames' times are the rows' to the bit (ten digits read 0.075 for
+    # 0.07500000000000001, a helper's check, 2026-12-07).
+    assert times[1:] == list(steps["t"])
+    # A fresh run into the folder clears this run's files and keeps the set-aside ones.
+    fresh = falling_block(output_dir=out)
+    fresh.run(0.025, 1, progress=False)
+    fresh.close()
+    pvd = (out / "particles.pvd").read_text()
+    assert [float(t) for t in re.findall(r'timestep="([^"]+)"', pvd)] == [0.0, 0.025]
+    assert sorted(p.name for p in out.glob("particles_*.vtu")) == [
+        "particles_000000.vtu",
+        "particles_000001.vtu",
+    ]
+    assert kept.is_dir()
+
+
 def test_a_restored_dynamic_plastic_run_continues_exactly(tmp_path):
     """Ten steps, a checkpoint, ten more: the restored run repeats the second ten."""
     straight = falling_block()
