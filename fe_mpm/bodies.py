@@ -60,7 +60,7 @@ def bodies_of_cells(mesh: dolfinx.mesh.Mesh, cells: np.ndarray) -> tuple[np.ndar
     travel, with the local body they belong to, and every rank joins the local
     bodies that meet at one (collective). So the cost per rank grows with its cells
     and the partition's interface, not with the whole grid: cheap enough for a check
-    at every static step (:meth:`Simulation.step` looks for a body that tore).
+    at every step (:class:`TearWatch`).
 
     Args:
         mesh: The grid.
@@ -122,7 +122,7 @@ def count_bodies(mesh: dolfinx.mesh.Mesh, cells: np.ndarray) -> int:
 
     Two occupied cells belong to one body when a chain of occupied cells, each
     sharing a node with the next, joins them: bodies that touch at the start are one.
-    Gathers the occupied cells' nodes on every rank; meant for a check at set-up.
+    Collective (:func:`bodies_of_cells`).
 
     Args:
         mesh: The grid.
@@ -182,6 +182,10 @@ class TearWatch:
     lie more than a cell apart tore, lost the force across the gap (1e-9 N of 2.7e5
     at λ = 3) and converged in every step (a new user's scene, 2026-12-07). Point
     domains tile the body and kept that strip whole to within 0.003 %.
+
+    Counted at each step's start and after a run's last step (or at ``close()``),
+    against the count at the first step: bodies that touch later and part again (a
+    contact) are not told, nor a tear that only brings the count back to the first.
 
     Attributes:
         bodies_at_start: How many bodies the material formed at the first step, or

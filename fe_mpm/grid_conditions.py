@@ -149,12 +149,8 @@ class GridConditions:
         self._conflict_warned = False
         self.dirichlet_nodes = []  # grid nodes of each condition's facets
         self.dirichlet_entities = []  # (dim, entities) each condition holds
-        # How far each condition has moved each of its entries over the accepted steps
-        # (m, signed) and with the step being tried, and the size of the smallest cell
-        # beside them: a condition that moves them further than that no longer holds
-        # the body's face (MOVED_PAST_CELLS).
-        self._moved: list[np.ndarray] = []
-        self._moving: list[np.ndarray] = []
+        # The size of the smallest cell beside each condition's nodes: one that moves
+        # them further than that no longer holds the body's face (MOVED_PAST_CELLS).
         self._cell_beside = np.full(len(dirichlet), np.inf)
         self._travel_warned = np.zeros(len(dirichlet), dtype=bool)
         self._value_dofs = []  # each condition's entries of its value Function
@@ -272,69 +268,64 @@ class GridConditions:
             The Dirichlet conditions on the increment t_old → t_new, then the pins.
         """
         for k, (spec, value, _) in enumerate(self.dirichlet):
-            if spec.profile is not None:
-                value.interpolate(lambda x: spec.profile(x, t_new) - spec.profile(x, t_old))
-                if not np.all(np.isfinite(value.x.array)):
-                    raise ValueError(
-                        f"Dirichlet: profile(x, t) is not finite everywhere "
-                        f"at t = {t_old:g} or {t_new:g}"
-                    )
-            else:
-                increment = spec.at(t_new) - spec.at(t_old)
-                _check_dirichlet_size(k, spec, increment.size, self.mesh.geometry.dim)
-                bs = value.function_space.dofmap.bs
-                value.x.array.reshape(-1, bs)[:] = increment.reshape(-1)
-        self._warn_travel(t_new)
+            self._fill(k, value, t_old, t_new)
         self.set_loads(t_new)
         if len(self.dirichlet) > 1 and not self._conflict_warned:  # the same on every rank
             self._warn_conflicts(t_old, t_new)
         pins = self.fields.pin_unsupported(occupied, zone_cells)
         return [bc for _, _, bc in self.dirichlet] + pins
 
-    def _warn_travel(self, t_new: float) -> None:
-        """Warn once per condition (collective) that has moved its nodes past a cell.
+    def _fill(self, k: int, value: dolfinx.fem.Function, t_from: float, t_to: float) -> None:
+        """Set ``value`` to condition k's motion from ``t_from`` to ``t_to`` (m)."""
+        spec = self.dirichlet[k][0]
+        if spec.profile is not None:
+            value.interpolate(lambda x: spec.profile(x, t_to) - spec.profile(x, t_from))
+            if not np.all(np.isfinite(value.x.array)):
+                raise ValueError(
+                    f"Dirichlet: profile(x, t) is not finite everywhere "
+                    f"at t = {t_from:g} or {t_to:g}"
+                )
+        else:
+            increment = spec.at(t_to) - spec.at(t_from)
+            _check_dirichlet_size(k, spec, increment.size, self.mesh.geometry.dim)
+            bs = value.function_space.dofmap.bs
+            value.x.array.reshape(-1, bs)[:] = increment.reshape(-1)
 
-        The grid is reset after every step, so a moving condition stays on the same
-        nodes while the body's face moves on: it then holds whatever material lies
-        there. A new user's strip pulled to three times its length by a grid
-        ``Dirichlet`` (40 cells) ended at x = 1.985 m for 3 m, its force 65 % over and
-        then 29 % under the exact one, and nothing was said (2026-12-07).
+    def warn_travel(self, t: float) -> None:
+        """Warn once per condition that has moved its nodes past a cell by ``t`` (collective).
+
+        Called after each accepted step. The grid is reset after every step, so a
+        moving condition stays on the same nodes while the body's face moves on: it
+        then holds whatever material lies there. A new user's strip pulled to three
+        times its length by a grid ``Dirichlet`` (40 cells) ended at x = 1.985 m for
+        3 m, its force 65 % over and then 29 % under the exact one, and nothing was
+        said (2026-12-07). How far: the condition's motion from t = 0 to ``t``, the
+        largest component over its own entries (the first version added up each
+        try's increment, and a helper's trapdoor, its steps cut three times, was
+        told 0.127 m for 0.030 m).
         """
-        if not self.dirichlet:
+        if not self.dirichlet or self._travel_warned.all():
             return
-        if not self._moved:
-            self._moved = [np.zeros(dofs.size) for dofs in self._value_dofs]
-        # Signed: the body's face lies where the accepted steps took it, however many
-        # tries a step took (a retried step added each try's increment until a helper's
-        # trapdoor, cut three times, was told 0.127 m for 0.030 m; 2026-12-07).
-        self._moving = [
-            moved + value.x.array[dofs.ravel()]
-            for moved, (_, value, _), dofs in zip(
-                self._moved, self.dirichlet, self._value_dofs, strict=True
-            )
-        ]
-        here = [float(np.abs(moving).max(initial=0.0)) for moving in self._moving]
-        travel = parallel.largest(self.mesh.comm, np.array(here))  # the largest component
+        here = np.zeros(len(self.dirichlet))
+        for k, (_, value, _) in enumerate(self.dirichlet):
+            if self._travel_warned[k]:
+                continue
+            total = value.copy()  # (the step's increment stays in value)
+            self._fill(k, total, 0.0, t)
+            here[k] = float(np.abs(total.x.array[self._value_dofs[k].ravel()]).max(initial=0.0))
+        travel = parallel.largest(self.mesh.comm, here)
         for k in np.flatnonzero(
             (travel > MOVED_PAST_CELLS * self._cell_beside) & ~self._travel_warned
         ):
             self._travel_warned[k] = True
             warn(
                 f"Dirichlet {k} has moved its grid nodes by {travel[k]:.3g} m by "
-                f"t = {t_new:g}, more than the cells beside them ({self._cell_beside[k]:.3g} "
+                f"t = {t:g}, more than the cells beside them ({self._cell_beside[k]:.3g} "
                 "m): the grid is reset after every step, so the condition stays on the "
                 "same nodes while the body moves on, and it holds whatever lies there now. "
                 "A support or a pull that follows the body is a PointDirichlet "
                 "(meshes.facet_points gives its points)."
             )
-
-    def accept_travel(self) -> None:
-        """Count the step just tried into how far each condition has moved its nodes.
-
-        Called once the step is accepted: a step retried shorter imposes its increment
-        again from the same start, and only the try that was kept moved the body.
-        """
-        self._moved = self._moving
 
     def _warn_conflicts(self, t_old: float, t_new: float) -> None:
         """Warn once (collective) where two conditions prescribe different increments.

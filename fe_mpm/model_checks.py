@@ -26,6 +26,7 @@ from fe_mpm.errors import warn
 from fe_mpm.formulations import FORMULATIONS, FormulationSpec
 from fe_mpm.ghost import WITH_DOMAINS, WITH_DOMAINS_DYNAMIC
 from fe_mpm.grid_conditions import follow_the_body
+from fe_mpm.materials.drucker_prager import SmoothCapDruckerPrager
 from fe_mpm.materials.protocol import Law, MixedLaw, missing_members
 from fe_mpm.materials.zones import laws_of, material_zones
 from fe_mpm.particles import MaterialPoints, coincident, simplex_cell_type
@@ -666,6 +667,17 @@ def warn_dilatant_averaging(material, spec: FormulationSpec, dynamic: bool) -> N
         )
 
 
+def _never_yields(law) -> bool:
+    """Whether ``law``'s strength (cohesion or yield stress) is at least its Young's modulus.
+
+    Then it yields at no strain below one: an elastic law in effect (a helper's
+    tunnel took Mohr–Coulomb with c = 1e15 Pa for an elastic law that keeps the
+    initial stress, 2026-12-07).
+    """
+    strength = max(getattr(law, "cohesion", 0.0), getattr(law, "yield_stress", 0.0))
+    return strength >= getattr(law, "E", math.inf)
+
+
 def warn_plastic_locking(material, spec: FormulationSpec) -> None:
     """Warn where the plain ``u`` form has a law whose plastic flow keeps the volume.
 
@@ -679,7 +691,11 @@ def warn_plastic_locking(material, spec: FormulationSpec) -> None:
     locking = [
         law
         for law in laws_of(material)
-        if law.history and getattr(law, "keeps_shape", True) and not _dilates(law)
+        if law.history
+        and getattr(law, "keeps_shape", True)
+        and not _dilates(law)
+        and not isinstance(law, SmoothCapDruckerPrager)  # its cap's flow is associated
+        and not _never_yields(law)
     ]
     if locking:
         warn(

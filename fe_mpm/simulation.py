@@ -422,6 +422,7 @@ class Simulation:
         self.tracking: PointTracking | None = None
         self._boundary: BoundaryPointStep | None = None
         self._conditions_warned: dict[int, float] = {}
+        self._travel_warned: np.ndarray | None = None  # each grid Dirichlet's, once per run
         self._iterations_of_old_grids = 0  # Newton iterations on grids since repartitioned
         self.output = None
         # The steps whose CSV rows are not yet written, and the step whose columns the
@@ -569,6 +570,9 @@ class Simulation:
             )
         self.conditions = GridConditions(self.fields, *self._given["conditions"], facet_tags)
         self.conditions._warned_share = self._conditions_warned  # warned once per run
+        if self._travel_warned is None:  # (kept when a repartition builds them anew)
+            self._travel_warned = self.conditions._travel_warned
+        self.conditions._travel_warned = self._travel_warned
         self.walls = RigidWalls(
             self.fields.du, self._given["walls"], mesh, facet_tags, self.material
         )
@@ -822,6 +826,7 @@ class Simulation:
             )
         before = self.step_number
         checkpoint.read(self, path)  # (with what add_points left due for the next step)
+        self._grid_is_a_step = False  # the grid's fields are not the restored step's
         if self.output is not None and not self.output.started:
             # A new process continuing a run: its output folder holds that run's frames
             # and rows, which this run's first frame would clear.
@@ -990,14 +995,26 @@ class Simulation:
             raise
         finally:
             bar.close()
-        if reports and self._watches_tears and self.domains is None:
-            # Each step counts the bodies at its start: the last step's tear is
-            # counted here, where the points lie now (a helper's strip tore in its
-            # last step and was not told).
-            cells = self.tracker.locate(self.points.x, self.points.cell)
-            self._tears.look(self.mesh, cells, self.t, domains=False)
+        if reports:
+            self._look_for_a_tear_now()
         self._write_output(force=True)
         return reports
+
+    def _look_for_a_tear_now(self) -> None:
+        """Count the bodies where the points lie now, after a run's last step (collective).
+
+        Each step counts them at its start, so a tear in the last step was not told
+        (a helper's strip). Not with domains, whose pieces are cut at a step's start.
+        """
+        if not self._watches_tears or self.domains is not None or self.step_number == 0:
+            return
+        cells = self.tracker.locate(self.points.x, self.points.cell)
+        # A point that crossed into another rank's cells goes there at the next
+        # step's tracking: found by that rank, or its cell would read as a gap.
+        lost = parallel.gathered(self.mesh.comm, self.points.x[cells < 0])
+        if self.mesh.comm.size > 1 and len(lost):
+            cells = np.concatenate([cells, self.tracker.locate(lost)])
+        self._tears.look(self.mesh, cells, self.t, domains=False)
 
     def _failure_advice(self) -> str:
         """What the message of a run that stops adds about its set-up (collective)."""
@@ -1139,7 +1156,7 @@ class Simulation:
         self.tracking.remember(layout.cell)
         self.tracking.drop(self.points, self.markers, leaving, k, t_new)
         self.t, self.step_number = t_new, k
-        self.conditions.accept_travel()
+        self.conditions.warn_travel(t_new)
         if not self._options_checked and self._newton and self._newton.iterations_total:
             self._options_checked = True  # after the first step that solved a system
             self._warn_unread_options()
@@ -1641,6 +1658,7 @@ class Simulation:
         Collective. A script that drives :meth:`step` itself gets its last frame and
         ``steps.csv`` rows here, as :meth:`run` writes them at its end.
         """
+        self._look_for_a_tear_now()  # (a script's own loop of step() calls)
         if self.output is not None:
             self._write_output(force=True)
             self.output.close()

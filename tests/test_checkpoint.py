@@ -119,6 +119,12 @@ def test_a_run_restored_in_a_new_process_keeps_the_earlier_output_and_starts_at_
         if not name.endswith(".bp"):  # (ADIOS2's are folders)
             assert (kept / name).read_bytes() == content, name
     assert (kept / "grid.bp").is_dir()
+    # Restored and closed at once (a script that only looks): the restored frame.
+    look = falling_block(output_dir=tmp_path / "look")
+    look.restore(tmp_path / "ck")
+    look.close()
+    pvd = (tmp_path / "look" / "particles.pvd").read_text()
+    assert [float(t) for t in re.findall(r'timestep="([^"]+)"', pvd)] == [again.t]
     again.run(0.1, 2, progress=False)
     again.close()
     pvd = (out / "particles.pvd").read_text()

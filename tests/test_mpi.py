@@ -351,6 +351,21 @@ def bodies():
             body, count = bodies_of_cells(mesh, cells)
             found[f"{dim} {seed}"] = {"count": count, "cells": middle[field > 0.8 + 0.1 * seed]
                                       .round(9).tolist(), "body": body.tolist()}
+            # The ghost cells of the blob too (as domains' pieces give), and a rank
+            # with none: counted against all the cells' nodes gathered (the count's
+            # first, serial-only way).
+            every = np.arange(mesh.topology.index_map(dim).size_local
+                              + mesh.topology.index_map(dim).num_ghosts, dtype=np.int32)
+            mid = dolfinx.mesh.compute_midpoints(mesh, dim, every)[:, :dim]
+            ghosts = every[sum(np.sin(mid @ k + i) for i, k in enumerate(waves)) > 0.8]
+            for name, chosen in (("ghosts", ghosts), ("rank 0 none", cells[:0] if rank == 0
+                                                       else cells)):
+                nodes = mesh.geometry.dofmaps[0][np.unique(chosen)]
+                gathered = parallel.gathered(comm, mesh.geometry.index_map().local_to_global(
+                    nodes.ravel().astype(np.int32)).reshape(nodes.shape))
+                from fe_mpm.bodies import body_labels
+                found[f"{dim} {seed} {name}"] = [bodies_of_cells(mesh, chosen)[1],
+                                                 int(body_labels(gathered).max(initial=-1)) + 1]
     return found
 
 try:
@@ -1186,6 +1201,10 @@ def test_the_bodies_counted_on_three_ranks_are_the_serial_ones(tmp_path):
     are the serial ones: the same count, and the same cells together."""
     serial = _run(tmp_path, "bodies", 1)[0]
     ranks = _run(tmp_path, "bodies", 3)
+    for key in [key for key in serial if key.endswith(("ghosts", "none"))]:
+        for rank in ranks:  # with ghost cells, and with a rank that has none
+            assert rank[key][0] == rank[key][1], key
+        del serial[key]
     for key, alone in serial.items():
         assert all(rank[key]["count"] == alone["count"] for rank in ranks), key
         body_at = {tuple(c): b for c, b in zip(alone["cells"], alone["body"], strict=True)}

@@ -927,6 +927,8 @@ def test_a_grid_dirichlet_retried_shorter_counts_only_the_tries_kept():
         (fe_mpm.J2Plasticity(1.0, 0.3, 0.1, 0.0), {"u"}),
         (fe_mpm.MohrCoulomb(1.0, 0.3, 0.1, 30.0, 0.0), {"u"}),
         (fe_mpm.MohrCoulomb(1.0, 0.3, 0.1, 30.0, 10.0), set()),  # it dilates
+        (fe_mpm.MohrCoulomb(1.0, 0.3, 1e15, 30.0, 0.0), set()),  # it cannot yield
+        (fe_mpm.SmoothCapDruckerPrager(1.0, 0.3, 30.0, 0.1, 0.0), set()),  # its cap compacts
         (fe_mpm.NeoHookean(1.0, 0.3), set()),
     ],
 )
@@ -937,6 +939,8 @@ def test_the_u_form_with_plastic_flow_at_constant_volume_is_warned_that_it_locks
     mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (2, 2))
     told = set()
     for formulation in ("u", "up", "u-nbva"):
+        if isinstance(law, fe_mpm.SmoothCapDruckerPrager) and formulation == "up":
+            continue  # (refused: its cap has no inverse at its top)
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             fe_mpm.Simulation(mesh, fe_mpm.seed(mesh, 1), law, formulation)
