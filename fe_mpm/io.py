@@ -33,6 +33,8 @@ class ParticleWriter:
         folder: Output folder (created).
         name: File stem.
         comm: The communicator of the points' grid.
+        clear: Remove an earlier run's frames of this name now; otherwise
+            :meth:`clear` does, before the first frame.
     """
 
     def __init__(
