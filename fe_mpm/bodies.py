@@ -197,6 +197,7 @@ class TearWatch:
     def __init__(self) -> None:
         self.bodies_at_start: int | None = None
         self.warned = False
+        self._counted_at: float | None = None  # the time of the points last counted
 
     def look(
         self, mesh: dolfinx.mesh.Mesh, occupied: np.ndarray, t: float, *, domains: bool
@@ -209,9 +210,9 @@ class TearWatch:
             t: The time the points have reached (s).
             domains: Whether the points carry domains (the advice differs).
         """
-        if self.warned:
-            return  # said once; the count costs a pass over the occupied cells
-        occupied = _each_once(occupied, mesh.geometry.dofmaps[0].shape[0])
+        if self.warned or (t == self._counted_at and self.bodies_at_start is not None):
+            return  # said once, or counted where the points lie now (run's end, close)
+        self._counted_at = t
         body, count = bodies_of_cells(mesh, occupied)
         if self.bodies_at_start is None:  # the first step, or points added or removed
             self.bodies_at_start = count
@@ -219,6 +220,7 @@ class TearWatch:
         if count <= self.bodies_at_start:
             return
         self.warned = True
+        occupied = _each_once(occupied, mesh.geometry.dofmaps[0].shape[0])  # body's order
         cells = parallel.total(mesh.comm, np.bincount(body, minlength=count))
         least = int(np.argmin(cells))
         g = mesh.geometry.dim

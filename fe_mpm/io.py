@@ -33,8 +33,9 @@ class ParticleWriter:
         folder: Output folder (created).
         name: File stem.
         comm: The communicator of the points' grid.
-        clear: Remove an earlier run's frames of this name now; otherwise
-            :meth:`clear` does, before the first frame.
+        clear: Remove an earlier run's frames of this name now (a
+            :class:`~fe_mpm.output.SimulationOutput` clears its folder at its first
+            frame instead).
     """
 
     def __init__(
@@ -70,19 +71,6 @@ class ParticleWriter:
                 f"{self.name}_[0-9][0-9][0-9][0-9][0-9][0-9]{pattern}.vtu"
             ):
                 stale.unlink()
-
-    def clear(self) -> None:
-        """Remove the frames an earlier run left in the folder; collective.
-
-        For a writer made with ``clear=False``, before its first frame.
-        """
-        error = None
-        if self.comm.rank == 0:
-            try:
-                self._clear_stale()
-            except OSError as err:
-                error = OSError(f"output folder {str(self.folder)!r} cannot be cleaned: {err}")
-        parallel.raise_together(self.comm, error)
 
     @property
     def pvd(self) -> Path:

@@ -49,32 +49,29 @@ def _close_open_outputs() -> None:
     _OPEN.clear()
 
 
-def _clear_earlier_run(folder: Path, domains: bool) -> None:
-    """Remove what an earlier run left in ``folder`` that this one may not overwrite.
+#: What a run writes in its output folder: cleared at its first frame, or set aside
+#: by a restore before it (:func:`_clear_earlier_run`, :func:`_set_aside`).
+_RUN_FILES = re.compile(
+    r"steps\.csv|walls\.csv|grid(_pressure)?(_\d+)?\.bp|(particles|domains)\.pvd"
+    r"|(particles|domains)_\d{6}(_r\d+)?\.vtu"
+)
+
+
+def _clear_earlier_run(folder: Path) -> None:
+    """Remove what an earlier run left in ``folder`` (:data:`_RUN_FILES`).
 
     A run with domains, walls and a pressure, then a plain one in the same folder,
     left the first run's ``domains.pvd`` (ParaView showed domains to t = 1 for a run
     that ended at 0.5), ``grid_pressure.bp`` and ``walls.csv`` (a helper's scene,
-    2026-12-06). Only fe-mpm's own names go; the points' frames are their writer's.
+    2026-12-06). Only fe-mpm's own names go.
     """
-    names = [r"steps\.csv", r"walls\.csv", r"grid_pressure(_\d+)?\.bp", r"grid_\d+\.bp"]
-    if not domains:  # a run with domains clears its own series
-        names += [r"domains\.pvd", r"domains_\d{6}(_r\d+)?\.vtu"]
-    fe_mpm_names = re.compile("|".join(f"(?:{name})" for name in names))
     for path in folder.glob("*") if folder.is_dir() else []:
-        if not fe_mpm_names.fullmatch(path.name):
+        if not _RUN_FILES.fullmatch(path.name):
             continue
         if path.is_dir():
             shutil.rmtree(path)
         else:
             path.unlink()
-
-
-#: What a run writes in its output folder (:func:`_set_aside`).
-_RUN_FILES = re.compile(
-    r"steps\.csv|walls\.csv|grid(_pressure)?(_\d+)?\.bp|(particles|domains)\.pvd"
-    r"|(particles|domains)_\d{6}(_r\d+)?\.vtu"
-)
 
 
 def _set_aside(folder: Path, step: int) -> Path | None:
@@ -127,13 +124,10 @@ class SimulationOutput:
         comm, error = self.fields.W.mesh.comm, None
         if comm.rank == 0:
             try:
-                _clear_earlier_run(self.folder, self._domains is not None)
+                _clear_earlier_run(self.folder)
             except OSError as err:
                 error = OSError(f"Simulation: cannot clear {self.folder} of an earlier run: {err}")
         parallel.raise_together(comm, error)
-        self._points.clear()
-        if self._domains is not None:
-            self._domains.clear()
         self._open_grid()
         self.started = True
 

@@ -842,6 +842,26 @@ def test_a_serial_run_limits_numpys_blas_to_one_thread(monkeypatch):
         assert set(numpy_threads()) == {2}
 
 
+def _strip_pulled_by_a_grid_dirichlet(formulation: str, pull: dict):
+    """A strip 1 m long on rollers, its end x = 1 m held by ``Dirichlet(**pull)`` (cells
+    of 0.1 m); the simulation and its points."""
+    mesh = rectangle_mesh((0.0, 0.0), (3.0, 0.5), (30, 5))
+    points = fe_mpm.seed(mesh, 1, density=1.0)
+    points.keep(points.x[:, 0] < 1.0)
+    sim = fe_mpm.Simulation(
+        mesh,
+        points,
+        fe_mpm.NeoHookean(1e3, 0.3),
+        formulation,
+        dirichlet=[
+            fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0), component=0),
+            fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0), component=1),
+            fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 1.0), **pull),
+        ],
+    )
+    return sim, points
+
+
 @pytest.mark.parametrize("formulation", ["u", "up"])
 @pytest.mark.parametrize(
     "pull, warned",
@@ -861,20 +881,7 @@ def test_a_grid_dirichlet_that_moves_its_nodes_past_a_cell_warns_once(formulatio
     nothing was said (2026-12-07): the condition stays on its nodes, the body moves on.
     Now a condition that has moved its nodes further than the cells beside them
     (0.141 m here) warns, once, naming PointDirichlet; a pull of 0.1 m does not."""
-    mesh = rectangle_mesh((0.0, 0.0), (3.0, 0.5), (30, 5))
-    points = fe_mpm.seed(mesh, 1, density=1.0)
-    points.keep(points.x[:, 0] < 1.0)
-    sim = fe_mpm.Simulation(
-        mesh,
-        points,
-        fe_mpm.NeoHookean(1e3, 0.3),
-        formulation,
-        dirichlet=[
-            fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0), component=0),
-            fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0), component=1),
-            fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 1.0), **pull),
-        ],
-    )
+    sim, _ = _strip_pulled_by_a_grid_dirichlet(formulation, pull)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         sim.run(1.0, 5, progress=False)
@@ -890,20 +897,7 @@ def test_a_grid_dirichlet_retried_shorter_counts_only_the_tries_kept():
     had moved 0.127 m when it had moved 0.030 m (2026-12-07): each try added its
     increment. A pull of 0.1 m, under the 0.141 m cells beside it, whose every step
     fails its first try, is not warned (0.2 m counted so), and ends where it should."""
-    mesh = rectangle_mesh((0.0, 0.0), (3.0, 0.5), (30, 5))
-    points = fe_mpm.seed(mesh, 1, density=1.0)
-    points.keep(points.x[:, 0] < 1.0)
-    sim = fe_mpm.Simulation(
-        mesh,
-        points,
-        fe_mpm.NeoHookean(1e3, 0.3),
-        "u",
-        dirichlet=[
-            fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0), component=0),
-            fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0), component=1),
-            fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 1.0), lambda t: 0.1 * t, component=0),
-        ],
-    )
+    sim, points = _strip_pulled_by_a_grid_dirichlet("u", dict(value=lambda t: 0.1 * t, component=0))
     solve, calls = sim._solve, []
 
     def failing_every_other(*args):
