@@ -915,6 +915,25 @@ def test_a_grid_dirichlet_retried_shorter_counts_only_the_tries_kept():
     assert points.x[:, 0].max() == pytest.approx(1.1 - 0.05, abs=0.03)
 
 
+def test_a_run_restored_after_its_travel_warning_does_not_say_it_again(tmp_path):
+    """The travel warning is said once per run; until 2026-12-07 (evening) a run restored
+    from a checkpoint written after it said it again at its next step."""
+    pull = dict(value=lambda t: 0.25 * t, component=0)
+    sim, _ = _strip_pulled_by_a_grid_dirichlet("u", pull)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        sim.run(0.6, 3, progress=False)
+        path = sim.checkpoint(tmp_path)
+    assert [w for w in caught if "moved its grid nodes" in str(w.message)]
+    restored, _ = _strip_pulled_by_a_grid_dirichlet("u", pull)
+    restored.restore(path)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        restored.run(1.0, 2, progress=False)
+    assert restored.t == pytest.approx(1.0)
+    assert not [w for w in caught if "moved its grid nodes" in str(w.message)]
+
+
 @pytest.mark.parametrize(
     "law, warned",
     [
