@@ -323,7 +323,10 @@ def boundary_facets(
     else:
         if facet_tags is None:
             raise ValueError(
-                f"{owner}: boundary tag {where} given but no facet_tags were passed to Simulation"
+                f"{owner}: boundary tag {where} given but Simulation's facet_tags is None. "
+                "dolfinx.io.gmsh.model_to_mesh gives facet_tags=None when the gmsh model "
+                "has no physical group of the facets' dimension (1 in 2D, 2 in 3D): add "
+                "one per boundary, e.g. gmsh.model.addPhysicalGroup(1, curves, tag=11)"
             )
         facets = facet_tags.find(int(where))
         # On a distributed mesh a rank may hold none of them: only none anywhere is wrong.

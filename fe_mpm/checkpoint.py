@@ -21,8 +21,10 @@ simulation with the same script and calls
 :meth:`Simulation.restore <fe_mpm.simulation.Simulation.restore>`: on N ranks, rank r
 reads the pieces r, r + N, ... and every point then moves to the rank
 that owns its cell (:mod:`fe_mpm.migration`), so a checkpoint written on 2 ranks
-continues on 3. The points come back in another order than they had, so sums over
-them round off differently: the answers agree to round-off, not bit for bit.
+continues on 3. Restored on another number of ranks than wrote it, the points come
+back in another order than they had, so sums over them round off differently: the
+answers agree to round-off, not bit for bit. On the same number of ranks they repeat
+the uninterrupted run bit for bit.
 
 A checkpoint of another fe-mpm version or format, of another scene, or one whose
 files do not match their checksums is refused with a :class:`CheckpointError` that
@@ -211,8 +213,8 @@ def _check_corners(sim, shared, path: Path) -> None:
         )
 
 
-def read(sim, path: str | Path) -> None:
-    """Put the state of the checkpoint at ``path`` into ``sim``; collective.
+def read(sim, path: str | Path) -> Path:
+    """Put the state of the checkpoint at ``path`` into ``sim``; collective; the folder read.
 
     Args:
         sim: A simulation built by the script that wrote the checkpoint (same
@@ -314,6 +316,7 @@ def read(sim, path: str | Path) -> None:
         sim._track(sim.step_number, sim.t)  # each point to the rank that owns its cell
     else:  # each point, with its domain, to the rank that owns its cell
         sim.tracking.migrated = sim.domains.migrate(pts, markers, sim.tracker)
+    return path
 
 
 def scene(sim) -> dict:

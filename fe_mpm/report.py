@@ -52,7 +52,7 @@ class StepReport:
         converged_reason: Why Newton stopped, e.g. ``"‖R‖ = 2.1e-13 of the force
             scale 1.962e+04"`` (see :class:`fe_mpm.newton.ForceTest`).
         force_scale: The forces in play at the last iterate, S = max(‖f_ext‖,
-            ‖f_int‖) (N; N/m in 2D).
+            ‖f_int‖, ‖f_M‖), f_M the inertia forces of a dynamic step (N; N/m in 2D).
         relative_residual: The last ‖R‖ over ``force_scale``.
         lost_load: Share of each grid ``Traction``'s or ``Pressure``'s load that acts
             on nodes with no material, so it is lost (``"Traction 0"`` -> share in

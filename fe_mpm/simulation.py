@@ -237,8 +237,8 @@ class Simulation:
             with point domains in a dynamic run (there the penalty, which acts on
             each step's increment, damps the motion like a dashpot), else 0.
         checkpoint_dir: Folder for a checkpoint every ``checkpoint_every`` steps
-            (:mod:`fe_mpm.checkpoint`; :meth:`restore` continues from one); None
-            (default): none.
+            and at the end of each :meth:`run` (:mod:`fe_mpm.checkpoint`;
+            :meth:`restore` continues from one); None (default): none.
         checkpoint_every: Steps between checkpoints, ≥ 1.
         rebalance_above: Under MPI, repartition the grid by its points
             (:meth:`rebalance`) at set-up and after a step in which the most points
@@ -251,6 +251,16 @@ class Simulation:
             shape ``(n, 3, 3)``, e.g. :func:`fe_mpm.geostatic_stress`; carried as
             an elastic strain of a Hencky law (:mod:`fe_mpm.initial_stress`). None
             (default): the points start unstressed.
+
+    Attributes:
+        t: The time the points have reached (s; a pseudo-time in a static run): 0 at
+            set-up, the checkpoint's after :meth:`restore`.
+        step_number: The steps accepted so far, the checkpoint's after :meth:`restore`.
+        history: The :class:`~fe_mpm.report.StepReport` of every step this object
+            took (empty after a restore in a new process: the earlier steps' rows are
+            in ``steps.csv``).
+        points: The material points, moved and updated in place.
+        mesh: The background grid (see ``mesh`` above).
     """
 
     def __init__(
@@ -387,6 +397,7 @@ class Simulation:
         self.timings: dict[str, float] = {}
         self.history: list[StepReport] = []
         self.t, self.step_number = 0.0, 0
+        self._restored_from: str | None = None  # the checkpoint restore() read, said in errors
 
         t0 = time.perf_counter()
         self.markers = Markers(mesh.comm)
@@ -825,7 +836,8 @@ class Simulation:
                 f"pathlib.Path), got {type(path).__name__}"
             )
         before = self.step_number
-        checkpoint.read(self, path)  # (with what add_points left due for the next step)
+        # (with what add_points left due for the next step)
+        self._restored_from = str(checkpoint.read(self, path))
         self._grid_is_a_step = False  # the grid's fields are not the restored step's
         if self.output is not None and not self.output.started:
             # A new process continuing a run: its output folder holds that run's frames
@@ -949,6 +961,15 @@ class Simulation:
         ``on_step(report)`` is called after every accepted step, the points updated.
         """
         n_steps = check_int("Simulation.run", "n_steps", n_steps, lo=1)
+        if isinstance(t_end, int | float) and t_end <= self.t:  # (NaN: check_range)
+            restored = (
+                "" if self._restored_from is None else f", restored from {self._restored_from}"
+            )
+            raise ValueError(
+                f"Simulation.run: t_end = {t_end:g} is not past the simulation's time "
+                f"t = {self.t:g} (step {self.step_number}{restored}): give a later end "
+                "time (sim.t is where the run stands)"
+            )
         check_range("Simulation.run", "t_end", t_end, lo=self.t, lo_open=True)
         nominal = (t_end - self.t) / n_steps
         floor = DEFAULT_MIN_STEP * nominal if self.min_step is None else self.min_step
@@ -998,6 +1019,10 @@ class Simulation:
         if reports:
             self._look_for_a_tear_now()
         self._write_output(force=True)
+        if reports and self.checkpoint_dir and self.step_number % self.checkpoint_every:
+            # A run shorter than checkpoint_every would leave nothing to restore
+            # (a new user's half run, 2026-12-07).
+            self.checkpoint()
         return reports
 
     def _look_for_a_tear_now(self) -> None:

@@ -180,7 +180,18 @@ def test_other_bad_values():
         sim.run(n_steps=0)
     with pytest.raises(TypeError, match=r"Simulation.run: n_steps must be an int, got 2.5"):
         sim.run(n_steps=2.5)  # was taken as 2 steps
-    no_tags = "Dirichlet 0: boundary tag 7 given but no facet_tags were passed to Simulation"
+    with pytest.raises(
+        ValueError,
+        match=r"Simulation.run: t_end = 0 is not past the simulation's time t = 0 \(step 0\)",
+    ):
+        sim.run(0.0)
+    with pytest.raises(ValueError, match=r"Simulation.run: t_end must lie in \(0, inf\), got nan"):
+        sim.run(float("nan"))
+    # The facet tags of a gmsh model without facet groups are None (a new user, 2026-12-07).
+    no_tags = (
+        r"Dirichlet 0: boundary tag 7 given but Simulation's facet_tags is None\. "
+        r".*model_to_mesh gives facet_tags=None .*addPhysicalGroup\(1, curves, tag=11\)"
+    )
     with pytest.raises(ValueError, match=no_tags):
         fe_mpm.Simulation(
             mesh, points, fe_mpm.NeoHookean(1.0, 0.3), dirichlet=[fe_mpm.Dirichlet(7)]

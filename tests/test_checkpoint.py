@@ -7,6 +7,7 @@ across rank counts (``tests/test_mpi.py``) it agrees to round-off.
 
 import json
 import re
+import shutil
 
 import numpy as np
 import pytest
@@ -67,6 +68,24 @@ def test_a_script_that_steps_itself_gets_the_runs_frames_and_checkpoints(tmp_pat
         assert np.array_equal(state(again)[name], value), name
 
 
+def test_a_run_shorter_than_checkpoint_every_ends_with_a_checkpoint(tmp_path):
+    """A new user's half run of 4 steps with the default checkpoint_every=10 left no
+    checkpoint and said nothing (2026-12-07). Each run now ends with one; restored, the
+    run knows its time, and a second run to the same end says where it stands."""
+    first = falling_block(checkpoint_dir=tmp_path)
+    first.run(0.1, 4, progress=False)
+    first.run(0.15, 2, progress=False)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["step_000004", "step_000006"]
+    again = falling_block()
+    again.restore(tmp_path)
+    assert (again.t, again.step_number, again.history) == (0.15, 6, [])
+    for name, value in state(first).items():
+        assert np.array_equal(state(again)[name], value), name
+    restored = r"t = 0\.15 \(step 6, restored from .*step_000006\): give a later end time"
+    with pytest.raises(ValueError, match=restored):
+        again.run(0.15, 2, progress=False)
+
+
 def test_a_simulation_restored_to_an_earlier_step_forgets_the_steps_after_it(tmp_path):
     """Found 2026-12-06 by a helper: run to step 4, restored to step 2 and run again, the
     history read 1, 2, 3, 4, 3, 4, steps.csv repeated rows 3 and 4, the .pvd listed
@@ -110,6 +129,7 @@ def test_a_run_restored_in_a_new_process_keeps_the_earlier_output_and_starts_at_
     sim = falling_block(output_dir=out, checkpoint_dir=tmp_path / "ck", checkpoint_every=2)
     sim.run(0.075, 3, progress=False)  # "killed" after step 3; checkpoint at step 2
     sim.close()
+    shutil.rmtree(tmp_path / "ck" / "step_000003")  # (a killed run writes no last one)
     earlier = {path.name: path.read_bytes() for path in out.iterdir() if path.is_file()}
     again = falling_block(output_dir=out)  # the same script, in a new process
     with pytest.warns(UserWarning, match=r"before_restore_at_step_2; this run writes its own"):
