@@ -136,3 +136,34 @@ def check_choice(owner: str, field: str, value: str, choices: tuple[str, ...]) -
     if value not in choices:
         raise ValueError(f"{owner}: unknown {field} {value!r}; choose one of {', '.join(choices)}")
     return value
+
+
+def check_indices(owner: str, field: str, values: object, size: int) -> np.ndarray:
+    """``values`` as int32 indices into ``size`` entities, or raise naming the field.
+
+    A boolean mask, fractional numbers or an index past the end are refused: cast
+    silently they read as the indices 0 and 1, truncate, or reach past an array in
+    compiled code (``facet_points`` with facet 999 of 16 ended the process).
+
+    Raises:
+        TypeError: A mask, or not integers.
+        ValueError: Not one-dimensional, or an index outside [0, size).
+    """
+    a = np.asarray(values)
+    if a.dtype.kind == "b":
+        raise TypeError(
+            f"{owner}: {field} must be indices, got a boolean mask; use np.flatnonzero(mask)"
+        )
+    if a.ndim != 1:
+        raise ValueError(f"{owner}: {field} must be a 1-D array of indices, got shape {a.shape}")
+    if a.dtype.kind == "f" and np.all(np.isfinite(a) & (a == np.trunc(a))):
+        a = a.astype(np.int64)  # whole floats such as 3.0 are indices
+    if a.size and a.dtype.kind not in "iu":
+        raise TypeError(
+            f"{owner}: {field} must be integer indices, got {reprlib.repr(values)} "
+            f"(dtype {a.dtype})"
+        )
+    outside = np.flatnonzero((a < 0) | (a >= size))
+    if outside.size:
+        raise ValueError(f"{owner}: {field} must lie in [0, {size - 1}], got {a[outside[0]]}")
+    return a.astype(np.int32)

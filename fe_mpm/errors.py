@@ -15,7 +15,14 @@ class PointsOutsideError(RuntimeError):
     """Material points left the background grid."""
 
 
-class MarkerHostLeftError(PointsOutsideError):
+class StepLeavesGridError(PointsOutsideError):
+    """A step would carry material points out of the grid (``points_leaving="raise"``).
+
+    Refused before anything moved, so the run still writes the steps it accepted.
+    """
+
+
+class MarkerHostLeftError(StepLeavesGridError):
     """A step would carry a marker's host point out of the grid.
 
     Refused before anything moved, so the run still writes the steps it accepted.

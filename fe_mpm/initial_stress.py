@@ -94,6 +94,11 @@ def geostatic_stress(
             thickness or density ≤ 0, both ``density`` and ``layers``, or no density
             to take.
     """
+    if np.ndim(gravity) > 0 and np.size(gravity) > 1:
+        raise TypeError(
+            f"geostatic_stress: gravity is the magnitude g > 0 (m/s²), acting along −y "
+            f"(−z in 3D), not the body-force vector; got {gravity!r}"
+        )
     if not (np.isfinite(gravity) and gravity > 0.0):
         raise ValueError(f"geostatic_stress: gravity must be > 0 (m/s²), got {gravity!r}")
     K0 = np.asarray(K0, dtype=float)

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 
 from mpi4py import MPI
 
@@ -20,7 +20,16 @@ import numpy as np
 from fe_mpm import parallel
 from fe_mpm._dolfinx import dolfinx
 from fe_mpm.bodies import bodies_of_cells, count_bodies
-from fe_mpm.boundary import PointDirichlet, RigidWall, refuse_tags_of_other_entities
+from fe_mpm.boundary import (
+    Dirichlet,
+    PointDirichlet,
+    PointPressure,
+    PointTraction,
+    Pressure,
+    RigidWall,
+    Traction,
+    refuse_tags_of_other_entities,
+)
 from fe_mpm.checks import check_choice, check_int, check_range
 from fe_mpm.errors import warn
 from fe_mpm.formulations import FORMULATIONS, FormulationSpec
@@ -243,6 +252,18 @@ def check_passes_between_bodies(
 
 def check_grid_and_points(mesh: dolfinx.mesh.Mesh, points: MaterialPoints) -> None:
     """A non-empty simplex grid, and points of its dimension (on some rank)."""
+    if not isinstance(mesh, dolfinx.mesh.Mesh):
+        hint = " (a scene's grid is its .mesh)" if hasattr(mesh, "mesh") else ""
+        raise TypeError(
+            "Simulation: the first argument, mesh, must be a dolfinx.mesh.Mesh, got "
+            f"{type(mesh).__name__}{hint}; the order is Simulation(mesh, points, material)"
+        )
+    if not isinstance(points, MaterialPoints):
+        raise TypeError(
+            "Simulation: the second argument, points, must be fe_mpm.MaterialPoints (what "
+            f"fe_mpm.seed returns), got {type(points).__name__}; the order is "
+            "Simulation(mesh, points, material)"
+        )
     simplex_cell_type(mesh)
     if mesh.topology.index_map(mesh.topology.dim).size_global == 0:
         raise ValueError("Simulation: the mesh is empty (it has no cells)")
@@ -739,6 +760,12 @@ def laws_of_zones(material, points: MaterialPoints, comm) -> object:
     # A list, tuple or array of laws; a law itself is not iterable.
     several = not hasattr(material, "kirchhoff") and isinstance(material, Iterable)
     laws = list(material) if several else [material]
+    for law in laws:
+        if isinstance(law, type):
+            raise TypeError(
+                f"Simulation: material must be a law object, e.g. {law.__name__}(E, nu, ...), "
+                f"got the class {law.__name__} itself"
+            )
     if several and len(laws) == 0:
         raise ValueError("Simulation: material is an empty list; give a law or a list of laws")
     error = None
@@ -1203,6 +1230,104 @@ def check_force_names(reactions: dict | None, walls: Sequence, boundary: Sequenc
                 "(StepReport.reactions), so each needs its own"
             )
     return set(owners)
+
+
+def check_flags(**flags) -> None:
+    """Refuse a yes/no option given as anything but a bool (``dynamic="no"`` ran dynamics)."""
+    for name, value in flags.items():
+        if not isinstance(value, bool | np.bool_):
+            raise TypeError(f"Simulation: {name} must be True or False, got {value!r}")
+
+
+def check_body_force_scale(body_force, body_force_scale) -> None:
+    """``body_force_scale`` is a function of time that scales a given ``body_force``.
+
+    Raises:
+        TypeError: It is not callable (a number failed only in the first step).
+        ValueError: It is given without a body force (it was ignored).
+    """
+    if body_force_scale is None:
+        return
+    if not callable(body_force_scale):
+        raise TypeError(
+            "Simulation: body_force_scale must be a function of time t -> factor, got "
+            f"{body_force_scale!r}; a constant factor belongs in body_force itself"
+        )
+    if body_force is None:
+        raise ValueError("Simulation: body_force_scale scales body_force, which is not given")
+
+
+def check_petsc_options(petsc_options) -> None:
+    """A mapping of PETSc option names to values, with a Newton fe-mpm can drive.
+
+    Raises:
+        TypeError: Not a mapping.
+        ValueError: ``snes_type`` other than ``newtonls``: fe-mpm's Newton drives
+            the line searches and tests convergence by its forces, and
+            ``ksponly`` ended the process from inside PETSc (a helper's probes).
+    """
+    if petsc_options is None:
+        return
+    if not isinstance(petsc_options, Mapping):
+        raise TypeError(
+            "Simulation: petsc_options must be a dict of PETSc option names to values, "
+            f"got {type(petsc_options).__name__}"
+        )
+    snes_type = petsc_options.get("snes_type", "newtonls")
+    if snes_type != "newtonls":
+        raise ValueError(
+            f"Simulation: petsc_options['snes_type'] must be 'newtonls' (Newton with the "
+            f"line searches of line_search=), got {snes_type!r}"
+        )
+
+
+#: Each list option of Simulation and what its entries may be.
+CONDITION_LISTS = {
+    "dirichlet": (Dirichlet,),
+    "tractions": (Traction, Pressure),
+    "point_dirichlet": (PointDirichlet,),
+    "point_tractions": (PointTraction, PointPressure),
+    "walls": (RigidWall,),
+}
+
+
+def condition_lists(**given) -> dict[str, tuple]:
+    """Each of Simulation's list options as a tuple, its entries checked.
+
+    None is an empty list. A single condition instead of a list, or an entry of
+    another kind (a bare function, a PointDirichlet among the grid's), is refused
+    naming the option and what it takes (a helper's probes, 2026-12-07, met
+    AttributeErrors from deep inside).
+
+    Raises:
+        TypeError: An option is neither a list nor None, or an entry is of a kind
+            the option does not take.
+    """
+    lists = {}
+    for name, value in given.items():
+        kinds = CONDITION_LISTS[name]
+        wanted = " or ".join(kind.__name__ for kind in kinds)
+        if value is None:
+            value = ()
+        if isinstance(value, kinds) or callable(value) or not isinstance(value, Iterable):
+            raise TypeError(
+                f"Simulation: {name} must be a list of {wanted}, got a "
+                f"{type(value).__name__}; write {name}=[...] even for one"
+            )
+        value = tuple(value)
+        for k, entry in enumerate(value):
+            if not isinstance(entry, kinds):
+                hint = (
+                    f" (wrap a marker function as {kinds[0].__name__}(where, ...))"
+                    if callable(entry) and not isinstance(entry, type)
+                    else ""
+                )
+                one = " or a ".join(kind.__name__ for kind in kinds)
+                raise TypeError(
+                    f"Simulation: {name}[{k}] must be a {one}, got {type(entry).__name__}{hint}"
+                )
+        lists[name] = value
+    return lists
 
 
 def check_walls(walls, spec, formulation: str) -> tuple:

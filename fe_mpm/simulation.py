@@ -39,7 +39,7 @@ from fe_mpm.boundary import (
     Traction,
 )
 from fe_mpm.boundary_points import BoundaryPointStep
-from fe_mpm.checks import check_finite, check_int, check_range
+from fe_mpm.checks import as_number, check_finite, check_int, check_range
 from fe_mpm.domains import (
     DOMAIN_GHOST_LAYERS,
     PointDomains,
@@ -47,7 +47,7 @@ from fe_mpm.domains import (
     step_with_domains,
 )
 from fe_mpm.dynamics import NewmarkDynamics
-from fe_mpm.errors import ConvergenceError, MarkerHostLeftError, PointsOutsideError, warn
+from fe_mpm.errors import ConvergenceError, PointsOutsideError, StepLeavesGridError, warn
 from fe_mpm.forms.mixed_up import PPPData, PressureFloor
 from fe_mpm.formulations import FORMULATIONS, GridFields
 from fe_mpm.ghost import GhostStabilisation
@@ -306,6 +306,19 @@ class Simulation:
         initial_stress: np.ndarray | None = None,
     ):
         model_checks.check_grid_and_points(mesh, points)
+        model_checks.check_flags(dynamic=dynamic)
+        model_checks.check_body_force_scale(body_force, body_force_scale)
+        model_checks.check_petsc_options(petsc_options)
+        lists = model_checks.condition_lists(
+            dirichlet=dirichlet,
+            tractions=tractions,
+            point_dirichlet=point_dirichlet,
+            point_tractions=point_tractions,
+            walls=walls,
+        )
+        dirichlet, tractions = lists["dirichlet"], lists["tractions"]
+        point_dirichlet, point_tractions = lists["point_dirichlet"], lists["point_tractions"]
+        walls = lists["walls"]
         _check_points(mesh.comm, points.check_state)  # a script may change them after seeding
         material = model_checks.laws_of_zones(material, points, mesh.comm)
         if parallel.any_rank(mesh.comm, points.simulated_to is not None):
@@ -961,6 +974,10 @@ class Simulation:
         ``on_step(report)`` is called after every accepted step, the points updated.
         """
         n_steps = check_int("Simulation.run", "n_steps", n_steps, lo=1)
+        if on_step is not None and not callable(on_step):
+            raise TypeError(
+                f"Simulation.run: on_step must be a function of the step's report, got {on_step!r}"
+            )
         if isinstance(t_end, int | float) and t_end <= self.t:  # (NaN: check_range)
             restored = (
                 "" if self._restored_from is None else f", restored from {self._restored_from}"
@@ -1006,12 +1023,13 @@ class Simulation:
                     self._rebalance_now()
                 length.accepted()
                 bar.update(report, nominal, cuts)
-        except (ConvergenceError, MarkerHostLeftError):
+        except (ConvergenceError, StepLeavesGridError):
             # Raised on every rank together, the points as the last accepted step left
-            # them: their frame and rows (a marker's host refused before anything moved
-            # too; until 2026-12-07 a helper's run lost its last accepted steps' rows
-            # there). Not after any other PointsOutsideError: tracking may have sent
-            # points to other ranks before it stopped, their cells not yet renumbered.
+            # them: their frame and rows (a step that would carry points or a marker's
+            # host out of the grid is refused before anything moved too; until
+            # 2026-12-07 a helper's run lost its last accepted steps' rows there). Not
+            # after any other PointsOutsideError: tracking may have sent points to other
+            # ranks before it stopped, their cells not yet renumbered.
             self._write_output(force=True)
             raise
         finally:
@@ -1080,8 +1098,12 @@ class Simulation:
         the steps itself: the output's t = 0 frame is written before the first step
         and the checkpoints after every ``checkpoint_every``-th, as in :meth:`run`.
         """
-        if not t_new > self.t:
-            raise ValueError(f"Simulation.step: t_new must exceed the current time {self.t}")
+        t_new = as_number("Simulation.step", "t_new", t_new)
+        if not (t_new > self.t and np.isfinite(t_new)):
+            raise ValueError(
+                f"Simulation.step: t_new must be finite and exceed the current time "
+                f"{self.t}, got {t_new!r}"
+            )
         if self.dynamic and self.step_number == 0:
             # A script gives a body its velocity by setting points.velocity after seeding.
             _check_points(self.mesh.comm, self.points.check_motion)
@@ -1613,7 +1635,7 @@ class Simulation:
             own = np.linalg.det(new.dF) * np.linalg.det(pts.F)
             bary = self._current.bary
             J = volume_of_average(self.fields.Q[0], layout.cell, bary, pts.mass, own, step, t)
-        # With points_leaving="drop": found before anything moves, dropped once it has.
+        # Points leaving: refused ("raise") or found ("drop") before anything moves.
         # A domain's sub-points are not dropped: its point goes if the domain leaves
         # (PointDomains.drop_left).
         leaving = (

@@ -15,7 +15,13 @@ import numpy as np
 
 from fe_mpm import parallel
 from fe_mpm._dolfinx import dolfinx
-from fe_mpm.errors import ConvergenceError, MarkerHostLeftError, PointsOutsideError, warn
+from fe_mpm.errors import (
+    ConvergenceError,
+    MarkerHostLeftError,
+    PointsOutsideError,
+    StepLeavesGridError,
+    warn,
+)
 from fe_mpm.formulations import FormulationSpec
 from fe_mpm.markers import Markers
 from fe_mpm.migration import migrate, owning_ranks, send
@@ -130,14 +136,15 @@ class PointTracking:
             t: Its end time, for the message.
 
         Returns:
-            This rank's leaving points (indices); none with ``"raise"``, where the next
-            tracking stops the run.
+            This rank's leaving points (indices), to be dropped once they have moved.
 
         Raises:
-            PointsOutsideError: A marker's host would leave.
+            MarkerHostLeftError: A marker's host would leave.
+            StepLeavesGridError: With ``"raise"``, a point would leave. Until
+                2026-12-07 the next step's tracking stopped the run instead, so a run's
+                last step carried points out of the grid, wrote them and ended without
+                a word (a helper's bad-input probes).
         """
-        if self.points_leaving != "drop":
-            return np.zeros(0, dtype=np.int64)
         comm = self.tracker.mesh.comm
         lost = np.flatnonzero(self.tracker.locate(moved, points.cell) < 0)
         if comm.size > 1 and parallel.any_rank(comm, lost.size > 0):
@@ -146,6 +153,20 @@ class PointTracking:
             owner = owning_ranks(self.tracker, moved[lost])
             lost = lost[(owner < 0) | (owner == comm.rank)]
         parallel.raise_together(comm, hosts_leaving(markers.hosts(), lost, step, t))
+        if self.points_leaving == "raise" and parallel.any_rank(comm, lost.size > 0):
+            count = int(parallel.total(comm, int(lost.size)))
+            first = None
+            if lost.size:
+                first = (
+                    f"{count} material point(s) would leave the grid in step {step} "
+                    f"(t = {t:g}); first: point {lost[0]} at x = {moved[lost[0]]}"
+                )
+            if comm.size > 1:  # the lowest rank that has one gives the example
+                first = parallel.first_given(comm, first)
+                first += f" (in none of the {comm.size} MPI ranks' cells)"
+            parallel.raise_together(
+                comm, StepLeavesGridError(f"{first}. Nothing was updated. {LEAVING_ADVICE}")
+            )
         return lost
 
     def drop(
@@ -235,17 +256,7 @@ class PointTracking:
         if self.points_leaving == "raise":
             parallel.raise_together(
                 comm,
-                PointsOutsideError(
-                    first + ". The grid does not move with the body: leave empty cells "
-                    "wherever it may go (a face on the grid's edge bulges out of it unless "
-                    "a Dirichlet condition holds it), or pass points_leaving='drop' to "
-                    "remove what flies off. Where a condition holds that edge: if it moves "
-                    "the edge outwards (a lowered trapdoor, a settling base), the body it "
-                    "holds goes out with it, however short the steps: put the moving "
-                    "condition on facets inside the grid, with empty cells beyond them; if it "
-                    "holds the edge still, the step moved the nodes beside it by more than "
-                    "their cells, turning those cells over: take shorter steps."
-                ),
+                PointsOutsideError(f"{first}. {LEAVING_ADVICE}"),
             )
         warn(first + "; dropped.")
         keep = cells >= 0
@@ -264,6 +275,20 @@ class PointTracking:
         if parallel.total(comm, len(points)) == 0:
             raise PointsOutsideError(f"all material points have left the grid at {where}")
         return cells[keep]
+
+
+#: What a run stopped by points outside the grid says to do.
+LEAVING_ADVICE = (
+    "The grid does not move with the body: leave empty cells "
+    "wherever it may go (a face on the grid's edge bulges out of it unless "
+    "a Dirichlet condition holds it), or pass points_leaving='drop' to "
+    "remove what flies off. Where a condition holds that edge: if it moves "
+    "the edge outwards (a lowered trapdoor, a settling base), the body it "
+    "holds goes out with it, however short the steps: put the moving "
+    "condition on facets inside the grid, with empty cells beyond them; if it "
+    "holds the edge still, the step moved the nodes beside it by more than "
+    "their cells, turning those cells over: take shorter steps."
+)
 
 
 def hosts_leaving(

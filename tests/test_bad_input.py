@@ -1028,3 +1028,75 @@ def test_a_friction_angle_that_looks_like_radians_is_warned(law, smallest):
         warnings.simplefilter("error")
         law(1e7, 0.3, cohesion=0.0, friction_angle=2.0)
         law(1e7, 0.3, cohesion=10.0, friction_angle=smallest)
+
+
+def test_what_a_careless_user_passes_is_refused_by_name(tmp_path):
+    """A helper's probes (2026-12-07) met AttributeErrors and numpy's messages from deep
+    inside, a segmentation fault, or a silent run, for each of these."""
+    mesh, points = _scene()
+    law = fe_mpm.NeoHookean(1.0, 0.3)
+    left = lambda x: np.isclose(x[0], 0.0)  # noqa: E731
+    pull = fe_mpm.Traction(left, (0.0, 1.0))
+    refused = [
+        (dict(dirichlet=fe_mpm.Dirichlet(left)),
+         r"dirichlet must be a list of Dirichlet, got a Dirichlet; write dirichlet=\[...\]"),
+        (dict(dirichlet=[left]),
+         r"dirichlet\[0\] must be a Dirichlet, got function \(wrap a marker function as"),
+        (dict(dirichlet=[pull]), r"dirichlet\[0\] must be a Dirichlet, got Traction"),
+        (dict(tractions=pull), r"tractions must be a list of Traction or Pressure, got a Traction"),
+        (dict(walls=fe_mpm.RigidWall("floor", left)), r"walls must be a list of RigidWall, got a"),
+        (dict(point_tractions=[pull]),
+         r"point_tractions\[0\] must be a PointTraction or a PointPressure, got Traction"),
+        (dict(dynamic="no"), r"dynamic must be True or False, got 'no'"),
+        (dict(body_force=(0.0, -1.0), body_force_scale=2.0), r"body_force_scale must be a func"),
+        (dict(body_force_scale=lambda t: t), r"body_force_scale scales body_force, which is not"),
+        (dict(petsc_options=["snes_rtol", 1e-8]), r"petsc_options must be a dict"),
+        (dict(petsc_options={"snes_type": "ksponly"}), r"\['snes_type'\] must be 'newtonls'"),
+    ]  # fmt: skip
+    for options, message in refused:
+        with pytest.raises((TypeError, ValueError), match=message):
+            fe_mpm.Simulation(mesh, points, law, **options)
+    # None is an empty list.
+    fe_mpm.Simulation(mesh, points, law, dirichlet=None, tractions=None, walls=None)
+    order = r"the order is Simulation\(mesh, points, material\)"
+    with pytest.raises(
+        TypeError,
+        match=r"second argument, points, must be fe_mpm.MaterialPoints .*got NeoHookean; " + order,
+    ):
+        fe_mpm.Simulation(mesh, law, points)
+    with pytest.raises(
+        TypeError, match=r"first argument, mesh, .* got MeshData \(a scene's grid is its .mesh\)"
+    ):
+        fe_mpm.Simulation(cook_membrane(n=2), points, law)
+    with pytest.raises(
+        TypeError,
+        match=r"material must be a law object, e.g. NeoHookean\(E, nu, ...\), got the class",
+    ):
+        fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean)
+    sim = fe_mpm.Simulation(mesh, points, law, dirichlet=[fe_mpm.Dirichlet(left)])
+    with pytest.raises(
+        TypeError, match=r"Simulation.run: on_step must be a function of the step's report, got 3"
+    ):
+        sim.run(1.0, 1, on_step=3, progress=False)
+    for t in (np.inf, float("nan")):
+        with pytest.raises(
+            ValueError, match=r"Simulation.step: t_new must be finite and exceed the current time 0"
+        ):
+            sim.step(t)
+    with pytest.raises(TypeError, match=r"Simulation.step: t_new must be a number, got '0.1'"):
+        sim.step("0.1")
+    # facet_points: an index past the end ended the process; a mask and fractions read wrong.
+    facets = dolfinx.mesh.locate_entities_boundary(mesh, 1, left)
+    with pytest.raises(ValueError, match=r"facet_points: facets must lie in \[0, 15\], got 999"):
+        fe_mpm.meshes.facet_points(mesh, np.array([999]))
+    with pytest.raises(
+        TypeError, match=r"facet_points: facets must be indices, got a boolean mask"
+    ):
+        fe_mpm.meshes.facet_points(mesh, np.array([True, False, True]))
+    with pytest.raises(TypeError, match=r"facet_points: facets must be integer indices"):
+        fe_mpm.meshes.facet_points(mesh, np.array([0.7, 1.2]))
+    assert len(fe_mpm.meshes.facet_points(mesh, facets.astype(float))[0]) == len(facets)
+    with pytest.raises(
+        TypeError, match=r"gravity is the magnitude g > 0 .*not the body-force vector"
+    ):
+        fe_mpm.geostatic_stress(points, 1.0, (0.0, -9.81), 0.5, density=1.0)

@@ -1,5 +1,7 @@
 """Tracker: points crossing cells, points on facets and vertices, points leaving the grid."""
 
+import re
+
 import numpy as np
 import pytest
 from layouts import translating_block
@@ -97,12 +99,22 @@ def test_points_outside_are_reported_and_concave_grids_use_the_tree():
     assert cells[2] == -1 and cells[3] == -1
 
 
-def test_point_leaving_the_grid_raises_with_step_and_position():
-    sim, points = translating_block("raise")
-    sim.step(1.0)  # moves the block 0.6 to the right: its right part leaves the grid
-    message = r"left the grid at step 2 \(t = 2\).*point \d+ at x = "
+@pytest.mark.parametrize("dynamic", [False, True])
+def test_a_step_that_would_carry_points_out_of_the_grid_is_refused_before_they_move(
+    tmp_path, dynamic
+):
+    """Until 2026-12-07 the next step's tracking stopped the run, so a run's last step
+    carried points out of the grid, wrote them and ended without a word (a helper's
+    probes: a block at 200 m/s, a pulled edge). Now the step is refused before anything
+    moves, and the run's files end at the last accepted step."""
+    sim, points = translating_block("raise", dynamic=dynamic, output_dir=tmp_path)
+    x, F = points.x.copy(), points.F.copy()
+    message = r"would leave the grid in step 1 \(t = 1\); first: point \d+ at x = .*Nothing"
     with pytest.raises(fe_mpm.PointsOutsideError, match=message):
-        sim.step(2.0)
+        sim.run(1.0, 1, progress=False)  # the block moves 0.6 m: its right part leaves
+    assert sim.step_number == 0 and np.array_equal(points.x, x) and np.array_equal(points.F, F)
+    pvd = (tmp_path / "particles.pvd").read_text()
+    assert [float(t) for t in re.findall(r'timestep="([^"]+)"', pvd)] == [0.0]
 
 
 def test_points_leaving_the_grid_can_be_dropped_with_a_count():

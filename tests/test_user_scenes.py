@@ -88,7 +88,10 @@ def _run(built, on_step=None):
 
 
 def _stopped(err: BaseException) -> dict:
-    return {"outcome": type(err).__name__, "message": str(err)[:400]}
+    # (a step refused before its points leave the grid is a PointsOutsideError too)
+    outside = isinstance(err, fe_mpm.PointsOutsideError)
+    return {"outcome": "PointsOutsideError" if outside else type(err).__name__,
+            "message": str(err)[:400]}  # fmt: skip
 
 
 def _run_recording(built, on_step, seen: dict) -> None:

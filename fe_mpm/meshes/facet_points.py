@@ -6,7 +6,7 @@ import numpy as np
 
 from fe_mpm import parallel
 from fe_mpm._dolfinx import dolfinx
-from fe_mpm.checks import check_int
+from fe_mpm.checks import check_indices, check_int
 
 
 def facet_points(
@@ -63,7 +63,10 @@ def facet_points(
     fdim = mesh.topology.dim - 1
     # Facets found with dolfinx.mesh.locate_entities exist before their connectivity.
     mesh.topology.create_connectivity(fdim, fdim + 1)
-    facets = np.asarray(facets, dtype=np.int32)
+    index_map = mesh.topology.index_map(fdim)
+    facets = check_indices(
+        "facet_points", "facets", facets, index_map.size_local + index_map.num_ghosts
+    )
     if mesh.comm.size > 1:
         facets = facets[facets < mesh.topology.index_map(fdim).size_local]
     nodes = dolfinx.mesh.entities_to_geometry(mesh, fdim, facets)
