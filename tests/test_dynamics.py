@@ -763,3 +763,32 @@ def test_a_body_force_whose_direction_changes_in_time_drives_a_free_body():
     np.testing.assert_allclose(points.velocity[:, 1], -9.81 * 0.2, rtol=1e-9)
     with pytest.raises(ValueError, match=r"body_force\(t = 0\) must have 2 components"):
         fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1e6, 0.3), body_force=lambda t: (t,))
+
+
+@pytest.mark.parametrize(
+    "passes, spin, warned", [(2, 2.8, True), (1, 2.8, False), (2, 0.0, False), (8, 0.0, False)]
+)
+def test_projection_passes_on_a_spinning_body_are_warned_against(passes, spin, warned):
+    """A helper's free elastic disk spinning at 2.8 rad/s gained energy without bound
+    with two passes, though passes × c dt / h was 4.7 to 19, far under the warning's
+    100 (2026-12-07). A run with passes is now told at its first step when its body
+    spins; one pass, or a body that only translates, is not."""
+    grid = meshes.rectangle_mesh((-1.5, -1.5), (1.5, 1.5), (12, 12))
+    points = fe_mpm.seed(meshes.disk((0.0, 0.0), 1.0, 0.25).mesh, per_cell=3, density=1000.0)
+    points.velocity[:] = spin * np.stack([-points.x[:, 1], points.x[:, 0]], axis=1) + (0.5, 0.0)
+    sim = fe_mpm.Simulation(
+        grid,
+        points,
+        fe_mpm.NeoHookean(1e6, 0.3, density=1000.0),
+        dynamic=True,
+        projection_passes=passes,
+    )
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        sim.run(0.01, 1, progress=False)
+    said = [str(w.message) for w in caught if "on a body that spins" in str(w.message)]
+    assert len(said) == int(warned), said
+    if warned:
+        assert said[0].startswith(
+            "Simulation: projection_passes=2 on a body that spins (2.8 rad/s"
+        )
