@@ -279,7 +279,26 @@ class GridConditions:
         """Set ``value`` to condition k's motion from ``t_from`` to ``t_to`` (m)."""
         spec = self.dirichlet[k][0]
         if spec.profile is not None:
-            value.interpolate(lambda x: spec.profile(x, t_to) - spec.profile(x, t_from))
+            bs = value.function_space.dofmap.bs
+
+            def motion(x: np.ndarray) -> np.ndarray:
+                # (held components, points): checked, or dolfinx stops without a name
+                shape = (x.shape[1],) if bs == 1 else (bs, x.shape[1])
+                moved = np.asarray(spec.profile(x, t_to), dtype=float) - np.asarray(
+                    spec.profile(x, t_from), dtype=float
+                )
+                if bs == 1 and moved.size == 1:  # a uniform motion of the component
+                    moved = np.full(shape, float(moved.reshape(-1)[0]))
+                if moved.shape != shape:
+                    held = "one component (component= given)" if bs == 1 else f"{bs} components"
+                    raise ValueError(
+                        f"Dirichlet {k}: profile(x, t) must return shape {shape} for {held} "
+                        f"at the {x.shape[1]} points of x (x has shape (3, n)), got "
+                        f"{moved.shape}"
+                    )
+                return moved
+
+            value.interpolate(motion)
             if not np.all(np.isfinite(value.x.array)):
                 raise ValueError(
                     f"Dirichlet: profile(x, t) is not finite everywhere "

@@ -41,6 +41,27 @@ PER_POINT_FIELDS = (
 )
 
 
+def _one_per_point(name: str, values, n: int) -> np.ndarray:
+    """``values`` (n,) checked finite: a number for each point, not one for all."""
+    a = check_finite("MaterialPoints", name, values, what="point")
+    if a.shape != (n,):
+        raise ValueError(
+            f"MaterialPoints: {name} must have one entry per point, shape ({n},), got "
+            f"shape {a.shape} (np.full({n}, value) gives every point the same)"
+        )
+    return a.copy()
+
+
+def _shaped(name: str, values, shape: tuple, described: str) -> np.ndarray:
+    """``values`` as a float array of ``shape``, or a ValueError naming the field."""
+    a = np.array(check_finite("MaterialPoints", name, values, what="point"), dtype=np.float64)
+    if a.shape != shape:
+        raise ValueError(
+            f"MaterialPoints: {name} must have shape {described}, {shape} here, got {a.shape}"
+        )
+    return a
+
+
 @dataclass
 class MaterialPoints:
     """State carried by the material points between steps.
@@ -97,12 +118,8 @@ class MaterialPoints:
                 f"MaterialPoints: x must have shape (n, 2) or (n, 3), got {self.x.shape}"
             )
         n, g = self.x.shape
-        self.volume = (
-            check_finite("MaterialPoints", "volume", self.volume, what="point").reshape(n).copy()
-        )
-        self.mass = (
-            check_finite("MaterialPoints", "mass", self.mass, what="point").reshape(n).copy()
-        )
+        self.volume = _one_per_point("volume", self.volume, n)
+        self.mass = _one_per_point("mass", self.mass, n)
         if self.F is None:
             self.F = np.tile(np.eye(g), (n, 1, 1))
         else:
@@ -111,12 +128,12 @@ class MaterialPoints:
         if self.stress is None:
             self.stress = np.zeros((n, 3, 3))
         else:
-            self.stress = np.array(self.stress, dtype=np.float64).reshape(n, 3, 3)
+            self.stress = _shaped("stress", self.stress, (n, 3, 3), "(n, 3, 3), 3 x 3 in 2D too")
         if self.cell is None:
             self.cell = np.full(n, -1, dtype=np.int32)
         else:
-            self.cell = np.array(self.cell, dtype=np.int32).reshape(n)
-        self.x0 = self.x.copy() if self.x0 is None else np.array(self.x0, dtype=np.float64)
+            self.cell = _shaped("cell", self.cell, (n,), "(n,)").astype(np.int32)
+        self.x0 = self.x.copy() if self.x0 is None else _shaped("x0", self.x0, (n, g), "(n, g)")
         for name in ("velocity", "acceleration"):
             if getattr(self, name) is None:
                 setattr(self, name, np.zeros((n, g)))

@@ -1100,3 +1100,57 @@ def test_what_a_careless_user_passes_is_refused_by_name(tmp_path):
         TypeError, match=r"gravity is the magnitude g > 0 .*not the body-force vector"
     ):
         fe_mpm.geostatic_stress(points, 1.0, (0.0, -9.81), 0.5, density=1.0)
+
+
+@pytest.mark.parametrize(
+    "bad, match",
+    [
+        (dict(mass=1.0), r"mass must have one entry per point, shape \(2,\), got shape \(\)"),
+        (
+            dict(volume=[1.0]),
+            r"volume must have one entry per point, shape \(2,\), got shape \(1,\)",
+        ),
+        (dict(stress=np.zeros((2, 2, 2))), r"stress must have shape \(n, 3, 3\), 3 x 3 in 2D too"),
+        (dict(x0=np.zeros((2, 3))), r"x0 must have shape \(n, g\), \(2, 2\) here, got \(2, 3\)"),
+    ],
+)
+def test_material_points_made_by_hand_name_a_field_of_the_wrong_shape(bad, match):
+    """A helper's probes (2026-12-07): numpy's "cannot reshape array of size 1 into
+    shape (2,)", or a point mass taken for every point where there was one point."""
+    spec = dict(x=[[0.1, 0.1], [0.2, 0.2]], volume=[1.0, 1.0], mass=[1.0, 1.0])
+    spec.update(bad)
+    with pytest.raises(ValueError, match="MaterialPoints: " + match):
+        fe_mpm.MaterialPoints(**spec)
+
+
+def test_a_dirichlet_profile_of_the_wrong_shape_names_the_condition_and_the_shape():
+    """Until 2026-12-07: dolfinx's "Interpolation data has the wrong shape/size"."""
+    mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (4, 4))
+    base, top = (lambda x, y=y: np.isclose(x[1], y) for y in (0.0, 1.0))
+    for profile, got in [
+        (lambda x, t: np.column_stack([0 * x[0], -0.01 * t + 0 * x[0]]), r"\(96, 2\)"),
+        (lambda x, t: -0.01 * t, r"\(\)"),
+        (lambda x, t: np.vstack([0 * x[0], -0.01 * t + 0 * x[0], 0 * x[0]]), r"\(3, 96\)"),
+    ]:
+        sim = fe_mpm.Simulation(
+            mesh,
+            fe_mpm.seed(mesh, density=1000.0),
+            fe_mpm.NeoHookean(1e6, 0.3),
+            dirichlet=[fe_mpm.Dirichlet(base), fe_mpm.Dirichlet(top, profile=profile)],
+        )
+        message = r"Dirichlet 1: profile\(x, t\) must return shape \(2, 96\) for 2 components"
+        with pytest.raises(ValueError, match=message + ".*got " + got):
+            sim.run(1.0, 1, progress=False)
+    # One component: a number is a uniform motion of it.
+    sim = fe_mpm.Simulation(
+        mesh,
+        fe_mpm.seed(mesh, density=1000.0),
+        fe_mpm.NeoHookean(1e6, 0.3),
+        dirichlet=[
+            fe_mpm.Dirichlet(base),
+            fe_mpm.Dirichlet(top, profile=lambda x, t: -0.01 * t, component=1),
+        ],
+    )
+    sim.run(1.0, 1, progress=False)
+    settled = sim.points.x0[:, 1] - sim.points.x[:, 1]  # between 0 (base) and 0.01 (top)
+    assert 0.008 < settled.max() < 0.01 and settled.min() > 0.0

@@ -789,6 +789,4 @@ def test_projection_passes_on_a_spinning_body_are_warned_against(passes, spin, w
     said = [str(w.message) for w in caught if "on a body that spins" in str(w.message)]
     assert len(said) == int(warned), said
     if warned:
-        assert said[0].startswith(
-            "Simulation: projection_passes=2 on a body that spins (2.8 rad/s"
-        )
+        assert said[0].startswith("Simulation: projection_passes=2 on a body that spins (2.8 rad/s")
