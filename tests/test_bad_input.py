@@ -1154,3 +1154,17 @@ def test_a_dirichlet_profile_of_the_wrong_shape_names_the_condition_and_the_shap
     sim.run(1.0, 1, progress=False)
     settled = sim.points.x0[:, 1] - sim.points.x[:, 1]  # between 0 (base) and 0.01 (top)
     assert 0.008 < settled.max() < 0.01 and settled.min() > 0.0
+
+
+def test_scene_builders_and_laws_refuse_what_they_dropped_or_overflowed_on():
+    """A helper's probes (2026-12-07): n = 2.5 gave n = 2, a third coordinate of a disk's
+    centre was dropped, Mast's a2 in 1/kPa overflowed math.exp, a string angle met '<'."""
+    with pytest.raises(TypeError, match=r"cook_membrane: n must be an int, got 2.5"):
+        cook_membrane(n=2.5)
+    with pytest.raises(ValueError, match=r"disk: centre must be \(x, y\), a disk is 2D"):
+        fe_mpm.meshes.disk((0.5, 0.5, 7.0), 0.1, 0.05)
+    mast = (1e7, 0.3, 20.0, 7750.0, 3.33e-4, 150.0, 20.0, 300.0)  # a2 in 1/kPa
+    with pytest.raises(ValueError, match=r"a2 \(1/Pa\) times 3 apex_stress \(Pa\) is 999, so"):
+        fe_mpm.ModifiedDruckerPrager(*mast, apex_stress=1e6)
+    with pytest.raises(TypeError, match=r"constant: friction_angle must be a number, got '30'"):
+        fe_mpm.ModifiedDruckerPrager.constant(1e7, 0.3, "30")

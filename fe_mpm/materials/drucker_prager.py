@@ -30,6 +30,7 @@ from typing import Self
 
 import numpy as np
 
+from fe_mpm.checks import check_range
 from fe_mpm.materials.elastic import IsotropicModuli
 from fe_mpm.materials.linearised import LinearisedStress, ReturnMapResult
 from fe_mpm.materials.principal_return import YIELD_TOLERANCE
@@ -401,7 +402,15 @@ class ModifiedDruckerPrager(_ConeLaw):
                 "ModifiedDruckerPrager: a3 must be > 0 when a1 > 0 (φ_F would grow "
                 "without bound), got 0"
             )
-        peak = self.a0 + self._largest_rise() * math.exp(self.a2 * 3.0 * self.apex_stress)
+        # a2 I1 at the apex: past ~700 exp overflows (Mast's a2 is in 1/kPa, ours 1/Pa)
+        exponent = self.a2 * 3.0 * self.apex_stress
+        if exponent > 700.0:
+            raise ValueError(
+                f"ModifiedDruckerPrager: a2 (1/Pa) times 3 apex_stress (Pa) is {exponent:.4g}, "
+                "so exp(a2 I1) overflows at the apex; a2 is in 1/Pa (Mast gives it in 1/kPa: "
+                "divide his by 1000)"
+            )
+        peak = self.a0 + self._largest_rise() * math.exp(exponent)
         if peak >= 90.0:
             raise ValueError(
                 "ModifiedDruckerPrager: a0 + max over λ of (a1 λ − a4) exp(a2 I1 − a3 λ) must "
@@ -435,6 +444,8 @@ class ModifiedDruckerPrager(_ConeLaw):
                 :class:`~fe_mpm.materials.MatsuokaNakai`).
         """
         name = cls.__name__
+        friction_angle = check_range(f"{name}.constant", "friction_angle", friction_angle)
+        cohesion = check_range(f"{name}.constant", "cohesion", cohesion)
         if not 0.0 < friction_angle < 90.0:
             raise ValueError(
                 f"{name}.constant: friction_angle must be in (0, 90) degrees, got {friction_angle}"

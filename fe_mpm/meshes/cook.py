@@ -75,8 +75,8 @@ def cook_membrane(
         :data:`COOK_MARGIN`) and ``facet_tags`` (:data:`COOK_CLAMPED`,
         :data:`COOK_LOADED`, :data:`COOK_FREE`, and in 3D :data:`COOK_FACES`).
     """
-    n = int(check_range("cook_membrane", "n", n, lo=1))
-    margin = int(check_range("cook_membrane", "margin", margin, lo=0))
+    n = check_int("cook_membrane", "n", n, lo=1)  # (2.5 was taken as 2)
+    margin = check_int("cook_membrane", "margin", margin, lo=0)
     if h is None:
         h = 44.0 / n
     check_range("cook_membrane", "h", h, lo=0.0, lo_open=True)

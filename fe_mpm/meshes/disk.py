@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from mpi4py import MPI
 
-from fe_mpm.checks import check_range
+from fe_mpm.checks import check_finite, check_range
 from fe_mpm.meshes.gmsh_session import gmsh_session, to_dolfinx
 
 
@@ -31,6 +31,9 @@ def disk(
     Returns:
         ``dolfinx.io.gmsh.MeshData`` with ``.mesh``.
     """
+    if len(centre) != 2:  # (a third coordinate was dropped without a word)
+        raise ValueError(f"disk: centre must be (x, y), a disk is 2D; got {centre!r}")
+    centre = check_finite("disk", "centre", centre)
     check_range("disk", "radius", radius, lo=0.0, lo_open=True)
     check_range("disk", "h", h, lo=0.0, hi=radius, lo_open=True)
     with gmsh_session("disk") as model:
