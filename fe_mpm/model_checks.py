@@ -436,6 +436,16 @@ def check_facet_tags(mesh: dolfinx.mesh.Mesh, facet_tags) -> None:
             f"{type(facet_tags).__name__}"
         )
     refuse_tags_of_other_entities(mesh, facet_tags, "Simulation: ")
+    own = getattr(mesh.topology, "_cpp_object", None)
+    theirs = getattr(facet_tags, "topology", None)
+    if own is not None and theirs is not None and theirs is not own:
+        # (another grid's tags select its facet numbers here: the Cook grid's clamped
+        # tag held a rectangle's right edge, a helper's probes, 2026-12-07)
+        raise ValueError(
+            "Simulation: facet_tags belong to another grid than mesh; pass the tags that "
+            "came with this grid (e.g. model_to_mesh's facet_tags, or sim.facet_tags of "
+            "a simulation whose sim.mesh this is)"
+        )
 
 
 def pressure_by_parts(

@@ -1168,3 +1168,24 @@ def test_scene_builders_and_laws_refuse_what_they_dropped_or_overflowed_on():
         fe_mpm.ModifiedDruckerPrager(*mast, apex_stress=1e6)
     with pytest.raises(TypeError, match=r"constant: friction_angle must be a number, got '30'"):
         fe_mpm.ModifiedDruckerPrager.constant(1e7, 0.3, "30")
+
+
+def test_facet_tags_of_another_grid_are_refused():
+    """A helper's probes (2026-12-07): the Cook grid's clamped tag, passed with a 4 × 4
+    rectangle, held the rectangle's right edge, and the run converged without a word."""
+    mesh, points = _scene()
+    cook = cook_membrane(n=4)
+    with pytest.raises(ValueError, match=r"facet_tags belong to another grid than mesh"):
+        fe_mpm.Simulation(
+            mesh, points, fe_mpm.NeoHookean(1.0, 0.3), facet_tags=cook.facet_tags,
+            dirichlet=[fe_mpm.Dirichlet(1)],
+        )  # fmt: skip
+    own = fe_mpm.Simulation(
+        cook.mesh, fe_mpm.seed(cook.mesh), fe_mpm.NeoHookean(1.0, 0.3),
+        facet_tags=cook.facet_tags, dirichlet=[fe_mpm.Dirichlet(1)],
+    )  # fmt: skip
+    # A second stage on the first's grid and tags (rebuilt with ghost layers under MPI).
+    fe_mpm.Simulation(
+        own.mesh, fe_mpm.seed(own.mesh), fe_mpm.NeoHookean(1.0, 0.3),
+        facet_tags=own.facet_tags, dirichlet=[fe_mpm.Dirichlet(1)],
+    )  # fmt: skip

@@ -186,9 +186,9 @@ class DruckerPrager(_ConeLaw):
     :class:`~fe_mpm.material_driver.MaterialDriver`, the deviator σ₁ − σ₃ is 3.04
     times Mohr-Coulomb's at φ = ψ = 30° and p = 10 c, 2.62 times at p = 0.1 c, and
     2/√3 = 1.155 times at φ = 0 for either; the axial stress σ₁ itself 2.43, 2.57,
-    1.03 and 1.15 times; measured 2026-12-07). The cone hardens linearly with the equivalent plastic strain α
-    (``hardening`` k: ‖s‖ at I₁ = 0 grows by √(2/3) k α); the cutoff stays at the
-    initial apex I₁ = 3c cot φ.
+    1.03 and 1.15 times; measured 2026-12-07). The cone hardens linearly with the
+    equivalent plastic strain α (``hardening`` k: ‖s‖ at I₁ = 0 grows by √(2/3) k α);
+    the cutoff stays at the initial apex I₁ = 3c cot φ.
 
     Args:
         E: Young's modulus (Pa), > 0.
