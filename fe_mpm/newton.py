@@ -9,6 +9,7 @@ and one residual vector, and takes the step's forms and boundary conditions in
 
 from __future__ import annotations
 
+import re
 import time
 import weakref
 from collections.abc import Callable, Sequence
@@ -174,7 +175,17 @@ class NewtonSolver:
             self._strain_probe.array[self._p_rows] = signs
         if linear_solver == "iterative":
             self._set_up_iterative(displacement or u.function_space, split)
-        self._with_options(self.snes.setFromOptions)
+        try:
+            self._with_options(self.snes.setFromOptions)
+        except PETSc.Error as err:  # (a helper's {"snes_rtol": "1e-8x"} met PETSc's stack)
+            # PETSc's own words are the stack's lines that name no source file.
+            lines = [re.sub(r"^\[\d+\] ", "", line).strip() for line in str(err).splitlines()]
+            said = "; ".join(line for line in lines[1:] if " at /" not in line and line)
+            raise ValueError(
+                f"NewtonSolver: PETSc refused the solver options while setting Newton up "
+                f"({said}); the options: {self._options}. Check Simulation's petsc_options "
+                "(names and values as on PETSc's command line, without the prefix)"
+            ) from err
         #: Where the first iterate to assemble a non-finite residual or Jacobian since
         #: :meth:`clear_nonfinite` did so, in words; "" if none did.
         self.nonfinite = ""

@@ -382,7 +382,12 @@ class Simulation:
                 mesh.comm, points, initial_stress, start_body_force
             )
         for name, h in material.history.items():
-            points.history.setdefault(name, h.initial_values(len(points)))
+            start = h.initial_values(len(points))
+            given = points.history.setdefault(name, start)
+            if given is not start:  # a later stage's, or set by a script: checked
+                parallel.check_together(
+                    mesh.comm, _check_history, name, given, start.shape, kinds=(ValueError,)
+                )
         if MATERIAL in material.history:  # several laws: the label reaches the slots
             points.history[MATERIAL] = points.material.astype(np.float64)
         else:  # one law after a stage of several: no stale labels in the output
@@ -1776,6 +1781,26 @@ def _check_points(comm, check: Callable[[str, str], None]) -> None:
     a script sets it (``points.x``).
     """
     parallel.check_together(comm, check, "Simulation", "points.", kinds=(ValueError, TypeError))
+
+
+def _check_history(name: str, given, shape: tuple) -> None:
+    """Refuse a point field of the law's history of another shape, or not finite.
+
+    NaN in a later stage's ``be`` stopped Newton with a message about its iterates, and
+    ``plastic_strain = inf`` ran on into the output (a helper's probes, 2026-12-07).
+    """
+    given = np.asarray(given)
+    if given.shape != shape:
+        raise ValueError(
+            f"Simulation: points.history[{name!r}] must have shape {shape} for this law, "
+            f"got {given.shape}"
+        )
+    bad = np.flatnonzero(~np.isfinite(given.reshape(shape[0], -1)).all(axis=1))
+    if bad.size:
+        raise ValueError(
+            f"Simulation: points.history[{name!r}] must be finite; point {bad[0]} has "
+            f"{given[bad[0]].ravel().tolist()}"
+        )
 
 
 def spin_rate(comm, points: MaterialPoints) -> float:

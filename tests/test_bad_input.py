@@ -1189,3 +1189,45 @@ def test_facet_tags_of_another_grid_are_refused():
         own.mesh, fe_mpm.seed(own.mesh), fe_mpm.NeoHookean(1.0, 0.3),
         facet_tags=own.facet_tags, dirichlet=[fe_mpm.Dirichlet(1)],
     )  # fmt: skip
+
+
+def test_a_later_stages_history_of_the_wrong_shape_or_not_finite_is_refused():
+    """A helper's probes (2026-12-07): NaN in a staged run's ``be`` stopped Newton with a
+    message about its iterates, ``plastic_strain = inf`` ran on into the output, and a
+    2 × 2 ``be`` in 2D met numpy's reshape."""
+    mesh, _ = _scene()
+    law = fe_mpm.MohrCoulomb(1e6, 0.3, 1e3, 30.0)
+    held = [fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))]
+    points = fe_mpm.seed(mesh, 3, density=1000.0)
+    fe_mpm.Simulation(mesh, points, law, dirichlet=held, body_force=(0, -9.81)).step(1.0)
+    for name, value, match in [
+        ("be", np.nan, r"history\['be'\] must be finite; point 0 has \[nan, nan"),
+        ("plastic_strain", np.inf, r"history\['plastic_strain'\] must be finite; point 0"),
+    ]:
+        kept = points.history[name].copy()
+        points.history[name][0] = value
+        with pytest.raises(ValueError, match="Simulation: points." + match):
+            fe_mpm.Simulation(mesh, points, law, dirichlet=held, body_force=(0, -9.81))
+        points.history[name] = kept
+    points.history["be"] = np.zeros((len(points), 2, 2))
+    with pytest.raises(ValueError, match=r"history\['be'\] must have shape \(24, 3, 3\) for this"):
+        fe_mpm.Simulation(mesh, points, law, dirichlet=held, body_force=(0, -9.81))
+
+
+@pytest.mark.parametrize(
+    "options, said",
+    [
+        ({"snes_rtol": "1e-8x"}, r"Input string 1e-8x has no numeric value"),
+        ({"pc_type": "lu_mumps"}, r"Unable to find requested PC type lu_mumps"),
+    ],
+)
+def test_a_petsc_option_petsc_refuses_is_named_with_petscs_words(options, said):
+    """A helper's probes (2026-12-07): PETSc's error stack, "error code 63" and source
+    paths, without a word of petsc_options."""
+    mesh, points = _scene()
+    sim = fe_mpm.Simulation(
+        mesh, points, fe_mpm.NeoHookean(1e5, 0.3), petsc_options=options,
+        dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))],
+    )  # fmt: skip
+    with pytest.raises(ValueError, match=r"PETSc refused the solver options .*" + said):
+        sim.step(1.0)
