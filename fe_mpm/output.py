@@ -7,7 +7,9 @@ volume, history; :class:`~fe_mpm.io.ParticleWriter`), with point domains
 displacement increment of the step and, for the mixed forms, ``grid_pressure.bp``
 the grid pressure (ADIOS2 files that ParaView opens with its VTX reader). After
 the N-th repartition of the grid under MPI the grid's files are ``grid_N.bp`` and
-``grid_pressure_N.bp``.
+``grid_pressure_N.bp``, and a run restored from a checkpoint in a new process
+continues the series of the run it restores (:meth:`SimulationOutput.continue_earlier_run`),
+its grid's files numbered on the same way.
 """
 
 from __future__ import annotations
@@ -24,7 +26,7 @@ from fe_mpm import parallel
 from fe_mpm._dolfinx import dolfinx
 from fe_mpm.balance import original_indices
 from fe_mpm.formulations import GridFields, collapse
-from fe_mpm.io import DomainWriter, ParticleWriter
+from fe_mpm.io import DomainWriter, ParticleWriter, drop_rows_after
 from fe_mpm.particles import MaterialPoints
 
 #: Every output that may still hold open grid files, in the order they were made.
@@ -74,6 +76,34 @@ def _clear_earlier_run(folder: Path) -> None:
             path.unlink()
 
 
+#: One frame's piece in a ``.pvd`` (as :class:`~fe_mpm.io.ParticleWriter` writes it).
+_DATASET = re.compile(r'<DataSet timestep="([^"]+)" part="\d+" file="([^"]+)"/>')
+#: The grid's files of a run: ``grid.bp`` is number 0.
+_GRID_FILE = re.compile(r"grid(?:_(\d+))?\.bp")
+
+
+def _series(pvd: Path) -> list[tuple[float, list[str]]]:
+    """The frames a ``.pvd`` lists: (time, its pieces' files), in order; none if absent."""
+    frames: list[tuple[float, list[str]]] = []
+    for time, name in _DATASET.findall(pvd.read_text()) if pvd.exists() else []:
+        if frames and frames[-1][0] == float(time):
+            frames[-1][1].append(name)
+        else:
+            frames.append((float(time), [name]))
+    return frames
+
+
+def _has_row(csv: Path, step: int, t: float) -> bool:
+    """Whether the CSV of a run's steps has the row of ``step`` at time ``t`` exactly."""
+    if not csv.exists():
+        return False
+    for row in csv.read_text().splitlines()[1:]:
+        fields = row.split(",", 2)
+        if len(fields) >= 2 and fields[0] == str(step):
+            return float(fields[1]) == t
+    return False
+
+
 def _set_aside(folder: Path, step: int) -> Path | None:
     """Move the run files in ``folder`` into a new subfolder; None if there are none."""
     found = [path for path in folder.glob("*") if _RUN_FILES.fullmatch(path.name)]
@@ -114,6 +144,8 @@ class SimulationOutput:
         self._points = ParticleWriter(self.folder, comm=comm, clear=False)
         self._domains = DomainWriter(self.folder, comm=comm, clear=False) if domains else None
         self.started = False  # whether a frame was written (the files are this run's)
+        #: Whether this run continues the series already in the folder (a restore).
+        self.continues = False
         self._grids = 0  # grids written so far: a repartition starts another
         self._writers: list = []
         _OPEN[:] = [ref for ref in _OPEN if ref() is not None]
@@ -122,7 +154,7 @@ class SimulationOutput:
     def _start(self) -> None:
         """Clear what an earlier run left in the folder and open the grid's files (collective)."""
         comm, error = self.fields.W.mesh.comm, None
-        if comm.rank == 0:
+        if comm.rank == 0 and not self.continues:
             try:
                 _clear_earlier_run(self.folder)
             except OSError as err:
@@ -147,6 +179,60 @@ class SimulationOutput:
                 error = OSError(f"Simulation.restore: cannot keep the earlier output: {err}")
         parallel.raise_together(comm, error)
         return comm.bcast(kept, root=0) if comm.size > 1 else kept
+
+    def continue_earlier_run(self, t: float, step: int) -> bool:
+        """Take up the series of the run a checkpoint came from; whether it did (collective).
+
+        Where the folder holds that run's files (``steps.csv`` has the row of ``step``
+        at ``t``), its frames up to ``t`` stay listed and this run's follow them in
+        the same ``.pvd``, the rows after ``step`` go (this run writes them again) and
+        the grid's files go on as ``grid_N.bp`` after the last one there (a VTX file
+        cannot be appended to). Otherwise nothing changes and False is returned.
+        """
+        comm, error, found = self.fields.W.mesh.comm, None, None
+        writers = [w for w in (self._points, self._domains) if w is not None]
+        if comm.rank == 0:
+            try:
+                found = self._earlier_series(writers, t, step)
+            except (OSError, ValueError) as err:
+                error = OSError(f"Simulation.restore: cannot read the earlier output: {err}")
+        parallel.raise_together(comm, error)
+        found = comm.bcast(found, root=0) if comm.size > 1 else found
+        if found is None:
+            return False
+        series, self._grids = found
+        for writer, frames in zip(writers, series, strict=True):
+            writer._entries = frames
+        frames = series[0]
+        self._written_step = step if frames and frames[-1][0] == t else -1
+        self.continues = True
+        return True
+
+    def _earlier_series(self, writers: list, t: float, step: int) -> tuple | None:
+        """The frames to keep and the next grid file's number, or None (rank 0).
+
+        Drops the later frames' files and the rows after ``step``: they belong to
+        steps the restored run takes again.
+        """
+        if not _has_row(self.folder / "steps.csv", step, t):
+            return None
+        series = [_series(writer.pvd) for writer in writers]
+        kept = [[frame for frame in frames if frame[0] <= t] for frames in series]
+        for frames in kept:
+            if not all((self.folder / name).exists() for _, names in frames for name in names):
+                return None  # a frame's file is gone: not a series to continue
+        for frames, keep in zip(series, kept, strict=True):
+            for _, names in frames[len(keep) :]:
+                for name in names:
+                    (self.folder / name).unlink(missing_ok=True)
+        for name in ("steps.csv", "walls.csv"):
+            drop_rows_after(self.folder / name, step)
+        numbers = [
+            int(match.group(1) or 0)
+            for match in map(_GRID_FILE.fullmatch, (p.name for p in self.folder.glob("grid*")))
+            if match
+        ]
+        return kept, max(numbers, default=-1) + 1
 
     def _open_grid(self) -> None:
         """The grid files of the current grid: grid.bp, or grid_N.bp for the N-th repartition."""

@@ -857,16 +857,20 @@ class Simulation:
         # (with what add_points left due for the next step)
         self._restored_from = str(checkpoint.read(self, path))
         self._grid_is_a_step = False  # the grid's fields are not the restored step's
-        if self.output is not None and not self.output.started:
+        out = self.output
+        if out is not None and not out.started:
             # A new process continuing a run: its output folder holds that run's frames
-            # and rows, which this run's first frame would clear.
-            kept = self.output.set_aside_earlier_run(self.step_number)
-            if kept is not None:
-                warn(
-                    f"Simulation.restore: the output already in {self.output.folder} "
-                    f"(frames, steps.csv) is kept in {kept}; this run writes its own "
-                    f"from step {self.step_number} (t = {self.t:g}) on"
-                )
+            # and rows, which this run's first frame would clear. Its series goes on
+            # where it is that run's; anything else there is kept aside.
+            if not out.continue_earlier_run(self.t, self.step_number):
+                kept = out.set_aside_earlier_run(self.step_number)
+                if kept is not None:
+                    warn(
+                        f"Simulation.restore: the output already in {out.folder} is not "
+                        f"the run of this checkpoint (its steps.csv has no row of step "
+                        f"{self.step_number} at t = {self.t:g}); it is kept in {kept}, "
+                        "and this run writes its own"
+                    )
         if before > self.step_number:
             # This simulation had stepped past the checkpoint: those steps are undone
             # (found 2026-12-06 by a helper: the history read 1, 2, 3, 4, 3, 4), also
@@ -1684,11 +1688,17 @@ class Simulation:
                 # The rows of the steps since the last output only: a long run's files
                 # grow by their new steps, not rewritten whole. Appended rows keep the
                 # columns of the first step written.
-                head = self._csv_head
-                rows, first = ([head, *self._unwritten], 1) if head else (self._unwritten, 0)
-                write_steps(rows, out.folder / "steps.csv", first)
-                if self.walls:
-                    write_wall_forces(rows, out.folder / "walls.csv", first)
+                # A restored run's first rows go on after the rows of the run it
+                # continues (SimulationOutput.continues), under their header.
+                head = self._csv_head or (self._unwritten[0] if out.continues else None)
+                for name, write in [("steps.csv", write_steps), ("walls.csv", write_wall_forces)]:
+                    path = out.folder / name
+                    if name == "walls.csv" and not self.walls:
+                        continue
+                    if head is not None and path.exists():
+                        write([head, *self._unwritten], path, 1)
+                    else:
+                        write(self._unwritten, path, 0)
             if self._unwritten:
                 self._csv_head = self._csv_head or self._unwritten[0]
             self._unwritten = []

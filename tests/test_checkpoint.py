@@ -8,6 +8,7 @@ across rank counts (``tests/test_mpi.py``) it agrees to round-off.
 import json
 import re
 import shutil
+import warnings
 
 import numpy as np
 import pytest
@@ -117,55 +118,67 @@ def test_a_simulation_restored_to_an_earlier_step_forgets_the_steps_after_it(tmp
     assert [float(t) for t in re.findall(r'timestep="([^"]+)"', pvd)] == [0.0, 0.05]
 
 
-def test_a_run_restored_in_a_new_process_keeps_the_earlier_output_and_starts_at_its_step(
+def test_a_run_restored_in_a_new_process_continues_the_series_of_the_run_it_restores(
     tmp_path,
 ):
-    """Found 2026-12-07 by a helper: a job killed after step 6 and restored from its
-    step-4 checkpoint by the same script (a new Simulation, the same output_dir) cleared
-    the frames t = 0 … 0.75 and the CSV rows 1-6 without a word, and its own series
-    began after the restored step. Now the earlier files are moved into a subfolder,
-    with a warning, and the new series begins with the restored state."""
+    """Found 2026-12-07 by a helper: a job killed after step 3 and restored from its
+    step-2 checkpoint by the same script (a new Simulation, the same output_dir)
+    cleared the earlier frames and rows without a word. That afternoon they were moved
+    into a subfolder; since the evening the restored run continues their series: one
+    .pvd and one steps.csv, the steps after the checkpoint written again (bit for bit
+    on one rank), the grid's next file grid_1.bp. An output folder of another run is
+    still set aside, with a warning."""
     out = tmp_path / "out"
     sim = falling_block(output_dir=out, checkpoint_dir=tmp_path / "ck", checkpoint_every=2)
     sim.run(0.075, 3, progress=False)  # "killed" after step 3; checkpoint at step 2
     sim.close()
     shutil.rmtree(tmp_path / "ck" / "step_000003")  # (a killed run writes no last one)
-    earlier = {path.name: path.read_bytes() for path in out.iterdir() if path.is_file()}
+    earlier = {path.name: path.read_bytes() for path in out.glob("particles_*.vtu")}
     again = falling_block(output_dir=out)  # the same script, in a new process
-    with pytest.warns(UserWarning, match=r"before_restore_at_step_2; this run writes its own"):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # nothing to say
         again.restore(tmp_path / "ck")
-    kept = out / "before_restore_at_step_2"
-    for name, content in earlier.items():
-        if not name.endswith(".bp"):  # (ADIOS2's are folders)
-            assert (kept / name).read_bytes() == content, name
-    assert (kept / "grid.bp").is_dir()
-    # Restored and closed at once (a script that only looks): the restored frame.
-    look = falling_block(output_dir=tmp_path / "look")
-    look.restore(tmp_path / "ck")
-    look.close()
-    pvd = (tmp_path / "look" / "particles.pvd").read_text()
-    assert [float(t) for t in re.findall(r'timestep="([^"]+)"', pvd)] == [again.t]
     again.run(0.1, 2, progress=False)
     again.close()
     pvd = (out / "particles.pvd").read_text()
     times = [float(t) for t in re.findall(r'timestep="([^"]+)"', pvd)]
-    assert times == pytest.approx([0.05, 0.075, 0.1], rel=1e-12, abs=0)
+    assert times == pytest.approx([0.0, 0.025, 0.05, 0.075, 0.1], rel=1e-12, abs=1e-15)
     steps = np.genfromtxt(out / "steps.csv", delimiter=",", names=True)
-    assert list(steps["step"]) == [3, 4]
+    assert list(steps["step"]) == [1, 2, 3, 4]
     # The frames' times are the rows' to the bit (ten digits read 0.075 for
     # 0.07500000000000001, a helper's check, 2026-12-07).
     assert times[1:] == list(steps["t"])
-    # A fresh run into the folder clears this run's files and keeps the set-aside ones.
+    frames = sorted(p.name for p in out.glob("particles_*.vtu"))
+    assert frames == [f"particles_{k:06d}.vtu" for k in range(5)]
+    for name, content in earlier.items():  # step 3 taken again: the same to the bit
+        assert (out / name).read_bytes() == content, name
+    assert (out / "grid.bp").is_dir() and (out / "grid_1.bp").is_dir()
+    # Restored and closed at once (a script that only looks), into an empty folder.
+    look = falling_block(output_dir=tmp_path / "look")
+    look.restore(tmp_path / "ck")
+    look.close()
+    pvd = (tmp_path / "look" / "particles.pvd").read_text()
+    assert [float(t) for t in re.findall(r'timestep="([^"]+)"', pvd)] == [look.t]
+    # Another run's output (its step 2 at t = 0.1) is kept aside, not continued.
+    other = tmp_path / "other"
+    earlier_run = falling_block(output_dir=other)
+    earlier_run.run(0.1, 2, progress=False)
+    earlier_run.close()
+    restored = falling_block(output_dir=other)
+    with pytest.warns(UserWarning, match=r"is not the run of this checkpoint .*kept in .*before"):
+        restored.restore(tmp_path / "ck")
+    assert (other / "before_restore_at_step_2" / "steps.csv").is_file()
+    # A fresh run into the folder clears this run's files, the grid's second one too.
     fresh = falling_block(output_dir=out)
     fresh.run(0.025, 1, progress=False)
     fresh.close()
     pvd = (out / "particles.pvd").read_text()
-    assert [float(t) for t in re.findall(r'timestep="([^"]+)"', pvd)] == [0.0, 0.025]
+    assert [float(t) for t in re.findall(r'timestep="([^"]+)"', pvd)] == [0.0, fresh.t]
     assert sorted(p.name for p in out.glob("particles_*.vtu")) == [
         "particles_000000.vtu",
         "particles_000001.vtu",
     ]
-    assert kept.is_dir()
+    assert not (out / "grid_1.bp").exists()
 
 
 def test_a_restored_dynamic_plastic_run_continues_exactly(tmp_path):
