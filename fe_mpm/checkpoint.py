@@ -175,8 +175,10 @@ def write(sim, directory: str | Path) -> Path:
                 "check_supports_again": sim._check_supports_again,
                 "bodies_at_start": sim._tears.bodies_at_start,
                 "tear_warned": sim._tears.warned,
+                "meeting_warned": sim._tears.meeting_warned,
                 # Warnings said once per run (a restored run would say them again).
                 "travel_warned": [bool(v) for v in sim._travel_warned],
+                "staged_at": sim._staged_at,
                 "lost_share_warned": {str(k): v for k, v in sim._conditions_warned.items()},
                 "pieces": pieces,
                 "shared_sha256": _save(partial / "shared.npz", shared),
@@ -292,6 +294,8 @@ def read(sim, path: str | Path) -> Path:
     sim._check_supports_again = bool(state.get("check_supports_again", False))
     sim._tears.bodies_at_start = state.get("bodies_at_start")  # (absent before 2026-12-07)
     sim._tears.warned = bool(state.get("tear_warned", False))
+    sim._tears.meeting_warned = bool(state.get("meeting_warned", False))
+    sim._staged_at = state.get("staged_at")  # (absent before 2026-12-07, evening)
     travel_warned = state.get("travel_warned")  # (absent before 2026-12-07, evening)
     if travel_warned is not None and len(travel_warned) == len(sim._travel_warned):
         sim._travel_warned[:] = travel_warned

@@ -554,6 +554,7 @@ def failure_advice(
     sliding: str = "",
     lost_loads: dict[str, float] | None = None,
     cohesionless_from_rest: bool = False,
+    staged: bool = False,
 ) -> str:
     """What a run's stop message adds about its options (empty if nothing).
 
@@ -576,8 +577,16 @@ def failure_advice(
     unstressed points failed their first step: a helper's Janssen silo (sand between
     frictional walls, gravity ramped) stopped there with the step cut 4096-fold, where
     a geostatic start or c = 100 Pa ran.
+    ``staged``: points were added or removed before the step (a lift of an
+    embankment, an excavation), whose load comes whole at any step length.
     """
     advice = [sliding] if sliding else []
+    if staged:
+        advice.append(
+            "Points were added or removed just before this step (add_points, "
+            "remove_points): their weight, or the support they gave, comes whole in this "
+            "step however short it is cut, so a stage the body cannot carry stops here."
+        )
     if cohesionless_from_rest:
         advice.append(COHESIONLESS_ADVICE)
     for label, share in (lost_loads or {}).items():

@@ -416,6 +416,8 @@ class Simulation:
         self.history: list[StepReport] = []
         self.t, self.step_number = 0.0, 0
         self._restored_from: str | None = None  # the checkpoint restore() read, said in errors
+        #: The step after which points were last added or removed (a stage), or None.
+        self._staged_at: int | None = None
 
         t0 = time.perf_counter()
         self.markers = Markers(mesh.comm)
@@ -728,6 +730,7 @@ class Simulation:
         self.tracking.keep(keep)
         self._check_supports_again = True  # what is left may hang free
         self._tears.bodies_at_start = None  # counted anew at the next step
+        self._staged_at = self.step_number  # the next step's load comes at once
         return removed
 
     def add_points(self, new: MaterialPoints) -> int:
@@ -818,6 +821,7 @@ class Simulation:
             self.tracking.remember(layout.cell)
         self._check_supports_again = True
         self._tears.bodies_at_start = None  # counted anew at the next step
+        self._staged_at = self.step_number  # the next step's load comes at once
         # The new points' accelerations in equilibrium, as a run's first step gives
         # (from 0, a body added in free fall lagged g Δt / 2 behind for ever).
         self._restart_dynamics = self.dynamic
@@ -1079,11 +1083,16 @@ class Simulation:
         loads_rise |= body_force is not None and (
             callable(body_force) or body_force_scale is not None or self.step_number == 0
         )
+        # Points added or removed before this step bring their weight, or take away
+        # their support, whatever its length (a helper's embankment raised in lifts
+        # was told of cell crossing and point domains, which add_points refuses).
+        staged = self._staged_at == self.step_number
         return model_checks.failure_advice(
             self.domains is not None,
             self._ghost_factor,
-            self._domains_would_do and self._points_crossed_cells(),
-            static_plastic=not self.dynamic and self._plastic and loads_rise,
+            self._domains_would_do and self._points_crossed_cells() and self._staged_at is None,
+            static_plastic=not self.dynamic and self._plastic and (loads_rise or staged),
+            staged=staged and not self.dynamic,
             sliding=""
             if self.dynamic
             else model_checks.sliding_on_walls(
@@ -1158,6 +1167,7 @@ class Simulation:
                 layout.occupied,
                 self.t,
                 domains=self.domains is not None,
+                dynamic=self.dynamic,
             )
         if self.dynamics is not None and (k == 1 or self._restart_dynamics):
             # Equilibrium at the step's start: the grid loads there (the boundary

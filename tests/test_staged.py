@@ -190,3 +190,29 @@ def test_separate_bodies_with_nothing_acting_on_them_step():
     sim = fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(E, NU), "u")
     sim.step(1.0)
     assert np.array_equal(points.x, points.x0)
+
+
+def test_a_lift_past_the_limit_load_is_told_so_not_of_cell_crossing():
+    """A helper's embankment raised in lifts on Tresca clay (2026-12-07): the lift that
+    passed (2 + π) c_u stopped with advice about cell crossing and point_domains=True,
+    which add_points refuses, and no word of a limit load. A stage's weight comes whole
+    at any step length: the message now says so, and names the limit load."""
+    depth, g, cu = 4.0, 10.0, 5e3
+    mesh = rectangle_mesh((0.0, 0.0), (8.0, 8.0), (8, 8))
+    clay = fe_mpm.seed(mesh, 3, density=100.0, level_set=lambda x: depth - x[1])
+    base = lambda x: np.isclose(x[1], 0.0)  # noqa: E731
+    sides = lambda x: np.isclose(x[0], 0.0) | np.isclose(x[0], 8.0)  # noqa: E731
+    sim = fe_mpm.Simulation(
+        mesh, clay,
+        [fe_mpm.MohrCoulomb.tresca(2.5e6, 0.49, cu), fe_mpm.MohrCoulomb(1e8, 0.3, 1e12)],
+        "up", dirichlet=[fe_mpm.Dirichlet(base), fe_mpm.Dirichlet(sides, component=0)],
+        body_force=(0.0, -g), initial_stress=fe_mpm.geostatic_stress(clay, depth, g, 1.0),
+        min_step=0.25,
+    )  # fmt: skip
+    fill = [lambda x: x[1] - depth, lambda x: depth + 3.0 - x[1], lambda x: 2.0 - x[0]]
+    sim.add_points(fe_mpm.seed(mesh, 3, density=2000.0, material=1, level_set=fill))
+    with pytest.raises(fe_mpm.ConvergenceError) as stop:  # γ H = 2.3 (2 + π) c_u
+        sim.run(1.0, 1, progress=False)
+    said = str(stop.value)
+    assert "their weight, or the support they gave, comes whole in this step" in said
+    assert "its limit load" in said and "point_domains=True" not in said
