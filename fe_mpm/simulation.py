@@ -17,6 +17,7 @@ the module that owns its state:
 from __future__ import annotations
 
 import os
+import shutil
 import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -237,8 +238,9 @@ class Simulation:
             with point domains in a dynamic run (there the penalty, which acts on
             each step's increment, damps the motion like a dashpot), else 0.
         checkpoint_dir: Folder for a checkpoint every ``checkpoint_every`` steps
-            and at the end of each :meth:`run` (:mod:`fe_mpm.checkpoint`;
-            :meth:`restore` continues from one); None (default): none.
+            and at the end of each :meth:`run` (the latest of these kept;
+            :mod:`fe_mpm.checkpoint`; :meth:`restore` continues from one); None
+            (default): none.
         checkpoint_every: Steps between checkpoints, ≥ 1.
         rebalance_above: Under MPI, repartition the grid by its points
             (:meth:`rebalance`) at set-up and after a step in which the most points
@@ -418,6 +420,7 @@ class Simulation:
         self._restored_from: str | None = None  # the checkpoint restore() read, said in errors
         #: The step after which points were last added or removed (a stage), or None.
         self._staged_at: int | None = None
+        self._off_cadence: Path | None = None  # the last run-end checkpoint (one is kept)
 
         t0 = time.perf_counter()
         self.markers = Markers(mesh.comm)
@@ -1052,9 +1055,21 @@ class Simulation:
         self._write_output(force=True)
         if reports and self.checkpoint_dir and self.step_number % self.checkpoint_every:
             # A run shorter than checkpoint_every would leave nothing to restore
-            # (a new user's half run, 2026-12-07).
-            self.checkpoint()
+            # (a new user's half run, 2026-12-07). Only the latest such one is kept:
+            # a script's loop of short runs does not fill the disk.
+            self._regular_checkpoint(off_cadence=True)
         return reports
+
+    def _regular_checkpoint(self, off_cadence: bool = False) -> None:
+        """A checkpoint into ``checkpoint_dir``, dropping the last off-cadence one (collective).
+
+        ``off_cadence``: written at a run's end, between the ``checkpoint_every``-th
+        steps; it goes once a later checkpoint is written.
+        """
+        path = self.checkpoint()
+        earlier, self._off_cadence = self._off_cadence, path if off_cadence else None
+        if earlier is not None and earlier != path and parallel.on_rank_zero(self.mesh.comm):
+            shutil.rmtree(earlier, ignore_errors=True)
 
     def _look_for_a_tear_now(self) -> None:
         """Count the bodies where the points lie now, after a run's last step (collective).
@@ -1139,7 +1154,7 @@ class Simulation:
             report = self._step_points(t_new, rebin)
         self.points.simulated_to = self.t
         if self.checkpoint_dir and self.step_number % self.checkpoint_every == 0:
-            self.checkpoint()
+            self._regular_checkpoint()
         return report
 
     def _step_points(self, t_new: float, rebin: bool = True) -> StepReport:

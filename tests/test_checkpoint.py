@@ -71,12 +71,14 @@ def test_a_script_that_steps_itself_gets_the_runs_frames_and_checkpoints(tmp_pat
 
 def test_a_run_shorter_than_checkpoint_every_ends_with_a_checkpoint(tmp_path):
     """A new user's half run of 4 steps with the default checkpoint_every=10 left no
-    checkpoint and said nothing (2026-12-07). Each run now ends with one; restored, the
-    run knows its time, and a second run to the same end says where it stands."""
+    checkpoint and said nothing (2026-12-07). Each run now ends with one, the latest
+    such kept (a loop of short runs must not fill the disk); restored, the run knows
+    its time, and a second run to the same end says where it stands."""
     first = falling_block(checkpoint_dir=tmp_path)
     first.run(0.1, 4, progress=False)
-    first.run(0.15, 2, progress=False)
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["step_000004", "step_000006"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["step_000004"]
+    first.run(0.15, 2, progress=False)  # only the latest of these is kept
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["step_000006"]
     again = falling_block()
     again.restore(tmp_path)
     assert (again.t, again.step_number, again.history) == (0.15, 6, [])
@@ -85,6 +87,11 @@ def test_a_run_shorter_than_checkpoint_every_ends_with_a_checkpoint(tmp_path):
     restored = r"t = 0\.15 \(step 6, restored from .*step_000006\): give a later end time"
     with pytest.raises(ValueError, match=restored):
         again.run(0.15, 2, progress=False)
+    # A regular checkpoint (every 5 steps here) replaces the run-end one too.
+    loop = falling_block(checkpoint_dir=tmp_path / "loop", checkpoint_every=5)
+    for k in range(1, 8):
+        loop.run(0.025 * k, 1, progress=False)
+    assert sorted(p.name for p in (tmp_path / "loop").iterdir()) == ["step_000005", "step_000007"]
 
 
 def test_a_simulation_restored_to_an_earlier_step_forgets_the_steps_after_it(tmp_path):
