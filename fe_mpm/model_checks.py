@@ -311,7 +311,11 @@ OVERFULL = 1.5
 
 
 def warn_overfull_nodes(
-    mesh: dolfinx.mesh.Mesh, points: MaterialPoints, bary: np.ndarray, cell_volumes: np.ndarray
+    mesh: dolfinx.mesh.Mesh,
+    points: MaterialPoints,
+    bary: np.ndarray,
+    cell_volumes: np.ndarray,
+    added_cells: np.ndarray | None = None,
 ) -> None:
     """Warn (collective) where the points around a node hold more volume than its cells.
 
@@ -321,15 +325,20 @@ def warn_overfull_nodes(
     material in their common cells, silently (2026-12-07). Compared at each node I:
     ``Σ_p N_I(x_p) V_p`` against ``Σ_c N_I |c|/(d + 1)`` over the cells around it.
 
-    Points that an earlier simulation stepped are not checked.
+    Points that an earlier simulation stepped are not checked, except at the nodes of
+    ``added_cells``, the cells of points just added to a run
+    (:meth:`~fe_mpm.Simulation.add_points`: a helper's seeding added over the body's
+    own cells doubled its weight without a word, 2026-12-07).
 
     Args:
         mesh: The grid (affine simplices: its geometry's nodes are its vertices).
         points: The tracked material points, in this rank's owned cells.
         bary: Their barycentric coordinates in their cells (n, d + 1).
         cell_volumes: The local cells' areas (volumes) in m² (m³), owned first.
+        added_cells: This rank's cells of added points (local indices), or None.
     """
-    if parallel.any_rank(mesh.comm, points.simulated_to is not None):
+    stepped = parallel.any_rank(mesh.comm, points.simulated_to is not None)
+    if stepped and added_cells is None:
         # Stepped by an earlier simulation: a flow crowds its points (a dam break's
         # along its wall filled a node 1.91 times), which is no overlap.
         return
@@ -346,7 +355,12 @@ def warn_overfull_nodes(
         minlength=n,
     )
     held, room = summed_over_ranks(index_map, held), summed_over_ranks(index_map, room)
-    fill = np.divide(held, room, out=np.zeros(n), where=room > 0)[: index_map.size_local]
+    fill = np.divide(held, room, out=np.zeros(n), where=room > 0)
+    if added_cells is not None:  # only where the added points lie
+        near = np.zeros(n)
+        near[nodes[added_cells[added_cells >= 0]].ravel()] = 1.0
+        fill[summed_over_ranks(index_map, near) == 0.0] = 0.0
+    fill = fill[: index_map.size_local]
     count = parallel.total(mesh.comm, int(np.count_nonzero(fill > OVERFULL)))
     if count == 0:
         return

@@ -822,6 +822,14 @@ class Simulation:
         layout = self._track(self.step_number, self.t)
         if self.step_number > 0:  # a retry may hold every point where it is now
             self.tracking.remember(layout.cell)
+        pts = self.points
+        model_checks.warn_overfull_nodes(
+            self.mesh,
+            pts,
+            self.tracker.barycentric(pts.x, pts.cell),
+            self.tracker.volumes,
+            added_cells=self.tracker.locate(new.x),
+        )
         self._check_supports_again = True
         self._tears.bodies_at_start = None  # counted anew at the next step
         self._staged_at = self.step_number  # the next step's load comes at once

@@ -5,6 +5,8 @@ to Newton's tolerance, whatever was taken away or put on before the step (measur
 1e-12 relative; bound 1e-9), and a marker moves with the point it started on.
 """
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -216,3 +218,26 @@ def test_a_lift_past_the_limit_load_is_told_so_not_of_cell_crossing():
     said = str(stop.value)
     assert "their weight, or the support they gave, comes whole in this step" in said
     assert "its limit load" in said and "point_domains=True" not in said
+
+
+def test_points_added_over_the_body_are_warned_and_a_layer_on_it_is_not():
+    """A helper's probes (2026-12-07): a seeding added over the body's own cells after
+    a step doubled its weight (the base carried 19620 N for 9810) without a word; the
+    set-up's overlap warning was not asked again. A layer placed on the body is not
+    told."""
+    mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.5), (4, 6))
+    below = lambda x: 1.0 - x[1]  # noqa: E731
+    body = fe_mpm.seed(mesh, 3, density=1000.0, level_set=below)
+    sim = fe_mpm.Simulation(
+        mesh, body, fe_mpm.NeoHookean(1e6, 0.3),
+        dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))], body_force=(0, -9.81),
+    )  # fmt: skip
+    sim.run(1.0, 1, progress=False)
+    layer = fe_mpm.seed(
+        mesh, 3, density=1000.0, level_set=[lambda x: x[1] - 1.0, lambda x: 1.25 - x[1]]
+    )
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        sim.add_points(layer)
+    with pytest.warns(UserWarning, match=r"points hold more than 1.5 times the volume"):
+        sim.add_points(fe_mpm.seed(mesh, 1, density=1000.0, level_set=below))
