@@ -50,6 +50,7 @@ import numpy as np
 
 import fe_mpm
 from fe_mpm import meshes, parallel
+from fe_mpm.cli import positive
 from fe_mpm.plotting import pyplot
 
 
@@ -57,13 +58,13 @@ def parse_args(argv=None):
     """The command-line contract of the demo."""
     p = argparse.ArgumentParser(description="Cylindrical cavity expansion in Tresca clay")
     p.add_argument("--formulation", choices=("up", "u-nbva", "up-p2p1"), default="up")
-    p.add_argument("--radius", type=float, default=0.05, help="cavity radius a₀ (m)")
-    p.add_argument("--outer", type=float, default=50.0, help="body's radius b over a₀")
-    p.add_argument("--strength", type=float, default=20e3, help="undrained strength c_u (Pa)")
-    p.add_argument("--stiffness", type=float, default=100.0, help="G / c_u")
+    p.add_argument("--radius", type=positive(), default=0.05, help="cavity radius a₀ (m)")
+    p.add_argument("--outer", type=positive(), default=50.0, help="body's radius b over a₀")
+    p.add_argument("--strength", type=positive(), default=20e3, help="undrained strength c_u (Pa)")
+    p.add_argument("--stiffness", type=positive(), default=100.0, help="G / c_u")
     p.add_argument("--nu", type=float, default=0.4999, help="Poisson's ratio")
-    p.add_argument("--expansion", type=float, default=1.5, help="a / a₀ the load aims at")
-    p.add_argument("--h", type=float, default=0.05, help="cell size at the cavity over a₀")
+    p.add_argument("--expansion", type=positive(), default=1.5, help="a / a₀ the load aims at")
+    p.add_argument("--h", type=positive(), default=0.05, help="cell size at the cavity over a₀")
     p.add_argument("--steps", type=int, default=20, help="load steps")
     p.add_argument(
         "--load",

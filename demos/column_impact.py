@@ -49,6 +49,7 @@ from pathlib import Path
 import fe_mpm
 from fe_mpm import parallel
 from fe_mpm.meshes import cell_centroids
+from fe_mpm.cli import positive
 from fe_mpm.plotting import pyplot
 from fe_mpm.walls import write_wall_forces
 import dolfinx
@@ -67,13 +68,13 @@ STEADY_RANGE = (0.7, 1.3)
 def parse_args(argv=None):
     """The command-line contract of the demo."""
     p = argparse.ArgumentParser(description="Soil surge hitting a column (Mast 2013, §7.4)")
-    p.add_argument("--width", type=float, default=6.0, help="column width w_c (m); 6 is a wall")
-    p.add_argument("--height", type=float, default=2.0, help="the block's height H_b (m)")
+    p.add_argument("--width", type=positive(), default=6.0, help="column width w_c (m); 6: wall")
+    p.add_argument("--height", type=positive(), default=2.0, help="the block's height H_b (m)")
     p.add_argument("--phi", type=float, default=30.0, help="friction angle φ_F (degrees)")
-    p.add_argument("--length", type=float, default=8.0, help="the block's length L_b (m)")
-    p.add_argument("--h", type=float, default=0.5, help="cell size (m): cubes of 6 tetrahedra")
-    p.add_argument("--dt", type=float, default=0.05, help="time step (s)")
-    p.add_argument("--t-end", type=float, default=3.5, help="end time (s); Mast's t_f = 3.5 s")
+    p.add_argument("--length", type=positive(), default=8.0, help="the block's length L_b (m)")
+    p.add_argument("--h", type=positive(), default=0.5, help="cell size (m): cubes of 6 tetrahedra")
+    p.add_argument("--dt", type=positive(), default=0.05, help="time step (s)")
+    p.add_argument("--t-end", type=positive(), default=3.5, help="end time (s); Mast's t_f = 3.5 s")
     p.add_argument(
         "--bossak-alpha",
         type=float,

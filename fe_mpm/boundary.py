@@ -466,6 +466,12 @@ class PointDirichlet:
                     f"such as (1,), got {reprlib.repr(components)}"
                 )
             components = tuple(check_int(owner, "components", c, lo=0, hi=2) for c in components)
+            if not components or len(set(components)) != len(components):
+                # (none held nothing; (1, 1) doubled the penalty: a helper's probes)
+                raise ValueError(
+                    f"{owner}: components must name each held component once, e.g. (1,) "
+                    f"or (0, 1), got {components}; None holds every component"
+                )
         reach = check_finite(owner, "reach", self.reach, what="point")
         if reach.ndim > 1 or reach.size not in (1, x.shape[0]) or np.any(reach < 0):
             raise ValueError(

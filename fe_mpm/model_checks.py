@@ -99,6 +99,12 @@ def check_output_dir(output_dir) -> None:
             "Simulation: output_dir must be a folder's path (str or pathlib.Path) or None, "
             f"got {type(output_dir).__name__}"
         )
+    if isinstance(output_dir, str) and not output_dir.strip():
+        # (argparse's "off" wrote the run into the working folder, over a user's
+        # steps.csv: a helper's probes, 2026-12-07)
+        raise ValueError(
+            "Simulation: output_dir is an empty string; give a folder, or None for no output"
+        )
 
 
 def check_rebalance(rebalance_above: float | None) -> float | None:

@@ -567,6 +567,12 @@ def merge(*sets: MaterialPoints) -> MaterialPoints:
     """
     if not sets:
         raise ValueError("merge: no point sets given")
+    for k, s in enumerate(sets):
+        if not isinstance(s, MaterialPoints):
+            raise TypeError(
+                f"merge: sets[{k}] must be MaterialPoints, got {type(s).__name__}; pass the "
+                "sets as separate arguments, merge(a, b), or unpack a list, merge(*sets)"
+            )
     given = {s.density_given for s in sets}
     if len(given) > 1:
         raise ValueError(

@@ -665,6 +665,14 @@ class Simulation:
         cell = self.tracker.locate(xm[None, :])[0]
         if not parallel.any_rank(self.mesh.comm, cell >= 0):
             raise PointsOutsideError(f"marker {name!r} at {xm} is outside the grid")
+        if self.output is not None and self.step_number > 0:
+            # steps.csv keeps the columns of its first row (a helper's late marker,
+            # 2026-12-07, was in the history but never in the file).
+            warn(
+                f"Simulation.add_marker: marker {name!r} is added after steps.csv was "
+                "started, whose columns stay those of its first row: read it from "
+                "sim.history or sim.marker(), or add markers before the first step"
+            )
         distance = self.markers.add(name, xm, self.points.x)
         # A mistyped coordinate inside the grid would follow a far host's motion extended
         # over the distance, without a word (a helper's cantilever tip, 2026-12-07).

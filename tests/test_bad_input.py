@@ -1231,3 +1231,27 @@ def test_a_petsc_option_petsc_refuses_is_named_with_petscs_words(options, said):
     )  # fmt: skip
     with pytest.raises(ValueError, match=r"PETSc refused the solver options .*" + said):
         sim.step(1.0)
+
+
+def test_second_round_of_careless_input_is_refused_or_told(tmp_path):
+    """A helper's second round of probes (2026-12-07)."""
+    mesh, points = _scene()
+    law = fe_mpm.NeoHookean(1e6, 0.3)
+    held = [fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))]
+    # An empty output_dir wrote the run into the working folder, over its steps.csv.
+    with pytest.raises(ValueError, match=r"output_dir is an empty string; give a folder, or None"):
+        fe_mpm.Simulation(mesh, points, law, dirichlet=held, output_dir="")
+    with pytest.raises(TypeError, match=r"merge: sets\[0\] must be MaterialPoints, got list"):
+        fe_mpm.merge([points, points])
+    top = np.array([[0.5, 1.0]])
+    for components in [(), (1, 1)]:  # held nothing; doubled the penalty
+        with pytest.raises(ValueError, match=r"components must name each held component once"):
+            fe_mpm.PointDirichlet("top", top, np.ones(1), lambda t: (0.0, 0.0), 1e6, components)
+    with pytest.raises(ValueError, match=r"disk: centre must be \(x, y\)"):
+        fe_mpm.meshes.disk(0.0, 1.0, 0.5)
+    # A marker added once steps.csv has its columns is told it will not be written there.
+    sim = fe_mpm.Simulation(mesh, points, law, dirichlet=held, output_dir=tmp_path)
+    sim.add_marker("early", (0.5, 0.5))
+    sim.run(1.0, 1, progress=False)
+    with pytest.warns(UserWarning, match=r"marker 'late' is added after steps.csv was started"):
+        sim.add_marker("late", (0.5, 0.75))

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from mpi4py import MPI
 
+import numpy as np
+
 from fe_mpm.checks import check_finite, check_range
 from fe_mpm.meshes.gmsh_session import gmsh_session, to_dolfinx
 
@@ -31,7 +33,7 @@ def disk(
     Returns:
         ``dolfinx.io.gmsh.MeshData`` with ``.mesh``.
     """
-    if len(centre) != 2:  # (a third coordinate was dropped without a word)
+    if np.ndim(centre) != 1 or len(centre) != 2:  # (a third coordinate was dropped)
         raise ValueError(f"disk: centre must be (x, y), a disk is 2D; got {centre!r}")
     centre = check_finite("disk", "centre", centre)
     check_range("disk", "radius", radius, lo=0.0, lo_open=True)
