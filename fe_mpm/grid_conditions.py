@@ -298,12 +298,26 @@ class GridConditions:
                     )
                 return moved
 
-            value.interpolate(motion)
-            if not np.all(np.isfinite(value.x.array)):
-                raise ValueError(
-                    f"Dirichlet: profile(x, t) is not finite everywhere "
-                    f"at t = {t_from:g} or {t_to:g}"
-                )
+            # Checked on every rank together: raised on one alone, the others waited
+            # for ever (a helper's profile was NaN at one rank's corner node), and
+            # only at the condition's own entries, which are all it sets.
+            error = None
+            try:
+                value.interpolate(motion)
+            except ValueError as err:
+                error = err
+            if error is None:
+                held = self._value_dofs[k].ravel()
+                bad = np.flatnonzero(~np.isfinite(value.x.array[held]))
+                if bad.size:
+                    node = held[bad[0]] // value.function_space.dofmap.bs
+                    x = value.function_space.tabulate_dof_coordinates()[node]
+                    error = ValueError(
+                        f"Dirichlet {k}: profile(x, t) is not finite at x = "
+                        f"{[round(float(v), 9) for v in x[: self.mesh.geometry.dim]]} "
+                        f"(t = {t_from:g} or {t_to:g})"
+                    )
+            parallel.raise_together(self.mesh.comm, error)
         else:
             increment = spec.at(t_to) - spec.at(t_from)
             _check_dirichlet_size(k, spec, increment.size, self.mesh.geometry.dim)

@@ -157,9 +157,12 @@ class PointTracking:
             count = int(parallel.total(comm, int(lost.size)))
             first = None
             if lost.size:
+                # Named by where it started: an index is the rank's own (a helper's
+                # run named point 46, 2 and 1 on 1, 2 and 3 ranks).
                 first = (
                     f"{count} material point(s) would leave the grid in step {step} "
-                    f"(t = {t:g}); first: point {lost[0]} at x = {moved[lost[0]]}"
+                    f"(t = {t:g}); first: the point that started at x0 = "
+                    f"{points.x0[lost[0]]}, bound for x = {moved[lost[0]]}"
                 )
             if comm.size > 1:  # the lowest rank that has one gives the example
                 first = parallel.first_given(comm, first)

@@ -1255,3 +1255,26 @@ def test_second_round_of_careless_input_is_refused_or_told(tmp_path):
     sim.run(1.0, 1, progress=False)
     with pytest.warns(UserWarning, match=r"marker 'late' is added after steps.csv was started"):
         sim.add_marker("late", (0.5, 0.75))
+
+
+def test_a_dirichlet_profile_is_checked_where_it_holds_and_named_where_it_fails():
+    """A helper's profile finite along its held top edge but NaN below it was refused
+    (2026-12-07), and on two ranks a profile NaN at one rank's corner node stopped that
+    rank alone while the other waited for ever: it is now checked at the condition's
+    own nodes, on every rank together, and the message names the place."""
+    mesh = rectangle_mesh((0.0, 0.0), (2.0, 1.0), (8, 4))
+    top = lambda x: np.isclose(x[1], 1.0)  # noqa: E731
+
+    def run(profile):
+        sim = fe_mpm.Simulation(
+            mesh, fe_mpm.seed(mesh, density=1000.0), fe_mpm.NeoHookean(1e6, 0.3),
+            dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0)),
+                       fe_mpm.Dirichlet(top, component=1, profile=profile)],
+        )  # fmt: skip
+        return sim.run(0.5, 1, progress=False)
+
+    with np.errstate(invalid="ignore"):
+        run(lambda x, t: -0.01 * t * np.sqrt(x[1] - 0.99))  # NaN off the edge only
+        message = r"Dirichlet 1: profile\(x, t\) is not finite at x = \[2.0, 1.0\]"
+        with pytest.raises(ValueError, match=message):
+            run(lambda x, t: -0.01 * t * np.sqrt(1.9 - x[0]))  # NaN at the top right
