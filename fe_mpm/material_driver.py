@@ -162,8 +162,10 @@ def mixed_control(
         free: The entries (i, j) to solve for.
         held: Stress component (a, b) -> its value (Pa); as many as ``free``.
         tolerance: Stop when every held component is met to this fraction of the
-            largest held stress (or of 1 Pa if they are all zero); Mast used 1e-6.
-            The returns' own round-off is near 1e-10 of the stress.
+            stresses in play: the largest held stress or stress component, or 1 Pa
+            (held stresses of zero met a floor of 1e-9 Pa that round-off of 1e6 Pa
+            stresses missed, 2026-12-07); Mast used 1e-6. The returns' own round-off
+            is near 1e-10 of the stress.
         measure: ``"cauchy"`` (σ, Mast's) or ``"kirchhoff"`` (τ = Jσ) for the held stresses.
         max_iterations: Newton iterations before giving up.
 
@@ -193,6 +195,7 @@ def mixed_control(
         sigma = cauchy_stress(result["tau"], F[None])[0]
         held_stress = sigma if measure == "cauchy" else result["tau"][0]
         residual = np.array([held_stress[a, b] for a, b in held]) - targets
+        scale = max(scale, float(np.abs(held_stress).max(initial=0.0)))
         if not np.all(np.isfinite(residual)):
             raise RuntimeError(
                 "mixed_control: the law returned a non-finite stress at F = "

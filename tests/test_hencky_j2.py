@@ -21,7 +21,7 @@ from law_checks import assert_step_is_consistent, finite_difference_error
 from test_taylor import _simulation
 
 import fe_mpm
-from fe_mpm.material_driver import MaterialDriver
+from fe_mpm.material_driver import MaterialDriver, mixed_control
 
 SQRT_2_3 = math.sqrt(2.0 / 3.0)
 
@@ -159,3 +159,22 @@ def test_a_non_finite_iterate_gives_nan_at_its_point_and_no_exception():
     assert np.isfinite(result.tau[[0, 2]]).all()
     alone = j2.return_map(dF[[0, 2]], {k: v[[0, 2]] for k, v in history.items()})
     np.testing.assert_array_equal(result.tau[[0, 2]], alone.tau)
+
+
+def test_mixed_control_meets_held_stresses_of_zero_at_its_default_tolerance():
+    """A helper's uniaxial-stress compression (2026-12-07): with σ_xx = σ_yy = 0 held,
+    the default tolerance was an absolute 1e-9 Pa, which the round-off of stresses of
+    1e6 Pa missed (1.65e-8 Pa), so the first step failed. It now scales with the
+    stresses in play, and the path meets the log-strain closed form of the law."""
+    E, sigma_y, H = 1e8, 1e6, 1e7
+    driver = MaterialDriver(fe_mpm.HenckyJ2(E, 0.3, sigma_y, hardening=H), n=1, gdim=3)
+    F = np.eye(3)
+    for stretch in np.linspace(0.975, 0.75, 10):
+        F = F.copy()
+        F[2, 2] = stretch
+        held = {(0, 0): 0.0, (1, 1): 0.0}
+        F, result = mixed_control(driver, F, [(0, 0), (1, 1)], held, measure="kirchhoff")
+        driver.step(F[None])
+    strain = -np.log(0.75)
+    exact = sigma_y + H * (strain - sigma_y / E) * E / (E + H)
+    assert -result["tau"][2, 2] == pytest.approx(exact, rel=1e-9)
