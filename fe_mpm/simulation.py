@@ -1857,7 +1857,7 @@ def _check_history(name: str, given, shape: tuple) -> None:
 def spin_rate(comm, points: MaterialPoints) -> float:
     """The points' rate of rigid spin about their mass centre (rad/s), 0 if negligible.
 
-    ω = |L| / I with L = Σ m (x − x̄) × v and I = Σ m |x − x̄|², over every rank; 0
+    ω = ‖L‖ / I with L = Σ m (x − x̄) × v and I = Σ m ‖x − x̄‖², over every rank; 0
     where the spin's speed at the radius of gyration, ω √(I/M), is under a tenth of
     the fastest point's speed relative to the mass centre's (a vibrating body, a
     flow), or where nothing moves.
