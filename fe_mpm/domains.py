@@ -62,7 +62,7 @@ import numpy as np
 from fe_mpm import parallel
 from fe_mpm.clipping import piece_rule, simplex_volumes
 from fe_mpm.domain_flips import flip_distorted
-from fe_mpm.errors import ConvergenceError, PointsOutsideError
+from fe_mpm.errors import ConvergenceError, PointsOutsideError, StepLeavesGridError
 from fe_mpm.markers import Markers
 from fe_mpm.materials.route import compiled_module
 from fe_mpm.materials.spectral import embedded_3d
@@ -713,8 +713,8 @@ class PointDomains:
                 guess = _heaviest_cells(self._pieces, n)  # every domain of the step has pieces
                 self._next = self._cut(moved, tracker, guess, may_leave=self.drop_leaving)
                 error = hosts_leaving(self.marker_hosts, self._next.left, step, t)
-            except PointsOutsideError as err:
-                error = PointsOutsideError(f"{err} (step {step}, t = {t:g})")
+            except PointsOutsideError as err:  # refused before anything moved
+                error = StepLeavesGridError(f"{err} (step {step}, t = {t:g}). Nothing was updated.")
             except ConvergenceError as err:
                 error = ConvergenceError(f"{err} in step {step} (t = {t:g}). Nothing was updated.")
         parallel.raise_together(tracker.mesh.comm, self._beyond_ghosts(tracker) or error)

@@ -304,7 +304,7 @@ class GridConditions:
             error = None
             try:
                 value.interpolate(motion)
-            except ValueError as err:
+            except Exception as err:  # a user's function may raise anything, on one rank
                 error = err
             if error is None:
                 held = self._value_dofs[k].ravel()

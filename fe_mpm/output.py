@@ -104,6 +104,12 @@ def _has_row(csv: Path, step: int, t: float) -> bool:
     return False
 
 
+def _rows_after(csv: Path, step: int) -> bool:
+    """Whether the CSV of a run's steps has rows after ``step``."""
+    rows = csv.read_text().splitlines()[1:]
+    return any(int(row.split(",", 1)[0]) > step for row in rows if row)
+
+
 def _set_aside(folder: Path, step: int) -> Path | None:
     """Move the run files in ``folder`` into a new subfolder; None if there are none."""
     found = [path for path in folder.glob("*") if _RUN_FILES.fullmatch(path.name)]
@@ -180,14 +186,18 @@ class SimulationOutput:
         parallel.raise_together(comm, error)
         return comm.bcast(kept, root=0) if comm.size > 1 else kept
 
-    def continue_earlier_run(self, t: float, step: int) -> bool:
-        """Take up the series of the run a checkpoint came from; whether it did (collective).
+    def continue_earlier_run(self, t: float, step: int) -> tuple[bool, Path | None]:
+        """Take up the series of the run a checkpoint came from (collective).
 
         Where the folder holds that run's files (``steps.csv`` has the row of ``step``
-        at ``t``), its frames up to ``t`` stay listed and this run's follow them in
-        the same ``.pvd``, the rows after ``step`` go (this run writes them again) and
-        the grid's files go on as ``grid_N.bp`` after the last one there (a VTX file
-        cannot be appended to). Otherwise nothing changes and False is returned.
+        at ``t``: a checkpoint writes the rows of its steps), its frames up to ``t``
+        stay listed and this run's follow them in the same ``.pvd``, and the grid's
+        files go on as ``grid_N.bp`` after the last one there (a VTX file cannot be
+        appended to). What that run wrote after ``step`` (frames, rows) goes into
+        ``undone_after_step_N/``, with copies of its ``.pvd`` and CSV files whole:
+        this run takes those steps again, and a branch from an earlier checkpoint
+        loses nothing. Returns whether it continues, and that folder (None if nothing
+        came after). Otherwise nothing changes: ``(False, None)``.
         """
         comm, error, found = self.fields.W.mesh.comm, None, None
         writers = [w for w in (self._points, self._domains) if w is not None]
@@ -199,20 +209,22 @@ class SimulationOutput:
         parallel.raise_together(comm, error)
         found = comm.bcast(found, root=0) if comm.size > 1 else found
         if found is None:
-            return False
-        series, self._grids = found
+            return False, None
+        series, self._grids, undone = found
         for writer, frames in zip(writers, series, strict=True):
             writer._entries = frames
+            if comm.rank == 0:
+                writer._write_pvd()  # the frames kept, now: a run that stops lists no others
         frames = series[0]
         self._written_step = step if frames and frames[-1][0] == t else -1
         self.continues = True
-        return True
+        self._start()  # the grid's next files; nothing is cleared
+        return True, None if undone is None else Path(undone)
 
     def _earlier_series(self, writers: list, t: float, step: int) -> tuple | None:
-        """The frames to keep and the next grid file's number, or None (rank 0).
+        """The frames to keep, the next grid file's number and the undone folder (rank 0).
 
-        Drops the later frames' files and the rows after ``step``: they belong to
-        steps the restored run takes again.
+        None where the folder is not the checkpoint's run.
         """
         if not _has_row(self.folder / "steps.csv", step, t):
             return None
@@ -221,10 +233,29 @@ class SimulationOutput:
         for frames in kept:
             if not all((self.folder / name).exists() for _, names in frames for name in names):
                 return None  # a frame's file is gone: not a series to continue
-        for frames, keep in zip(series, kept, strict=True):
-            for _, names in frames[len(keep) :]:
-                for name in names:
-                    (self.folder / name).unlink(missing_ok=True)
+        later = [name for frames, keep in zip(series, kept, strict=True)
+                 for _, names in frames[len(keep):] for name in names]  # fmt: skip
+        rows = [
+            name
+            for name in ("steps.csv", "walls.csv")
+            if (self.folder / name).exists() and _rows_after(self.folder / name, step)
+        ]
+        undone = None
+        if later or rows:
+            undone = self.folder / f"undone_after_step_{step}"
+            k = 1
+            while undone.exists():
+                k += 1
+                undone = self.folder / f"undone_after_step_{step}_{k}"
+            undone.mkdir()
+            for writer in writers:
+                if writer.pvd.exists():
+                    shutil.copy2(writer.pvd, undone / writer.pvd.name)
+            for name in rows:
+                shutil.copy2(self.folder / name, undone / name)
+            for name in later:
+                if (self.folder / name).exists():
+                    (self.folder / name).rename(undone / name)
         for name in ("steps.csv", "walls.csv"):
             drop_rows_after(self.folder / name, step)
         numbers = [
@@ -232,7 +263,7 @@ class SimulationOutput:
             for match in map(_GRID_FILE.fullmatch, (p.name for p in self.folder.glob("grid*")))
             if match
         ]
-        return kept, max(numbers, default=-1) + 1
+        return kept, max(numbers, default=-1) + 1, None if undone is None else str(undone)
 
     def _open_grid(self) -> None:
         """The grid files of the current grid: grid.bp, or grid_N.bp for the N-th repartition."""

@@ -177,22 +177,7 @@ def write_steps(history: list[StepReport], path: str | Path, first: int = 0) -> 
     path = Path(path)
     if not history:
         return path
-    head = history[0]
-    axes = "xyz"
-    fixed = [
-        "step",
-        "t",
-        "dt",
-        "newton_iterations",
-        "relative_residual",
-        "force_scale",
-        "occupied_cells",
-        "grid_kinetic_energy",
-    ]
-    vectors = [("reactions", name) for name in head.reactions]
-    vectors += [("markers", name) for name in head.markers]
-    g = next((np.size(getattr(head, kind)[name]) for kind, name in vectors), 0)
-    header = [*fixed, *(f"{name}_{c}" for _, name in vectors for c in axes[:g])]
+    header, fixed, vectors, g = _steps_columns(history[0])
     lines = []
     for report in history[first:]:
         values = [
@@ -204,6 +189,33 @@ def write_steps(history: list[StepReport], path: str | Path, first: int = 0) -> 
             values += [repr(float(v)) for v in np.ravel(vector)]
         lines.append(",".join(values))
     return write_csv_rows(path, header, lines, first)
+
+
+#: The columns of ``steps.csv`` that every step has.
+_FIXED_COLUMNS = (
+    "step",
+    "t",
+    "dt",
+    "newton_iterations",
+    "relative_residual",
+    "force_scale",
+    "occupied_cells",
+    "grid_kinetic_energy",
+)
+
+
+def _steps_columns(head: StepReport) -> tuple[list[str], list[str], list, int]:
+    """The header of ``steps.csv`` whose first row is ``head``'s, with its parts."""
+    vectors = [("reactions", name) for name in head.reactions]
+    vectors += [("markers", name) for name in head.markers]
+    g = next((np.size(getattr(head, kind)[name]) for kind, name in vectors), 0)
+    fixed = list(_FIXED_COLUMNS)
+    return [*fixed, *(f"{name}_{c}" for _, name in vectors for c in "xyz"[:g])], fixed, vectors, g
+
+
+def steps_header(head: StepReport) -> str:
+    """The header line of a ``steps.csv`` whose first row is ``head``'s."""
+    return ",".join(_steps_columns(head)[0])
 
 
 def occupied_cells(mesh, occupied: np.ndarray) -> int:

@@ -72,7 +72,14 @@ from fe_mpm.point_update import (
 )
 from fe_mpm.pressure_by_parts import PressureByParts
 from fe_mpm.quadrature import SlotLayout
-from fe_mpm.report import ProgressBar, StepReport, imbalance, newton_failure, write_steps
+from fe_mpm.report import (
+    ProgressBar,
+    StepReport,
+    imbalance,
+    newton_failure,
+    steps_header,
+    write_steps,
+)
 from fe_mpm.retry import RetryLadder, StepLength
 from fe_mpm.shared_increment import SharedIncrement
 from fe_mpm.step_forms import (
@@ -386,10 +393,10 @@ class Simulation:
         for name, h in material.history.items():
             start = h.initial_values(len(points))
             given = points.history.setdefault(name, start)
-            if given is not start:  # a later stage's, or set by a script: checked
-                parallel.check_together(
-                    mesh.comm, _check_history, name, given, start.shape, kinds=(ValueError,)
-                )
+            # A later stage's, or set by a script: checked on every rank together.
+            parallel.check_together(
+                mesh.comm, _check_history, name, given, start.shape, kinds=(ValueError,)
+            )
         if MATERIAL in material.history:  # several laws: the label reaches the slots
             points.history[MATERIAL] = points.material.astype(np.float64)
         else:  # one law after a stage of several: no stale labels in the output
@@ -665,13 +672,20 @@ class Simulation:
         cell = self.tracker.locate(xm[None, :])[0]
         if not parallel.any_rank(self.mesh.comm, cell >= 0):
             raise PointsOutsideError(f"marker {name!r} at {xm} is outside the grid")
-        if self.output is not None and self.step_number > 0:
+        out = self.output
+        if out is not None and (self._csv_head is not None or self._unwritten):
             # steps.csv keeps the columns of its first row (a helper's late marker,
             # 2026-12-07, was in the history but never in the file).
             warn(
                 f"Simulation.add_marker: marker {name!r} is added after steps.csv was "
                 "started, whose columns stay those of its first row: read it from "
                 "sim.history or sim.marker(), or add markers before the first step"
+            )
+        elif out is not None and out.continues:
+            warn(
+                f"Simulation.add_marker: marker {name!r} is not in the steps.csv of the run "
+                "this one continues: if it is new there, this run's rows start a new "
+                "steps.csv, the earlier one kept as steps_before_step_N.csv"
             )
         distance = self.markers.add(name, xm, self.points.x)
         # A mistyped coordinate inside the grid would follow a far host's motion extended
@@ -856,7 +870,21 @@ class Simulation:
         directory = self.checkpoint_dir if directory is None else directory
         if directory is None:
             raise ValueError("Simulation.checkpoint: give a directory (or checkpoint_dir)")
+        folder = self._write_checkpoint(directory)
+        if folder == self._off_cadence:  # asked for by name: kept
+            self._off_cadence = None
+        return folder
+
+    def _write_checkpoint(self, directory: str | Path) -> Path:
+        """:meth:`checkpoint`, with the rows of the steps so far written (collective).
+
+        A restore in a new process continues the output where ``steps.csv`` has the
+        checkpoint's row (:meth:`~fe_mpm.output.SimulationOutput.continue_earlier_run`),
+        which an ``output_every`` > 1 would otherwise hold back (a reviewer, 2026-12-07).
+        """
         t0 = time.perf_counter()
+        if self.output is not None and self.output.started:
+            self._write_rows(self.output)
         folder = checkpoint.write(self, directory)
         self._add_time("checkpoint", t0)
         return folder
@@ -885,14 +913,23 @@ class Simulation:
             # A new process continuing a run: its output folder holds that run's frames
             # and rows, which this run's first frame would clear. Its series goes on
             # where it is that run's; anything else there is kept aside.
-            if not out.continue_earlier_run(self.t, self.step_number):
+            continued, undone = out.continue_earlier_run(self.t, self.step_number)
+            if continued:
+                if undone is not None:
+                    warn(
+                        f"Simulation.restore: what the earlier run in {out.folder} wrote "
+                        f"after step {self.step_number} (t = {self.t:g}), frames and rows, "
+                        f"is moved into {undone}; this run takes those steps again"
+                    )
+            else:
                 kept = out.set_aside_earlier_run(self.step_number)
                 if kept is not None:
                     warn(
-                        f"Simulation.restore: the output already in {out.folder} is not "
-                        f"the run of this checkpoint (its steps.csv has no row of step "
-                        f"{self.step_number} at t = {self.t:g}); it is kept in {kept}, "
-                        "and this run writes its own"
+                        f"Simulation.restore: the output already in {out.folder} is kept "
+                        f"in {kept}: its steps.csv has no row of step {self.step_number} at "
+                        f"t = {self.t:g} (another run's, or one that a checkpoint of "
+                        "before 2026-12-07 evening had not written yet); this run writes "
+                        "its own"
                     )
         if before > self.step_number:
             # This simulation had stepped past the checkpoint: those steps are undone
@@ -1082,7 +1119,7 @@ class Simulation:
         ``off_cadence``: written at a run's end, between the ``checkpoint_every``-th
         steps; it goes once a later checkpoint is written.
         """
-        path = self.checkpoint()
+        path = self._write_checkpoint(self.checkpoint_dir)
         earlier, self._off_cadence = self._off_cadence, path if off_cadence else None
         if earlier is not None and earlier != path and parallel.on_rank_zero(self.mesh.comm):
             shutil.rmtree(earlier, ignore_errors=True)
@@ -1725,25 +1762,36 @@ class Simulation:
         if out is not None and out.write(
             self.step_number, self.t, self.points, force, corners, grid, self._cells_of_grid
         ):
-            if self._unwritten and parallel.on_rank_zero(self.mesh.comm):
-                # The rows of the steps since the last output only: a long run's files
-                # grow by their new steps, not rewritten whole. Appended rows keep the
-                # columns of the first step written.
-                # A restored run's first rows go on after the rows of the run it
-                # continues (SimulationOutput.continues), under their header.
-                head = self._csv_head or (self._unwritten[0] if out.continues else None)
-                for name, write in [("steps.csv", write_steps), ("walls.csv", write_wall_forces)]:
-                    path = out.folder / name
-                    if name == "walls.csv" and not self.walls:
-                        continue
-                    if head is not None and path.exists():
-                        write([head, *self._unwritten], path, 1)
-                    else:
-                        write(self._unwritten, path, 0)
-            if self._unwritten:
-                self._csv_head = self._csv_head or self._unwritten[0]
-            self._unwritten = []
+            self._write_rows(out)
             self._add_time("output", t0)
+
+    def _write_rows(self, out: SimulationOutput) -> None:
+        """Append the rows of the steps since the last ones written to the CSV files.
+
+        A long run's files grow by their new steps, not rewritten whole; appended rows
+        keep the columns of the first step written. A restored run's first rows go on
+        after the rows of the run it continues (``SimulationOutput.continues``), under
+        their header if it is theirs; a header that differs (a marker added after the
+        restore) starts the file anew, the earlier one kept beside it.
+        """
+        if self._unwritten and parallel.on_rank_zero(self.mesh.comm):
+            head = self._csv_head
+            if head is None and out.continues:
+                head = self._unwritten[0]
+                steps = out.folder / "steps.csv"
+                if steps.exists() and steps.read_text().split("\n", 1)[0] != steps_header(head):
+                    steps.rename(out.folder / f"steps_before_step_{head.step}.csv")
+            for name, write in [("steps.csv", write_steps), ("walls.csv", write_wall_forces)]:
+                path = out.folder / name
+                if name == "walls.csv" and not self.walls:
+                    continue
+                if head is not None and path.exists():
+                    write([head, *self._unwritten], path, 1)
+                else:
+                    write(self._unwritten, path, 0)
+        if self._unwritten:
+            self._csv_head = self._csv_head or self._unwritten[0]
+        self._unwritten = []
 
     def _add_time(self, key: str, t0: float) -> None:
         self.timings[key] = self.timings.get(key, 0.0) + time.perf_counter() - t0
@@ -1846,7 +1894,8 @@ def _check_history(name: str, given, shape: tuple) -> None:
             f"Simulation: points.history[{name!r}] must have shape {shape} for this law, "
             f"got {given.shape}"
         )
-    bad = np.flatnonzero(~np.isfinite(given.reshape(shape[0], -1)).all(axis=1))
+    rows = given.reshape(shape[0], int(np.prod(shape[1:])))  # (a rank may hold none)
+    bad = np.flatnonzero(~np.isfinite(rows).all(axis=1))
     if bad.size:
         raise ValueError(
             f"Simulation: points.history[{name!r}] must be finite; point {bad[0]} has "

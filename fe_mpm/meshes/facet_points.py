@@ -64,9 +64,18 @@ def facet_points(
     # Facets found with dolfinx.mesh.locate_entities exist before their connectivity.
     mesh.topology.create_connectivity(fdim, fdim + 1)
     index_map = mesh.topology.index_map(fdim)
-    facets = check_indices(
-        "facet_points", "facets", facets, index_map.size_local + index_map.num_ghosts
+    size = index_map.size_local + index_map.num_ghosts
+    # Every rank refuses together: one alone would leave the others in the gather below.
+    parallel.check_together(
+        mesh.comm,
+        check_indices,
+        "facet_points",
+        "facets",
+        facets,
+        size,
+        kinds=(TypeError, ValueError),
     )
+    facets = check_indices("facet_points", "facets", facets, size)
     if mesh.comm.size > 1:
         facets = facets[facets < mesh.topology.index_map(fdim).size_local]
     nodes = dolfinx.mesh.entities_to_geometry(mesh, fdim, facets)
