@@ -122,11 +122,13 @@ class PointTracking:
     def leaving(
         self, points: MaterialPoints, markers: Markers, moved: np.ndarray, step: int, t: float
     ) -> np.ndarray:
-        """With ``points_leaving="drop"``, the points a step is about to carry out of the grid.
+        """The points a step is about to carry out of the grid: refused, or to drop.
 
-        Called before the step's update, so that a marker whose host would leave stops
-        the run with nothing updated. Points that land in another rank's cells are not
-        leaving (the next tracking sends them). Collective.
+        Called before the step's update, so that with ``points_leaving="raise"`` (or a
+        marker whose host would leave) the run stops with nothing updated; with
+        ``"drop"`` they are dropped once they have moved. It locates every moved point
+        (about 0.5 % of a strip footing's step, 2026-12-07). Points that land in
+        another rank's cells are not leaving (the next tracking sends them). Collective.
 
         Args:
             points: The points, not yet updated (their cells the step's).
