@@ -1290,6 +1290,8 @@ class Simulation:
         self.tracking.remember(layout.cell)
         self.tracking.drop(self.points, self.markers, leaving, k, t_new)
         self.t, self.step_number = t_new, k
+        if self.tracking.left:  # kept, and told: the next step's tracking stops the run
+            warn(self.tracking.left)
         self.conditions.warn_travel(t_new)
         if not self._options_checked and self._newton and self._newton.iterations_total:
             self._options_checked = True  # after the first step that solved a system
@@ -1736,7 +1738,8 @@ class Simulation:
             own = np.linalg.det(new.dF) * np.linalg.det(pts.F)
             bary = self._current.bary
             J = volume_of_average(self.fields.Q[0], layout.cell, bary, pts.mass, own, step, t)
-        # Points leaving: refused ("raise") or found ("drop") before anything moves.
+        # Points leaving: found before anything moves, dropped once it has ("drop") or
+        # told of once the step is kept ("raise").
         # A domain's sub-points are not dropped: its point goes if the domain leaves
         # (PointDomains.drop_left).
         leaving = (

@@ -15,13 +15,7 @@ import numpy as np
 
 from fe_mpm import parallel
 from fe_mpm._dolfinx import dolfinx
-from fe_mpm.errors import (
-    ConvergenceError,
-    MarkerHostLeftError,
-    PointsOutsideError,
-    StepLeavesGridError,
-    warn,
-)
+from fe_mpm.errors import ConvergenceError, MarkerHostLeftError, PointsOutsideError, warn
 from fe_mpm.formulations import FormulationSpec
 from fe_mpm.markers import Markers
 from fe_mpm.migration import migrate, owning_ranks, send
@@ -51,6 +45,8 @@ class PointTracking:
         self.held_points = 0
         self.dropped = 0
         self.migrated = 0  # points that moved between ranks at the last tracking
+        #: What the last step's update carried out of the grid, in words ("" if nothing).
+        self.left = ""
         self._nslot: int | None = None  # slots per entity, kept while they suit
         # (rank, cell) of each point in the last accepted step, kept in step with the
         # points as they migrate: a held point goes back to that rank and cell.
@@ -122,13 +118,19 @@ class PointTracking:
     def leaving(
         self, points: MaterialPoints, markers: Markers, moved: np.ndarray, step: int, t: float
     ) -> np.ndarray:
-        """The points a step is about to carry out of the grid: refused, or to drop.
+        """The points a step is about to carry out of the grid, to drop or to tell of.
 
-        Called before the step's update, so that with ``points_leaving="raise"`` (or a
-        marker whose host would leave) the run stops with nothing updated; with
-        ``"drop"`` they are dropped once they have moved. It locates every moved point
-        (about 0.5 % of a strip footing's step, 2026-12-07). Points that land in
-        another rank's cells are not leaving (the next tracking sends them). Collective.
+        Called before the step's update, so that a marker whose host would leave
+        (``points_leaving="drop"``) stops the run with nothing updated. With
+        ``"drop"`` the points returned are dropped once they have moved; with
+        ``"raise"`` none are returned, and :attr:`left` says what left, for the step
+        to tell once it is kept: its solution is the grid's, so a one-step solve on a
+        grid fitted to the body (Cook's membrane, whose tip bulges past the grid's
+        edge) keeps its answer, and the next step's tracking stops the run. Until
+        2026-12-07 nothing was said, and a run's last step wrote points outside the
+        grid and ended normally (a helper's bad-input probes). It locates every moved
+        point (about 0.5 % of a strip footing's step). Points that land in another
+        rank's cells are not leaving (the next tracking sends them). Collective.
 
         Args:
             points: The points, not yet updated (their cells the step's).
@@ -138,41 +140,41 @@ class PointTracking:
             t: Its end time, for the message.
 
         Returns:
-            This rank's leaving points (indices), to be dropped once they have moved.
+            This rank's leaving points (indices) with ``"drop"``; none with ``"raise"``.
 
         Raises:
-            MarkerHostLeftError: A marker's host would leave.
-            StepLeavesGridError: With ``"raise"``, a point would leave. Until
-                2026-12-07 the next step's tracking stopped the run instead, so a run's
-                last step carried points out of the grid, wrote them and ended without
-                a word (a helper's bad-input probes).
+            MarkerHostLeftError: A marker's host would leave (``"drop"``).
         """
         comm = self.tracker.mesh.comm
+        self.left = ""
         lost = np.flatnonzero(self.tracker.locate(moved, points.cell) < 0)
         if comm.size > 1 and parallel.any_rank(comm, lost.size > 0):
             # A point just past the grid's edge is owned within the padding; owned by this
             # rank, whose cells do not hold it, it has left, as migrate() finds it.
             owner = owning_ranks(self.tracker, moved[lost])
             lost = lost[(owner < 0) | (owner == comm.rank)]
-        parallel.raise_together(comm, hosts_leaving(markers.hosts(), lost, step, t))
-        if self.points_leaving == "raise" and parallel.any_rank(comm, lost.size > 0):
+        if self.points_leaving == "drop":
+            parallel.raise_together(comm, hosts_leaving(markers.hosts(), lost, step, t))
+            return lost
+        if parallel.any_rank(comm, lost.size > 0):
             count = int(parallel.total(comm, int(lost.size)))
             first = None
             if lost.size:
                 # Named by where it started: an index is the rank's own (a helper's
                 # run named point 46, 2 and 1 on 1, 2 and 3 ranks).
                 first = (
-                    f"{count} material point(s) would leave the grid in step {step} "
-                    f"(t = {t:g}); first: the point that started at x0 = "
-                    f"{points.x0[lost[0]]}, bound for x = {moved[lost[0]]}"
+                    f"the point that started at x0 = {points.x0[lost[0]]}, now at x = "
+                    f"{moved[lost[0]]}"
                 )
             if comm.size > 1:  # the lowest rank that has one gives the example
                 first = parallel.first_given(comm, first)
-                first += f" (in none of the {comm.size} MPI ranks' cells)"
-            parallel.raise_together(
-                comm, StepLeavesGridError(f"{first}. Nothing was updated. {LEAVING_ADVICE}")
+            self.left = (
+                f"Step {step} (t = {t:g}) carried {count} material point(s) out of the grid "
+                f"(first: {first}). The step is kept, its solution being the grid's, and "
+                "the points are written where they went, but no step can follow: the next "
+                f"one stops. {LEAVING_ADVICE}"
             )
-        return lost
+        return np.zeros(0, dtype=np.int64)
 
     def drop(
         self,

@@ -1011,10 +1011,8 @@ def test_points_that_fall_out_of_the_grid_are_dropped_on_every_rank_as_in_serial
 
 def test_a_point_that_leaves_the_grid_stops_every_rank_with_one_message(tmp_path):
     lines = _run(tmp_path, "leaving", 2)
-    # Refused in the step that would carry the point out, before anything moved.
-    assert all(line["error"] == "StepLeavesGridError" for line in lines), lines
+    assert all(line["error"] == "PointsOutsideError" for line in lines), lines
     assert all("in none of the 2 MPI ranks' cells" in x["message"] for x in lines)
-    assert all("would leave the grid in step" in x["message"] for x in lines)
     assert all("points_leaving='drop'" in x["message"] for x in lines)
 
 
