@@ -16,9 +16,11 @@ class PointsOutsideError(RuntimeError):
 
 
 class StepLeavesGridError(PointsOutsideError):
-    """A step would carry material points out of the grid (``points_leaving="raise"``).
+    """A step would carry point domains (or a marker's host) out of the grid.
 
-    Refused before anything moved, so the run still writes the steps it accepted.
+    Refused before anything moved, so the run still writes the steps it accepted. (A
+    step of standard MPM that carries points out is kept and told of, its solution
+    being the grid's; the next step's tracking stops the run.)
     """
 
 
