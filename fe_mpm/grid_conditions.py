@@ -179,11 +179,6 @@ class GridConditions:
         ds = ufl.Measure("ds", domain=mesh)
         for i, spec in enumerate(tractions, start=1):
             label = f"{type(spec).__name__} {i - 1}"
-            if not isinstance(spec, Traction | Pressure):
-                raise TypeError(
-                    f"Simulation: tractions[{i - 1}] must be a Traction or a Pressure, "
-                    f"got {type(spec).__name__}"
-                )
             hint = (
                 "; a load on a face inside the grid, where the body's edge lies between "
                 "grid lines or moves, is a PointTraction or PointPressure on points along "

@@ -1369,18 +1369,13 @@ def condition_lists(**given) -> dict[str, tuple]:
     return lists
 
 
-def check_walls(walls, spec, formulation: str) -> tuple:
-    """The rigid walls as a tuple, or raise where they cannot act yet.
+def check_walls(walls: tuple, spec, formulation: str) -> tuple:
+    """The rigid walls (each one checked by :func:`condition_lists`), or raise.
 
     Raises:
-        TypeError: An entry is not a :class:`~fe_mpm.boundary.RigidWall`.
         NotImplementedError: P2 displacements (the walls' springs sit on the
             vertices only).
     """
-    walls = tuple(walls)
-    for wall in walls:
-        if not isinstance(wall, RigidWall):
-            raise TypeError(f"Simulation: walls must be RigidWall objects, got {wall!r}")
     if walls and spec.u_degree != 1:
         raise NotImplementedError(
             f"Simulation: walls with formulation={formulation!r}: a wall's springs sit on "
