@@ -110,16 +110,22 @@ def _rows_after(csv: Path, step: int) -> bool:
     return any(int(row.split(",", 1)[0]) > step for row in rows if row)
 
 
+def _new_folder(folder: Path, name: str) -> Path:
+    """Make the subfolder ``name`` of ``folder``, numbered on (``name_2``, ...) if taken."""
+    made, k = folder / name, 1
+    while made.exists():
+        k += 1
+        made = folder / f"{name}_{k}"
+    made.mkdir()
+    return made
+
+
 def _set_aside(folder: Path, step: int) -> Path | None:
     """Move the run files in ``folder`` into a new subfolder; None if there are none."""
     found = [path for path in folder.glob("*") if _RUN_FILES.fullmatch(path.name)]
     if not found:
         return None
-    kept, k = folder / f"before_restore_at_step_{step}", 1
-    while kept.exists():
-        k += 1
-        kept = folder / f"before_restore_at_step_{step}_{k}"
-    kept.mkdir()
+    kept = _new_folder(folder, f"before_restore_at_step_{step}")
     for path in found:
         path.rename(kept / path.name)
     return kept
@@ -242,12 +248,7 @@ class SimulationOutput:
         ]
         undone = None
         if later or rows:
-            undone = self.folder / f"undone_after_step_{step}"
-            k = 1
-            while undone.exists():
-                k += 1
-                undone = self.folder / f"undone_after_step_{step}_{k}"
-            undone.mkdir()
+            undone = _new_folder(self.folder, f"undone_after_step_{step}")
             for writer in writers:
                 if writer.pvd.exists():
                     shutil.copy2(writer.pvd, undone / writer.pvd.name)
