@@ -138,12 +138,28 @@ def check_choice(owner: str, field: str, value: str, choices: tuple[str, ...]) -
     return value
 
 
-def check_indices(owner: str, field: str, values: object, size: int) -> np.ndarray:
+def check_indices(
+    owner: str,
+    field: str,
+    values: object,
+    size: int,
+    *,
+    what: str = "indices",
+    counted: str = "",
+) -> np.ndarray:
     """``values`` as int32 indices into ``size`` entities, or raise naming the field.
 
     A boolean mask, fractional numbers or an index past the end are refused: cast
     silently they read as the indices 0 and 1, truncate, or reach past an array in
     compiled code (``facet_points`` with facet 999 of 16 ended the process).
+
+    Args:
+        owner: Who asks, e.g. ``"seed"``.
+        field: The argument, e.g. ``"cells"``.
+        values: What was given.
+        size: How many entities there are: the indices lie in [0, size).
+        what: What the indices are, in the messages (``"cell indices"``).
+        counted: Said after the valid range, e.g. what ``size`` counts.
 
     Raises:
         TypeError: A mask, or not integers.
@@ -152,18 +168,19 @@ def check_indices(owner: str, field: str, values: object, size: int) -> np.ndarr
     a = np.asarray(values)
     if a.dtype.kind == "b":
         raise TypeError(
-            f"{owner}: {field} must be indices, got a boolean mask; use np.flatnonzero(mask)"
+            f"{owner}: {field} must be {what}, got a boolean mask; use np.flatnonzero(mask)"
         )
     if a.ndim != 1:
-        raise ValueError(f"{owner}: {field} must be a 1-D array of indices, got shape {a.shape}")
+        raise ValueError(f"{owner}: {field} must be a 1-D array of {what}, got shape {a.shape}")
     if a.dtype.kind == "f" and np.all(np.isfinite(a) & (a == np.trunc(a))):
         a = a.astype(np.int64)  # whole floats such as 3.0 are indices
     if a.size and a.dtype.kind not in "iu":
         raise TypeError(
-            f"{owner}: {field} must be integer indices, got {reprlib.repr(values)} "
-            f"(dtype {a.dtype})"
+            f"{owner}: {field} must be integer {what}, got {reprlib.repr(values)} (dtype {a.dtype})"
         )
     outside = np.flatnonzero((a < 0) | (a >= size))
     if outside.size:
-        raise ValueError(f"{owner}: {field} must lie in [0, {size - 1}], got {a[outside[0]]}")
+        raise ValueError(
+            f"{owner}: {field} must lie in [0, {size - 1}]{counted}, got {a[outside[0]]}"
+        )
     return a.astype(np.int32)

@@ -6,7 +6,6 @@ number of points and ``g`` for the geometric dimension (2 or 3).
 
 from __future__ import annotations
 
-import reprlib
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
@@ -16,7 +15,7 @@ import numpy.typing as npt
 
 from fe_mpm import parallel
 from fe_mpm._dolfinx import dolfinx
-from fe_mpm.checks import check_choice, check_finite, check_int, check_range
+from fe_mpm.checks import check_choice, check_finite, check_indices, check_int, check_range
 from fe_mpm.cut_cells import inside_simplices
 
 #: A cell whose size (d! times its area or volume) is below this share of its longest
@@ -517,28 +516,14 @@ def _cells(cells: npt.ArrayLike, num_cells: int, num_ghosts: int = 0) -> np.ndar
     Returns:
         The owned cells among ``cells``, int32, in the order given.
     """
-    a = np.asarray(cells)
-    # np.asarray(mask, np.int32) would read a mask as the indices 0 and 1.
-    if a.dtype.kind == "b":
-        raise TypeError(
-            "seed: cells must be cell indices, got a boolean mask; use np.flatnonzero(mask)"
-        )
-    if a.ndim != 1:
-        raise ValueError(f"seed: cells must be a 1-D array of cell indices, got shape {a.shape}")
-    # Whole floats such as 3.0 are indices; a cast would truncate 2.5 to 2 silently.
-    if a.dtype.kind == "f" and np.all(np.isfinite(a) & (a == np.trunc(a))):
-        a = a.astype(np.int64)
-    if a.dtype.kind not in "iu":
-        raise TypeError(
-            f"seed: cells must be integer cell indices, got {reprlib.repr(cells)} (dtype {a.dtype})"
-        )
-    local = num_cells + num_ghosts
-    outside = np.flatnonzero((a < 0) | (a >= local))
-    if outside.size:
-        raise ValueError(
-            f"seed: cells must lie in [0, {local - 1}] (this rank's {num_cells} owned and "
-            f"{num_ghosts} ghost cells), got {a[outside[0]]}"
-        )
+    a = check_indices(
+        "seed",
+        "cells",
+        cells,
+        num_cells + num_ghosts,
+        what="cell indices",
+        counted=f" (this rank's {num_cells} owned and {num_ghosts} ghost cells)",
+    )
     values, counts = np.unique(a, return_counts=True)
     repeated = np.flatnonzero(counts > 1)
     if repeated.size:
@@ -548,7 +533,7 @@ def _cells(cells: npt.ArrayLike, num_cells: int, num_ghosts: int = 0) -> np.ndar
             f"seed: cells holds duplicates, e.g. cell {cell} {times}; each cell "
             "would get its points again"
         )
-    return a[a < num_cells].astype(np.int32)
+    return a[a < num_cells]
 
 
 def merge(*sets: MaterialPoints) -> MaterialPoints:
