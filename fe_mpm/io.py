@@ -31,23 +31,27 @@ class ParticleWriter:
 
     Args:
         folder: Output folder (created).
-        name: File stem.
+        name: File stem; None: :attr:`default_name` ("particles", or "domains" for a
+            :class:`DomainWriter`).
         comm: The communicator of the points' grid.
         clear: Remove an earlier run's frames of this name now (a
             :class:`~fe_mpm.output.SimulationOutput` clears its folder at its first
             frame instead).
     """
 
+    #: The file stem when none is given.
+    default_name = "particles"
+
     def __init__(
         self,
         folder: str | Path,
-        name: str = "particles",
+        name: str | None = None,
         comm: MPI.Comm = MPI.COMM_SELF,
         clear: bool = True,
     ):
         self.folder = Path(folder)
         self.comm = comm
-        self.name = name
+        self.name = self.default_name if name is None else name
         error = None
         if comm.rank == 0:
             try:
@@ -166,14 +170,7 @@ class DomainWriter(ParticleWriter):
     domains stretch or were redrawn. Under MPI, pieces per rank as for the points.
     """
 
-    def __init__(
-        self,
-        folder: str | Path,
-        name: str = "domains",
-        comm: MPI.Comm = MPI.COMM_SELF,
-        clear: bool = True,
-    ):
-        super().__init__(folder, name, comm, clear)
+    default_name = "domains"
 
     def write(
         self, t: float, points: MaterialPoints, corners: np.ndarray, **fields: np.ndarray
