@@ -9,6 +9,7 @@ that stops early still leaves a readable series up to its last good step.
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
@@ -135,6 +136,19 @@ class ParticleWriter:
             self._write_pvd()
         return bool(self._entries) and self._entries[-1][0] == t
 
+    def listed(self) -> list[tuple[float, list[str]]]:
+        """The frames the folder's ``.pvd`` lists: (time, its pieces' files), in order.
+
+        Read as :meth:`_write_pvd` writes them; none if there is no ``.pvd``.
+        """
+        frames: list[tuple[float, list[str]]] = []
+        for time, name in _DATASET.findall(self.pvd.read_text()) if self.pvd.exists() else []:
+            if frames and frames[-1][0] == float(time):
+                frames[-1][1].append(name)
+            else:
+                frames.append((float(time), [name]))
+        return frames
+
     def _write_pvd(self) -> None:
         lines = [
             '<?xml version="1.0"?>',
@@ -148,6 +162,10 @@ class ParticleWriter:
         ]
         lines += ["  </Collection>", "</VTKFile>", ""]
         self.pvd.write_text("\n".join(lines))
+
+
+#: One frame's piece in a ``.pvd``, as :meth:`ParticleWriter._write_pvd` writes it.
+_DATASET = re.compile(r'<DataSet timestep="([^"]+)" part="\d+" file="([^"]+)"/>')
 
 
 def _exact(t: float) -> str:

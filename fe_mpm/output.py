@@ -76,21 +76,8 @@ def _clear_earlier_run(folder: Path) -> None:
             path.unlink()
 
 
-#: One frame's piece in a ``.pvd`` (as :class:`~fe_mpm.io.ParticleWriter` writes it).
-_DATASET = re.compile(r'<DataSet timestep="([^"]+)" part="\d+" file="([^"]+)"/>')
 #: The grid's files of a run: ``grid.bp`` is number 0.
 _GRID_FILE = re.compile(r"grid(?:_(\d+))?\.bp")
-
-
-def _series(pvd: Path) -> list[tuple[float, list[str]]]:
-    """The frames a ``.pvd`` lists: (time, its pieces' files), in order; none if absent."""
-    frames: list[tuple[float, list[str]]] = []
-    for time, name in _DATASET.findall(pvd.read_text()) if pvd.exists() else []:
-        if frames and frames[-1][0] == float(time):
-            frames[-1][1].append(name)
-        else:
-            frames.append((float(time), [name]))
-    return frames
 
 
 def _has_row(csv: Path, step: int, t: float) -> bool:
@@ -234,7 +221,7 @@ class SimulationOutput:
         """
         if not _has_row(self.folder / "steps.csv", step, t):
             return None
-        series = [_series(writer.pvd) for writer in writers]
+        series = [writer.listed() for writer in writers]
         kept = [[frame for frame in frames if frame[0] <= t] for frames in series]
         for frames in kept:
             if not all((self.folder / name).exists() for _, names in frames for name in names):
