@@ -216,6 +216,7 @@ class BoundaryPointStep:
         self._warned = False
         self._warned_far = False
         self._checked_rule = degree == 1  # P2 loads: their points per facet, once
+        self._checked_normals = not points.pressed.any()  # pressures' normals, once
 
     @classmethod
     def of(
@@ -296,6 +297,9 @@ class BoundaryPointStep:
         if not self._checked_rule:
             self._checked_rule = True
             self._warn_sparse_loads(cells)
+        if not self._checked_normals:
+            self._checked_normals = True
+            self._warn_inward_normals(cells, occupied)
         counts = np.bincount(cells)
         self._nslot = slot_count(counts, self._nslot, tracker.mesh.comm, CROWDED_CELL)
         self.layout = SlotLayout.from_cells(cells, self._nslot)
@@ -327,6 +331,43 @@ class BoundaryPointStep:
                 "that hold material, where a quadratic field bends away from the body: "
                 "the hold on it may be lost (docs/limitations.md). Fit the grid's lines "
                 "to the edges these points hold, or take a P1 formulation."
+            )
+
+    def _warn_inward_normals(self, cells: np.ndarray, occupied: np.ndarray) -> None:
+        """Warn where a PointPressure's normal points into the body; collective.
+
+        A point's normal points out of the body when a cell's length along it leads
+        into no occupied cell and the same length against it into one; a normal
+        that points in has it the other way round, and then a positive pressure
+        pulls on the face (a helper's probe, 2026-12-07: +1000 Pa on a block's top,
+        its normal given as (0, −1), pulled it up by 1000 N/m, without a word).
+
+        Args:
+            cells: The active points' cells on this rank, in the order of ``_active``.
+            occupied: Which of this rank's cells hold material.
+        """
+        pp, comm = self.points, self.tracker.mesh.comm
+        size = np.zeros(len(pp))
+        size[np.flatnonzero(self._active)] = self.tracker.sizes[cells]
+        size = parallel.total(comm, size)  # each active point counted on one rank
+        probe = np.flatnonzero(pp.pressed & (size > 0.0))
+        unit = pp.area[probe] / np.linalg.norm(pp.area[probe], axis=1)[:, None]
+        step = size[probe, None] * unit
+        ahead, _ = self.tracker.claim(pp.x[probe] + step, occupied, tol=0.0)
+        behind, _ = self.tracker.claim(pp.x[probe] - step, occupied, tol=0.0)
+        ahead = parallel.total(comm, (ahead >= 0).astype(np.int64)) > 0
+        behind = parallel.total(comm, (behind >= 0).astype(np.int64)) > 0
+        owner = pp.owner[probe]
+        inward = np.bincount(owner[ahead & ~behind], minlength=len(pp.conditions))
+        outward = np.bincount(owner[behind & ~ahead], minlength=len(pp.conditions))
+        for k in np.flatnonzero(inward > outward):
+            condition = pp.conditions[k]
+            warn(
+                f"PointPressure {condition.name!r}: at {inward[k]} of its "
+                f"{np.count_nonzero(owner == k)} points the normal points into the body "
+                f"(at {outward[k]} out of it): normal is the body's outward normal and a "
+                "positive pressure pushes along −normal, so this one pulls on the face. "
+                "Reverse the normals, or give a negative value for a suction."
             )
 
     def _warn_sparse_loads(self, cells: np.ndarray) -> None:

@@ -126,9 +126,14 @@ def check_finite(owner: str, field: str, value: object, *, what: str = "entry") 
         i = int(bad[0])
         raise ValueError(
             f"{owner}: {field} must be finite; {what} {i} is {a[i].tolist()} "
-            f"({bad.size} of {a.shape[0]} {what}s non-finite)"
+            f"({bad.size} of {a.shape[0]} {_plural(what)} non-finite)"
         )
     return a
+
+
+def _plural(noun: str) -> str:
+    """``noun`` in the plural: entry -> entries, point -> points."""
+    return noun[:-1] + "ies" if noun.endswith("y") else noun + "s"
 
 
 def check_choice(owner: str, field: str, value: str, choices: tuple[str, ...]) -> str:

@@ -98,6 +98,11 @@ def body_force_at(body_force, t: float, g: int) -> np.ndarray:
 #: times the smallest cell beside them.
 MOVED_PAST_CELLS = 1.0
 
+#: A reaction boundary of which a Dirichlet condition holds less than this share of
+#: the dofs is warned about: what it reports is the held dofs' share of another
+#: condition's reaction (a side that meets a held base at a corner).
+HELD_SHARE = 0.5
+
 
 def follow_the_body(label: str) -> str:
     """What carries the load of the grid condition ``label`` on the body instead."""
@@ -212,6 +217,7 @@ class GridConditions:
                 dofs = dolfinx.fem.locate_dofs_topological((sub_c, collapsed), dim, entities)
                 comps.append(np.asarray(dofs[0], dtype=np.int32))
             self.reaction_dofs[name] = comps
+        self._check_reactions_held()
 
         self.body_force = None
         self._body_force_of_time = body_force if callable(body_force) else None
@@ -219,6 +225,49 @@ class GridConditions:
             self._body_force_value = body_force_at(body_force, 0.0, g)
             self.body_force = dolfinx.fem.Constant(mesh, self._body_force_value.copy())
         self._body_force_scale = body_force_scale
+
+    def _check_reactions_held(self) -> None:
+        """Refuse a reaction boundary that no Dirichlet condition holds; collective.
+
+        At a converged step the residual vanishes at every free dof, so a boundary
+        whose dofs nothing holds reports zero at every step, and one that shares a
+        corner node with a held edge reports that node's share of the edge's
+        reaction (a helper's probes, 2026-12-07: the grid's empty top and the free
+        side of a block on its base, without a word). The latter is warned about
+        where less than :data:`HELD_SHARE` of its dofs are held, by a condition
+        whose other dofs lie outside it.
+        """
+        owned = self.fields.W.dofmap.index_map.size_local * self.fields.W.dofmap.index_map_bs
+        held = [bc.dof_indices()[0] for *_, bc in self.dirichlet]
+        held = [dofs[dofs < owned] for dofs in held]
+        comm = self.mesh.comm
+        for name, comps in self.reaction_dofs.items():
+            dofs = np.concatenate(comps)
+            dofs = dofs[dofs < owned]
+            on = np.zeros(dofs.size, dtype=bool)
+            partly = np.zeros(len(held), dtype=np.int64)  # per condition: dofs left out
+            for j, d in enumerate(held):
+                inside = np.isin(dofs, d)
+                on |= inside
+                partly[j] = np.count_nonzero(inside) and d.size - np.count_nonzero(inside)
+            total, on_held = parallel.total(comm, np.array([dofs.size, on.sum()], np.int64))
+            if on_held == 0:
+                raise ValueError(
+                    f"reactions[{name!r}]: no Dirichlet condition holds any of its "
+                    f"{total} displacement dofs, so its reaction is zero at every "
+                    "converged step (the residual vanishes where nothing is held). Name "
+                    "a boundary that a Dirichlet condition holds; a PointDirichlet's "
+                    "force is reported under its own name, a RigidWall's in "
+                    "StepReport.walls"
+                )
+            if on_held < HELD_SHARE * total and parallel.total(comm, partly).any():
+                warn(
+                    f"reactions[{name!r}]: Dirichlet conditions hold only {on_held} of "
+                    f"its {total} displacement dofs, where it meets a held boundary that "
+                    "goes on outside it, and the others carry no reaction: it reports the "
+                    "held dofs' share of that boundary's reaction, not a force on a face "
+                    "of its own"
+                )
 
     def _dirichlet_bc(self, component: int | None, dim: int, entities: np.ndarray):
         """A condition's value Function, its DirichletBC and its entries of the value.

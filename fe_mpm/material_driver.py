@@ -24,6 +24,7 @@ import numpy as np
 import ufl
 
 from fe_mpm._dolfinx import dolfinx
+from fe_mpm.checks import check_finite, check_int
 from fe_mpm.materials import PointState, embed_3d
 from fe_mpm.materials.protocol import PointwiseLaw
 
@@ -38,6 +39,9 @@ class MaterialDriver:
     """
 
     def __init__(self, material, n: int = 1, gdim: int = 3):
+        n = check_int("MaterialDriver", "n", n, lo=1)
+        if gdim not in (2, 3) or isinstance(gdim, bool):
+            raise ValueError(f"MaterialDriver: gdim must be 2 (plane strain) or 3, got {gdim!r}")
         self.material, self.n, self.gdim = material, n, gdim
         g = gdim
         self.F = np.tile(np.eye(g), (n, 1, 1))
@@ -97,7 +101,7 @@ class MaterialDriver:
             and the updated history by name; a pointwise law adds ``region``,
             its return region per state.
         """
-        F = np.asarray(F, dtype=np.float64).reshape(self.n, self.gdim, self.gdim)
+        F = _checked_gradients(F, self.n, self.gdim)
         if self._pointwise:
             g = self.gdim
             result = self.material.return_map(F @ np.linalg.inv(self.F), self.history)
@@ -125,10 +129,31 @@ class MaterialDriver:
     def step(self, F: np.ndarray) -> np.ndarray:
         """Go to total deformation gradients ``F`` (n, g, g) and commit; returns τ (n, 3, 3)."""
         result = self.evaluate(F)
-        self.F = np.asarray(F, dtype=np.float64).reshape(self.n, self.gdim, self.gdim).copy()
+        self.F = _checked_gradients(F, self.n, self.gdim).copy()
         for name in self.history:
             self.history[name] = result[name]
         return result["tau"]
+
+
+def _checked_gradients(F, n: int, g: int) -> np.ndarray:
+    """``F`` as (n, g, g) float64, refused unless finite with det F > 0.
+
+    A helper's probe (2026-12-07): det F < 0 gave a Neo-Hookean NaN and a
+    Mohr-Coulomb a finite stress, and a NaN was committed to J2's history.
+    """
+    F = check_finite("MaterialDriver", "F", F)
+    if F.size != n * g * g:
+        raise ValueError(
+            f"MaterialDriver: F must have shape ({n}, {g}, {g}) (n states of g x g), got {F.shape}"
+        )
+    F = F.reshape(n, g, g)
+    J = np.linalg.det(F)
+    if np.any(J <= 0.0):
+        k = int(np.flatnonzero(J <= 0.0)[0])
+        raise ValueError(
+            f"MaterialDriver: F must have det F > 0, got det F = {J[k]:g} at state {k}"
+        )
+    return F
 
 
 def cauchy_stress(tau: np.ndarray, F: np.ndarray) -> np.ndarray:

@@ -36,6 +36,7 @@ from fe_mpm.formulations import FORMULATIONS, FormulationSpec
 from fe_mpm.ghost import WITH_DOMAINS, WITH_DOMAINS_DYNAMIC
 from fe_mpm.grid_conditions import follow_the_body
 from fe_mpm.materials.drucker_prager import SmoothCapDruckerPrager
+from fe_mpm.materials.elastic import young_modulus
 from fe_mpm.materials.protocol import Law, MixedLaw, missing_members
 from fe_mpm.materials.zones import laws_of, material_zones
 from fe_mpm.particles import MaterialPoints, coincident, simplex_cell_type
@@ -692,6 +693,44 @@ def warn_ppp_against_weight(
             "wrong (0.33 put a tank's thrust 12 % off, 1 put it 60 % off, every step "
             "converged). Pass ppp_alpha=0 or take formulation 'u-nbva'."
         )
+
+
+#: A penalty above this many times E / h (h the grid's largest cell) is warned about:
+#: 10⁴ times the advised 10³ E/h, whose gap under a pressure p, p h / (10³ E), is
+#: already negligible. Measured 2026-12-07 (a helper's probe: a block pressed 1 cm by
+#: a PointDirichlet on triangles of 0.25 m sides, h = 0.35 m, E = 1 MPa): the force
+#: within 2e-6 of its converged value up to 1.4e10 E/h, then 0.86 % off at 1.4e11 E/h
+#: and 28 % at 3.5e14, each step accepted at the round-off floor of the penalty's own
+#: forces (ε h β), which had swallowed the load. The floor grows with β, so a stiffer
+#: penalty buys nothing but that.
+STIFF_PENALTY = 1e7
+
+
+def warn_stiff_penalties(comm, material, supports: Sequence, walls: Sequence, sizes) -> None:
+    """Warn of a PointDirichlet's or RigidWall's penalty far above 10³ E/h; collective.
+
+    ``sizes`` are this rank's cells' longest edges (m, ``Tracker.sizes``). A fluid
+    without its ``shear_scale`` sets no E, and nothing is checked.
+    """
+    given = [(f"PointDirichlet {s.name!r}", s.penalty) for s in supports]
+    given += [(f"RigidWall {w.name!r}", w.penalty) for w in walls if w.penalty is not None]
+    if not given:
+        return
+    try:
+        E = young_modulus(material)
+    except (AttributeError, ValueError):  # a fluid without its shear_scale
+        return
+    h = parallel.largest(comm, float(np.max(sizes, initial=0.0)))
+    for owner, penalty in given:
+        ratio = penalty * h / E
+        if ratio > STIFF_PENALTY:
+            warn(
+                f"{owner}: penalty = {penalty:.3g} Pa/m is {ratio:.3g} E/h (E = {E:.4g} Pa, "
+                f"h = {h:.3g} m), where about 1e3 E/h already keeps the gap negligible: the "
+                "round-off of so stiff a penalty's forces grows with it and may swallow the "
+                "load, and Newton then accepts a step whose force is off (1.4e11 E/h put a "
+                "platen's force 0.86 % off, 3.5e14 E/h 28 %). Take 1e3 E/h."
+            )
 
 
 def _dilates(law) -> bool:

@@ -193,6 +193,8 @@ def strip_footing(
         options: Passed on to :class:`~fe_mpm.simulation.Simulation`.
     """
     per_cell = check_int("strip_footing", "base_points_per_cell", base_points_per_cell, lo=1)
+    # (0 ran a whole analysis of a footing that never moved)
+    check_range("strip_footing", "settlement", settlement, lo=0.0, lo_open=True)
     scene = meshes.strip_footing(
         B,
         h=h,

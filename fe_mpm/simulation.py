@@ -505,6 +505,9 @@ class Simulation:
             ppp_alpha,
             start_body_force,
         )
+        model_checks.warn_stiff_penalties(
+            mesh.comm, material, point_dirichlet, walls, self.tracker.sizes
+        )
         self._add_time("setup", t0)
         self._track()  # once now, so a bad initial layout fails at set-up
         model_checks.check_distinct_points(self.mesh.comm, points)

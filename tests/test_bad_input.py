@@ -1278,3 +1278,80 @@ def test_a_dirichlet_profile_is_checked_where_it_holds_and_named_where_it_fails(
         message = r"Dirichlet 1: profile\(x, t\) is not finite at x = \[2.0, 1.0\]"
         with pytest.raises(ValueError, match=message):
             run(lambda x, t: -0.01 * t * np.sqrt(1.9 - x[0]))  # NaN at the top right
+
+
+def test_a_penalty_far_above_1e3_E_over_h_and_an_unheld_reaction_are_told():
+    """A helper's third round of probes (2026-12-07).
+
+    A PointDirichlet of penalty 1e21 on triangles of 0.25 m sides (E = 1 MPa) was accepted at
+    the round-off floor of its own forces, its force 28 % off, without a word; a
+    ``reactions=`` boundary that nothing holds reported zero or a corner's share of
+    another condition's reaction.
+    """
+    mesh, points = _scene()
+    law = fe_mpm.NeoHookean(1e6, 0.3)
+    held = [fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))]
+    top = np.column_stack([np.linspace(0.1, 0.9, 4), np.ones(4)])
+
+    def platen(penalty):
+        return [fe_mpm.PointDirichlet("top", top, 0.25, lambda t: (0.0, 0.0), penalty, (1,))]
+
+    h = np.sqrt(2.0) * 0.5  # the cells' longest edge
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        fe_mpm.Simulation(mesh, points, law, dirichlet=held, point_dirichlet=platen(1e4 * 1e6 / h))
+    said = r"PointDirichlet 'top': penalty = 1e\+21 Pa/m is 7.07e\+14 E/h \(E = 1e\+06 Pa"
+    with pytest.warns(UserWarning, match=said):
+        fe_mpm.Simulation(mesh, points, law, dirichlet=held, point_dirichlet=platen(1e21))
+    wall = [fe_mpm.RigidWall("floor", lambda x: np.isclose(x[1], 0.0), penalty=1e21)]
+    with pytest.warns(UserWarning, match=r"RigidWall 'floor': penalty = 1e\+21 Pa/m is"):
+        fe_mpm.Simulation(mesh, points, law, walls=wall, dynamic=True)
+    with pytest.raises(ValueError, match=r"reactions\['line'\]: no Dirichlet condition holds any"):
+        fe_mpm.Simulation(
+            mesh, points, law, dirichlet=held, reactions={"line": lambda x: np.isclose(x[1], 1.0)}
+        )
+    side = {"side": lambda x: np.isclose(x[0], 0.0)}
+    with pytest.warns(
+        UserWarning, match=r"reactions\['side'\]: Dirichlet conditions hold only 2 of"
+    ):
+        fe_mpm.Simulation(mesh, points, law, dirichlet=held, reactions=side)
+    whole = {"all": lambda x: np.ones(x.shape[1], dtype=bool)}  # holds the base's whole reaction
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        fe_mpm.Simulation(mesh, points, law, dirichlet=held, reactions=whole)
+
+
+def test_the_material_driver_refuses_what_no_law_can_take():
+    """n = 0, gdim = 4 and det F ≤ 0 ran on (a NaN, or a finite stress for a
+    Mohr-Coulomb body turned inside out), and a NaN F was committed to the history."""
+    from fe_mpm.material_driver import MaterialDriver
+
+    law = fe_mpm.NeoHookean(1e6, 0.3)
+    with pytest.raises(ValueError, match=r"MaterialDriver: n must lie in \[1, inf\), got 0"):
+        MaterialDriver(law, n=0)
+    with pytest.raises(ValueError, match=r"MaterialDriver: gdim must be 2 \(plane strain\) or 3"):
+        MaterialDriver(law, gdim=4)
+    driver = MaterialDriver(fe_mpm.J2Plasticity(E=1e3, nu=0.3, yield_stress=1.0), n=2, gdim=2)
+    flipped = np.array([np.eye(2), np.diag([1.0, -0.5])])
+    with pytest.raises(ValueError, match=r"det F > 0, got det F = -0.5 at state 1"):
+        driver.step(flipped)
+    with pytest.raises(ValueError, match=r"F must be finite; entry 0 is .*\(1 of 2 entries"):
+        driver.step(np.array([np.full((2, 2), np.nan), np.eye(2)]))
+    with pytest.raises(ValueError, match=r"F must have shape \(2, 2, 2\)"):
+        driver.step(np.eye(2))
+    assert np.isfinite(driver.history["be_bar"]).all()  # nothing committed
+
+
+def test_scene_builders_refuse_degenerate_sizes_and_a_scene_for_a_grid():
+    """A helper's probes (2026-12-07): each ran on, or failed deep inside."""
+    scene = cook_membrane(2)
+    with pytest.raises(TypeError, match=r"got MeshData; a scene.s grid is scene.mesh"):
+        cell_centroids(scene)  # dolfinx's MeshData: its grid is scene.mesh
+    with pytest.raises(ValueError, match=r"footing_points: B must lie in \(0, inf\), got 0"):
+        fe_mpm.meshes.footing_points(0.0, 4)
+    with pytest.raises(TypeError, match=r"footing_points: n must be an int, got 2.5"):
+        fe_mpm.meshes.footing_points(1.0, 2.5)
+    with pytest.raises(ValueError, match=r"strip_footing: settlement must lie in \(0, inf\)"):
+        scenes.strip_footing(settlement=0.0)
+    with pytest.raises(ValueError, match=r"cook_membrane: h sizes the unstructured grid"):
+        cook_membrane(4, h=2.0)

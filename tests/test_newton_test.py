@@ -18,7 +18,7 @@ import pytest
 import fe_mpm
 from fe_mpm._dolfinx import dolfinx
 from fe_mpm.force_test import DIVERGENCE_FACTOR, STALL_ITERATIONS
-from fe_mpm.meshes import rectangle_mesh
+from fe_mpm.meshes import cell_centroids, rectangle_mesh
 from fe_mpm.newton import ForceTest
 
 RHO, G = 2000.0, 9.81
@@ -335,3 +335,36 @@ def test_a_failed_solve_quotes_its_own_force_scale_even_from_a_non_finite_start(
     test.record_internal(np.nan)
     test(None, 0, (0.0, 0.0, np.nan))
     assert test.reported_scale == 1e6
+
+
+def test_the_round_off_floor_is_the_same_in_any_consistent_units():
+    """A block under its weight and a shear traction, in SI and in m–kg–ns (stress
+    unit 1e18 Pa, so E = 1e-11): the held rows' diagonal of 1, counted in the floor,
+    made it 1e-4 of the forces there, and steps were accepted at iteration 0 with ‖R‖
+    at 36 % of the forces, the tip 0.24 % off (a helper's check, 2026-12-07)."""
+
+    def run(stress, acceleration):
+        mesh = rectangle_mesh((0.0, 0.0), (2.0, 1.25), (8, 5))
+        body = np.flatnonzero(cell_centroids(mesh)[:, 1] < 1.0)
+        points = fe_mpm.seed(mesh, 3, cells=body)
+        sim = fe_mpm.Simulation(
+            mesh,
+            points,
+            fe_mpm.NeoHookean(10e6 / stress, 0.3, density=2000.0),
+            dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))],
+            tractions=[
+                fe_mpm.Traction(
+                    lambda x: np.isclose(x[0], 2.0) & (x[1] < 1.0 + 1e-9),
+                    (0.0, -30e3 / stress),
+                    scale=lambda t: t,
+                )
+            ],
+            body_force=(0.0, -9.81 / acceleration),
+        )
+        reports = sim.run(1.0, 3, progress=False)
+        return [r.newton_iterations for r in reports], points.x.copy(), reports
+
+    (si, x_si, reports), (ns, x_ns, _) = run(1.0, 1.0), run(1e18, 1e18)
+    assert ns == si and min(si) >= 2
+    assert max(r.relative_residual for r in reports) < 1e-10
+    np.testing.assert_allclose(x_ns, x_si, rtol=0, atol=1e-12)

@@ -17,6 +17,8 @@ References:
   stretching face against Gibson and Anderson's curve.)
 """
 
+import warnings
+
 import numpy as np
 import pytest
 from test_taylor import assert_first_step_is_consistent
@@ -274,3 +276,43 @@ def test_a_corner_no_occupied_cell_reaches_moves_with_its_point():
     moved = np.full((len(w), 2), 0.01)  # what the points moved by
     step._move_corners(lambda cells, bary: np.full((len(cells), 2), 0.02), moved, w > 0)
     np.testing.assert_allclose(step.points.corners - before, 0.01, rtol=0, atol=1e-15)
+
+
+@pytest.mark.parametrize("curved", [False, True])
+def test_a_normal_that_points_into_the_body_is_warned(curved):
+    """A positive pressure pushes along −normal: given the inward normal it pulls.
+
+    A block on a grid that goes on above it, pressed on its top (a helper's probe,
+    2026-12-07: the normal (0, −1) pulled the block up by p times its top, said
+    nothing). Curved: the bore of a hole in a plate, pressed from the hole, whose outward
+    normal points to the centre.
+    """
+    if curved:
+        mesh = rectangle_mesh((-2.0, -2.0), (2.0, 2.0), (16, 16))
+        r = np.linalg.norm(cell_centroids(mesh), axis=1)
+        points = fe_mpm.seed(mesh, 3, cells=np.flatnonzero(r > 1.0))
+        angle = np.linspace(0.0, 2.0 * np.pi, 32, endpoint=False)
+        x = np.column_stack([np.cos(angle), np.sin(angle)])
+        outward, weight = -x, 2.0 * np.pi / 32
+        held = lambda x: np.isclose(np.abs(x).max(axis=0), 2.0)  # noqa: E731
+    else:
+        mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.5), (4, 6))
+        points = fe_mpm.seed(mesh, 3, cells=np.flatnonzero(cell_centroids(mesh)[:, 1] < 1.0))
+        x = np.column_stack([(np.arange(8) + 0.5) / 8, np.ones(8)])
+        outward, weight = np.array([0.0, 1.0]), 1 / 8
+        held = lambda x: np.isclose(x[1], 0.0)  # noqa: E731
+    said = {}
+    for sign in (1.0, -1.0):
+        sim = fe_mpm.Simulation(
+            mesh,
+            points,
+            fe_mpm.NeoHookean(E, 0.3),
+            dirichlet=[fe_mpm.Dirichlet(held)],
+            point_tractions=[fe_mpm.PointPressure("p", x, weight, sign * outward, P)],
+        )
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            sim.step(0.1)
+        said[sign] = [str(w.message) for w in caught if "into the body" in str(w.message)]
+    assert not said[1.0]
+    assert len(said[-1.0]) == 1 and "PointPressure 'p'" in said[-1.0][0]

@@ -14,6 +14,11 @@ def cell_centroids(mesh: dolfinx.mesh.Mesh) -> np.ndarray:
     gives the ``cells=`` of :func:`fe_mpm.seed`: each rank seeds the cells it owns.
     Affine cells only (the mean of the vertices).
     """
+    if not isinstance(mesh, dolfinx.mesh.Mesh):
+        hint = "; a scene's grid is scene.mesh" if hasattr(mesh, "mesh") else ""
+        raise TypeError(
+            f"cell_centroids: mesh must be a dolfinx Mesh, got {type(mesh).__name__}{hint}"
+        )
     owned = mesh.topology.index_map(mesh.topology.dim).size_local
     vertices = mesh.geometry.x[mesh.geometry.dofmaps[0][:owned]]  # (cells, t + 1, 3)
     return vertices[:, :, : mesh.geometry.dim].mean(axis=1)

@@ -79,6 +79,11 @@ def cook_membrane(
     margin = check_int("cook_membrane", "margin", margin, lo=0)
     if h is None:
         h = 44.0 / n
+    elif structured:  # (it was ignored)
+        raise ValueError(
+            "cook_membrane: h sizes the unstructured grid; give structured=False with it, "
+            "or n alone for the structured grid"
+        )
     check_range("cook_membrane", "h", h, lo=0.0, lo_open=True)
     layers = check_int("cook_membrane", "layers", layers, lo=1)
     if thickness is not None:

@@ -17,7 +17,7 @@ from mpi4py import MPI
 import gmsh
 import numpy as np
 
-from fe_mpm.checks import check_range
+from fe_mpm.checks import check_int, check_range
 from fe_mpm.meshes.gmsh_session import gmsh_session, to_dolfinx
 
 #: Facet tag of the symmetry line x = 0.
@@ -256,7 +256,8 @@ def footing_points(B: float, n: int, thickness: float = 0.0) -> tuple[np.ndarray
         Positions (k, 2), base points first (at the segment midpoints), and weights
         (k,), all B/(2n) (m): every point carries the same penalty stiffness β·B/(2n).
     """
-    check_range("footing_points", "n", n, lo=1)
+    check_range("footing_points", "B", B, lo=0.0, lo_open=True)
+    n = check_int("footing_points", "n", n, lo=1)
     check_range("footing_points", "thickness", thickness, lo=0.0)
     spacing = B / (2 * int(n))
     s = (np.arange(int(n)) + 0.5) * spacing
