@@ -345,6 +345,25 @@ def boundary_facets(
     return np.asarray(facets, dtype=np.int32)
 
 
+def check_exterior(mesh: dolfinx.mesh.Mesh, facets: np.ndarray, owner: str, why: str) -> None:
+    """Refuse facets inside the grid, for a condition that needs a facet's one outward normal.
+
+    Args:
+        mesh: The grid.
+        facets: The condition's facets this rank owns (local indices).
+        owner: The condition's name in the message (``"Pressure 0"``).
+        why: The rest of the message: why it needs them outside, and what to do.
+
+    Raises:
+        ValueError: On every rank, when some rank owns a facet that is not exterior.
+    """
+    exterior = dolfinx.mesh.exterior_facet_indices(mesh.topology)  # owned ones only
+    inside = np.setdiff1d(facets, exterior)
+    if any_rank(mesh.comm, inside.size > 0):
+        count = int(mesh.comm.allreduce(int(inside.size)))
+        raise ValueError(f"{owner}: {count} of its facets lie inside the grid, {why}")
+
+
 def dirichlet_entities(
     mesh: dolfinx.mesh.Mesh,
     where: Where,

@@ -176,6 +176,9 @@ def write(sim, directory: str | Path) -> Path:
                 "bodies_at_start": sim._tears.bodies_at_start,
                 "tear_warned": sim._tears.warned,
                 "meeting_warned": sim._tears.meeting_warned,
+                "contact_steps": sim._contacts.steps,
+                "contact_since": sim._contacts.since,
+                "contact_warned": sim._contacts.warned,
                 # Warnings said once per run (a restored run would say them again).
                 "travel_warned": [bool(v) for v in sim._travel_warned],
                 "staged_at": sim._staged_at,
@@ -295,6 +298,10 @@ def read(sim, path: str | Path) -> Path:
     sim._tears.bodies_at_start = state.get("bodies_at_start")  # (absent before 2026-12-07)
     sim._tears.warned = bool(state.get("tear_warned", False))
     sim._tears.meeting_warned = bool(state.get("meeting_warned", False))
+    # Walls in contact and for how long (absent before 2026-12-07, night).
+    sim._contacts.steps = {k: int(v) for k, v in state.get("contact_steps", {}).items()}
+    sim._contacts.since = {k: float(v) for k, v in state.get("contact_since", {}).items()}
+    sim._contacts.warned = bool(state.get("contact_warned", False))
     sim._staged_at = state.get("staged_at")  # (absent before 2026-12-07, evening)
     travel_warned = state.get("travel_warned")  # (absent before 2026-12-07, evening)
     if travel_warned is not None and len(travel_warned) == len(sim._travel_warned):

@@ -16,7 +16,14 @@ import ufl
 
 from fe_mpm import parallel
 from fe_mpm._dolfinx import dolfinx
-from fe_mpm.boundary import Dirichlet, Pressure, Traction, boundary_facets, dirichlet_entities
+from fe_mpm.boundary import (
+    Dirichlet,
+    Pressure,
+    Traction,
+    boundary_facets,
+    check_exterior,
+    dirichlet_entities,
+)
 from fe_mpm.checks import check_range
 from fe_mpm.errors import warn
 from fe_mpm.formulations import GridFields, constrained_space
@@ -24,30 +31,6 @@ from fe_mpm.transfer import summed_over_ranks
 
 #: A traction's lost share is warned about again when it grows by this much.
 LOST_LOAD_WARNING_STEP = 0.005
-
-
-def _check_exterior(mesh: dolfinx.mesh.Mesh, facets: np.ndarray, owner: str) -> None:
-    """Refuse facets inside the grid: a pressure needs the one outward normal of a facet.
-
-    Args:
-        mesh: The grid.
-        facets: The load's facets this rank owns (local indices).
-        owner: The load's name in the message (``"Pressure 0"``).
-
-    Raises:
-        ValueError: On every rank, when some rank owns a facet that is not exterior.
-    """
-    exterior = dolfinx.mesh.exterior_facet_indices(mesh.topology)  # owned ones only
-    inside = np.setdiff1d(facets, exterior)
-    if parallel.any_rank(mesh.comm, inside.size > 0):
-        count = parallel.total(mesh.comm, int(inside.size))
-        raise ValueError(
-            f"{owner}: {count} of its facets lie inside the grid, where a facet has no "
-            "outward normal to push along; a Pressure acts on the grid's outer boundary, "
-            "so make the loaded face a boundary of the grid (a hole in it, as "
-            "meshes.quarter_ring does), or load it with a PointPressure on points along "
-            "the face (meshes.facet_points)"
-        )
 
 
 def facet_node_weights(
@@ -193,7 +176,15 @@ class GridConditions:
             # A rank's facets by tag include its ghosts, which their owner counts.
             owned = facets[facets < mesh.topology.index_map(fdim).size_local]
             if isinstance(spec, Pressure):
-                _check_exterior(mesh, owned, label)
+                check_exterior(
+                    mesh,
+                    owned,
+                    label,
+                    "where a facet has no outward normal to push along; a Pressure acts on "
+                    "the grid's outer boundary, so make the loaded face a boundary of the "
+                    "grid (a hole in it, as meshes.quarter_ring does), or load it with a "
+                    "PointPressure on points along the face (meshes.facet_points)",
+                )
                 value = dolfinx.fem.Constant(mesh, 0.0)
                 term = -value * ufl.FacetNormal(mesh)
             else:

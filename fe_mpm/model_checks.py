@@ -156,7 +156,8 @@ def warn_trapezoid_on_walls(dynamic: bool, walls) -> None:
             "(bossak_alpha left at its default, 0): a body that lands on a wall can leave it "
             "faster than it came (an elastic cube dropped on a smooth floor gained 26 % "
             "of its energy in one bounce; with bossak_alpha=-0.3, as the demos on walls "
-            "take, it lost some). Pass bossak_alpha=-0.3, or 0 where nothing lands."
+            "take, it lost some). Pass bossak_alpha=-0.3, or 0 where nothing lands, and "
+            "take steps that put several in each contact (docs/dynamics.md)."
         )
 
 

@@ -56,7 +56,10 @@ class StepReport:
         relative_residual: The last ‖R‖ over ``force_scale``.
         lost_load: Share of each grid ``Traction``'s or ``Pressure``'s load that acts
             on nodes with no material, so it is lost (``"Traction 0"`` -> share in
-            [0, 1], named by its place in ``tractions=``); only loads that lose some.
+            [0, 1], named by its place in ``tractions=``), and of each
+            ``PointTraction``'s or ``PointPressure``'s weight whose points lie in no
+            occupied cell, so their load is not applied (by its name); only loads
+            that lose some.
         failed_iterations: Newton iterations spent since the last accepted step on
             set-ups that failed (a placement of the points whose Newton solves all
             failed, or a step length that was then cut, see :mod:`fe_mpm.retry`);

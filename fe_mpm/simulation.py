@@ -89,8 +89,13 @@ from fe_mpm.step_forms import (
     StepInProgress,
 )
 from fe_mpm.tracker import Tracker
-from fe_mpm.tracking import PointTracking, cell_fill_anywhere, check_points_per_cell
-from fe_mpm.walls import RigidWalls, write_wall_forces
+from fe_mpm.tracking import (
+    PointTracking,
+    cell_fill_anywhere,
+    check_points_per_cell,
+    hinged_cells,
+)
+from fe_mpm.walls import ContactWatch, RigidWalls, write_wall_forces
 
 #: A run ends when less than this fraction of its nominal step is left to ``t_end``.
 END_OF_RUN = 1e-12
@@ -475,8 +480,10 @@ class Simulation:
         # whether the run was warned (once).
         self._passes_checked_dt, self._passes_warned = 0.0, False
         self._nonfinite_warned = False  # said once: a NaN in a Jacobian, not its residual
+        self._hinge_warned = False  # said once: a static step's hinged cells
         self._crossing_warned = False  # said once: a static standard run's points crossed
         self._tears = TearWatch()  # the material came apart (said once)
+        self._contacts = ContactWatch()  # a dynamic contact of a step or two (said once)
         self._restart_dynamics = False  # points were added: accelerations anew
         self._csv_head: StepReport | None = None
         self._grid_is_a_step = True  # the grid's fields are the last step's (or zero)
@@ -1273,6 +1280,8 @@ class Simulation:
                 nonfinite,
                 self._newton.where_it_failed(),
             )
+        if not self.dynamic and self.domains is None and not self._hinge_warned:
+            self._warn_hinges(layout, k, t_new)
         self.refresh_material(tangent=False)  # the converged iterate's, for reactions and history
         grid_energy = (
             0.0
@@ -1286,6 +1295,8 @@ class Simulation:
         if self._boundary is not None:
             reactions.update(self._boundary.convect(forms, t_new, self.fields.displacement_at))
         walls = self.walls.finish_step()
+        if self.dynamic:
+            self._contacts.look(walls, self.t, t_new)
         reactions.update({name: force.total for name, force in walls.items()})
         self._add_time("update", t0)
         if self._domains_would_do and not self._crossing_warned and self.spec.u_degree == 1:
@@ -1303,12 +1314,49 @@ class Simulation:
             k, t_new, result, self._current, reactions, self.markers, self.tracking, self.conditions
         )
         report.walls, report.grid_kinetic_energy = walls, grid_energy
+        if self._boundary is not None:
+            report.lost_load.update(self._boundary.lost_load)
         self.history.append(report)
         if self._writes_csv:  # (with domains the output is set aside in the step)
             self._unwritten.append(report)
         self._grid_is_a_step = self._cells_of_grid = True  # accepted: its frame may be written
         self._write_output()
         return report
+
+    def _warn_hinges(self, layout: SlotLayout, k: int, t_new: float) -> None:
+        """Warn (once, collective) where a converged static step had hinged cells.
+
+        A cell that shares one node with the rest of the body swings freely about it,
+        and the static tangent is singular there; the solver then returns one of the
+        swings and Newton converges on it. Found 2026-12-07 by a helper: a block
+        turned rigidly through 90° in 16 steps by PointDirichlet points on two of its
+        edges (cells of 0.1 m, three points each, u) ended with two corner points
+        turned by −25° and 3.5 cm from where the turn put them, every step converged
+        (one or four steps, or point domains: exact to 1e-11). A cell held by a
+        Dirichlet condition at another node, or by a penalty point, is not hinged.
+        """
+        held = np.concatenate([np.zeros(0, np.int64), *self.conditions.dirichlet_nodes])
+        tied = None
+        if self._boundary is not None and self._boundary.layout is not None:
+            pp = self._boundary.points
+            stiff = pp.stiffness[self._boundary._active].any(axis=1)
+            tied = self._boundary.layout.cell[stiff]
+        hinged, count = hinged_cells(self.mesh, layout.occupied, held, tied)
+        if count == 0:
+            return
+        self._hinge_warned = True
+        first = parallel.first_given(
+            self.mesh.comm, self.tracker.centroids[hinged[0]] if hinged.size else None
+        )
+        warn(
+            f"Static step {k} (t = {self.t:g} -> {t_new:g}): {count} occupied cell(s) "
+            f"shared at most one node with the rest of the material (first near x = "
+            f"{first}). Such a cell swings freely about that node, so the step's answer "
+            "there is one swing of many, and its points' F and places may be wrong though "
+            "the step converged (a block turned 90 degrees in 16 steps ended with two "
+            "corner points turned by -25 degrees). point_domains=True, a coarser grid or "
+            "dynamic=True avoids it (said once)."
+        )
 
     def _warn_passes_against_step(self, dt: float) -> None:
         """Warn (once, collective) where projection passes meet too long a step.

@@ -294,7 +294,10 @@ LEAVING_ADVICE = (
     "holds goes out with it, however short the steps: put the moving "
     "condition on facets inside the grid, with empty cells beyond them; if it "
     "holds the edge still, the step moved the nodes beside it by more than "
-    "their cells, turning those cells over: take shorter steps."
+    "their cells, turning those cells over: take shorter steps. Where a RigidWall is "
+    "that edge, the body went through its springs: an impact that the steps resolve "
+    "in one or two does (a disk dropped on a wall, 2026-12-07), so take steps of a "
+    "fifth of the contact or shorter (docs/dynamics.md)."
 )
 
 
@@ -461,29 +464,48 @@ def sparse_mass_diagnosis(
     )
 
 
-def hinge_diagnosis(mesh: dolfinx.mesh.Mesh, layout: SlotLayout, centroids: np.ndarray) -> str:
-    """Explain a singular tangent by occupied cells hinged to the rest at one node.
+def hinged_cells(
+    mesh: dolfinx.mesh.Mesh,
+    occupied: np.ndarray,
+    held_nodes: np.ndarray | None = None,
+    tied_cells: np.ndarray | None = None,
+) -> tuple[np.ndarray, int]:
+    """The occupied cells hinged to the rest at one node: this rank's, and the count.
 
     A P1 simplex has a constant strain whatever number of points it holds, so an
     occupied cell that shares at most one node with the other occupied cells can
     rotate freely about it: a mechanism of quasi-static MPM that appears when points
-    cross into empty cells. Returns "" when no cell is hinged. Collective: the nodes'
-    uses are counted over every rank, so a cell beside another rank's is not taken for
-    hinged, and every rank returns the same words (on two ranks one rank's message
-    named a hinged cell and the other's did not; a helper's trench, 2026-12-06).
+    cross into empty cells. A node in ``held_nodes`` (geometry nodes a condition
+    holds) counts as shared, and a cell in ``tied_cells`` (one that a penalty point
+    holds) is not hinged. Collective: the nodes' uses are counted over every rank, so
+    a cell beside another rank's is not taken for hinged (on two ranks one rank's
+    message named a hinged cell and the other's did not; a helper's trench,
+    2026-12-06).
     """
-    comm = mesh.comm
-    nodes = mesh.geometry.dofmaps[0][layout.occupied]
+    nodes = mesh.geometry.dofmaps[0][occupied]
     index_map = mesh.geometry.index_map()
     uses = np.zeros(index_map.size_local + index_map.num_ghosts)
     np.add.at(uses, nodes.ravel(), 1.0)
+    if held_nodes is not None:
+        uses[np.asarray(held_nodes, dtype=np.int64)] += 2.0  # shared, on every rank
     uses = summed_over_ranks(index_map, uses)
     shared = (uses[nodes] > 1).sum(axis=1)
-    hinged = layout.occupied[shared <= 1]
-    count = int(parallel.total(comm, int(hinged.size)))
+    hinged = occupied[shared <= 1]
+    if tied_cells is not None:
+        hinged = np.setdiff1d(hinged, tied_cells)
+    return hinged, int(parallel.total(mesh.comm, int(hinged.size)))
+
+
+def hinge_diagnosis(mesh: dolfinx.mesh.Mesh, layout: SlotLayout, centroids: np.ndarray) -> str:
+    """Explain a singular tangent by occupied cells hinged to the rest at one node.
+
+    See :func:`hinged_cells`. Returns "" when no cell is hinged. Collective: every
+    rank returns the same words.
+    """
+    hinged, count = hinged_cells(mesh, layout.occupied)
     if count == 0:
         return ""
-    first = parallel.first_given(comm, centroids[hinged[0]] if hinged.size else None)
+    first = parallel.first_given(mesh.comm, centroids[hinged[0]] if hinged.size else None)
     return (
         f"{count} occupied cell(s) share at most one node with the rest of the "
         f"material (first near x = {first}); such a cell can swing about that "

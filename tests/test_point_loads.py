@@ -134,3 +134,23 @@ def test_a_point_outside_its_cell_is_pulled_onto_the_cell_and_one_inside_is_left
     assert np.all(tracker.barycentric(moved, cell).min(axis=1) >= -1e-12)
     # A point straight across a facet goes straight onto it, not along a barycentric ray.
     assert np.allclose(moved[1:], [[1.0, 0.05], [0.3, 0.0]], atol=1e-15)
+
+
+def test_the_share_of_a_point_load_that_acts_on_nothing_is_reported_and_warned():
+    """Points of a load in no occupied cell load nothing (a helper's cantilever ended
+    with 7/8 of its tip load, told once without the share, 2026-12-07): the step's
+    report has the share of the load's weight lost, and the warning says it."""
+    mesh = rectangle_mesh((0.0, 0.0), (2.0, 1.0), (8, 4))
+    body = np.flatnonzero(cell_centroids(mesh)[:, 0] < 1.0)
+    points = fe_mpm.seed(mesh, 3, cells=body)
+    face = np.column_stack([np.ones(6), (np.arange(6) + 0.5) / 6])
+    stray = np.array([[1.8, 0.5], [1.9, 0.5]])  # three cells past the face
+    load = fe_mpm.PointTraction("tip", np.vstack([face, stray]), 1 / 6, (0.0, -1e3))
+    sim = fe_mpm.Simulation(
+        mesh, points, fe_mpm.NeoHookean(1e6, 0.3), point_tractions=[load],
+        dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0))],
+    )  # fmt: skip
+    with pytest.warns(UserWarning, match=r"2 of the 8 points of PointTraction 'tip' lie in no "):
+        report = sim.step(1.0)
+    assert report.lost_load == {"tip": pytest.approx(0.25)}
+    np.testing.assert_allclose(report.reactions["tip"], [0.0, -1e3], rtol=1e-12)

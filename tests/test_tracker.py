@@ -1,6 +1,7 @@
 """Tracker: points crossing cells, points on facets and vertices, points leaving the grid."""
 
 import re
+import warnings
 
 import numpy as np
 import pytest
@@ -356,3 +357,37 @@ def test_a_point_past_a_vertex_takes_the_allowed_cell_within_its_reach():
     assert tracker.barycentric(x, np.array([cell])).min() >= -0.5
     assert tracker.within_reach(x, np.array([cell]), 0.5)[0]
     assert tracker.claim(x, allowed, 0.5)[0][0] == cell
+
+
+def test_a_static_step_with_a_cell_hinged_at_one_node_is_warned_unless_something_holds_it():
+    """A cell that meets the body at one node swings freely about it; the step still
+    converges, on one swing of many (a helper's block turned 90 degrees in 16 steps
+    ended with two corner points turned by -25 degrees, 2026-12-07)."""
+    mesh = fe_mpm.meshes.rectangle_mesh((0.0, 0.0), (1.0, 1.0), (4, 4))
+    c = fe_mpm.meshes.cell_centroids(mesh)
+    body = (c[:, 0] < 0.5) & (c[:, 1] < 0.5)
+    # The triangle beyond the body's corner (0.5, 0.5) with no other node on the body.
+    corner = np.flatnonzero((c[:, 0] > 0.5) & (c[:, 0] < 0.75) & (c[:, 1] > 0.5) & (c[:, 1] < 0.75))
+    nodes = mesh.geometry.x[mesh.geometry.dofmaps[0][corner], :2]
+    lone = corner[np.isclose(nodes, [0.75, 0.5]).all(axis=2).any(axis=1)]  # below the diagonal
+    assert lone.size == 1
+    base = fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))
+    said = {}
+    for case, cells, held in [
+        ("hinged", np.flatnonzero(body).tolist() + lone.tolist(), [base]),
+        ("no hinge", np.flatnonzero(body), [base]),
+        ("held", np.flatnonzero(body).tolist() + lone.tolist(),
+         [base, fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.75) & (x[1] > 0.4))]),
+    ]:  # fmt: skip
+        points = fe_mpm.seed(mesh, 3, cells=np.asarray(cells))
+        sim = fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1e6, 0.3), dirichlet=held)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            sim.step(0.5)
+            sim.step(1.0)
+        said[case] = [str(w.message) for w in caught if "swings freely" in str(w.message)]
+    assert (
+        len(said["hinged"]) == 1
+        and "Static step 1 (t = 0 -> 0.5): 1 occupied cell" in (said["hinged"][0])
+    )
+    assert not said["no hinge"] and not said["held"]

@@ -672,3 +672,58 @@ def test_a_restored_run_keeps_the_walls_springs(tmp_path, domains):
         wall.extension.x.array[:] = 0.0
     lost = steps_11_to_20(forgetful, forgetful_points)
     assert np.abs(np.subtract(lost, expected)).max() > 2e-10
+
+
+def test_an_impact_of_a_step_or_two_on_a_wall_is_warned_and_gains_energy():
+    """An elastic disk dropped on a smooth wall with Bossak's α_B = −0.3 (a new user's
+    scene, 2026-12-07): with steps of 12.5 ms the wall pushes for two of them, and the
+    disk leaves with more energy than it brought, which the run now says."""
+    from fe_mpm import meshes
+    from fe_mpm.walls import SHORT_CONTACT_STEPS, ContactWatch, WallForces
+
+    grid = rectangle_mesh((0.0, 0.0), (1.0, 1.3), (20, 26))
+    points = fe_mpm.seed(meshes.disk((0.5, 0.5), 0.2, 0.05).mesh, per_cell=3, density=1000.0)
+    law = fe_mpm.NeoHookean(1e7, 0.3, 1000.0)
+    sim = fe_mpm.Simulation(
+        grid, points, law, dynamic=True, bossak_alpha=-0.3, body_force=(0.0, -G),
+        walls=[fe_mpm.RigidWall("floor", on_base)],
+    )  # fmt: skip
+    m = points.mass
+
+    def energy():
+        strain = (points.volume / np.linalg.det(points.F)) @ law.stored_energy(points.F)
+        return 0.5 * m @ (points.velocity**2).sum(axis=1) + strain + G * m @ points.x[:, 1]
+
+    start, pushed = energy(), []
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        for _ in range(24):  # to t = 0.3 s: contact from t = 0.2375 s
+            pushed.append(sim.step(sim.t + 0.0125).walls["floor"].normal > 0.0)
+    said = [str(w.message) for w in caught if "a contact lasted only" in str(w.message)]
+    assert sum(pushed) == 2 and not pushed[-1]
+    assert energy() > 1.01 * start
+    assert len(said) == 1 and "RigidWall 'floor': a contact lasted only 2 step(s)" in said[0]
+    # One step more in contact is not warned.
+    watch, zero = ContactWatch(), np.zeros(2)
+    for normal in [1.0] * (SHORT_CONTACT_STEPS + 1) + [0.0]:
+        force = WallForces(zero, normal, zero, np.zeros((0, 2)), np.zeros((0, 2)), zero, zero)
+        watch.look({"floor": force}, 0.0, 1.0)
+    assert not watch.warned
+
+
+def test_a_wall_given_the_tag_of_facets_inside_the_grid_is_refused():
+    """A helper's incline, a line gmsh's fragment kept inside the grid (2026-12-07): its
+    wall took its normal from either side, reported no force, and on one grid let a
+    block fall through. A marker already found no boundary facet there."""
+    from fe_mpm._dolfinx import dolfinx
+
+    grid = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (4, 4))
+    fdim = grid.topology.dim - 1
+    middle = dolfinx.mesh.locate_entities(grid, fdim, lambda x: np.isclose(x[1], 0.5))
+    tags = dolfinx.mesh.meshtags(grid, fdim, middle, np.full(middle.size, 11, dtype=np.int32))
+    points = fe_mpm.seed(grid, 3, cells=np.flatnonzero(cell_centroids(grid)[:, 1] > 0.5))
+    with pytest.raises(ValueError, match=r"RigidWall 'ledge': 4 of its facets lie inside the grid"):
+        fe_mpm.Simulation(
+            grid, points, fe_mpm.NeoHookean(1e6, 0.3, 1000.0), dynamic=True, facet_tags=tags,
+            walls=[fe_mpm.RigidWall("ledge", 11)], bossak_alpha=-0.3,
+        )  # fmt: skip

@@ -101,10 +101,17 @@ class NewmarkData:
 
         Raises:
             ValueError: A step so short that 1/(β Δt²) is not a finite number (a bare
-                ZeroDivisionError until 2026-12-07).
+                ZeroDivisionError until 2026-12-07), or so long that β Δt² is not (an
+                OverflowError).
         """
         beta, gamma = newmark_parameters(float(self.bossak.value))
-        if not 0.0 < beta * dt**2 < math.inf or not math.isfinite(1.0 / (beta * dt**2)):
+        scale = beta * dt * dt  # (dt**2 raised OverflowError past 1e154 s)
+        if not scale < math.inf:
+            raise ValueError(
+                f"Simulation: a dynamic step of {dt:.3g} s is too long for Newmark's rule "
+                "(β Δt² is not a finite number)"
+            )
+        if not 0.0 < scale or not math.isfinite(1.0 / scale):
             raise ValueError(
                 f"Simulation: a dynamic step of {dt:.3g} s is too short for Newmark's rule "
                 f"(1/(β Δt²) is not a finite number); take steps of at least "
