@@ -175,16 +175,27 @@ class GridConditions:
             facets = boundary_facets(mesh, spec.where, facet_tags, label, hint)
             # A rank's facets by tag include its ghosts, which their owner counts.
             owned = facets[facets < mesh.topology.index_map(fdim).size_local]
-            if isinstance(spec, Pressure):
-                check_exterior(
-                    mesh,
-                    owned,
-                    label,
-                    "where a facet has no outward normal to push along; a Pressure acts on "
-                    "the grid's outer boundary, so make the loaded face a boundary of the "
-                    "grid (a hole in it, as meshes.quarter_ring does), or load it with a "
-                    "PointPressure on points along the face (meshes.facet_points)",
-                )
+            pressure = isinstance(spec, Pressure)
+            # (a Traction by tag of facets inside the grid ran on, its load left on that
+            # grid line as the face moved off it: 15 % short, a helper's plate, 2026-12-07)
+            kind, carrier = (
+                ("Pressure", "PointPressure") if pressure else ("Traction", "PointTraction")
+            )
+            why = (
+                "where a facet has no outward normal to push along"
+                if pressure
+                else "where the load stays on that grid line as the body's face moves off it"
+            )
+            check_exterior(
+                mesh,
+                owned,
+                label,
+                f"{why}; a {kind} acts on the grid's outer boundary, so make the loaded face "
+                "a boundary of the grid (a hole in it, as meshes.quarter_ring does, or no "
+                f"grid beyond it), or load it with a {carrier} on points along the face "
+                "(meshes.facet_points)",
+            )
+            if pressure:
                 value = dolfinx.fem.Constant(mesh, 0.0)
                 term = -value * ufl.FacetNormal(mesh)
             else:

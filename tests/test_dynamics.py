@@ -202,7 +202,7 @@ def test_the_inertia_norm_of_the_force_scale_is_the_lumped_inertia_force(formula
     assert np.all(np.maximum(internal[1:], inertia[1:]) < 1e-12 * internal[0])
 
 
-def test_a_dynamic_step_too_short_for_newmarks_rule_is_refused_by_name():
+def test_a_dynamic_step_too_short_or_too_long_for_newmarks_rule_is_refused_by_name():
     """Found 2026-12-07: ``run(1e-300, 1)`` ended in a bare ZeroDivisionError from
     1/(β Δt²); it is now refused, saying how short a step may be."""
     mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (4, 4))
@@ -210,6 +210,9 @@ def test_a_dynamic_step_too_short_for_newmarks_rule_is_refused_by_name():
     sim = fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1000.0, 0.3), dynamic=True)
     with pytest.raises(ValueError, match=r"step of 1e-300 s is too short for Newmark's rule"):
         sim.run(1e-300, 1, progress=False)
+    # And one so long that β Δt² overflows (an OverflowError of dt**2 until that night).
+    with pytest.raises(ValueError, match=r"step of 1e\+300 s is too long for Newmark's rule"):
+        sim.step(1e300)
 
 
 def test_a_block_of_a_law_with_history_falls_freely():
