@@ -406,6 +406,8 @@ class Simulation:
             points.history[MATERIAL] = points.material.astype(np.float64)
         else:  # one law after a stage of several: no stale labels in the output
             points.history.pop(MATERIAL, None)
+        if initial_stress is not None:  # (its history complete)
+            model_checks.warn_initial_stress_outside_yield(mesh.comm, points, material)
         #: Whether the law keeps internal variables (plasticity), besides a point's law.
         self._plastic = bool(set(material.history) - {MATERIAL})
         # Elastic solids do not come apart, static or not; in dynamics a splash or a

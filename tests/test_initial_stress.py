@@ -408,3 +408,27 @@ def test_a_geostatic_stress_under_gravity_along_another_axis_is_warned():
     at_rest = fe_mpm.geostatic_stress(shifted, 6e6 + H, G, K0)
     assert not _imbalance_warnings(far, shifted, at_rest, (0.0, -G))
     assert _imbalance_warnings(far, shifted, at_rest, (0.0, G))
+
+
+def test_an_initial_stress_outside_the_yield_surface_is_warned():
+    """A Tresca layer started at K0 = 0.5, whose deviator reaches 2.4 c_u at its base
+    (a helper's excavation, 2026-12-07): it settled 0.86 mm in its first step at rest,
+    its base σ_xx moved by 58 %, without a word. At K0 = 1 it starts inside."""
+    cu, depth = 10e3, 5.0
+    mesh = rectangle_mesh((0.0, 0.0), (2.0, depth + 0.5), (4, 11))
+    said, outside = {}, {}
+    for K0 in (0.5, 1.0):
+        points = fe_mpm.seed(mesh, 3, density=2000.0, level_set=lambda x: depth - x[1])
+        stress = fe_mpm.geostatic_stress(points, depth, 9.81, K0)
+        outside[K0] = int((np.abs(stress[:, 0, 0] - stress[:, 1, 1]) > 2 * cu).sum())
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            fe_mpm.Simulation(
+                mesh, points, fe_mpm.MohrCoulomb.tresca(1e7, 0.45, cu), "u-nbva",
+                dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))],
+                body_force=(0.0, -9.81), initial_stress=stress,
+            )  # fmt: skip
+        said[K0] = [str(w.message) for w in caught if "outside the law's yield" in str(w.message)]
+    assert outside == {0.5: 144, 1.0: 0}  # the points past c_u, counted by hand
+    assert len(said[0.5]) == 1 and said[0.5][0].startswith("Simulation: 144 of the 240 points")
+    assert not said[1.0]
