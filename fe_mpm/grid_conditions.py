@@ -81,11 +81,6 @@ def body_force_at(body_force, t: float, g: int) -> np.ndarray:
 #: times the smallest cell beside them.
 MOVED_PAST_CELLS = 1.0
 
-#: A reaction boundary of which a Dirichlet condition holds less than this share of
-#: the dofs is warned about: what it reports is the held dofs' share of another
-#: condition's reaction (a side that meets a held base at a corner).
-HELD_SHARE = 0.5
-
 
 def follow_the_body(label: str) -> str:
     """What carries the load of the grid condition ``label`` on the body instead."""
@@ -232,12 +227,12 @@ class GridConditions:
         """Refuse a reaction boundary that no Dirichlet condition holds; collective.
 
         At a converged step the residual vanishes at every free dof, so a boundary
-        whose dofs nothing holds reports zero at every step, and one that shares a
-        corner node with a held edge reports that node's share of the edge's
-        reaction (a helper's probes, 2026-12-07: the grid's empty top and the free
-        side of a block on its base, without a word). The latter is warned about
-        where less than :data:`HELD_SHARE` of its dofs are held, by a condition
-        whose other dofs lie outside it.
+        whose dofs nothing holds reports zero at every step, and one that meets a held
+        edge only where that edge goes on past it (a corner) reports the shared
+        nodes' share of the edge's reaction (a helper's probes, 2026-12-07: the grid's
+        empty top and the free side of a block on its base, without a word). The
+        latter is warned about: a boundary that holds some condition whole (a roller
+        face, or the base itself) is not.
         """
         owned = self.fields.W.dofmap.index_map.size_local * self.fields.W.dofmap.index_map_bs
         held = [bc.dof_indices()[0] for *_, bc in self.dirichlet]
@@ -246,14 +241,13 @@ class GridConditions:
         for name, comps in self.reaction_dofs.items():
             dofs = np.concatenate(comps)
             dofs = dofs[dofs < owned]
-            on = np.zeros(dofs.size, dtype=bool)
-            partly = np.zeros(len(held), dtype=np.int64)  # per condition: dofs left out
-            for j, d in enumerate(held):
-                inside = np.isin(dofs, d)
-                on |= inside
-                partly[j] = np.count_nonzero(inside) and d.size - np.count_nonzero(inside)
-            total, on_held = parallel.total(comm, np.array([dofs.size, on.sum()], np.int64))
-            if on_held == 0:
+            # Per condition: its dofs on the boundary, and all of its dofs.
+            counts = np.array(
+                [[np.isin(dofs, d).sum(), d.size] for d in held], dtype=np.int64
+            ).reshape(-1, 2)
+            on, size = parallel.total(comm, counts).T if len(held) else (np.zeros(0),) * 2
+            total = parallel.total(comm, int(dofs.size))
+            if not on.any():
                 raise ValueError(
                     f"reactions[{name!r}]: no Dirichlet condition holds any of its "
                     f"{total} displacement dofs, so its reaction is zero at every "
@@ -262,13 +256,12 @@ class GridConditions:
                     "force is reported under its own name, a RigidWall's in "
                     "StepReport.walls"
                 )
-            if on_held < HELD_SHARE * total and parallel.total(comm, partly).any():
+            if not np.any((on == size) & (size > 0)):
                 warn(
-                    f"reactions[{name!r}]: Dirichlet conditions hold only {on_held} of "
-                    f"its {total} displacement dofs, where it meets a held boundary that "
-                    "goes on outside it, and the others carry no reaction: it reports the "
-                    "held dofs' share of that boundary's reaction, not a force on a face "
-                    "of its own"
+                    f"reactions[{name!r}]: it holds no Dirichlet condition whole, only "
+                    f"{int(on.max())} dofs of a held boundary that goes on past it (a "
+                    "corner): it reports those dofs' share of that boundary's reaction, "
+                    "not a force on a face of its own"
                 )
 
     def _dirichlet_bc(self, component: int | None, dim: int, entities: np.ndarray):

@@ -483,6 +483,7 @@ class Simulation:
         self._passes_checked_dt, self._passes_warned = 0.0, False
         self._nonfinite_warned = False  # said once: a NaN in a Jacobian, not its residual
         self._hinge_warned = False  # said once: a static step's hinged cells
+        self._shared_support_warned = False  # said once: penalty points in held cells
         self._crossing_warned = False  # said once: a static standard run's points crossed
         self._tears = TearWatch()  # the material came apart (said once)
         self._contacts = ContactWatch()  # a dynamic contact of a step or two (said once)
@@ -1284,6 +1285,8 @@ class Simulation:
             )
         if not self.dynamic and self.domains is None and not self._hinge_warned:
             self._warn_hinges(layout, k, t_new)
+        if self._boundary is not None and not self._shared_support_warned:
+            self._warn_shared_supports()
         self.refresh_material(tangent=False)  # the converged iterate's, for reactions and history
         grid_energy = (
             0.0
@@ -1325,6 +1328,63 @@ class Simulation:
         self._write_output()
         return report
 
+    def _penalty_cells(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """This step's acting penalty points: their cells, conditions and held components.
+
+        The components as a boolean (k, g) array.
+        """
+        pp, step = self._boundary.points, self._boundary
+        if step.layout is None:
+            return np.zeros(0, np.int32), np.zeros(0, np.int64), np.zeros((0, self.gdim), bool)
+        acting = np.flatnonzero(step._active)
+        held = pp.stiffness[acting] > 0.0
+        stiff = held.any(axis=1)
+        return step.layout.cell[stiff], pp.owner[acting[stiff]], held[stiff]
+
+    def _warn_shared_supports(self) -> None:
+        """Warn (once, collective) where penalty points act in cells a grid Dirichlet holds.
+
+        The penalty's share on a node that a grid condition holds in the same
+        component passes straight into the grid support, and both conditions' reported
+        forces count it. Found 2026-12-07 by a helper: a row of fixed penalty points in
+        the bottom cells of a block on a fixed base, its top pulled by 11.6 kN/m,
+        reported −49.4 kN/m and the base +36.3 kN/m (pushing up); their sum was the
+        support's force. (A footing's points beside a symmetry line's rollers are not
+        counted for the component the rollers leave free.)
+        """
+        cells, owners, components = self._penalty_cells()
+        nodes = self.mesh.geometry.dofmaps[0][cells]
+        shared = np.zeros(components.shape, dtype=bool)  # (points, g): held by both
+        for (spec, *_), held_nodes in zip(
+            self.conditions.dirichlet, self.conditions.dirichlet_nodes, strict=True
+        ):
+            held = np.zeros(self.mesh.geometry.x.shape[0], dtype=bool)
+            held[held_nodes] = True
+            near = held[nodes].any(axis=1)
+            both = components.copy() if spec.component is None else np.zeros_like(components)
+            if spec.component is not None:
+                both[:, spec.component] = components[:, spec.component]
+            shared |= both & near[:, None]
+        n = len(self._boundary.points.conditions)
+        count = np.zeros((n, self.gdim), dtype=np.int64)
+        np.add.at(count, owners, shared.astype(np.int64))
+        count = parallel.total(self.mesh.comm, count)
+        if not count.any():
+            return
+        self._shared_support_warned = True
+        k = int(np.argmax(count.max(axis=1)))
+        axes = ", ".join("xyz"[c] for c in np.flatnonzero(count[k]))
+        warn(
+            f"PointDirichlet {self._boundary.points.conditions[k].name!r}: "
+            f"{int(count[k].max())} of its acting points lie in cells that a grid Dirichlet "
+            f"condition holds at a node, both holding {axes}. The penalty's share on those "
+            "nodes passes straight into that support, so in "
+            f"{axes} both the PointDirichlet's reported force and the Dirichlet's reaction "
+            "count it, and only their sum is the support's force on the body; the other "
+            "components are the body's (docs/user_scenes.md, Conditions that share nodes; "
+            "said once)."
+        )
+
     def _warn_hinges(self, layout: SlotLayout, k: int, t_new: float) -> None:
         """Warn (once, collective) where a converged static step had hinged cells.
 
@@ -1338,11 +1398,7 @@ class Simulation:
         Dirichlet condition at another node, or by a penalty point, is not hinged.
         """
         held = np.concatenate([np.zeros(0, np.int64), *self.conditions.dirichlet_nodes])
-        tied = None
-        if self._boundary is not None and self._boundary.layout is not None:
-            pp = self._boundary.points
-            stiff = pp.stiffness[self._boundary._active].any(axis=1)
-            tied = self._boundary.layout.cell[stiff]
+        tied = None if self._boundary is None else self._penalty_cells()[0]
         hinged, count = hinged_cells(self.mesh, layout.occupied, held, tied)
         if count == 0:
             return

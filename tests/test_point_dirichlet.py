@@ -337,3 +337,37 @@ def test_a_footing_a_cell_above_the_soil_does_not_grip_it():
     touching = _footing_force_across_a_gap(0.0)
     assert touching < -1e5
     assert _footing_force_across_a_gap(0.2) == 0.0
+
+
+def test_penalty_points_in_cells_a_grid_condition_holds_are_warned_by_component():
+    """A helper's pin (2026-12-07): fixed penalty points in the bottom cells of a block
+    on a fixed base, its top pulled up 1 cm. The pin reported −49.4 kN/m and the base
+    +36.3 kN/m, pushing up, where the pull was 13.2 kN/m: the penalty's share on the
+    base's nodes goes straight into the base. Their sum is the support's force, and
+    the run says so, naming the components both hold."""
+    E, h = 1e6, 0.125
+    mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.5), (8, 12))
+    xs = (np.arange(16) + 0.5) / 16
+
+    def platen(name, y, value, **options):
+        x = np.column_stack([xs, np.full(16, y)])
+        return fe_mpm.PointDirichlet(name, x, 1 / 16, value, 1e3 * E / h, **options)
+
+    top = platen("top", 1.0, lambda t: (0.0, 0.01 * t))
+    pin = platen("pin", h / 4, lambda t: (0.0, 0.0), reach=0.0)
+    base = lambda x: np.isclose(x[1], 0.0)  # noqa: E731
+    for supports, said in [([top], None), ([top, pin], "'pin': 16 of its acting points")]:
+        sim = fe_mpm.Simulation(
+            mesh, fe_mpm.seed(mesh, 3, level_set=lambda x: 1.0 - x[1]), fe_mpm.NeoHookean(E, 0.3),
+            dirichlet=[fe_mpm.Dirichlet(base)], point_dirichlet=supports, reactions={"base": base},
+        )  # fmt: skip
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            forces = sim.run(1.0, 1, progress=False)[-1].reactions
+        told = [str(w.message) for w in caught if "passes straight into" in str(w.message)]
+        np.testing.assert_allclose(sum(forces.values()), 0.0, atol=1e-6)
+        if said is None:
+            assert not told
+        else:
+            assert len(told) == 1 and said in told[0] and "both holding x, y" in told[0]
+            assert forces["base"][1] > 0.0 > forces["pin"][1]  # the base pushes up
