@@ -179,6 +179,8 @@ def write(sim, directory: str | Path) -> Path:
                 "contact_steps": sim._contacts.steps,
                 "contact_since": sim._contacts.since,
                 "contact_warned": sim._contacts.warned,
+                "hinge_warned": sim._hinge_warned,
+                "shared_support_warned": sim._shared_support_warned,
                 # Warnings said once per run (a restored run would say them again).
                 "travel_warned": [bool(v) for v in sim._travel_warned],
                 "staged_at": sim._staged_at,
@@ -302,6 +304,8 @@ def read(sim, path: str | Path) -> Path:
     sim._contacts.steps = {k: int(v) for k, v in state.get("contact_steps", {}).items()}
     sim._contacts.since = {k: float(v) for k, v in state.get("contact_since", {}).items()}
     sim._contacts.warned = bool(state.get("contact_warned", False))
+    sim._hinge_warned = bool(state.get("hinge_warned", False))
+    sim._shared_support_warned = bool(state.get("shared_support_warned", False))
     sim._staged_at = state.get("staged_at")  # (absent before 2026-12-07, evening)
     travel_warned = state.get("travel_warned")  # (absent before 2026-12-07, evening)
     if travel_warned is not None and len(travel_warned) == len(sim._travel_warned):

@@ -81,6 +81,11 @@ def body_force_at(body_force, t: float, g: int) -> np.ndarray:
 #: times the smallest cell beside them.
 MOVED_PAST_CELLS = 1.0
 
+#: A reaction boundary of whose nodes Dirichlet conditions hold less than this share
+#: in every component is warned about: it reports a corner's share of another
+#: boundary's reaction.
+HELD_SHARE = 0.5
+
 
 def follow_the_body(label: str) -> str:
     """What carries the load of the grid condition ``label`` on the body instead."""
@@ -228,40 +233,44 @@ class GridConditions:
 
         At a converged step the residual vanishes at every free dof, so a boundary
         whose dofs nothing holds reports zero at every step, and one that meets a held
-        edge only where that edge goes on past it (a corner) reports the shared
-        nodes' share of the edge's reaction (a helper's probes, 2026-12-07: the grid's
-        empty top and the free side of a block on its base, without a word). The
-        latter is warned about: a boundary that holds some condition whole (a roller
-        face, or the base itself) is not.
+        edge only at a corner reports the corner's share of the edge's reaction (a
+        helper's probes, 2026-12-07: the grid's empty top and the free side of a block
+        on its base, without a word). The latter is warned about where, in every
+        component, less than :data:`HELD_SHARE` of its nodes are held (a roller face
+        holds all of them in one component) and it holds no condition whole (a marker
+        of the grid's whole boundary holds the base).
         """
         owned = self.fields.W.dofmap.index_map.size_local * self.fields.W.dofmap.index_map_bs
-        held = [bc.dof_indices()[0] for *_, bc in self.dirichlet]
-        held = [dofs[dofs < owned] for dofs in held]
+        each = [bc.dof_indices()[0] for *_, bc in self.dirichlet]
+        each = [dofs[dofs < owned] for dofs in each]
+        held = np.concatenate([np.zeros(0, np.int32), *each])
         comm = self.mesh.comm
         for name, comps in self.reaction_dofs.items():
             dofs = np.concatenate(comps)
-            dofs = dofs[dofs < owned]
-            # Per condition: its dofs on the boundary, and all of its dofs.
+            # Conditions it holds whole (the base, inside a marker of the whole boundary).
+            whole = np.array([[np.isin(d, dofs).sum(), d.size] for d in each], np.int64)
+            whole = parallel.total(comm, whole.reshape(-1, 2))
+            holds_one = bool(np.any((whole[:, 0] == whole[:, 1]) & (whole[:, 1] > 0)))
             counts = np.array(
-                [[np.isin(dofs, d).sum(), d.size] for d in held], dtype=np.int64
-            ).reshape(-1, 2)
-            on, size = parallel.total(comm, counts).T if len(held) else (np.zeros(0),) * 2
-            total = parallel.total(comm, int(dofs.size))
+                [[np.isin(d[d < owned], held).sum(), np.count_nonzero(d < owned)] for d in comps],
+                dtype=np.int64,
+            )
+            on, nodes = parallel.total(comm, counts).T  # per component
             if not on.any():
                 raise ValueError(
                     f"reactions[{name!r}]: no Dirichlet condition holds any of its "
-                    f"{total} displacement dofs, so its reaction is zero at every "
-                    "converged step (the residual vanishes where nothing is held). Name "
-                    "a boundary that a Dirichlet condition holds; a PointDirichlet's "
+                    f"{int(nodes.sum())} displacement dofs, so its reaction is zero at "
+                    "every converged step (the residual vanishes where nothing is held). "
+                    "Name a boundary that a Dirichlet condition holds; a PointDirichlet's "
                     "force is reported under its own name, a RigidWall's in "
                     "StepReport.walls"
                 )
-            if not np.any((on == size) & (size > 0)):
+            if np.all(on < HELD_SHARE * nodes) and not holds_one:
                 warn(
-                    f"reactions[{name!r}]: it holds no Dirichlet condition whole, only "
-                    f"{int(on.max())} dofs of a held boundary that goes on past it (a "
-                    "corner): it reports those dofs' share of that boundary's reaction, "
-                    "not a force on a face of its own"
+                    f"reactions[{name!r}]: Dirichlet conditions hold only {int(on.max())} of "
+                    f"its {int(nodes.max())} nodes (a corner shared with a held edge): it "
+                    "reports their share of that edge's reaction, not a force on a face of "
+                    "its own"
                 )
 
     def _dirichlet_bc(self, component: int | None, dim: int, entities: np.ndarray):

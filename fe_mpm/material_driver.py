@@ -40,7 +40,8 @@ class MaterialDriver:
 
     def __init__(self, material, n: int = 1, gdim: int = 3):
         n = check_int("MaterialDriver", "n", n, lo=1)
-        if gdim not in (2, 3) or isinstance(gdim, bool):
+        gdim = check_int("MaterialDriver", "gdim", gdim)
+        if gdim not in (2, 3):
             raise ValueError(f"MaterialDriver: gdim must be 2 (plane strain) or 3, got {gdim!r}")
         self.material, self.n, self.gdim = material, n, gdim
         g = gdim

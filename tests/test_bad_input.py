@@ -1312,7 +1312,7 @@ def test_a_penalty_far_above_1e3_E_over_h_and_an_unheld_reaction_are_told():
         )
     side = {"side": lambda x: np.isclose(x[0], 0.0)}
     with pytest.warns(
-        UserWarning, match=r"reactions\[.side.\]: it holds no Dirichlet condition whole, only 2"
+        UserWarning, match=r"reactions\[.side.\]: Dirichlet conditions hold only 1 of its 3 nodes"
     ):
         fe_mpm.Simulation(mesh, points, law, dirichlet=held, reactions=side)
     whole = {"all": lambda x: np.ones(x.shape[1], dtype=bool)}  # holds the base's whole reaction
@@ -1331,6 +1331,8 @@ def test_the_material_driver_refuses_what_no_law_can_take():
         MaterialDriver(law, n=0)
     with pytest.raises(ValueError, match=r"MaterialDriver: gdim must be 2 \(plane strain\) or 3"):
         MaterialDriver(law, gdim=4)
+    with pytest.raises(TypeError, match=r"MaterialDriver: gdim must be an int, got 2.0"):
+        MaterialDriver(law, gdim=2.0)
     driver = MaterialDriver(fe_mpm.J2Plasticity(E=1e3, nu=0.3, yield_stress=1.0), n=2, gdim=2)
     flipped = np.array([np.eye(2), np.diag([1.0, -0.5])])
     with pytest.raises(ValueError, match=r"det F > 0, got det F = -0.5 at state 1"):
