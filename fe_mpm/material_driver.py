@@ -26,7 +26,7 @@ import ufl
 from fe_mpm._dolfinx import dolfinx
 from fe_mpm.checks import check_finite, check_int
 from fe_mpm.materials import PointState, embed_3d
-from fe_mpm.materials.protocol import PointwiseLaw
+from fe_mpm.materials.protocol import Law, PointwiseLaw, missing_members
 
 
 class MaterialDriver:
@@ -39,6 +39,12 @@ class MaterialDriver:
     """
 
     def __init__(self, material, n: int = 1, gdim: int = 3):
+        missing = missing_members(material, Law)
+        if missing:  # (as Simulation says it: a bare AttributeError until 2026-12-07)
+            raise TypeError(
+                f"MaterialDriver: material {type(material).__name__} is not a law: it lacks "
+                f"{', '.join(missing)} (fe_mpm.materials.protocol.Law says what a law provides)"
+            )
         n = check_int("MaterialDriver", "n", n, lo=1)
         gdim = check_int("MaterialDriver", "gdim", gdim)
         if gdim not in (2, 3):
@@ -130,6 +136,14 @@ class MaterialDriver:
     def step(self, F: np.ndarray) -> np.ndarray:
         """Go to total deformation gradients ``F`` (n, g, g) and commit; returns τ (n, 3, 3)."""
         result = self.evaluate(F)
+        for name in ("tau", *self.history):
+            bad = ~np.isfinite(result[name].reshape(self.n, -1)).all(axis=1)
+            if bad.any():  # (committed without a word until 2026-12-07)
+                k = int(np.flatnonzero(bad)[0])
+                raise ValueError(
+                    f"MaterialDriver.step: {type(self.material).__name__} gave a non-finite "
+                    f"{name} at state {k}; nothing was committed"
+                )
         self.F = _checked_gradients(F, self.n, self.gdim).copy()
         for name in self.history:
             self.history[name] = result[name]

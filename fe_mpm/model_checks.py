@@ -792,6 +792,9 @@ def warn_plastic_locking(material, spec: FormulationSpec) -> None:
         law
         for law in laws_of(material)
         if law.history
+        # fe_mpm's own plastic laws: a user's law with a history (a damage law) may have
+        # no plastic flow at all (a helper's, 2026-12-07, was told of one)
+        and type(law).__module__.startswith("fe_mpm.")
         and getattr(law, "keeps_shape", True)
         and not _dilates(law)
         and not isinstance(law, SmoothCapDruckerPrager)  # its cap's flow is associated

@@ -1728,14 +1728,19 @@ class Simulation:
         try:
             return self.ladder.solve(attempt, self._newton.line_search)
         except PETSc.Error as err:
-            if not isinstance(err.__cause__, KeyboardInterrupt):
+            cause = err.__cause__
+            if cause is None or isinstance(cause, PETSc.Error):
                 raise
-            # A Ctrl-C in a callback of SNES reaches here as a PETSc error, and leaves
-            # SNES's vectors locked mid-solve: every later solve failed (error 73). The
-            # next step builds a new solver; the points are as the last step left them.
+            # A Ctrl-C or an error of Python (a law of a user's that returned the wrong
+            # shape) in a callback of SNES reaches here as PETSc's "error code 101", and
+            # leaves SNES's vectors locked mid-solve: every later solve failed (error
+            # 73). The next step builds a new solver; the points are as the last step
+            # left them. The error is raised as itself, its own message on top.
             self._newton.destroy()
             self._newton = None
-            raise KeyboardInterrupt from None
+            if isinstance(cause, KeyboardInterrupt):
+                raise KeyboardInterrupt from None
+            raise cause from None
 
     def _internal_force(self, R) -> Callable[[], np.ndarray]:
         """The residual's assembly, with G Δu and the starting pressure's facet terms.

@@ -1,5 +1,6 @@
 """Bad input fails early with a message that names the field and the valid range."""
 
+import dataclasses
 import warnings
 from types import SimpleNamespace
 
@@ -1357,3 +1358,58 @@ def test_scene_builders_refuse_degenerate_sizes_and_a_scene_for_a_grid():
         scenes.strip_footing(settlement=0.0)
     with pytest.raises(ValueError, match=r"cook_membrane: h sizes the unstructured grid"):
         cook_membrane(4, h=2.0)
+
+
+class _Forgetful(fe_mpm.HenckyJ2):
+    """A user's law (its module is not fe_mpm's) whose return drops a variable."""
+
+    def return_map(self, dF, history):
+        result = super().return_map(dF, history)
+        result.history.pop("plastic_strain")
+        return result
+
+
+class _Flat(fe_mpm.HenckyJ2):
+    """A user's law whose return gives the in-plane stress only."""
+
+    def return_map(self, dF, history):
+        result = super().return_map(dF, history)
+        return dataclasses.replace(result, tau=result.tau[:, :2, :2])
+
+
+class _Nan(fe_mpm.HenckyJ2):
+    """A user's law whose stress is NaN."""
+
+    def return_map(self, dF, history):
+        result = super().return_map(dF, history)
+        return dataclasses.replace(result, tau=np.full_like(result.tau, np.nan))
+
+
+def test_a_users_own_law_is_told_what_its_return_lacks():
+    """A helper writing laws of their own (2026-12-07): a τ of the wrong shape ended
+    inside PETSc ("cannot reshape", then its error code 101), a history variable
+    dropped from the return was never updated, without a word; MaterialDriver gave a
+    bare AttributeError for a missing member and committed a NaN stress; and a damage
+    law with a history was warned of plastic flow that locks."""
+    from fe_mpm.material_driver import MaterialDriver
+
+    mesh, _ = _scene()
+    base = [fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))]
+    for law, said in [
+        (_Forgetful(1e6, 0.3, 1e4), r"history must hold .* missing \['plastic_strain'\]"),
+        (_Flat(1e6, 0.3, 1e4), r"_Flat.return_map: tau must have shape \(24, 3, 3\)"),
+    ]:
+        sim = fe_mpm.Simulation(
+            mesh, fe_mpm.seed(mesh, 3, density=1.0), law, dirichlet=base, body_force=(0, -9.8)
+        )
+        with pytest.raises(ValueError, match=said):  # itself, not PETSc's error code 101
+            sim.step(1.0)
+    with pytest.raises(TypeError, match=r"MaterialDriver: material _HalfALaw is not a law"):
+        MaterialDriver(_HalfALaw())
+    driver = MaterialDriver(_Nan(1e6, 0.3, 1e4), gdim=2)
+    with pytest.raises(ValueError, match=r"_Nan gave a non-finite tau at state 0; nothing was"):
+        driver.step(np.array([[1.01, 0.0], [0.0, 1.0]]))
+    assert np.array_equal(driver.F[0], np.eye(2))
+    with warnings.catch_warnings():  # a law with a history of its own is not judged
+        warnings.simplefilter("error")
+        fe_mpm.Simulation(mesh, fe_mpm.seed(mesh, 3), _Forgetful(1e6, 0.3, 1e4), dirichlet=base)

@@ -55,6 +55,40 @@ class ReturnMapResult:
         return self.derivative()
 
 
+def check_returned(material, result: ReturnMapResult, n: int) -> None:
+    """Refuse a pointwise law's return whose stress or history has the wrong shape.
+
+    Found 2026-12-07 by a helper writing a law of their own: a τ of shape (n, 2, 2)
+    ended inside PETSc ("cannot reshape array"), and a history variable missing from
+    the return, or misspelt, was never updated (a damage law's κ stayed 0) or was
+    stored beside the declared one, without a word. The history is checked for laws
+    outside fe_mpm (its own are tested).
+    """
+    owner = f"{type(material).__name__}.return_map"
+    if np.shape(result.tau) != (n, 3, 3):
+        raise ValueError(
+            f"{owner}: tau must have shape ({n}, 3, 3) (Kirchhoff stress, τ₃₃ included in "
+            f"plane strain), got {np.shape(result.tau)}"
+        )
+    if type(material).__module__.startswith("fe_mpm."):
+        return
+    declared = getattr(material, "history", {})
+    missing = sorted(set(declared) - set(result.history))
+    extra = sorted(set(result.history) - set(declared))
+    if missing or extra:
+        raise ValueError(
+            f"{owner}: its history must hold the law's declared variables "
+            f"{sorted(declared)}; missing {missing}, not declared {extra}"
+        )
+    for name, field in declared.items():
+        want = (n, *field.shape)
+        if np.shape(result.history[name]) != want:
+            raise ValueError(
+                f"{owner}: history[{name!r}] must have shape {want}, "
+                f"got {np.shape(result.history[name])}"
+            )
+
+
 @dataclass
 class Linearisation:
     """Slot fields holding τ_k (3x3), D_k (flattened 3·3·g·g) and ΔF_k (g x g)."""
@@ -91,11 +125,19 @@ class Linearisation:
         """
         dF = values.reshape(-1, self.gdim, self.gdim)
         result = material.return_map(dF, history)
+        check_returned(material, result, dF.shape[0])
         return result, {self.tau: result.tau, self.dF: dF}
 
     def tangent_values(self, result: ReturnMapResult) -> dict:
         """The tangent's slot values, field -> (n, ...): computed only for a Jacobian."""
-        return {self.tangent: self.flat_tangent(result.tangent)}
+        tangent = result.tangent
+        n, g = result.tau.shape[0], self.gdim
+        if tangent.shape != (n, 3, 3, g, g):
+            raise ValueError(
+                f"return_map's tangent must have shape ({n}, 3, 3, {g}, {g}) "
+                f"(∂τ_ij/∂ΔF_kl, τ 3 x 3), got {tangent.shape}"
+            )
+        return {self.tangent: self.flat_tangent(tangent)}
 
     def kirchhoff(self, dF: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
         """τ_k + D_k : (ΔF − ΔF_k), 3x3 (Pa)."""
