@@ -235,6 +235,14 @@ def read(sim, path: str | Path) -> Path:
     """
     comm = sim.mesh.comm
     path = Path(path)
+    if not path.exists():  # (it said "cannot read state.json", as if one were broken)
+        parallel.raise_together(
+            comm,
+            CheckpointError(
+                f"no checkpoint at {path}: there is no such folder (a run stopped before "
+                "its first checkpoint wrote none)"
+            ),
+        )
     if not (path / "state.json").is_file() and path.is_dir():
         path = latest(path)
     state, error = None, None

@@ -1,6 +1,10 @@
 """Errors that say where and when a run stopped, and the warnings fe-mpm gives."""
 
+import contextlib
+import signal
+import threading
 import warnings
+from collections.abc import Iterator
 from pathlib import Path
 
 #: Warnings point at the first caller outside the package, however deep they arise.
@@ -41,3 +45,28 @@ def warn(message: str) -> None:
 
     if MPI.COMM_WORLD.rank == 0:
         warnings.warn(message, skip_file_prefixes=_PACKAGE)
+
+
+@contextlib.contextmanager
+def interrupts_deferred() -> Iterator[None]:
+    """Hold off a Ctrl-C (SIGINT) until the block ends, then raise KeyboardInterrupt.
+
+    For the acceptance of a step, which changes the points, the time, the step count
+    and the history in turn: a Ctrl-C between them left the points moved and the
+    clock behind, and a run continued in the same process took that step twice (a
+    block in free fall ended 1 cm off, a helper's interrupted runs, 2026-12-07).
+    Outside Python's main thread signals go to the main thread anyway, and nothing is
+    deferred.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    caught: list[int] = []
+    previous = signal.getsignal(signal.SIGINT)
+    signal.signal(signal.SIGINT, lambda signum, frame: caught.append(signum))
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, signal.default_int_handler if previous is None else previous)
+    if caught:
+        raise KeyboardInterrupt

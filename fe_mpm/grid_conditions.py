@@ -353,6 +353,9 @@ class GridConditions:
             try:
                 value.interpolate(motion)
             except Exception as err:  # a user's function may raise anything, on one rank
+                # Raised inside dolfinx's own `except TypeError` (its overloads): shown
+                # behind that unrelated TypeError until 2026-12-07 (a helper's script).
+                err.__suppress_context__ = True
                 error = err
             if error is None:
                 held = self._value_dofs[k].ravel()

@@ -317,7 +317,6 @@ class SimulationOutput:
             return False
         if not self.started:
             self._start()
-        self._written_step = step
         # The grid's input numbering, the same on any number of ranks (a rank's own
         # index differs between partitions and after a repartition).
         comm, mesh = self.fields.W.mesh.comm, self.fields.W.mesh
@@ -329,6 +328,10 @@ class SimulationOutput:
         self._points.write(t, points, cell=cell)
         if self._domains is not None:
             self._domains.write(t, points, corners, cell=cell)
+        # Written: marked only now, so a write that a Ctrl-C cut short is taken again
+        # when the run goes on in the same process (it lost that frame, a helper's
+        # interrupted run, 2026-12-07).
+        self._written_step = step
         if not grid:
             return True
         for out, dofs in zip(self._grid, self._maps, strict=True):

@@ -48,7 +48,13 @@ from fe_mpm.domains import (
     step_with_domains,
 )
 from fe_mpm.dynamics import NewmarkDynamics
-from fe_mpm.errors import ConvergenceError, PointsOutsideError, StepLeavesGridError, warn
+from fe_mpm.errors import (
+    ConvergenceError,
+    PointsOutsideError,
+    StepLeavesGridError,
+    interrupts_deferred,
+    warn,
+)
 from fe_mpm.forms.mixed_up import PPPData, PressureFloor
 from fe_mpm.formulations import FORMULATIONS, GridFields
 from fe_mpm.ghost import GhostStabilisation
@@ -1290,43 +1296,52 @@ class Simulation:
             else self.dynamics.grid_kinetic_energy(self.w.x.array, bcs, dt)
         )
         reactions = self.conditions.reactions(self._internal_force(R))
-        # Update the points (the last check may still reject the step); the grid is reset.
-        t0 = time.perf_counter()
-        leaving = self._update_points(forms, layout, k, t_new, dt)
-        if self._boundary is not None:
-            reactions.update(self._boundary.convect(forms, t_new, self.fields.displacement_at))
-        walls = self.walls.finish_step()
-        if self.dynamic:
-            self._contacts.look(walls, self.t, t_new)
-        reactions.update({name: force.total for name, force in walls.items()})
-        self._add_time("update", t0)
-        if self._domains_would_do and not self._crossing_warned and self.spec.u_degree == 1:
-            self._warn_crossing(k)  # (P2/P1 has its own warning at step 2)
-        self.tracking.remember(layout.cell)
-        self.tracking.drop(self.points, self.markers, leaving, k, t_new)
-        self.t, self.step_number = t_new, k
-        # Accepted: told only now (the points' update may still have refused it).
-        if not self.dynamic and self.domains is None and not self._hinge_warned:
-            self._warn_hinges(layout, k, t_old, t_new)
-        if self._boundary is not None and not self._shared_support_warned:
-            self._warn_shared_supports()
-        if self.tracking.left:  # kept, and told: the next step's tracking stops the run
-            warn(self.tracking.left)
-        self.conditions.warn_travel(t_new)
-        if not self._options_checked and self._newton and self._newton.iterations_total:
-            self._options_checked = True  # after the first step that solved a system
-            self._warn_unread_options()
-        report = StepReport.of_step(
-            k, t_new, result, self._current, reactions, self.markers, self.tracking, self.conditions
-        )
-        report.walls, report.grid_kinetic_energy = walls, grid_energy
-        if self._boundary is not None:
-            report.lost_load.update(self._boundary.lost_load)
-        self.history.append(report)
-        if self._writes_csv:  # (with domains the output is set aside in the step)
-            self._unwritten.append(report)
-        self._grid_is_a_step = self._cells_of_grid = True  # accepted: its frame may be written
-        self._write_output()
+        # Accepted at once: a Ctrl-C in the middle waits for the end (errors.py).
+        with interrupts_deferred():
+            # Update the points (the last check may still reject the step); the grid is reset.
+            t0 = time.perf_counter()
+            leaving = self._update_points(forms, layout, k, t_new, dt)
+            if self._boundary is not None:
+                reactions.update(self._boundary.convect(forms, t_new, self.fields.displacement_at))
+            walls = self.walls.finish_step()
+            if self.dynamic:
+                self._contacts.look(walls, self.t, t_new)
+            reactions.update({name: force.total for name, force in walls.items()})
+            self._add_time("update", t0)
+            if self._domains_would_do and not self._crossing_warned and self.spec.u_degree == 1:
+                self._warn_crossing(k)  # (P2/P1 has its own warning at step 2)
+            self.tracking.remember(layout.cell)
+            self.tracking.drop(self.points, self.markers, leaving, k, t_new)
+            self.t, self.step_number = t_new, k
+            # Accepted: told only now (the points' update may still have refused it).
+            if not self.dynamic and self.domains is None and not self._hinge_warned:
+                self._warn_hinges(layout, k, t_old, t_new)
+            if self._boundary is not None and not self._shared_support_warned:
+                self._warn_shared_supports()
+            if self.tracking.left:  # kept, and told: the next step's tracking stops the run
+                warn(self.tracking.left)
+            self.conditions.warn_travel(t_new)
+            if not self._options_checked and self._newton and self._newton.iterations_total:
+                self._options_checked = True  # after the first step that solved a system
+                self._warn_unread_options()
+            report = StepReport.of_step(
+                k,
+                t_new,
+                result,
+                self._current,
+                reactions,
+                self.markers,
+                self.tracking,
+                self.conditions,
+            )
+            report.walls, report.grid_kinetic_energy = walls, grid_energy
+            if self._boundary is not None:
+                report.lost_load.update(self._boundary.lost_load)
+            self.history.append(report)
+            if self._writes_csv:  # (with domains the output is set aside in the step)
+                self._unwritten.append(report)
+            self._grid_is_a_step = self._cells_of_grid = True  # accepted: its frame may be written
+            self._write_output()
         return report
 
     def _penalty_cells(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -25,7 +25,7 @@ from fe_mpm.grid_conditions import GridConditions
 from fe_mpm.materials import Linearisation, PointState, ReturnMapResult, embed_3d
 from fe_mpm.materials.linearised import MixedLinearisation
 from fe_mpm.materials.mixed_return import MixedReturnResult
-from fe_mpm.materials.protocol import PointwiseLaw
+from fe_mpm.materials.protocol import PointwiseLaw, checked_stress
 from fe_mpm.materials.runtime import with_runtime_parameters
 from fe_mpm.materials.zones import MATERIAL, indicator
 from fe_mpm.packing import BoundForm, PointExpression
@@ -303,7 +303,10 @@ class StepForms:
             w, w_theta = ufl.TestFunctions(fields.W)
         else:
             w = ufl.TestFunction(fields.W)
-        kirchhoff = lambda F: material.kirchhoff(F, state)  # noqa: E731
+
+        def kirchhoff(F):
+            return checked_stress(material, "kirchhoff", material.kirchhoff(F, state), F)
+
         if self.interior is not None:
             kirchhoff = volume_average.without_start_pressure(
                 kirchhoff, self.interior, q.at_points(fields.p_start)

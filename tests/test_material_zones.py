@@ -340,3 +340,26 @@ def test_a_later_stage_with_one_law_keeps_no_labels_of_the_earlier_zones():
         second = fe_mpm.Simulation(mesh, points, laws[0], dirichlet=hold, body_force=(0.0, -10.0))
     assert "material" not in points.history
     second.run(2.0, 1, progress=False)
+
+
+def test_each_points_law_label_stays_exact_with_point_domains():
+    """The label went to ParaView averaged over a point's pieces, 1 ± 1e-16 at 82
+    points after four steps, so a threshold at 1 missed them (a helper's layered
+    column, 2026-12-07)."""
+    mesh = rectangle_mesh((0.0, 0.0), (0.4, 2.3), (4, 23))
+    low = fe_mpm.seed(mesh, 3, density=2000.0, material=0, level_set=lambda x: 1.0 - x[1])
+    up = fe_mpm.seed(
+        mesh, 3, density=1600.0, material=1,
+        level_set=[lambda x: x[1] - 1.0, lambda x: 2.0 - x[1]],
+    )  # fmt: skip
+    sim = fe_mpm.Simulation(
+        mesh, fe_mpm.merge(low, up), [fe_mpm.NeoHookean(1e8, 0.2), fe_mpm.NeoHookean(1e10, 0.4)],
+        "u-nbva", body_force=(0.0, -9.81), body_force_scale=lambda t: t, point_domains=True,
+        dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0)),
+                   fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0) | np.isclose(x[0], 0.4),
+                                    component=0)],
+    )  # fmt: skip
+    sim.run(1.0, 4, progress=False)
+    label = sim.points.history["material"]
+    np.testing.assert_array_equal(label, sim.points.material.astype(np.float64))
+    assert set(np.unique(label)) == {0.0, 1.0}

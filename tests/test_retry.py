@@ -329,3 +329,46 @@ def test_a_ctrl_c_in_newton_leaves_the_simulation_usable(monkeypatch):
     for got, want in zip(again, fresh, strict=True):
         np.testing.assert_array_equal(got.markers["A"], want.markers["A"])
         assert got.newton_iterations == want.newton_iterations
+
+
+def test_a_ctrl_c_while_a_step_is_accepted_waits_for_its_end(monkeypatch, tmp_path):
+    """A Ctrl-C (a real SIGINT) that lands after the points took their update but
+    before the clock moved left the step half accepted, and a run continued in the
+    same process took it twice (a helper's block ended 1 cm off, 2026-12-07); one that
+    landed in a frame's write lost that frame. It now waits for the step's end, frame
+    included, and the run goes on as if never interrupted."""
+    import os
+    import signal
+
+    import fe_mpm.simulation
+
+    update = fe_mpm.simulation.apply_update
+    calls = {"n": 0}
+
+    def interrupted(*args, **kwargs):
+        update(*args, **kwargs)
+        calls["n"] += 1
+        if calls["n"] == 2:  # in the second step, its points already moved
+            os.kill(os.getpid(), signal.SIGINT)
+
+    def run(folder, interrupt):
+        mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.0), (8, 8))
+        block = lambda x: -np.maximum(abs(x[0] - 0.5) - 0.2, abs(x[1] - 0.7) - 0.2)  # noqa: E731
+        points = fe_mpm.seed(mesh, 1, level_set=block)
+        sim = fe_mpm.Simulation(
+            mesh, points, fe_mpm.NeoHookean(1e6, 0.3, 1000.0), dynamic=True,
+            body_force=(0.0, -9.81), output_dir=folder,
+        )  # fmt: skip
+        if interrupt:
+            monkeypatch.setattr(fe_mpm.simulation, "apply_update", interrupted)
+            with pytest.raises(KeyboardInterrupt):
+                sim.run(0.1, 4, progress=False)
+            monkeypatch.undo()
+            assert sim.step_number == 2 and sim.t == pytest.approx(0.05)
+        sim.run(0.1, 4 - sim.step_number, progress=False)
+        sim.close()
+        return points.x.copy(), sorted(p.name for p in folder.glob("particles_*.vtu"))
+
+    (x, frames), (x_cut, frames_cut) = run(tmp_path / "a", False), run(tmp_path / "b", True)
+    np.testing.assert_allclose(x_cut, x, rtol=0, atol=1e-14)
+    assert frames_cut == frames and len(frames) == 5

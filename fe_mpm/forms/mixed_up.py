@@ -52,6 +52,7 @@ import ufl
 from fe_mpm._dolfinx import dolfinx
 from fe_mpm.forms.loads import external_work, start_pressure_gradient_work
 from fe_mpm.materials import embed_3d
+from fe_mpm.materials.protocol import checked_stress
 from fe_mpm.quadrature import OCCUPIED, MaterialPointQuadrature
 from fe_mpm.transfer import summed_over_ranks
 
@@ -223,7 +224,10 @@ def stress_parts(material, F: ufl.core.expr.Expr, p: ufl.core.expr.Expr, state=N
     """Kirchhoff stress τ = −J p I + dev τ (the material's) of shape g x g, and J = det F."""
     J = ufl.det(embed_3d(F))
     g = ufl.shape(F)[0]
-    return -J * p * ufl.Identity(g) + material.kirchhoff_deviatoric(F, state), J
+    deviator = material.kirchhoff_deviatoric(F, state)
+    return -J * p * ufl.Identity(g) + checked_stress(
+        material, "kirchhoff_deviatoric", deviator, F
+    ), J
 
 
 def point_terms(material, dF, F_n, p_p, state=None, p_stress=None):

@@ -72,6 +72,23 @@ class PointwiseLaw(Law, Protocol):
         """Stress, tangent and history at t_{n+1} for the step increments ``dF`` (n, g, g)."""
 
 
+def checked_stress(law: object, member: str, tau, F):
+    """``tau``, the UFL stress ``law.member(F, ...)`` gave, refused unless of F's shape.
+
+    A user's law that returned a 3 x 3 stress for a plane-strain F, or a vector,
+    stopped inside UFL ("Shapes do not match: <ComponentTensor id=...>"; a helper's
+    laws, 2026-12-07).
+    """
+    import ufl
+
+    if ufl.shape(tau) != ufl.shape(F):
+        raise ValueError(
+            f"{type(law).__name__}.{member} must return a stress of F's shape "
+            f"{ufl.shape(F)} (g x g), got shape {ufl.shape(tau)}"
+        )
+    return tau
+
+
 def missing_members(law: object, protocol: type) -> list[str]:
     """The members of ``protocol`` that ``law`` lacks, in the protocol's order.
 
