@@ -1413,3 +1413,40 @@ def test_a_users_own_law_is_told_what_its_return_lacks():
     with warnings.catch_warnings():  # a law with a history of its own is not judged
         warnings.simplefilter("error")
         fe_mpm.Simulation(mesh, fe_mpm.seed(mesh, 3), _Forgetful(1e6, 0.3, 1e4), dirichlet=base)
+
+
+class _Wide(fe_mpm.NeoHookean):
+    """A user's UFL law that gives a 3 x 3 stress for a plane-strain F."""
+
+    def kirchhoff(self, F, state=None):
+        return fe_mpm.materials.embed_3d(super().kirchhoff(F, state))  # super() works
+
+
+def test_a_ufl_stress_of_the_wrong_shape_a_missing_checkpoint_and_a_profiles_error_are_named(
+    tmp_path,
+):
+    """A helper's probes (2026-12-07): a UFL law's 3 x 3 stress for a 2 x 2 F stopped
+    inside UFL ("Shapes do not match: <ComponentTensor id=...>"); restoring a
+    checkpoint folder that was never written said "cannot read state.json"; a
+    Dirichlet profile's own error came behind dolfinx's unrelated TypeError."""
+    from fe_mpm.checkpoint import CheckpointError
+
+    mesh, points = _scene()
+    base = [fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))]
+    sim = fe_mpm.Simulation(mesh, points, _Wide(1e6, 0.3), dirichlet=base)
+    with pytest.raises(ValueError, match=r"_Wide.kirchhoff must return a stress of F's shape"):
+        sim.step(1.0)
+    sim = fe_mpm.Simulation(mesh, fe_mpm.seed(mesh), fe_mpm.NeoHookean(1e6, 0.3), dirichlet=base)
+    with pytest.raises(CheckpointError, match=r"no checkpoint at .*never: there is no such folder"):
+        sim.restore(tmp_path / "never")
+
+    def profile(x, t):
+        raise ValueError("my profile failed")
+
+    sim = fe_mpm.Simulation(
+        mesh, fe_mpm.seed(mesh), fe_mpm.NeoHookean(1e6, 0.3),
+        dirichlet=[*base, fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 1.0), profile=profile)],
+    )  # fmt: skip
+    with pytest.raises(ValueError, match=r"my profile failed") as raised:
+        sim.step(1.0)
+    assert raised.value.__suppress_context__  # not behind dolfinx's TypeError

@@ -82,6 +82,7 @@ def checked_stress(law: object, member: str, tau, F):
     import ufl
 
     if ufl.shape(tau) != ufl.shape(F):
+        law = getattr(law, "_law", law)  # the law itself, not its view in the forms
         raise ValueError(
             f"{type(law).__name__}.{member} must return a stress of F's shape "
             f"{ufl.shape(F)} (g x g), got shape {ufl.shape(tau)}"

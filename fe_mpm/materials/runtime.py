@@ -65,12 +65,17 @@ class RuntimeParameters:
 def with_runtime_parameters(law, mesh):
     """The law as the forms should see it: its float parameters as constants.
 
-    A law that is not a dataclass (a user's own class) is returned as it is,
-    and its numbers are compiled into the forms.
+    A law that is not a dataclass, or whose class a user wrote (a subclass of one of
+    fe-mpm's laws too), is returned as it is, and its numbers are compiled into the
+    forms: the view binds the law's methods to itself, so a user's ``super()``
+    call in them failed ("super(type, obj): obj must be an instance or subtype of
+    type", found 2026-12-07).
     """
     in_forms = getattr(law, "in_forms", None)
     if in_forms is not None:  # several laws (fe_mpm.materials.zones): each its own view
         return in_forms(lambda one: with_runtime_parameters(one, mesh))
     if not dataclasses.is_dataclass(law) or isinstance(law, type):
+        return law
+    if not type(law).__module__.startswith("fe_mpm."):
         return law
     return RuntimeParameters(law, mesh)
