@@ -1003,7 +1003,7 @@ def warn_initial_stress_outside_yield(comm, points: MaterialPoints, material) ->
             J = np.linalg.det(points.F)[moved]
             sigma = points.stress[moved]
             returned = result.tau[moved] / J[:, None, None]
-            size = np.linalg.norm(sigma, axis=(1, 2))
+            size = np.maximum(np.linalg.norm(sigma, axis=(1, 2)), np.finfo(float).tiny)
             change = float((np.linalg.norm(returned - sigma, axis=(1, 2)) / size).max())
     count = parallel.total(comm, int(moved.sum()))
     if count:

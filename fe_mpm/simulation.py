@@ -1305,7 +1305,7 @@ class Simulation:
                 reactions.update(self._boundary.convect(forms, t_new, self.fields.displacement_at))
             walls = self.walls.finish_step()
             if self.dynamic:
-                self._contacts.look(walls, self.t, t_new)
+                self._contacts.look(walls, self.t)
             reactions.update({name: force.total for name, force in walls.items()})
             self._add_time("update", t0)
             if self._domains_would_do and not self._crossing_warned and self.spec.u_degree == 1:

@@ -606,8 +606,8 @@ class ContactWatch:
         self.since: dict[str, float] = {}
         self.warned = False
 
-    def look(self, forces: dict[str, WallForces], t_start: float, t_end: float) -> None:
-        """Count the step from ``t_start`` to ``t_end`` (s) with each wall's ``forces``."""
+    def look(self, forces: dict[str, WallForces], t_start: float) -> None:
+        """Count the step that began at ``t_start`` (s), with each wall's ``forces``."""
         for name, force in forces.items():
             if force.normal > 0.0:
                 self.since.setdefault(name, t_start)

@@ -707,7 +707,7 @@ def test_an_impact_of_a_step_or_two_on_a_wall_is_warned_and_gains_energy():
     watch, zero = ContactWatch(), np.zeros(2)
     for normal in [1.0] * (SHORT_CONTACT_STEPS + 1) + [0.0]:
         force = WallForces(zero, normal, zero, np.zeros((0, 2)), np.zeros((0, 2)), zero, zero)
-        watch.look({"floor": force}, 0.0, 1.0)
+        watch.look({"floor": force}, 0.0)
     assert not watch.warned
 
 
