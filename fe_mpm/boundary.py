@@ -17,7 +17,7 @@ import numpy as np
 
 from fe_mpm._dolfinx import dolfinx
 from fe_mpm.checks import check_finite, check_int, check_range
-from fe_mpm.parallel import any_rank
+from fe_mpm.parallel import any_rank, total
 
 #: A boundary point in an empty cell reads an occupied neighbour's field up to this
 #: far outside it (the least barycentric coordinate there, and in distance this many
@@ -360,7 +360,7 @@ def check_exterior(mesh: dolfinx.mesh.Mesh, facets: np.ndarray, owner: str, why:
     exterior = dolfinx.mesh.exterior_facet_indices(mesh.topology)  # owned ones only
     inside = np.setdiff1d(facets, exterior)
     if any_rank(mesh.comm, inside.size > 0):
-        count = int(mesh.comm.allreduce(int(inside.size)))
+        count = total(mesh.comm, int(inside.size))
         raise ValueError(f"{owner}: {count} of its facets lie inside the grid, {why}")
 
 

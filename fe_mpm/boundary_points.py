@@ -425,6 +425,21 @@ class BoundaryPointStep:
                 "meshes.facet_points(mesh, facets, degree=2)."
             )
 
+    def penalty_cells(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """This step's acting penalty points: their cells, conditions and held components.
+
+        The cells are this rank's (local indices), the conditions indices into
+        ``points.conditions``, the components a boolean (k, g) array; empty before the
+        first step.
+        """
+        pp, g = self.points, self.points.x.shape[1]
+        if self.layout is None:
+            return np.zeros(0, np.int32), np.zeros(0, np.int64), np.zeros((0, g), bool)
+        acting = np.flatnonzero(self._active)
+        held = pp.stiffness[acting] > 0.0
+        stiff = held.any(axis=1)
+        return self.layout.cell[stiff], pp.owner[acting[stiff]], held[stiff]
+
     def _active_anywhere(self) -> np.ndarray:
         """Whether each point takes part in the step on some rank (N,)."""
         return parallel.total(self.tracker.mesh.comm, self._active.astype(np.int64)) > 0

@@ -108,7 +108,10 @@ class MaterialDriver:
             and the updated history by name; a pointwise law adds ``region``,
             its return region per state.
         """
-        F = _checked_gradients(F, self.n, self.gdim)
+        return self._evaluate(_checked_gradients(F, self.n, self.gdim))
+
+    def _evaluate(self, F: np.ndarray) -> dict[str, np.ndarray]:
+        """:meth:`evaluate` at ``F`` (n, g, g), already checked."""
         if self._pointwise:
             g = self.gdim
             result = self.material.return_map(F @ np.linalg.inv(self.F), self.history)
@@ -135,7 +138,8 @@ class MaterialDriver:
 
     def step(self, F: np.ndarray) -> np.ndarray:
         """Go to total deformation gradients ``F`` (n, g, g) and commit; returns τ (n, 3, 3)."""
-        result = self.evaluate(F)
+        F = _checked_gradients(F, self.n, self.gdim)
+        result = self._evaluate(F)
         for name in ("tau", *self.history):
             bad = ~np.isfinite(result[name].reshape(self.n, -1)).all(axis=1)
             if bad.any():  # (committed without a word until 2026-12-07)
@@ -144,7 +148,7 @@ class MaterialDriver:
                     f"MaterialDriver.step: {type(self.material).__name__} gave a non-finite "
                     f"{name} at state {k}; nothing was committed"
                 )
-        self.F = _checked_gradients(F, self.n, self.gdim).copy()
+        self.F = F.copy()
         for name in self.history:
             self.history[name] = result[name]
         return result["tau"]

@@ -36,7 +36,7 @@ from fe_mpm.formulations import FORMULATIONS, FormulationSpec
 from fe_mpm.ghost import WITH_DOMAINS, WITH_DOMAINS_DYNAMIC
 from fe_mpm.grid_conditions import follow_the_body
 from fe_mpm.materials.drucker_prager import SmoothCapDruckerPrager
-from fe_mpm.materials.elastic import young_modulus
+from fe_mpm.materials.elastic import is_builtin, young_modulus
 from fe_mpm.materials.protocol import Law, MixedLaw, missing_members
 from fe_mpm.materials.zones import laws_of, material_zones
 from fe_mpm.particles import MaterialPoints, coincident, simplex_cell_type
@@ -794,7 +794,7 @@ def warn_plastic_locking(material, spec: FormulationSpec) -> None:
         if law.history
         # fe_mpm's own plastic laws: a user's law with a history (a damage law) may have
         # no plastic flow at all (a helper's, 2026-12-07, was told of one)
-        and type(law).__module__.startswith("fe_mpm.")
+        and is_builtin(law)
         and getattr(law, "keeps_shape", True)
         and not _dilates(law)
         and not isinstance(law, SmoothCapDruckerPrager)  # its cap's flow is associated

@@ -561,8 +561,8 @@ class NewtonSolver:
         pattern does not, so PETSc would keep the last step's reduced system.
         """
         self._F, self._J, self._bcs, self._ghost = F, J, bcs, ghost
-        held = [bc.dof_indices()[0] for bc in bcs]
-        self._free_u_rows = self._u_rows[~np.isin(self._u_rows, np.concatenate([[], *held]))]
+        held = np.concatenate([np.zeros(0, np.int32), *(bc.dof_indices()[0] for bc in bcs)])
+        self._free_u_rows = self._u_rows[~np.isin(self._u_rows, held)]
         self._extra_force = extra_force
         self._before_residual = before_residual
         self._inertia = inertia

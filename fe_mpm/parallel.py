@@ -150,18 +150,19 @@ def check_together(
     check: Callable[..., object],
     *args,
     kinds: tuple[type[Exception], ...] = (ValueError,),
-) -> None:
+):
     """Run ``check(*args)`` and raise what it raised on some rank on every rank.
 
     Errors of ``kinds`` only (:func:`raise_together`): no rank then waits in a
-    collective for one that has stopped. Collective.
+    collective for one that has stopped. Returns what ``check`` returned. Collective.
     """
-    error = None
+    error, result = None, None
     try:
-        check(*args)
+        result = check(*args)
     except kinds as err:
         error = err
     raise_together(comm, error)
+    return result
 
 
 def one_thread_per_rank(comm: MPI.Comm) -> None:

@@ -1344,19 +1344,6 @@ class Simulation:
             self._write_output()
         return report
 
-    def _penalty_cells(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """This step's acting penalty points: their cells, conditions and held components.
-
-        The components as a boolean (k, g) array.
-        """
-        pp, step = self._boundary.points, self._boundary
-        if step.layout is None:
-            return np.zeros(0, np.int32), np.zeros(0, np.int64), np.zeros((0, self.gdim), bool)
-        acting = np.flatnonzero(step._active)
-        held = pp.stiffness[acting] > 0.0
-        stiff = held.any(axis=1)
-        return step.layout.cell[stiff], pp.owner[acting[stiff]], held[stiff]
-
     def _warn_shared_supports(self) -> None:
         """Warn (once, collective) where penalty points act in cells a grid Dirichlet holds.
 
@@ -1370,7 +1357,7 @@ class Simulation:
         main demo would warn at every run (a reviewer, 2026-12-07); the footing's
         vertical force is the body's.
         """
-        cells, owners, components = self._penalty_cells()
+        cells, owners, components = self._boundary.penalty_cells()
         nodes = self.mesh.geometry.dofmaps[0][cells]
         shared = np.zeros(components.shape, dtype=bool)  # (points, g): held by both
         for (spec, *_), held_nodes in zip(
@@ -1414,7 +1401,7 @@ class Simulation:
         Dirichlet condition at another node, or by a penalty point, is not hinged.
         """
         held = np.concatenate([np.zeros(0, np.int64), *self.conditions.dirichlet_nodes])
-        tied = None if self._boundary is None else self._penalty_cells()[0]
+        tied = None if self._boundary is None else self._boundary.penalty_cells()[0]
         hinged, count = hinged_cells(self.mesh, layout.occupied, held, tied)
         if count == 0:
             return

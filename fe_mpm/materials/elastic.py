@@ -46,6 +46,15 @@ class CheckedFields:
             self._check("density", lo=0.0, lo_open=True)
 
 
+def is_builtin(law) -> bool:
+    """Whether ``law``'s class is one of fe-mpm's own laws, not one a user wrote.
+
+    fe-mpm's own are tested and described (their histories, their flow); a user's
+    law, or a subclass of one of fe-mpm's, is taken as it is.
+    """
+    return type(law).__module__.startswith("fe_mpm.")
+
+
 def young_modulus(law) -> float:
     """Young's modulus E = 9Kμ / (3K + μ) (Pa) of a law with ``mu`` and ``bulk_modulus``.
 

@@ -25,7 +25,7 @@ from functools import cached_property
 import numpy as np
 import ufl
 
-from fe_mpm.materials.elastic import in_plane
+from fe_mpm.materials.elastic import in_plane, is_builtin
 
 
 @dataclass(frozen=True)
@@ -70,7 +70,7 @@ def check_returned(material, result: ReturnMapResult, n: int) -> None:
             f"{owner}: tau must have shape ({n}, 3, 3) (Kirchhoff stress, τ₃₃ included in "
             f"plane strain), got {np.shape(result.tau)}"
         )
-    if type(material).__module__.startswith("fe_mpm."):
+    if is_builtin(material):
         return
     declared = getattr(material, "history", {})
     missing = sorted(set(declared) - set(result.history))

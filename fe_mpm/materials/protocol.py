@@ -79,8 +79,6 @@ def checked_stress(law: object, member: str, tau, F):
     stopped inside UFL ("Shapes do not match: <ComponentTensor id=...>"; a helper's
     laws, 2026-12-07).
     """
-    import ufl
-
     if ufl.shape(tau) != ufl.shape(F):
         law = getattr(law, "_law", law)  # the law itself, not its view in the forms
         raise ValueError(

@@ -22,6 +22,8 @@ import types
 import dolfinx.fem
 import numpy as np
 
+from fe_mpm.materials.elastic import is_builtin
+
 
 class RuntimeParameters:
     """A view of a dataclass law whose float fields are :class:`dolfinx.fem.Constant`.
@@ -76,6 +78,6 @@ def with_runtime_parameters(law, mesh):
         return in_forms(lambda one: with_runtime_parameters(one, mesh))
     if not dataclasses.is_dataclass(law) or isinstance(law, type):
         return law
-    if not type(law).__module__.startswith("fe_mpm."):
+    if not is_builtin(law):
         return law
     return RuntimeParameters(law, mesh)

@@ -66,7 +66,7 @@ def facet_points(
     index_map = mesh.topology.index_map(fdim)
     size = index_map.size_local + index_map.num_ghosts
     # Every rank refuses together: one alone would leave the others in the gather below.
-    parallel.check_together(
+    facets = parallel.check_together(
         mesh.comm,
         check_indices,
         "facet_points",
@@ -75,7 +75,6 @@ def facet_points(
         size,
         kinds=(TypeError, ValueError),
     )
-    facets = check_indices("facet_points", "facets", facets, size)
     if mesh.comm.size > 1:
         facets = facets[facets < mesh.topology.index_map(fdim).size_local]
     nodes = dolfinx.mesh.entities_to_geometry(mesh, fdim, facets)
