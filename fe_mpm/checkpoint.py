@@ -180,7 +180,6 @@ def write(sim, directory: str | Path) -> Path:
                 "contact_since": sim._contacts.since,
                 "contact_warned": sim._contacts.warned,
                 "hinge_warned": sim._hinge_warned,
-                "shared_support_warned": sim._shared_support_warned,
                 # Warnings said once per run (a restored run would say them again).
                 "travel_warned": [bool(v) for v in sim._travel_warned],
                 "staged_at": sim._staged_at,
@@ -313,7 +312,6 @@ def read(sim, path: str | Path) -> Path:
     sim._contacts.since = {k: float(v) for k, v in state.get("contact_since", {}).items()}
     sim._contacts.warned = bool(state.get("contact_warned", False))
     sim._hinge_warned = bool(state.get("hinge_warned", False))
-    sim._shared_support_warned = bool(state.get("shared_support_warned", False))
     sim._staged_at = state.get("staged_at")  # (absent before 2026-12-07, evening)
     travel_warned = state.get("travel_warned")  # (absent before 2026-12-07, evening)
     if travel_warned is not None and len(travel_warned) == len(sim._travel_warned):
@@ -360,6 +358,7 @@ def scene(sim) -> dict:
         "history": sorted(sim.material.history),
         "cells": int(mesh.topology.index_map(tdim).size_global),
         "extent": [np.asarray(low).tolist(), np.asarray(high).tolist()],
+        "cell_moments": _cell_moments(mesh, np.asarray(low)),
         "boundary_points": 0 if sim._boundary is None else len(sim._boundary.points),
         "point_domains": sim.domains is not None,
     }
@@ -376,6 +375,27 @@ def scene(sim) -> dict:
             for w in sim.walls.walls
         ]
     return fingerprint
+
+
+def _cell_moments(mesh, low: np.ndarray) -> list[float]:
+    """The means of the grid's cell centroids and of their pairwise products.
+
+    Measured from the grid's lowest corner ``low`` (g,), so that round-off is the
+    grid's size's, and the same on any number of ranks (each cell counted by its
+    owner); the products tell a square's two diagonals apart. A grid of another
+    layout with the cells and extent of the checkpoint's was read into without a
+    word (a helper's gmsh grid and a structured one, 462 triangles each on the same
+    rectangle, 2026-12-07).
+    """
+    g, tdim = mesh.geometry.dim, mesh.topology.dim
+    owned = mesh.topology.index_map(tdim).size_local
+    corners = mesh.geometry.x[mesh.geometry.dofmaps[0][:owned], :g]
+    c = corners.mean(axis=1) - low
+    upper = np.triu_indices(g)
+    products = (c[:, :, None] * c[:, None, :])[:, upper[0], upper[1]]
+    sums = parallel.total(mesh.comm, np.r_[c.sum(axis=0), products.sum(axis=0)])
+    count = parallel.total(mesh.comm, owned)
+    return (sums / max(count, 1)).tolist()
 
 
 def _parameters(material) -> dict:
@@ -420,6 +440,8 @@ def _check_state(sim, path: Path, state: dict) -> None:
             f"checkpoint {path} was written by fe-mpm {theirs.get('fe_mpm')}, this is "
             f"{ours['fe_mpm']}; restart with the version that wrote it"
         )
+    if "cell_moments" not in theirs:  # written before 2026-12-07, night
+        ours.pop("cell_moments")
     if sorted(theirs) != sorted(ours):
         raise CheckpointError(
             f"checkpoint {path} is of another scene: it records {sorted(theirs)}, "
@@ -431,8 +453,21 @@ def _check_state(sim, path: Path, state: dict) -> None:
             same = np.shape(theirs[key]) == np.shape(value) and np.allclose(
                 theirs[key], value, rtol=0, atol=EXTENT_TOLERANCE * span
             )
+        elif key == "cell_moments":  # means of x, then of x_i x_j, to round-off
+            g = sim.gdim
+            scale = np.r_[np.full(g, span), np.full(len(value) - g, span * span)]
+            same = np.shape(theirs[key]) == np.shape(value) and np.all(
+                np.abs(np.subtract(theirs[key], value)) <= EXTENT_TOLERANCE * scale
+            )
         else:
             same = theirs.get(key) == value
+        if not same and key == "cell_moments":
+            raise CheckpointError(
+                f"checkpoint {path} is of another grid with as many cells on the same "
+                f"extent: its cells' mean centroid is {np.round(theirs[key][:g], 6).tolist()}, "
+                f"this simulation's {np.round(value[:g], 6).tolist()}, or their spread "
+                "differs; restore into the grid that wrote it"
+            )
         if not same:
             raise CheckpointError(
                 f"checkpoint {path} is of another scene: its {key} is {theirs.get(key)!r}, "

@@ -77,6 +77,12 @@ from fe_mpm.tracking import hosts_leaving
 
 #: A domain's pieces must add up to its area to this relative tolerance.
 COVERAGE_TOL = 1e-9
+#: Round-off of a domain's pieces, as a fraction of the largest cell they lie in:
+#: the clipping's error is the cells' size, not the domain's. A level set that runs
+#: a hair from a gmsh grid's nodes seeds sliver points (1e-11 of their cell, a
+#: helper's block on cells of 0.125 m, 2026-12-07), whose pieces then missed
+#: COVERAGE_TOL, and every first step failed as "degenerated".
+COVERAGE_ROUNDOFF = 1e-12
 #: A domain with less than this fraction of its area inside the grid has left it.
 MIN_INSIDE = 0.5
 #: Pieces smaller than this fraction of their domain are dropped (slivers of
@@ -479,9 +485,10 @@ class PointDomains:
         area, rule = self._overlaps(corners, bounds, tracker, owner, cell)
         domain_area = simplex_volumes(corners)
         covered = np.bincount(owner, weights=area, minlength=n) / domain_area
+        tol = _coverage_tolerance(owner, cell, tracker, domain_area)
         # A domain stretched past the cells around its corners (a spreading flow)
         # misses the cells between them: try every cell for those too.
-        short = (covered < 1.0 - COVERAGE_TOL) & ~partly_outside
+        short = (covered < 1.0 - tol) & ~partly_outside
         if np.any(short):
             more_owner, more_cell = self._cells_meeting(bounds, short)
             more = self._overlaps(corners, bounds, tracker, more_owner, more_cell)
@@ -489,9 +496,10 @@ class PointDomains:
                 short, (owner, cell, area, rule), (more_owner, more_cell, *more)
             )
             covered = np.bincount(owner, weights=area, minlength=n) / domain_area
+            tol = _coverage_tolerance(owner, cell, tracker, domain_area)
         # For _beyond_ghosts: under MPI a domain short of its area may reach into
         # another rank's cells past this rank's ghosts, between corners that are not.
-        short = covered < 1.0 - COVERAGE_TOL
+        short = covered < 1.0 - tol
         self._short = corners[short], covered[short] * domain_area[short]
         left = covered < MIN_INSIDE if may_leave else np.zeros(n, dtype=bool)
         if not may_leave and np.any(covered < MIN_INSIDE):
@@ -503,13 +511,13 @@ class PointDomains:
         # Searched everywhere, a domain still short of its area reaches past the
         # grid's edge between its corners (a grid with a notch): like one with a
         # corner outside, it keeps the pieces inside.
-        wrong = np.abs(covered - 1.0) > COVERAGE_TOL
+        wrong = np.abs(covered - 1.0) > tol
         wrong &= (~(partly_outside | short) | (covered > 1.0)) & ~left
         if np.any(wrong):  # only round-off on a degenerate domain can get here
             p = int(np.flatnonzero(wrong)[0])
             raise ConvergenceError(
-                f"the pieces of the domain of point {p} add up to {covered[p]:.6f} of its "
-                "area: it has degenerated"
+                f"the pieces of the domain of point {p} add up to {covered[p]:.12g} of its "
+                "area: it has degenerated."
             )
         # A round-off sliver is dropped; the domain's other pieces share its area.
         keep = (area > MIN_SHARE * domain_area[owner]) & ~left[owner]
@@ -1040,6 +1048,19 @@ def _inside_the_grid(points: MaterialPoints, corners: np.ndarray, tracker: Track
     points.x0[out] += x - points.x[out]  # as a tiled point's (fe_mpm.tilings)
     points.x[out] = x
     return corners
+
+
+def _coverage_tolerance(
+    owner: np.ndarray, cell: np.ndarray, tracker: Tracker, domain_area: np.ndarray
+) -> np.ndarray:
+    """Each domain's tolerance on its pieces' sum, a fraction of its area (n,).
+
+    :data:`COVERAGE_TOL`, plus :data:`COVERAGE_ROUNDOFF` of the largest cell its
+    pieces lie in over its own area.
+    """
+    largest = np.zeros(domain_area.size)
+    np.maximum.at(largest, owner, tracker.volumes[cell])
+    return COVERAGE_TOL + COVERAGE_ROUNDOFF * largest / domain_area
 
 
 def _no_short(shape: tuple) -> tuple[np.ndarray, np.ndarray]:

@@ -200,16 +200,23 @@ class GridFields:
             bcs.append(dolfinx.fem.dirichletbc(zero, to_parent[~supported], sub))
         return bcs
 
-    def displacement_at(self, cells: np.ndarray, bary: np.ndarray) -> np.ndarray:
+    def displacement_at(
+        self, cells: np.ndarray, bary: np.ndarray, values: np.ndarray | None = None
+    ) -> np.ndarray:
         """Δu (n, g) in m at barycentric coordinates ``bary`` (n, g + 1) in ``cells`` (n,).
 
         P1 or P2; coordinates outside [0, 1] extrapolate the cell's polynomial.
+        ``values``, an array shaped as ``w.x.array``, is read in place of Δu (the
+        displacement field whose nodal values it holds).
         """
+        if len(cells) == 0:  # (basix tabulates no empty set)
+            return np.zeros((0, self.W.mesh.geometry.dim))
         if self.spec.u_degree == 1:
             basis = bary  # the P1 shape functions are the barycentric coordinates
         else:
             basis = self._scalar_element.tabulate(0, np.ascontiguousarray(bary[:, 1:]))[0]
-        nodal = self.w.x.array[self.displacement_dofs_of(cells)]  # (n, nodes, g)
+        values = self.w.x.array if values is None else values
+        nodal = values[self.displacement_dofs_of(cells)]  # (n, nodes, g)
         return np.einsum("nv,nvc->nc", basis, nodal)
 
     def start_from_rest(

@@ -210,6 +210,7 @@ class GridConditions:
             self.tractions.append((spec, value))
 
         self.reaction_dofs = {}  # name -> W dofs of each displacement component
+        self._held_masks: dict[str | None, np.ndarray] | None = None  # (held_shares)
         for name, where in (reactions or {}).items():
             dim, entities = dirichlet_entities(mesh, where, facet_tags, f"reactions[{name!r}]")
             comps = []
@@ -529,6 +530,33 @@ class GridConditions:
             name: np.array([parallel.total(comm, float(b[d[d < owned]].sum())) for d in comps])
             for name, comps in self.reaction_dofs.items()
         }
+
+    def held_shares(
+        self, cells: np.ndarray, bary: np.ndarray
+    ) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+        """The share of a point load that lands on held nodes, per component.
+
+        A force ``f`` at a point puts ``N_I f`` on each node of its cell; on a node a
+        Dirichlet condition holds, that share passes straight into the support. This
+        returns ``Σ_I N_I`` over the held nodes, shape (n, g) for points at
+        barycentric coordinates ``bary`` (n, g + 1) in this rank's ``cells`` (n,),
+        and the same over the held nodes of each reaction boundary, by name.
+        """
+        if self._held_masks is None:
+            held = np.zeros(self.fields.w.x.array.size)
+            for *_, bc in self.dirichlet:  # (local indices, ghosts included)
+                held[bc.dof_indices()[0]] = 1.0
+            self._held_masks = {None: held}
+            for name, comps in self.reaction_dofs.items():
+                mask = np.zeros_like(held)
+                dofs = np.concatenate(comps)
+                mask[dofs] = held[dofs]
+                self._held_masks[name] = mask
+        share = {
+            name: self.fields.displacement_at(cells, bary, mask)
+            for name, mask in self._held_masks.items()
+        }
+        return share.pop(None), share
 
 
 def _smallest_cell_beside(mesh: dolfinx.mesh.Mesh, dim: int, entities: np.ndarray) -> float:

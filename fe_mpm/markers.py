@@ -58,6 +58,10 @@ class Markers:
         self._entries[name] = (x.copy(), host)  # a copy: the caller's array must not move
         return nearest
 
+    def remove(self, name: str) -> None:
+        """Forget the marker ``name``."""
+        del self._entries[name]
+
     def position(self, name: str) -> np.ndarray:
         """Current position of the marker ``name``, a copy, shape (g,)."""
         return self._entries[name][0].copy()

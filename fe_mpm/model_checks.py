@@ -980,6 +980,37 @@ UNBALANCED_STRESS_SHARE = 0.1
 OUTSIDE_YIELD = 1e-9
 
 
+def warn_history_taken_as_elastic(
+    comm: MPI.Comm, points: MaterialPoints, material, names: Sequence[str]
+) -> None:
+    """Warn (collective) where a new law's elastic tensors start from deformed points' F.
+
+    A later stage with another law finds no value of the law's convected elastic
+    tensors (``names``) on its points; they start as the points' deformation taken
+    as elastic (:meth:`~fe_mpm.materials.HistoryField.elastic_values`). Until
+    2026-12-07 they started at I, so the new law's stress restarted from zero at
+    F ≠ I: a block that had sagged 4.34 mm under its weight in a Neo-Hookean stage
+    sagged 4.29 mm more in one step of an elastic HenckyJ2 stage (a helper's
+    scene), without a word.
+    """
+    if not names:
+        return
+    g = points.F.shape[-1]
+    strain = np.abs(points.F - np.eye(g)).max() if len(points) else 0.0
+    strain = parallel.largest(comm, float(strain))
+    if strain == 0.0:
+        return
+    laws = ", ".join(sorted({type(law).__name__ for law in laws_of(material)}))
+    fields = ", ".join(repr(n) for n in names)
+    warn(
+        f"Simulation: the points start deformed (largest |F - I| = {strain:.3g}) but carry "
+        f"no {fields} of the law ({laws}): it starts as their deformation taken as "
+        "elastic (bᵉ = F Fᵀ), so the law's stress at the start is its elastic response "
+        "to F, and its other internal variables start at their initial values. A "
+        "plastic deformation of an earlier stage is not carried over."
+    )
+
+
 def warn_initial_stress_outside_yield(comm, points: MaterialPoints, material) -> None:
     """Warn where an initial stress lies outside the law's yield surface; collective.
 

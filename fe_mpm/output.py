@@ -97,6 +97,13 @@ def _rows_after(csv: Path, step: int) -> bool:
     return any(int(row.split(",", 1)[0]) > step for row in rows if row)
 
 
+def earlier_run_files(folder: str | Path | None) -> list[str]:
+    """The names of an earlier run's files in ``folder`` (sorted; none if it is None)."""
+    if folder is None or not Path(folder).is_dir():
+        return []
+    return sorted(path.name for path in Path(folder).glob("*") if _RUN_FILES.fullmatch(path.name))
+
+
 def _new_folder(folder: Path, name: str) -> Path:
     """Make the subfolder ``name`` of ``folder``, numbered on (``name_2``, ...) if taken."""
     made, k = folder / name, 1

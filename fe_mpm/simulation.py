@@ -67,7 +67,7 @@ from fe_mpm.materials.elastic import p_wave_modulus
 from fe_mpm.materials.mixed_return import MixedReturnResult
 from fe_mpm.materials.zones import MATERIAL, laws_of
 from fe_mpm.newton import NewtonResult, NewtonSolver
-from fe_mpm.output import SimulationOutput
+from fe_mpm.output import SimulationOutput, earlier_run_files
 from fe_mpm.particles import MaterialPoints, coincident
 from fe_mpm.point_update import (
     apply_update,
@@ -342,11 +342,22 @@ class Simulation:
         _check_points(mesh.comm, points.check_state)  # a script may change them after seeding
         material = model_checks.laws_of_zones(material, points, mesh.comm)
         if parallel.any_rank(mesh.comm, points.simulated_to is not None):
+            # A stage's output in the folder of the stage before replaces it at its first
+            # frame (a helper's staged run lost its first stage so, 2026-12-07).
+            earlier = earlier_run_files(output_dir) if mesh.comm.rank == 0 else []
+            earlier = mesh.comm.bcast(earlier, root=0)
+            replaced = (
+                f" Its output_dir already holds an earlier run's files ({', '.join(earlier[:3])}"
+                f"{', ...' if len(earlier) > 3 else ''}), which this run's first frame "
+                "replaces: give each stage a folder of its own to keep them."
+                if earlier
+                else ""
+            )
             warn(
                 "Simulation: these points were already stepped by another Simulation (to "
                 f"t = {points.simulated_to}), so they start deformed, with their stresses "
                 "and internal variables: a staged analysis. For a fresh start, seed them "
-                "again."
+                f"again.{replaced}"
             )
         parallel.one_thread_per_rank(mesh.comm)
         model_checks.check_choices(
@@ -401,13 +412,19 @@ class Simulation:
             model_checks.warn_unbalanced_initial_stress(
                 mesh.comm, points, initial_stress, start_body_force
             )
+        taken_as_elastic = []  # a later stage's new law: its elastic tensors from F
         for name, h in material.history.items():
-            start = h.initial_values(len(points))
+            if name not in points.history and h.convected:
+                start = h.elastic_values(points.F)
+                taken_as_elastic.append(name)
+            else:
+                start = h.initial_values(len(points))
             given = points.history.setdefault(name, start)
             # A later stage's, or set by a script: checked on every rank together.
             parallel.check_together(
                 mesh.comm, _check_history, name, given, start.shape, kinds=(ValueError,)
             )
+        model_checks.warn_history_taken_as_elastic(mesh.comm, points, material, taken_as_elastic)
         if MATERIAL in material.history:  # several laws: the label reaches the slots
             points.history[MATERIAL] = points.material.astype(np.float64)
         else:  # one law after a stage of several: no stale labels in the output
@@ -489,7 +506,6 @@ class Simulation:
         self._passes_checked_dt, self._passes_warned = 0.0, False
         self._nonfinite_warned = False  # said once: a NaN in a Jacobian, not its residual
         self._hinge_warned = False  # said once: a static step's hinged cells
-        self._shared_support_warned = False  # said once: penalty points in held cells
         self._crossing_warned = False  # said once: a static standard run's points crossed
         self._tears = TearWatch()  # the material came apart (said once)
         self._contacts = ContactWatch()  # a dynamic contact of a step or two (said once)
@@ -719,6 +735,20 @@ class Simulation:
                 "follows that point's motion extended over the distance. Is it on the body?"
             )
 
+    def remove_marker(self, name: str) -> None:
+        """Remove the marker ``name`` between steps (its host may then be excavated).
+
+        Its columns in ``steps.csv`` read NaN from the next step on, and later
+        :class:`StepReport` objects leave it out. Collective: every rank calls it.
+
+        Raises:
+            KeyError: No marker has that name.
+        """
+        if name not in self.markers.names:
+            known = ", ".join(map(repr, self.markers.names)) or "none"
+            raise KeyError(f"Simulation.remove_marker: no marker {name!r}; the markers: {known}")
+        self.markers.remove(name)
+
     def remove_points(self, remove: npt.ArrayLike) -> int:
         """Remove this rank's points where ``remove`` is true, between steps (excavation).
 
@@ -762,7 +792,8 @@ class Simulation:
         if hosts:
             error = ValueError(
                 f"Simulation.remove_points: it removes the host point of marker "
-                f"{hosts[0]!r}; a marker moves with its host"
+                f"{hosts[0]!r}; a marker moves with its host. Remove the marker first "
+                f"(sim.remove_marker({hosts[0]!r})), or keep its host"
             )
         parallel.raise_together(self.mesh.comm, error)
         removed = int(parallel.total(self.mesh.comm, int(remove.sum())))
@@ -1302,7 +1333,12 @@ class Simulation:
             t0 = time.perf_counter()
             leaving = self._update_points(forms, layout, k, t_new, dt)
             if self._boundary is not None:
-                reactions.update(self._boundary.convect(forms, t_new, self.fields.displacement_at))
+                forces, passed = self._boundary.convect(
+                    forms, t_new, self.fields.displacement_at, self.conditions.held_shares
+                )
+                for name, force in passed.items():  # penalty shares on held nodes
+                    reactions[name] = reactions[name] + force
+                reactions.update(forces)
             walls = self.walls.finish_step()
             if self.dynamic:
                 self._contacts.look(walls, self.t)
@@ -1316,8 +1352,6 @@ class Simulation:
             # Accepted: told only now (the points' update may still have refused it).
             if not self.dynamic and self.domains is None and not self._hinge_warned:
                 self._warn_hinges(layout, k, t_old, t_new)
-            if self._boundary is not None and not self._shared_support_warned:
-                self._warn_shared_supports()
             if self.tracking.left:  # kept, and told: the next step's tracking stops the run
                 warn(self.tracking.left)
             self.conditions.warn_travel(t_new)
@@ -1343,50 +1377,6 @@ class Simulation:
             self._grid_is_a_step = self._cells_of_grid = True  # accepted: its frame may be written
             self._write_output()
         return report
-
-    def _warn_shared_supports(self) -> None:
-        """Warn (once, collective) where penalty points act in cells a grid Dirichlet holds.
-
-        The penalty's share on a node that a grid condition holds in every component
-        passes straight into the grid support, and both conditions' reported
-        forces count it. Found 2026-12-07 by a helper: a row of fixed penalty points in
-        the bottom cells of a block on a fixed base, its top pulled by 13.2 kN/m,
-        reported −49.4 kN/m and the base +36.3 kN/m (pushing up); their sum was the
-        support's force. Rollers are left out: a half-model footing's points beside its
-        symmetry line share the rollers' component, x, which no one reads there, and the
-        main demo would warn at every run (a reviewer, 2026-12-07); the footing's
-        vertical force is the body's.
-        """
-        cells, owners, components = self._boundary.penalty_cells()
-        nodes = self.mesh.geometry.dofmaps[0][cells]
-        shared = np.zeros(components.shape, dtype=bool)  # (points, g): held by both
-        for (spec, *_), held_nodes in zip(
-            self.conditions.dirichlet, self.conditions.dirichlet_nodes, strict=True
-        ):
-            if spec.component is not None:  # a roller (a symmetry plane): not told
-                continue
-            held = np.zeros(self.mesh.geometry.x.shape[0], dtype=bool)
-            held[held_nodes] = True
-            shared |= components & held[nodes].any(axis=1)[:, None]
-        n = len(self._boundary.points.conditions)
-        count = np.zeros((n, self.gdim), dtype=np.int64)
-        np.add.at(count, owners, shared.astype(np.int64))
-        count = parallel.total(self.mesh.comm, count)
-        if not count.any():
-            return
-        self._shared_support_warned = True
-        k = int(np.argmax(count.max(axis=1)))
-        axes = ", ".join("xyz"[c] for c in np.flatnonzero(count[k]))
-        warn(
-            f"PointDirichlet {self._boundary.points.conditions[k].name!r}: "
-            f"{int(count[k].max())} of its acting points lie in cells that a grid Dirichlet "
-            f"condition holds at a node, both holding {axes}. The penalty's share on those "
-            "nodes passes straight into that support, so in "
-            f"{axes} both the PointDirichlet's reported force and the Dirichlet's reaction "
-            "count it, and only their sum is the support's force on the body; the other "
-            "components are the body's (docs/user_scenes.md, Conditions that share nodes; "
-            "said once)."
-        )
 
     def _warn_hinges(self, layout: SlotLayout, k: int, t_old: float, t_new: float) -> None:
         """Warn (once, collective) where a converged static step had hinged cells.

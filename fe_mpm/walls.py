@@ -148,11 +148,12 @@ class _Wall:
         owner = f"RigidWall {spec.name!r}"
         self.spec, self.facets, self.subdomain = spec, facets, subdomain
         self.normal, self.offset = wall_plane(mesh, facets, owner)
-        corners = mesh.geometry.x[dolfinx.mesh.entities_to_geometry(mesh, fdim, facets), :g]
-        sizes = np.linalg.norm(corners[:, 1] - corners[:, 0], axis=1)  # an edge of each facet
+        facet_nodes = dolfinx.mesh.entities_to_geometry(mesh, fdim, facets)
+        corners = mesh.geometry.x[facet_nodes, :g]
+        each = np.linalg.norm(corners[:, 1] - corners[:, 0], axis=1)  # an edge of each facet
         # Each facet once: given by tag, a wall holds the tagged facets of ghost cells too
         # (point domains ask for two layers of them), which the ranks that own them count.
-        sizes = sizes[facets < mesh.topology.index_map(fdim).size_local]
+        sizes = each[facets < mesh.topology.index_map(fdim).size_local]
         count = parallel.total(mesh.comm, int(sizes.size))
         h = parallel.total(mesh.comm, float(sizes.sum())) / count
         self.penalty = spec.penalty if spec.penalty is not None else PENALTY_FACTOR * E / h
@@ -168,6 +169,8 @@ class _Wall:
         self.gap = dolfinx.fem.Function(gap_space, name=f"gap {spec.name}")
         self.gap_nodes = dolfinx.fem.locate_dofs_topological(gap_space, fdim, facets)
         self.gap_positions = gap_coordinates[self.gap_nodes]
+        self.reach = _node_sizes(mesh, gap_space, facet_nodes, each)[self.gap_nodes]
+        self.reach[self.reach == 0.0] = h  # (a node of another rank's facet only)
         self.law = contact.WallLaw(
             normal=n, stiffness=beta, friction=mu, slip_scale=s, gap=self.gap
         )
@@ -385,9 +388,16 @@ class RigidWalls:
         Grid-node contact acts on a node as soon as a point of the cells around it
         moves toward the wall, a cell before the body itself arrives: a rolling disk
         then rides on the nodes ahead of it. So each node's spring waits for the
-        body: its gap is the least distance from the wall of the points within a
-        facet size of it (along the wall), less each point's half-width
-        V_p^{1/g} / 2, and at least 0. A body that rests on the wall has none.
+        body: its gap is the least distance from the wall of the points within its
+        own facets' size of it (along the wall), less each point's half-width
+        V_p^{1/g} / 2, and at least 0. A body that rests on the wall has none; a node
+        with no point within reach and twice the wall's mean facet size of the wall
+        takes that distance. Found 2026-12-07 by a helper's Hertz contacts: with the
+        wall's mean facet as every node's reach, 2.7 to 7 cells on a graded grid, a
+        node took the lowest point of a curved body well beyond it, and the contact
+        came out 31 % too wide (b/R = 0.05, cells of b/10); and with point domains, a
+        node that no point reached pushed with gap 0 where the body was 0.09 m clear
+        of the wall (the half-width 4 times Hertz's).
 
         Args:
             occupied: The cells that hold points: nodes no such cell touches are released.
@@ -407,7 +417,7 @@ class RigidWalls:
             near_d = parallel.gathered(comm, distance[near])
             wall.gap.x.array[:] = 0.0
             wall.gap.x.array[wall.gap_nodes] = _least_distances(
-                wall.gap_positions, near_x, near_d, wall.normal, wall.size
+                wall.gap_positions, near_x, near_d, wall.normal, wall.reach, 2.0 * wall.size
             )
             wall.extension.x.array.reshape(-1, g)[idle] = 0.0
 
@@ -560,24 +570,45 @@ PAIRS_AT_ONCE = 2_000_000
 
 
 def _least_distances(
-    nodes: np.ndarray, x: np.ndarray, distance: np.ndarray, normal: np.ndarray, reach: float
+    nodes: np.ndarray,
+    x: np.ndarray,
+    distance: np.ndarray,
+    normal: np.ndarray,
+    reach: np.ndarray,
+    beyond: float,
 ) -> np.ndarray:
     """Each node's gap to the body (k,), m.
 
-    The least ``distance`` of the points ``x`` (n, g) within ``reach`` of the node along
-    the wall (normal ``normal``), at least 0; 0 where no point is.
+    The least ``distance`` of the points ``x`` (n, g) within ``reach`` (k,) of each
+    node along the wall (normal ``normal``), at least 0; ``beyond`` where no point is
+    (the points were kept only where nearer the wall than that).
     """
-    gaps = np.zeros(len(nodes))
+    gaps = np.full(len(nodes), float(beyond))
     if not len(nodes) or not len(x):
         return gaps
     chunk = max(1, PAIRS_AT_ONCE // len(x))  # bounds the memory of a long wall
     for start in range(0, len(nodes), chunk):
         offset = x[None, :, :] - nodes[start : start + chunk, None, :]
         along = offset - np.einsum("npg,g->np", offset, normal)[..., None] * normal
-        around = np.linalg.norm(along, axis=2) < reach
+        around = np.linalg.norm(along, axis=2) < reach[start : start + chunk, None]
         least = np.where(around, distance[None, :], np.inf).min(axis=1)
-        gaps[start : start + chunk] = np.where(np.isfinite(least), np.maximum(least, 0.0), 0.0)
+        gaps[start : start + chunk] = np.where(np.isfinite(least), np.maximum(least, 0.0), beyond)
     return gaps
+
+
+def _node_sizes(mesh, space, facet_nodes: np.ndarray, sizes: np.ndarray) -> np.ndarray:
+    """The longest facet of ``facet_nodes`` (k, g) at each dof of the P1 ``space``, m.
+
+    ``sizes`` (k,) are the facets'; 0 at nodes of none. A P1 cell lists its dofs in
+    its geometry nodes' order.
+    """
+    dof_of_node = np.empty(mesh.geometry.x.shape[0], dtype=np.int64)
+    dof_of_node[mesh.geometry.dofmaps[0].reshape(-1)] = space.dofmap.list.reshape(-1)
+    index_map = space.dofmap.index_map
+    largest = np.zeros(index_map.size_local + index_map.num_ghosts)
+    columns = facet_nodes.shape[1]
+    np.maximum.at(largest, dof_of_node[facet_nodes].reshape(-1), np.repeat(sizes, columns))
+    return largest
 
 
 #: A wall's contact that ends after this many steps or fewer is warned about in

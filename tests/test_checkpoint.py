@@ -9,8 +9,11 @@ import json
 import re
 import shutil
 
+from mpi4py import MPI
+
 import numpy as np
 import pytest
+from dolfinx.mesh import DiagonalType, create_rectangle
 
 import fe_mpm
 from fe_mpm import checkpoint, meshes, scenes
@@ -348,6 +351,28 @@ def _refused(folder, match, **options):
 
 def test_a_checkpoint_of_another_scene_is_refused(written):
     _refused(written, r"another scene: its law_parameters", E=2e6)
+
+
+def test_a_checkpoint_of_another_grid_of_as_many_cells_on_the_same_extent_is_refused(tmp_path):
+    """A helper's checkpoint of a gmsh grid (2026-12-07) restored without a word into a
+    structured grid of the same 462 triangles on the same rectangle: its retry's held
+    cells, kept by index, would have named cells of another grid. Here the two grids
+    have the same nodes and differ in their squares' diagonals only."""
+
+    def block(diagonal):
+        mesh = create_rectangle(MPI.COMM_WORLD, [[0, 0], [2, 2]], [4, 4], diagonal=diagonal)
+        points = fe_mpm.seed(mesh, 3, level_set=lambda x: 1.0 - x[1])
+        base = fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0))
+        return fe_mpm.Simulation(
+            mesh, points, fe_mpm.NeoHookean(1e6, 0.3), dirichlet=[base], body_force=(0, -9.81)
+        )
+
+    written = block(DiagonalType.right)
+    written.run(1.0, 1, progress=False)
+    folder = written.checkpoint(tmp_path)
+    block(DiagonalType.right).restore(folder)  # the same grid, built again
+    with pytest.raises(fe_mpm.CheckpointError, match=r"another grid with as many cells"):
+        block(DiagonalType.left).restore(folder)
 
 
 def test_a_corrupted_checkpoint_is_refused(written):

@@ -211,6 +211,27 @@ def test_free_fall_with_domains_is_exact(dim):
     assert np.allclose(points.F, np.eye(dim), rtol=0, atol=1e-12)
 
 
+def test_sliver_points_of_a_level_set_a_hair_from_the_nodes_take_their_domains():
+    """A helper's block (2026-12-07): seeded by a level set that ran a hair from the
+    nodes of a gmsh grid, it held sliver points, 1e-11 of their cells, whose pieces
+    missed the coverage tolerance by round-off: every first step failed as
+    "degenerated", at any load. Here the block's side lies 1e-10 m past a grid line
+    (slivers 4e-10 of a cell): with domains it stands on its base, the base carrying
+    its weight."""
+    mesh = meshes.rectangle_mesh((0.0, 0.0), (2.0, 1.5), (8, 6))
+    points = fe_mpm.seed(
+        mesh, 3, density=1000.0, level_set=[lambda x: 1.0 + 1e-10 - x[0], lambda x: 1.0 - x[1]]
+    )
+    assert points.volume.min() < 1e-9 * np.median(points.volume)  # slivers, as a user's
+    base = lambda x: np.isclose(x[1], 0.0)  # noqa: E731
+    sim = fe_mpm.Simulation(
+        mesh, points, fe_mpm.NeoHookean(1e6, 0.3), dirichlet=[fe_mpm.Dirichlet(base)],
+        body_force=(0.0, -9.81), point_domains=True, reactions={"base": base},
+    )  # fmt: skip
+    report = sim.run(1.0, 2, progress=False)[-1]
+    assert report.reactions["base"][1] == pytest.approx(9.81 * np.sum(points.mass), rel=1e-9)
+
+
 def test_a_plastic_law_gathers_its_history_from_the_pieces():
     """J2 squeezed by 5 % between two grips in one step, on a grid with room beside
     it to bulge into: the domains tile the cells, whose P1 strain is constant, so

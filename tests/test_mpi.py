@@ -538,7 +538,22 @@ try:
         steps = footing.run(1.0, 10, progress=False)
         platen = scenes.platen_compression(10, 3)
         squeezed = platen.run(1.0, 10, progress=False)
+        # A pin of penalty points in cells a fixed base holds: its share on the base's
+        # nodes goes to the base's reaction, summed on the ranks that hold the points.
+        mesh = meshes.rectangle_mesh((0.0, 0.0), (1.0, 1.5), (8, 12))
+        xs = (np.arange(16) + 0.5) / 16
+        def row(name, y, value, **options):
+            return fe_mpm.PointDirichlet(name, np.column_stack([xs, np.full(16, y)]), 1 / 16,
+                                         value, 8e6, **options)
+        base = lambda x: np.isclose(x[1], 0.0)
+        pinned = fe_mpm.Simulation(
+            mesh, fe_mpm.seed(mesh, 3, level_set=lambda x: 1.0 - x[1]), fe_mpm.NeoHookean(1e6, 0.3),
+            dirichlet=[fe_mpm.Dirichlet(base)], reactions={"base": base},
+            point_dirichlet=[row("top", 1.0, lambda t: (0.0, 0.01 * t)),
+                             row("pin", 0.03125, lambda t: (0.0, 0.0), reach=0.0)])
+        pin = pinned.run(1.0, 1, progress=False)[-1].reactions
         result = {
+            "pin": {name: force.tolist() for name, force in pin.items()},
             "platen": {"iterations": [r.newton_iterations for r in squeezed],
                        "force": [scenes.platen_force(r) for r in squeezed]},
             "cook": {"iterations": [r.newton_iterations for r in reports],
@@ -1183,7 +1198,9 @@ def test_boundary_points_act_on_one_rank_each_and_give_the_serial_answer(tmp_pat
     of ``scenes.platen_compression`` (standard MPM, 10 steps to half its length),
     whose platen points above the block's corner lie as near two occupied cells: they
     must take the same one on every partition (by index, 2 ranks once ended 0.5 %
-    off the serial force)."""
+    off the serial force). And a pin of penalty points beside a fixed base, whose
+    share on the base's nodes moves to the base's reaction on the ranks that hold the
+    pin's points: the three forces to 1e-10 of serial."""
     (serial,) = _run(tmp_path, "boundary points", 1)
     runs = _run(tmp_path, "boundary points", ranks)
     for result in runs:
@@ -1191,6 +1208,8 @@ def test_boundary_points_act_on_one_rank_each_and_give_the_serial_answer(tmp_pat
             want, got = serial[scene], result[scene]
             assert got["iterations"] == want["iterations"], scene
             assert np.allclose(got[key], want[key], rtol=1e-10, atol=0), scene
+        for name in ("top", "pin", "base"):
+            assert np.allclose(result["pin"][name], serial["pin"][name], rtol=1e-10, atol=1e-6)
         assert result["cook"]["load"] == pytest.approx([0.0, 5.0], abs=1e-12)
     assert serial["footing"]["q"][-1] > 2 * serial["footing"]["q"][0]  # the soil yields
     assert runs[0]["cook"]["migrated"] > 0 and runs[0]["footing"]["migrated"] > 0

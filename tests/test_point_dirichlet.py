@@ -339,12 +339,12 @@ def test_a_footing_a_cell_above_the_soil_does_not_grip_it():
     assert _footing_force_across_a_gap(0.2) == 0.0
 
 
-def test_penalty_points_in_cells_a_grid_condition_holds_are_warned_by_component():
-    """A helper's pin (2026-12-07): fixed penalty points in the bottom cells of a block
-    on a fixed base, its top pulled up 1 cm. The pin reported −49.4 kN/m and the base
-    +36.3 kN/m, pushing up, where the pull was 13.2 kN/m: the penalty's share on the
-    base's nodes goes straight into the base. Their sum is the support's force, and
-    the run says so, naming the components both hold."""
+def _pin_run(pin_y, pin_value, held, formulation="u"):
+    """A block on a fixed base, its top pulled up 1 cm by penalty points.
+
+    ``held``: name -> marker of the grid lines held fixed, each also a reaction;
+    ``pin_y``: a row of penalty points at that height moving by ``pin_value`` (None:
+    no pin). The reactions of the step, by name."""
     E, h = 1e6, 0.125
     mesh = rectangle_mesh((0.0, 0.0), (1.0, 1.5), (8, 12))
     xs = (np.arange(16) + 0.5) / 16
@@ -353,21 +353,41 @@ def test_penalty_points_in_cells_a_grid_condition_holds_are_warned_by_component(
         x = np.column_stack([xs, np.full(16, y)])
         return fe_mpm.PointDirichlet(name, x, 1 / 16, value, 1e3 * E / h, **options)
 
-    top = platen("top", 1.0, lambda t: (0.0, 0.01 * t))
-    pin = platen("pin", h / 4, lambda t: (0.0, 0.0), reach=0.0)
+    supports = [platen("top", 1.0, lambda t: (0.0, 0.01 * t))]
+    if pin_y is not None:
+        supports.append(platen("pin", pin_y, pin_value, reach=0.0))
+    sim = fe_mpm.Simulation(
+        mesh, fe_mpm.seed(mesh, 3, level_set=lambda x: 1.0 - x[1]), fe_mpm.NeoHookean(E, 0.3),
+        formulation, dirichlet=[fe_mpm.Dirichlet(m) for m in held.values()],
+        point_dirichlet=supports, reactions=held,
+    )  # fmt: skip
+    return sim.run(1.0, 1, progress=False)[-1].reactions
+
+
+@pytest.mark.parametrize("formulation", ["u", "up"])
+def test_a_penalty_points_share_on_held_nodes_goes_to_the_support_not_the_body(formulation):
+    """A helper's pin (2026-12-07): fixed penalty points in the bottom cells of a
+    block on a fixed base, its top pulled up 1 cm. The pin reported −49.4 kN/m and
+    the base +36.3 kN/m, pushing up, where the pull was 13.2 kN/m: the penalty's
+    share N_I f_b on the base's nodes went straight into the base, and both counted
+    it. That share is now the base's alone.
+
+    Exact check: a pin in cells whose nodes the grid holds all of, its target moved
+    off them, pulls on nothing that can move. It reports 0, and the base's reaction
+    is that of the run without it, to round-off (the penalty's share, 2e4 N/m, is
+    what both reported before)."""
     base = lambda x: np.isclose(x[1], 0.0)  # noqa: E731
-    for supports, said in [([top], None), ([top, pin], "'pin': 16 of its acting points")]:
-        sim = fe_mpm.Simulation(
-            mesh, fe_mpm.seed(mesh, 3, level_set=lambda x: 1.0 - x[1]), fe_mpm.NeoHookean(E, 0.3),
-            dirichlet=[fe_mpm.Dirichlet(base)], point_dirichlet=supports, reactions={"base": base},
-        )  # fmt: skip
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always")
-            forces = sim.run(1.0, 1, progress=False)[-1].reactions
-        told = [str(w.message) for w in caught if "passes straight into" in str(w.message)]
-        np.testing.assert_allclose(sum(forces.values()), 0.0, atol=1e-6)
-        if said is None:
-            assert not told
-        else:
-            assert len(told) == 1 and said in told[0] and "both holding x, y" in told[0]
-            assert forces["base"][1] > 0.0 > forces["pin"][1]  # the base pushes up
+    line = lambda x: np.isclose(x[1], 0.125)  # noqa: E731  (held inside: facets inside the grid)
+    bottom_rows = {"base": base, "line": line}  # all nodes of the bottom row of cells
+    alone = _pin_run(None, None, bottom_rows, formulation)
+    moved = lambda t: (0.0, -0.001 * t)  # noqa: E731
+    pinned = _pin_run(0.125 / 4, moved, bottom_rows, formulation)
+    np.testing.assert_allclose(pinned["pin"], 0.0, atol=1e-6)
+    for name in ("base", "line"):
+        np.testing.assert_allclose(pinned[name], alone[name], rtol=1e-9, atol=1e-6)
+    np.testing.assert_allclose(pinned["top"], alone["top"], rtol=1e-9, atol=1e-6)
+
+    # The helper's scene: the pin and the base both hold the block down.
+    forces = _pin_run(0.125 / 4, lambda t: (0.0, 0.0), {"base": base}, formulation)
+    np.testing.assert_allclose(sum(forces.values()), 0.0, atol=1e-6)
+    assert forces["base"][1] < 0.0 and forces["pin"][1] < 0.0 < forces["top"][1]

@@ -68,6 +68,27 @@ def test_a_trench_dug_between_steps_leaves_the_base_carrying_what_is_left():
         sim.step(3.0)
 
 
+def test_a_markers_host_is_dug_out_once_the_marker_is_removed(tmp_path):
+    """A helper's excavation through a marker (2026-12-07): its host could not be
+    removed, and nothing removed a marker. ``remove_marker`` does; the marker's
+    columns in ``steps.csv`` read NaN from then on."""
+    sim, points = _layer(output_dir=tmp_path)
+    sim.add_marker("crest", (2.0, 3.95))
+    sim.step(1.0)
+    trench = (np.abs(points.x[:, 0] - 2.0) < 0.5) & (points.x[:, 1] > 2.0)
+    with pytest.raises(ValueError, match=r"host point of marker 'crest'.*remove_marker"):
+        sim.remove_points(trench)
+    with pytest.raises(KeyError, match=r"no marker 'crst'; the markers: 'crest'"):
+        sim.remove_marker("crst")
+    sim.remove_marker("crest")
+    sim.remove_points(trench)
+    report = sim.step(2.0)
+    assert report.markers == {}
+    assert report.reactions["base"][1] == pytest.approx(_weight(points), rel=1e-9)
+    rows = np.genfromtxt(tmp_path / "steps.csv", delimiter=",", names=True)
+    assert np.isfinite(rows["crest_y"][0]) and np.isnan(rows["crest_y"][1])
+
+
 def test_a_layer_placed_on_a_stepped_one_adds_its_weight_to_the_base():
     """Staged construction: a second 0.5 m layer seeded on top of the first after a
     step; its internal variables start at the law's initial values, and the base

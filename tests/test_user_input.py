@@ -126,6 +126,52 @@ def test_points_stepped_by_one_simulation_warn_when_given_to_another():
         fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(2e5, 0.3), **options)
 
 
+def test_a_later_stage_written_into_the_folder_of_the_stage_before_says_it_replaces_it(tmp_path):
+    """A helper's staged run (2026-12-07): its second stage, written into the first
+    stage's folder, replaced the first stage's frames and rows without a word."""
+    mesh = _mesh()
+    points = fe_mpm.seed(mesh, per_cell=1, density=1000.0)
+    options = dict(dirichlet=[_base()], body_force=(0, -9.81), output_dir=tmp_path)
+    fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1e5, 0.3), **options).run(
+        1.0, 1, progress=False
+    )
+    with pytest.warns(UserWarning, match=r"already holds an earlier run's files \(grid.bp, .*own"):
+        fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1e5, 0.3), **options)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        fe_mpm.Simulation(
+            mesh, points, fe_mpm.NeoHookean(1e5, 0.3), **{**options, "output_dir": tmp_path / "2"}
+        )
+    assert not any("earlier run's files" in str(w.message) for w in caught)
+
+
+@pytest.mark.parametrize("law", [fe_mpm.HenckyJ2, fe_mpm.J2Plasticity])
+def test_a_later_stage_with_a_plastic_law_starts_from_the_elastic_state_of_f(law):
+    """Found 2026-12-07 by a helper: a block sagged 4.34 mm under its weight in a
+    Neo-Hookean stage; one more step at the same load, its points given to an elastic
+    HenckyJ2 (or J2Plasticity) of the same E and ν, sagged 4.29 (2.98) mm more. The
+    new law's bᵉ started at I on points with F ≠ I, its stress at zero. It now starts
+    as F Fᵀ, so the block stays where it is, up to the two laws' elastic difference
+    (here under 1 % of the sag), and the run says so."""
+    mesh = rectangle_mesh((0.0, 0.0), (2.0, 1.5), (16, 12))
+    points = fe_mpm.seed(
+        mesh, 3, density=1000.0, level_set=[lambda x: 1 - x[0], lambda x: 1 - x[1]]
+    )
+    start = points.x.copy()
+    options = dict(dirichlet=[_base()], body_force=(0.0, -9.81))
+    neo_hookean = fe_mpm.NeoHookean(1e6, 0.3)
+    fe_mpm.Simulation(mesh, points, neo_hookean, body_force_scale=lambda t: t, **options).run(
+        1.0, 4, progress=False
+    )
+    sagged = points.x.copy()
+    with pytest.warns(UserWarning, match=r"carry no 'be(_bar)?' of the law .*taken as elastic"):
+        second = fe_mpm.Simulation(mesh, points, law(1e6, 0.3, yield_stress=1e9), **options)
+    second.run(1.0, 1, progress=False)
+    sag = -(sagged - start)[:, 1].min()
+    assert sag > 4e-3
+    assert np.abs(points.x - sagged).max() < 0.01 * sag
+
+
 @pytest.mark.parametrize(
     ("dirichlet", "free"),
     [

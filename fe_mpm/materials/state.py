@@ -47,6 +47,24 @@ class HistoryField:
         """Initial values for ``n`` points, shape ``(n, *shape)``."""
         return np.broadcast_to(np.asarray(self.initial, dtype=np.float64), (n, *self.shape)).copy()
 
+    def elastic_values(self, F: np.ndarray) -> np.ndarray:
+        """Values for points already deformed by ``F`` (n, g, g), taken as elastic.
+
+        A convected elastic tensor is ``bᵉ = F Fᵀ`` (``"left"``) or
+        ``b̄ᵉ = J^(−2/3) F Fᵀ`` (``"left isochoric"``), embedded in 3D as plane
+        strain; the other fields take their initial values. At F = I this is
+        :meth:`initial_values`, to the bit.
+        """
+        n, g = F.shape[0], F.shape[-1]
+        if not self.convected:
+            return self.initial_values(n)
+        F3 = np.tile(np.eye(3), (n, 1, 1))
+        F3[:, :g, :g] = F
+        b = F3 @ np.swapaxes(F3, 1, 2)
+        if self.convected == "left isochoric":
+            b *= np.linalg.det(F3)[:, None, None] ** (-2.0 / 3.0)
+        return b
+
 
 @dataclass
 class PointState:
