@@ -64,7 +64,9 @@ def geostatic_stress(
 
     Args:
         points: The points (positions in m, masses in kg, volumes in m³ or m²).
-        surface: Height of the ground's free surface (m); no point may lie above it.
+        surface: Height of the ground's free surface (m), one number: level ground; no
+            point may lie above it. A body whose top lies well below it somewhere (a
+            slope's toe) is warned about: its face starts out of balance.
         gravity: Magnitude g > 0 of gravity (m/s²), acting along −z (−y in 2D).
         K0: Ratio K₀ ≥ 0 of horizontal to vertical stress at rest: one, or each
             point's (n,) (a layer's own, e.g. by ``points.material``).
@@ -111,6 +113,14 @@ def geostatic_stress(
     if np.any(bad):
         first = float(np.ravel(K0)[np.flatnonzero(np.ravel(bad))[0]])
         raise ValueError(f"geostatic_stress: K0 must be a finite number >= 0, got {first:g}")
+    if callable(surface) or np.ndim(surface) != 0:
+        given = "a function" if callable(surface) else f"an array of shape {np.shape(surface)}"
+        raise TypeError(
+            f"geostatic_stress: surface is the one height (m) of level ground, got {given}: "
+            "ground whose top is not level (a slope, an embankment) has no stress at rest "
+            "of this closed form; ramp its gravity instead (Simulation(..., "
+            "body_force_scale=lambda t: min(t, 1.0)), docs/user_scenes.md)"
+        )
     if not np.isfinite(surface):
         raise ValueError(f"geostatic_stress: surface must be a finite height (m), got {surface!r}")
     depth = surface - points.x[:, -1]
@@ -162,6 +172,55 @@ def _warn_gap_below(
             "stands for it (a surcharge) the top starts out of balance. Give the height "
             "of the body's own top."
         )
+    elif np.isfinite(gap):
+        _warn_top_not_level(points, surface, spacing, comm)
+
+
+#: Columns of this many point spacings across, whose tops :func:`_warn_top_not_level`
+#: compares with the surface; at most this many columns (else it is not checked).
+TOP_COLUMN_SPACINGS, MOST_TOP_COLUMNS = 2.0, 1_000_000
+
+
+def _warn_top_not_level(
+    points: MaterialPoints, surface: float, spacing: float, comm: MPI.Comm
+) -> None:
+    """Warn where the body's top lies well below the surface somewhere (collective).
+
+    The highest point of each vertical column of the body, columns
+    :data:`TOP_COLUMN_SPACINGS` point spacings wide, is compared with the surface: a
+    slope's toe lies far below its crest, and the level-ground stress then puts a
+    traction on the slope's face. Found 2026-12-07 by a helper's strength reduction
+    (Griffiths and Lane's 2:1 slope, H = 10 m): started at rest with ``surface=10``,
+    its face moved 3.6 mm in one step at rest, half the whole settlement under
+    gravity, without a word.
+    """
+    g = points.gdim
+    across = points.x[:, :-1]
+    low = -parallel.largest(comm, -across.min(axis=0, initial=np.inf))
+    high = parallel.largest(comm, across.max(axis=0, initial=-np.inf))
+    width = TOP_COLUMN_SPACINGS * spacing
+    if not (np.all(np.isfinite(low)) and width > 0.0):
+        return
+    counts = np.maximum(1, np.ceil((np.asarray(high) - low) / width)).astype(np.int64)
+    if np.prod(counts) > MOST_TOP_COLUMNS:
+        return
+    column = np.clip(((across - low) / width).astype(np.int64), 0, counts - 1)
+    top = np.full(int(np.prod(counts)), -np.inf)
+    np.maximum.at(top, np.ravel_multi_index(column.T, counts), points.x[:, -1])
+    top = parallel.largest(comm, top)
+    drop = np.where(np.isfinite(top), surface - top, -np.inf)
+    worst = int(np.argmax(drop))
+    if drop[worst] <= TOP_COLUMN_SPACINGS * spacing:
+        return
+    where = low + (np.array(np.unravel_index(worst, counts)) + 0.5) * width
+    at = ", ".join(f"{'xy'[k]} = {where[k]:.3g}" for k in range(g - 1))
+    warn(
+        f"geostatic_stress: the body's top is not level: near {at} m its highest point "
+        f"lies {drop[worst]:.3g} m below the surface {surface:g} m. The stress at rest of "
+        "level ground then puts a traction on the body's sloping or stepped face, which "
+        "starts out of balance and moves in the first step; ramp such a body's gravity "
+        "instead (body_force_scale), or start it from a stress of your own."
+    )
 
 
 def _own_density(points: MaterialPoints, density: float | None) -> np.ndarray | float:

@@ -577,6 +577,7 @@ def failure_advice(
     lost_loads: dict[str, float] | None = None,
     cohesionless_from_rest: bool = False,
     staged: bool = False,
+    later_stage: bool = False,
 ) -> str:
     """What a run's stop message adds about its options (empty if nothing).
 
@@ -601,8 +602,23 @@ def failure_advice(
     a geostatic start or c = 100 Pa ran.
     ``staged``: points were added or removed before the step (a lift of an
     embankment, an excavation), whose load comes whole at any step length.
+    ``later_stage``: the first step of a static run whose points an earlier
+    Simulation stepped: what the stage changes comes whole in that step, and Newton
+    may fail short of any limit (a helper's staged strength reduction of Griffiths
+    and Lane's slope, 2026-12-07: from the same state at F = 1, F = 1.05 failed and
+    1.15 to 1.3 converged; the message spoke of the limit load alone).
     """
     advice = [sliding] if sliding else []
+    if later_stage:
+        advice.append(
+            "This is the first step of a later stage (its points come from an earlier "
+            "Simulation): what the stage changes, a weaker law or another load, comes "
+            "whole in this step however short it is cut, and Newton may fail here short "
+            "of any limit load (a staged strength reduction of a slope failed at F = 1.05 "
+            "and converged at 1.3 from the same state). A failure here says nothing of "
+            "the body's strength: ramp the change over steps instead (fresh points and "
+            "gravity ramped, docs/user_scenes.md, strength reduction)."
+        )
     if staged:
         advice.append(
             "Points were added or removed just before this step (add_points, "

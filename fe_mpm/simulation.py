@@ -341,7 +341,9 @@ class Simulation:
         walls = lists["walls"]
         _check_points(mesh.comm, points.check_state)  # a script may change them after seeding
         material = model_checks.laws_of_zones(material, points, mesh.comm)
-        if parallel.any_rank(mesh.comm, points.simulated_to is not None):
+        #: Whether the points come from an earlier Simulation (a later stage).
+        self._later_stage = parallel.any_rank(mesh.comm, points.simulated_to is not None)
+        if self._later_stage:
             # A stage's output in the folder of the stage before replaces it at its first
             # frame (a helper's staged run lost its first stage so, 2026-12-07).
             earlier = earlier_run_files(output_dir) if mesh.comm.rank == 0 else []
@@ -1211,6 +1213,7 @@ class Simulation:
             self._domains_would_do and self._points_crossed_cells() and self._staged_at is None,
             static_plastic=not self.dynamic and self._plastic and (loads_rise or staged),
             staged=staged and not self.dynamic,
+            later_stage=not self.dynamic and self._later_stage and self.step_number == 0,
             sliding=""
             if self.dynamic
             else model_checks.sliding_on_walls(

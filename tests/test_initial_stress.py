@@ -432,3 +432,24 @@ def test_an_initial_stress_outside_the_yield_surface_is_warned():
     assert outside == {0.5: 144, 1.0: 0}  # the points past c_u, counted by hand
     assert len(said[0.5]) == 1 and said[0.5][0].startswith("Simulation: 144 of the 240 points")
     assert not said[1.0]
+
+
+def test_a_slope_given_the_stress_of_level_ground_is_warned_and_a_surface_profile_refused():
+    """A helper's strength reduction (Griffiths and Lane's slope, 2026-12-07): given
+    the level-ground stress with ``surface`` at its crest, the slope's face moved
+    3.6 mm in one step at rest, half its settlement under gravity, without a word;
+    a surface profile (a function or one height per point) failed inside numpy.
+    Now the top's drop below the surface is warned, naming where, and a profile is
+    refused; a level layer, its top seeded by a level set between grid lines, is
+    not warned."""
+    grid = rectangle_mesh((0.0, 0.0), (W, H), (8, 4))
+    slope = fe_mpm.seed(grid, 3, density=RHO, level_set=lambda x: H - x[1] - 0.5 * x[0])
+    with pytest.warns(UserWarning, match=r"top is not level: near x = .* m its highest point"):
+        fe_mpm.geostatic_stress(slope, H, G, K0)
+    level = fe_mpm.seed(grid, 3, density=RHO, level_set=lambda x: 0.9 * H - x[1])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        fe_mpm.geostatic_stress(level, 0.9 * H, G, K0)
+    for profile in (lambda x: H - 0.5 * x[0], np.full(len(slope), H)):
+        with pytest.raises(TypeError, match=r"surface is the one height .* ramp its gravity"):
+            fe_mpm.geostatic_stress(slope, profile, G, K0)

@@ -100,16 +100,43 @@ def test_a_point_left_on_the_yield_surface_starts_its_next_step_elastic_whatever
     assert np.array_equal(at_start["plastic_strain"], driver.history["plastic_strain"])
 
 
-def test_plastic_flow_is_isochoric_in_the_trial_measure():
-    """The return changes only dev b̄ᵉ: tr b̄ᵉ is that of the trial state (Algorithm 3)."""
+def test_plastic_flow_is_isochoric_b_bar_stays_unimodular_and_its_deviator_is_the_stress():
+    """The return changes dev b̄ᵉ to s/μ, and its spherical part keeps det b̄ᵉ = 1
+    (plastic flow is isochoric). Simo's ⅓ tr b̄ᵉ,tr I left det b̄ᵉ = 1.0000965 after
+    this one step of shear γ = 0.01 (measured before 2026-12-07)."""
     mat = fe_mpm.J2Plasticity(**STEEL)
     driver = MaterialDriver(mat, n=1)
-    driver.step(shear(0.01))
+    tau = driver.step(shear(0.01))[0]
     be = driver.history["be_bar"][0]
-    F = shear(0.01)[0]
-    trial = F @ F.T  # det F = 1, virgin b̄ᵉ_n = I
-    assert abs(np.trace(be) - np.trace(trial)) < 1e-14
+    assert driver.history["plastic_strain"][0] > 0.0
+    assert abs(np.linalg.det(be) - 1.0) < 1e-14
+    mu = mat.E / (2 * (1 + mat.nu))
+    dev = lambda a: a - np.trace(a) / 3 * np.eye(3)  # noqa: E731
+    np.testing.assert_allclose(mu * dev(be), dev(tau), rtol=0, atol=1e-12 * mat.yield_stress)
     assert np.allclose(be, be.T, atol=1e-15)
+
+
+def test_an_unloading_after_large_plastic_flow_does_not_depend_on_the_step_count():
+    """Isochoric compression to λ = 0.75, then an elastic unloading of 1.5 σ_Y/E:
+    with Simo's ⅓ tr b̄ᵉ,tr I update det b̄ᵉ drifted to 1.012 over 25 steps, and the
+    unloaded stress was 176.6, 175.6 and 175.3 MPa after 25, 100 and 400 steps. Kept
+    unimodular, it is one number for every count (measured 174.97 to 1e-13), and
+    HenckyJ2's exact one, 175.03, differs by the two elastic laws' difference alone."""
+    E, nu, sy = 2.1e5, 0.3, 240.0
+
+    def unloaded(law, steps):
+        driver = MaterialDriver(law, n=1)
+        for lam in np.linspace(1.0, 0.75, steps + 1)[1:]:
+            driver.step(np.diag([lam, lam**-0.5, lam**-0.5])[None])
+        lam = 0.75 * (1 + 1.5 * sy / E)
+        tau = driver.step(np.diag([lam, lam**-0.5, lam**-0.5])[None])[0]
+        return tau[0, 0] - tau[1, 1], np.linalg.det(driver.history.get("be_bar", [np.eye(3)])[0])
+
+    simo = [unloaded(fe_mpm.J2Plasticity(E, nu, sy), steps) for steps in (25, 400)]
+    assert abs(simo[0][1] - 1.0) < 1e-13 and abs(simo[1][1] - 1.0) < 1e-13
+    assert simo[0][0] == pytest.approx(simo[1][0], rel=1e-10)
+    hencky, _ = unloaded(fe_mpm.HenckyJ2(E, nu, sy), 25)
+    assert simo[0][0] == pytest.approx(hencky, rel=1e-3)
 
 
 @pytest.mark.parametrize("gdim", [2, 3])

@@ -32,10 +32,15 @@ def _simulation(dim, formulation, seed=3, material=None):
     pts, _ = random_points(mesh, rng, counts, F_spread=0.1)
     traction = np.zeros(dim)
     traction[1] = 0.3
+    material = material or fe_mpm.NeoHookean(E=10.0, nu=0.3)
+    # The history at its initial values, not the elastic state of F that points
+    # without one would take (a later stage's): the random F then spans the regions.
+    for name, field in material.history.items():
+        pts.history[name] = field.initial_values(len(pts))
     sim = fe_mpm.Simulation(
         mesh,
         pts,
-        material or fe_mpm.NeoHookean(E=10.0, nu=0.3),
+        material,
         formulation,
         dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0))],
         tractions=[fe_mpm.Traction(lambda x: np.isclose(x[0], 2.0), traction)],

@@ -126,6 +126,26 @@ def test_points_stepped_by_one_simulation_warn_when_given_to_another():
         fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(2e5, 0.3), **options)
 
 
+def test_a_later_stage_that_fails_its_first_step_is_not_told_the_body_has_failed_alone():
+    """A helper's staged strength reduction (2026-12-07): from one state at F = 1, the
+    stage at F = 1.05 failed and 1.15 to 1.3 converged, and the failure spoke of the
+    limit load only. A later stage's first step now says that its change came whole
+    there. Here a block that stood under its weight is given to a law far too weak
+    to carry it (c = 10 Pa), and the stop message says both."""
+    mesh = _mesh()
+    points = fe_mpm.seed(mesh, 3, density=RHO, level_set=lambda x: 0.75 - x[1])
+    options = dict(dirichlet=[_base()], body_force=(0.0, -G), min_step=0.25)
+    fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1e6, 0.3), **options).run(1.0, 1, progress=False)
+    weak = fe_mpm.MohrCoulomb(1e6, 0.3, 10.0, 0.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        stage = fe_mpm.Simulation(mesh, points, weak, "up", **options)
+    with pytest.raises(fe_mpm.ConvergenceError) as stop:
+        stage.run(1.0, 1, progress=False)
+    assert "first step of a later stage" in str(stop.value)
+    assert "limit load" in str(stop.value)
+
+
 def test_a_later_stage_written_into_the_folder_of_the_stage_before_says_it_replaces_it(tmp_path):
     """A helper's staged run (2026-12-07): its second stage, written into the first
     stage's folder, replaced the first stage's frames and rows without a word."""

@@ -39,6 +39,10 @@ from fe_mpm.materials.spectral import deviator, norm
 from fe_mpm.materials.state import HistoryField, PointState
 
 _SQRT_2_3 = float(np.sqrt(2.0 / 3.0))
+#: Newton steps that make b̄ᵉ unimodular (:meth:`J2Plasticity.updated_history`):
+#: from ⅓ tr b̄ᵉ,tr, whose error is the step's plastic drift (about 1e-3), three
+#: steps reach round-off.
+UNIMODULAR_NEWTON_STEPS = 3
 
 
 @dataclass(frozen=True)
@@ -109,10 +113,25 @@ class J2Plasticity(IsotropicModuli):
         return in_plane(self.bulk_modulus * J * (J - 1.0) * ufl.Identity(3) + s, g)
 
     def updated_history(self, F: ufl.core.expr.Expr, state: PointState) -> dict:
-        """b̄ᵉ and α at t_{n+1} (Algorithm 3, steps 3 and 5)."""
+        """b̄ᵉ and α at t_{n+1} (Algorithm 3, steps 3 and 5), b̄ᵉ kept unimodular.
+
+        Simo's update ``s/μ + ⅓ tr b̄ᵉ,tr I`` leaves det b̄ᵉ ≠ 1 after a plastic
+        step, and the error accumulates: 1.2 % after 25 steps of isochoric
+        compression to λ = 0.75, and the stress of a following elastic unloading
+        was 0.9 % off HenckyJ2's where 400 steps gave 0.15 % (2026-12-07). Its
+        spherical part is therefore the root x of det(s/μ + x I) = 1 nearest
+        ⅓ tr b̄ᵉ,tr (Simo 1992, §3.3; Simo & Hughes 1998, §9.3), found by Newton
+        from there: x³ − ½ tr(A²) x + det A − 1 = 0 for the deviator A = s/μ.
+        The stress of the step is unchanged; the next step starts from b̄ᵉ.
+        """
         s, b_trial, dgamma = self._return_map(state)
+        A = s / self.mu
+        half_square, det_A = 0.5 * ufl.tr(A * A), ufl.det(A)
+        x = ufl.tr(b_trial) / 3.0
+        for _ in range(UNIMODULAR_NEWTON_STEPS):
+            x = x - (x**3 - half_square * x + det_A - 1.0) / (3.0 * x**2 - half_square)
         return {
-            "be_bar": s / self.mu + ufl.tr(b_trial) / 3.0 * ufl.Identity(3),
+            "be_bar": A + x * ufl.Identity(3),
             "plastic_strain": state.history["plastic_strain"] + _SQRT_2_3 * dgamma,
         }
 
