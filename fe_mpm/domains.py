@@ -83,6 +83,8 @@ COVERAGE_TOL = 1e-9
 #: helper's block on cells of 0.125 m, 2026-12-07), whose pieces then missed
 #: COVERAGE_TOL, and every first step failed as "degenerated".
 COVERAGE_ROUNDOFF = 1e-12
+#: The most that tolerance may be: a domain's pieces must still add up to its area.
+COVERAGE_MOST = 1e-3
 #: A domain with less than this fraction of its area inside the grid has left it.
 MIN_INSIDE = 0.5
 #: Pieces smaller than this fraction of their domain are dropped (slivers of
@@ -1056,11 +1058,12 @@ def _coverage_tolerance(
     """Each domain's tolerance on its pieces' sum, a fraction of its area (n,).
 
     :data:`COVERAGE_TOL`, plus :data:`COVERAGE_ROUNDOFF` of the largest cell its
-    pieces lie in over its own area.
+    pieces lie in over its own area, at most :data:`COVERAGE_MOST` (a domain 1e-13 of
+    its cell would otherwise pass any sum: a reviewer).
     """
     largest = np.zeros(domain_area.size)
     np.maximum.at(largest, owner, tracker.volumes[cell])
-    return COVERAGE_TOL + COVERAGE_ROUNDOFF * largest / domain_area
+    return np.minimum(COVERAGE_TOL + COVERAGE_ROUNDOFF * largest / domain_area, COVERAGE_MOST)
 
 
 def _no_short(shape: tuple) -> tuple[np.ndarray, np.ndarray]:

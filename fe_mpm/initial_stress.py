@@ -173,28 +173,31 @@ def _warn_gap_below(
             "of the body's own top."
         )
     elif np.isfinite(gap):
-        _warn_top_not_level(points, surface, spacing, comm)
+        _warn_top_not_level(points, surface, comm)
 
 
-#: Columns of this many point spacings across, whose tops :func:`_warn_top_not_level`
-#: compares with the surface; at most this many columns (else it is not checked).
+#: Columns of this many of the largest point spacing across, whose tops
+#: :func:`_warn_top_not_level` compares with the surface (warned from twice that
+#: below it); at most this many columns (else it is not checked).
 TOP_COLUMN_SPACINGS, MOST_TOP_COLUMNS = 2.0, 1_000_000
 
 
-def _warn_top_not_level(
-    points: MaterialPoints, surface: float, spacing: float, comm: MPI.Comm
-) -> None:
+def _warn_top_not_level(points: MaterialPoints, surface: float, comm: MPI.Comm) -> None:
     """Warn where the body's top lies well below the surface somewhere (collective).
 
-    The highest point of each vertical column of the body, columns
-    :data:`TOP_COLUMN_SPACINGS` point spacings wide, is compared with the surface: a
-    slope's toe lies far below its crest, and the level-ground stress then puts a
-    traction on the slope's face. Found 2026-12-07 by a helper's strength reduction
-    (Griffiths and Lane's 2:1 slope, H = 10 m): started at rest with ``surface=10``,
-    its face moved 3.6 mm in one step at rest, half the whole settlement under
-    gravity, without a word.
+    The highest point of each vertical column of the body is compared with the
+    surface: a slope's toe lies far below its crest, and the level-ground stress then
+    puts a traction on the slope's face. Found 2026-12-07 by a helper's strength
+    reduction (Griffiths and Lane's 2:1 slope, H = 10 m): started at rest with
+    ``surface=10``, its face moved 3.6 mm in one step at rest, half the whole
+    settlement under gravity, without a word. The columns are as wide as
+    :data:`TOP_COLUMN_SPACINGS` of the largest point spacing, so that each holds a
+    point of the top row where the cells are coarsest: sized by the median, the strip
+    footing's graded grid warned of level ground (a reviewer, 2026-12-07).
     """
     g = points.gdim
+    own = points.volume ** (1.0 / g) if len(points) else np.zeros(0)
+    spacing = parallel.largest(comm, float(own.max(initial=0.0)))
     across = points.x[:, :-1]
     low = -parallel.largest(comm, -across.min(axis=0, initial=np.inf))
     high = parallel.largest(comm, across.max(axis=0, initial=-np.inf))
@@ -210,7 +213,7 @@ def _warn_top_not_level(
     top = parallel.largest(comm, top)
     drop = np.where(np.isfinite(top), surface - top, -np.inf)
     worst = int(np.argmax(drop))
-    if drop[worst] <= TOP_COLUMN_SPACINGS * spacing:
+    if drop[worst] <= 2.0 * width:
         return
     where = low + (np.array(np.unravel_index(worst, counts)) + 0.5) * width
     at = ", ".join(f"{'xy'[k]} = {where[k]:.3g}" for k in range(g - 1))

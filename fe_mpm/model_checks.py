@@ -996,20 +996,21 @@ UNBALANCED_STRESS_SHARE = 0.1
 OUTSIDE_YIELD = 1e-9
 
 
-def warn_history_taken_as_elastic(
-    comm: MPI.Comm, points: MaterialPoints, material, names: Sequence[str]
+def warn_elastic_tensors_started(
+    comm: MPI.Comm, points: MaterialPoints, material, started: Mapping[str, str | None]
 ) -> None:
-    """Warn (collective) where a new law's elastic tensors start from deformed points' F.
+    """Warn (collective) where a new law's elastic tensors start on deformed points.
 
-    A later stage with another law finds no value of the law's convected elastic
-    tensors (``names``) on its points; they start as the points' deformation taken
-    as elastic (:meth:`~fe_mpm.materials.HistoryField.elastic_values`). Until
-    2026-12-07 they started at I, so the new law's stress restarted from zero at
-    F ≠ I: a block that had sagged 4.34 mm under its weight in a Neo-Hookean stage
-    sagged 4.29 mm more in one step of an elastic HenckyJ2 stage (a helper's
-    scene), without a word.
+    ``started``: each convected elastic tensor of the law that the points lacked, and
+    the other one it was converted from (None: from F,
+    :meth:`~fe_mpm.materials.HistoryField.elastic_values`). Until 2026-12-07 they
+    started at I, so the new law's stress restarted from zero at F ≠ I: a block that
+    had sagged 4.34 mm under its weight in a Neo-Hookean stage sagged 4.29 mm more in
+    one step of an elastic HenckyJ2 stage (a helper's scene), without a word. Taken
+    from F where a J2Plasticity stage had left b̄ᵉ, its plastic strain became elastic
+    strain: 10 times the stress (a reviewer); b̄ᵉ is now converted.
     """
-    if not names:
+    if not started:
         return
     g = points.F.shape[-1]
     strain = np.abs(points.F - np.eye(g)).max() if len(points) else 0.0
@@ -1017,13 +1018,20 @@ def warn_history_taken_as_elastic(
     if strain == 0.0:
         return
     laws = ", ".join(sorted({type(law).__name__ for law in laws_of(material)}))
-    fields = ", ".join(repr(n) for n in names)
+    told = []
+    for name, other in started.items():
+        if other is None:
+            told.append(
+                f"{name!r} starts as their whole deformation taken as elastic (F Fᵀ): any "
+                "plastic deformation of an earlier stage becomes elastic strain, and "
+                "stress, in this one"
+            )
+        else:
+            told.append(f"{name!r} starts from the {other!r} they carry, converted")
     warn(
-        f"Simulation: the points start deformed (largest |F - I| = {strain:.3g}) but carry "
-        f"no {fields} of the law ({laws}): it starts as their deformation taken as "
-        "elastic (bᵉ = F Fᵀ), so the law's stress at the start is its elastic response "
-        "to F, and its other internal variables start at their initial values. A "
-        "plastic deformation of an earlier stage is not carried over."
+        f"Simulation: the points start deformed (largest |F - I| = {strain:.3g}) and "
+        f"lack the law's ({laws}) elastic tensor: {'; '.join(told)}. Its other internal "
+        "variables start at their initial values."
     )
 
 

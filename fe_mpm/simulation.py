@@ -414,11 +414,11 @@ class Simulation:
             model_checks.warn_unbalanced_initial_stress(
                 mesh.comm, points, initial_stress, start_body_force
             )
-        taken_as_elastic = []  # a later stage's new law: its elastic tensors from F
+        started = {}  # a later stage's new law: its elastic tensors, and from what
         for name, h in material.history.items():
             if name not in points.history and h.convected:
-                start = h.elastic_values(points.F)
-                taken_as_elastic.append(name)
+                started[name] = h.counterpart_in(points.history)
+                start = h.elastic_values(points.F, points.history)
             else:
                 start = h.initial_values(len(points))
             given = points.history.setdefault(name, start)
@@ -426,7 +426,7 @@ class Simulation:
             parallel.check_together(
                 mesh.comm, _check_history, name, given, start.shape, kinds=(ValueError,)
             )
-        model_checks.warn_history_taken_as_elastic(mesh.comm, points, material, taken_as_elastic)
+        model_checks.warn_elastic_tensors_started(mesh.comm, points, material, started)
         if MATERIAL in material.history:  # several laws: the label reaches the slots
             points.history[MATERIAL] = points.material.astype(np.float64)
         else:  # one law after a stage of several: no stale labels in the output

@@ -169,8 +169,11 @@ class _Wall:
         self.gap = dolfinx.fem.Function(gap_space, name=f"gap {spec.name}")
         self.gap_nodes = dolfinx.fem.locate_dofs_topological(gap_space, fdim, facets)
         self.gap_positions = gap_coordinates[self.gap_nodes]
-        self.reach = _node_sizes(mesh, gap_space, facet_nodes, each)[self.gap_nodes]
-        self.reach[self.reach == 0.0] = h  # (a node of another rank's facet only)
+        longest = np.max(  # each facet's longest edge, the reach of its nodes
+            [np.linalg.norm(corners[:, i] - corners[:, j], axis=1) for i, j in _EDGES[g]],
+            axis=0,
+        )
+        self.reach = _node_sizes(mesh.comm, gap_space, facet_nodes, longest)[self.gap_nodes]
         self.law = contact.WallLaw(
             normal=n, stiffness=beta, friction=mu, slip_scale=s, gap=self.gap
         )
@@ -596,19 +599,35 @@ def _least_distances(
     return gaps
 
 
-def _node_sizes(mesh, space, facet_nodes: np.ndarray, sizes: np.ndarray) -> np.ndarray:
-    """The longest facet of ``facet_nodes`` (k, g) at each dof of the P1 ``space``, m.
+#: The edges of a wall's facet by the grid's dimension: a segment, a triangle.
+_EDGES = {2: ((0, 1),), 3: ((0, 1), (1, 2), (2, 0))}
 
-    ``sizes`` (k,) are the facets'; 0 at nodes of none. A P1 cell lists its dofs in
-    its geometry nodes' order.
+
+def _node_sizes(comm, space, facet_nodes: np.ndarray, sizes: np.ndarray) -> np.ndarray:
+    """The largest of ``sizes`` (k,) of the facets ``facet_nodes`` (k, g) at each dof.
+
+    Over the facets of every rank: a rank may hold only some of a shared node's
+    facets, and a node that two ranks gave two reaches took two gaps, so that the
+    answer moved with the partition (a reviewer, 2026-12-07). 0 at nodes of no
+    facet. ``space`` is P1, whose cells list their dofs in their geometry nodes'
+    order. Collective.
     """
-    dof_of_node = np.empty(mesh.geometry.x.shape[0], dtype=np.int64)
+    mesh = space.mesh
+    dof_of_node = np.empty(mesh.geometry.x.shape[0], dtype=np.int32)
     dof_of_node[mesh.geometry.dofmaps[0].reshape(-1)] = space.dofmap.list.reshape(-1)
     index_map = space.dofmap.index_map
-    largest = np.zeros(index_map.size_local + index_map.num_ghosts)
-    columns = facet_nodes.shape[1]
-    np.maximum.at(largest, dof_of_node[facet_nodes].reshape(-1), np.repeat(sizes, columns))
-    return largest
+    local = dof_of_node[facet_nodes].reshape(-1)
+    every = parallel.gathered(comm, index_map.local_to_global(local))
+    each = parallel.gathered(comm, np.repeat(sizes, facet_nodes.shape[1]))
+    nodes, which = np.unique(every, return_inverse=True)
+    largest = np.zeros(nodes.size)
+    np.maximum.at(largest, which, each)
+    mine = index_map.local_to_global(
+        np.arange(index_map.size_local + index_map.num_ghosts, dtype=np.int32)
+    )
+    at = np.clip(np.searchsorted(nodes, mine), 0, max(nodes.size - 1, 0))
+    found = nodes[at] == mine if nodes.size else np.zeros(mine.size, dtype=bool)
+    return np.where(found, largest[at] if nodes.size else 0.0, 0.0)
 
 
 #: A wall's contact that ends after this many steps or fewer is warned about in

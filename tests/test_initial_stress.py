@@ -447,9 +447,18 @@ def test_a_slope_given_the_stress_of_level_ground_is_warned_and_a_surface_profil
     with pytest.warns(UserWarning, match=r"top is not level: near x = .* m its highest point"):
         fe_mpm.geostatic_stress(slope, H, G, K0)
     level = fe_mpm.seed(grid, 3, density=RHO, level_set=lambda x: 0.9 * H - x[1])
+    # Level ground on the strip footing's graded gmsh grid (cells 0.05 to 0.5 m): with
+    # columns sized by the median spacing it warned of a top 2.7 m down (a reviewer).
+    from fe_mpm.meshes.footing import FOOTING_SOIL, FOOTING_SOIL_NEAR, strip_footing
+
+    graded = strip_footing(1.0, h=0.05, h_far=0.5)
+    soil = np.concatenate([graded.cell_tags.find(t) for t in (FOOTING_SOIL, FOOTING_SOIL_NEAR)])
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         fe_mpm.geostatic_stress(level, 0.9 * H, G, K0)
+        for per_cell in (1, 3):
+            ground = fe_mpm.seed(graded.mesh, per_cell, density=RHO, cells=soil)
+            fe_mpm.geostatic_stress(ground, 0.0, G, K0)
     for profile in (lambda x: H - 0.5 * x[0], np.full(len(slope), H)):
         with pytest.raises(TypeError, match=r"surface is the one height .* ramp its gravity"):
             fe_mpm.geostatic_stress(slope, profile, G, K0)

@@ -564,6 +564,23 @@ try:
                         "q": [scenes.footing_pressure(r) for r in steps],
                         "migrated": sum(r.migrated_points for r in steps)},
         }
+    elif case == "wall gaps":
+        # A disk over a floor graded along it: each node's gap, by its global index.
+        mesh = meshes.rectangle_mesh((0.0, 0.0), (1.0, 1.0), (24, 12))
+        mesh.geometry.x[:, 0] = mesh.geometry.x[:, 0] ** 2
+        disk = fe_mpm.seed(mesh, 6, level_set=lambda x: np.hypot(x[0] - 0.5, x[1] - 0.3) - 0.28)
+        sim = fe_mpm.Simulation(mesh, disk, fe_mpm.NeoHookean(1e6, 0.3),
+                                walls=[fe_mpm.RigidWall("floor", lambda x: np.isclose(x[1], 0.0))])
+        wall = sim.walls.walls[0]
+        index_map = wall.gap.function_space.dofmap.index_map
+        nodes = index_map.local_to_global(np.asarray(wall.gap_nodes, dtype=np.int32))
+        cells = np.arange(mesh.topology.index_map(2).size_local)
+        gaps = []
+        for shift in np.linspace(-0.3, 0.3, 7):
+            sim.walls.start_step(cells, disk.x + [shift, 0.0], disk.volume)
+            gaps.append(wall.gap.x.array[wall.gap_nodes].tolist())
+        x = wall.gap.function_space.tabulate_dof_coordinates()[wall.gap_nodes, 0]
+        result = {"x": x.tolist(), "gaps": gaps}
     elif case == "nbva slosh":
         result = nbva_slosh(10)
     elif case == "pressure":
@@ -1213,6 +1230,22 @@ def test_boundary_points_act_on_one_rank_each_and_give_the_serial_answer(tmp_pat
         assert result["cook"]["load"] == pytest.approx([0.0, 5.0], abs=1e-12)
     assert serial["footing"]["q"][-1] > 2 * serial["footing"]["q"][0]  # the soil yields
     assert runs[0]["cook"]["migrated"] > 0 and runs[0]["footing"]["migrated"] > 0
+
+
+def test_a_wall_nodes_gap_is_the_same_on_every_rank_that_holds_it(tmp_path):
+    """Each wall node looks for the body as far along the wall as its own facets
+    reach; a rank that held only some of a shared node's facets gave it another
+    reach, so the node took two gaps and the answer moved with the partition (a
+    reviewer, 2026-12-07: 7 nodes of a disk over a graded floor on 2 ranks, 17 on 3).
+    Every rank's gap at every node it holds is now the serial one, to round-off."""
+    (serial,) = _run(tmp_path, "wall gaps", 1)
+    at = {round(x, 12): k for k, x in enumerate(serial["x"])}
+    for ranks in (2, 3):
+        for result in _run(tmp_path, "wall gaps", ranks):
+            rows = [at[round(x, 12)] for x in result["x"]]
+            for mine, alone in zip(result["gaps"], serial["gaps"], strict=True):
+                np.testing.assert_allclose(mine, np.asarray(alone)[rows], rtol=0, atol=1e-12)
+    assert max(max(g) for g in serial["gaps"]) > 0.0  # the disk is clear of some nodes
 
 
 def test_the_bodies_counted_on_three_ranks_are_the_serial_ones(tmp_path):

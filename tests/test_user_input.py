@@ -126,6 +126,41 @@ def test_points_stepped_by_one_simulation_warn_when_given_to_another():
         fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(2e5, 0.3), **options)
 
 
+def test_a_later_stage_takes_the_elastic_tensor_the_stage_before_left_converted():
+    """A reviewer's J2 block (2026-12-07): compressed past yield by a J2Plasticity
+    stage (σ_yy −5.68 kPa, α up to 0.069), then given to an elastic HenckyJ2 of the
+    same moduli with nothing changed, whose bᵉ started from F Fᵀ: the plastic strain
+    became elastic, and one step later σ_yy read −53.7 kPa. bᵉ = J^(2/3) b̄ᵉ of the
+    stage before keeps the stress (measured −5.69 kPa, the two laws' elastic
+    difference)."""
+    E, nu, sy = 1e6, 0.3, 5e3
+    mesh = rectangle_mesh((0.0, 0.0), (1.5, 1.5), (9, 9))
+    points = fe_mpm.seed(mesh, 3, level_set=[lambda x: 1.0 - x[1], lambda x: 1.0 - x[0]])
+    base = fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0), component=1)
+    corner = fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0) & np.isclose(x[1], 0.0))
+
+    def held(value):
+        top = fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 1.0), value, component=1)
+        return dict(dirichlet=[base, corner, top])
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the u form's locking, cell crossing
+        first = fe_mpm.Simulation(
+            mesh, points, fe_mpm.J2Plasticity(E, nu, sy), **held(lambda t: -0.05 * t)
+        )
+        first.run(1.0, 10, progress=False)
+    assert points.history["plastic_strain"].max() > 0.05
+    before = points.stress[:, 1, 1].mean()
+    with pytest.warns(UserWarning, match=r"'be' starts from the 'be_bar' they carry, converted"):
+        second = fe_mpm.Simulation(
+            mesh, points, fe_mpm.HenckyJ2(E, nu, 1e9), **held(lambda t: -0.05)
+        )
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        second.run(1.0, 1, progress=False)
+    assert points.stress[:, 1, 1].mean() == pytest.approx(before, rel=0.01)
+
+
 def test_a_later_stage_that_fails_its_first_step_is_not_told_the_body_has_failed_alone():
     """A helper's staged strength reduction (2026-12-07): from one state at F = 1, the
     stage at F = 1.05 failed and 1.15 to 1.3 converged, and the failure spoke of the
@@ -135,7 +170,9 @@ def test_a_later_stage_that_fails_its_first_step_is_not_told_the_body_has_failed
     mesh = _mesh()
     points = fe_mpm.seed(mesh, 3, density=RHO, level_set=lambda x: 0.75 - x[1])
     options = dict(dirichlet=[_base()], body_force=(0.0, -G), min_step=0.25)
-    fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1e6, 0.3), **options).run(1.0, 1, progress=False)
+    fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1e6, 0.3), **options).run(
+        1.0, 1, progress=False
+    )
     weak = fe_mpm.MohrCoulomb(1e6, 0.3, 10.0, 0.0)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -184,7 +221,7 @@ def test_a_later_stage_with_a_plastic_law_starts_from_the_elastic_state_of_f(law
         1.0, 4, progress=False
     )
     sagged = points.x.copy()
-    with pytest.warns(UserWarning, match=r"carry no 'be(_bar)?' of the law .*taken as elastic"):
+    with pytest.warns(UserWarning, match=r"'be(_bar)?' starts as their whole deformation taken"):
         second = fe_mpm.Simulation(mesh, points, law(1e6, 0.3, yield_stress=1e9), **options)
     second.run(1.0, 1, progress=False)
     sag = -(sagged - start)[:, 1].min()

@@ -47,23 +47,48 @@ class HistoryField:
         """Initial values for ``n`` points, shape ``(n, *shape)``."""
         return np.broadcast_to(np.asarray(self.initial, dtype=np.float64), (n, *self.shape)).copy()
 
-    def elastic_values(self, F: np.ndarray) -> np.ndarray:
-        """Values for points already deformed by ``F`` (n, g, g), taken as elastic.
+    def counterpart_in(self, carried: dict) -> str | None:
+        """The name of the other convected elastic tensor among ``carried``, or None.
 
-        A convected elastic tensor is ``bᵉ = F Fᵀ`` (``"left"``) or
+        fe-mpm's laws name theirs :data:`ELASTIC_TENSORS`: ``be`` (bᵉ) and
+        ``be_bar`` (b̄ᵉ); a convected field of this one's kind has the other.
+        """
+        if not self.convected:
+            return None
+        other = next((n for c, n in ELASTIC_TENSORS.items() if c != self.convected), None)
+        return other if other in carried else None
+
+    def elastic_values(self, F: np.ndarray, carried: dict | None = None) -> np.ndarray:
+        """Values for points deformed by ``F`` (n, g, g) that lack this field.
+
+        A convected elastic tensor is converted from the other one the points carry
+        (:meth:`counterpart_in`): ``b̄ᵉ = det(bᵉ)^(−1/3) bᵉ``, or ``bᵉ = J^(2/3) b̄ᵉ``
+        with J = det F (plastic flow keeps the volume); without one it is the
+        deformation taken as elastic, ``bᵉ = F Fᵀ`` (``"left"``) or
         ``b̄ᵉ = J^(−2/3) F Fᵀ`` (``"left isochoric"``), embedded in 3D as plane
-        strain; the other fields take their initial values. At F = I this is
-        :meth:`initial_values`, to the bit.
+        strain. The other fields take their initial values. At F = I and without a
+        counterpart this is :meth:`initial_values`, to the bit.
         """
         n, g = F.shape[0], F.shape[-1]
         if not self.convected:
             return self.initial_values(n)
         F3 = np.tile(np.eye(3), (n, 1, 1))
         F3[:, :g, :g] = F
+        J = np.linalg.det(F3)[:, None, None]
+        other = self.counterpart_in(carried or {})
+        if other is not None:
+            b = np.array(carried[other], dtype=np.float64)
+            if self.convected == "left isochoric":  # from bᵉ
+                return b * np.linalg.det(b)[:, None, None] ** (-1.0 / 3.0)
+            return b * J ** (2.0 / 3.0)  # from b̄ᵉ
         b = F3 @ np.swapaxes(F3, 1, 2)
         if self.convected == "left isochoric":
-            b *= np.linalg.det(F3)[:, None, None] ** (-2.0 / 3.0)
+            b *= J ** (-2.0 / 3.0)
         return b
+
+
+#: The history names of fe-mpm's convected elastic tensors, by their convection.
+ELASTIC_TENSORS = {"left": "be", "left isochoric": "be_bar"}
 
 
 @dataclass
