@@ -821,7 +821,8 @@ def warn_plastic_locking(material, spec: FormulationSpec) -> None:
             f"Simulation: 'u' with {type(locking[0]).__name__}, whose plastic flow keeps "
             "the volume: the u form locks under such flow (a thick J2 sphere under "
             "internal pressure moved 11 % too little at 0.9 times its limit pressure, "
-            "where 'up' was within 1 %); take 'up' (docs/materials.md)"
+            "where 'up' was within 1 %); take 'up', or 'u-nbva' (volumetric "
+            "averaging, which also unlocks it) (docs/materials.md)"
         )
 
 
