@@ -43,6 +43,7 @@ from pathlib import Path
 import numpy as np
 
 from fe_mpm import balance, parallel
+from fe_mpm.meshes.centroids import cell_centroids
 from fe_mpm.particles import PER_POINT_FIELDS, MaterialPoints
 
 #: Version of the checkpoint layout; a reader refuses any other.
@@ -387,14 +388,11 @@ def _cell_moments(mesh, low: np.ndarray) -> list[float]:
     word (a helper's gmsh grid and a structured one, 462 triangles each on the same
     rectangle, 2026-12-07).
     """
-    g, tdim = mesh.geometry.dim, mesh.topology.dim
-    owned = mesh.topology.index_map(tdim).size_local
-    corners = mesh.geometry.x[mesh.geometry.dofmaps[0][:owned], :g]
-    c = corners.mean(axis=1) - low
-    upper = np.triu_indices(g)
+    c = cell_centroids(mesh) - low
+    upper = np.triu_indices(mesh.geometry.dim)
     products = (c[:, :, None] * c[:, None, :])[:, upper[0], upper[1]]
     sums = parallel.total(mesh.comm, np.r_[c.sum(axis=0), products.sum(axis=0)])
-    count = parallel.total(mesh.comm, owned)
+    count = parallel.total(mesh.comm, len(c))
     return (sums / max(count, 1)).tolist()
 
 
@@ -456,18 +454,18 @@ def _check_state(sim, path: Path, state: dict) -> None:
         elif key == "cell_moments":  # means of x, then of x_i x_j, to round-off
             g = sim.gdim
             scale = np.r_[np.full(g, span), np.full(len(value) - g, span * span)]
-            same = np.shape(theirs[key]) == np.shape(value) and np.all(
-                np.abs(np.subtract(theirs[key], value)) <= EXTENT_TOLERANCE * scale
-            )
+            if np.shape(theirs[key]) != np.shape(value) or np.any(
+                np.abs(np.subtract(theirs[key], value)) > EXTENT_TOLERANCE * scale
+            ):
+                raise CheckpointError(
+                    f"checkpoint {path} is of another grid with as many cells on the same "
+                    f"extent: its cells' mean centroid is {np.round(theirs[key][:g], 6).tolist()}, "
+                    f"this simulation's {np.round(value[:g], 6).tolist()}, or their spread "
+                    "differs; restore into the grid that wrote it"
+                )
+            continue
         else:
             same = theirs.get(key) == value
-        if not same and key == "cell_moments":
-            raise CheckpointError(
-                f"checkpoint {path} is of another grid with as many cells on the same "
-                f"extent: its cells' mean centroid is {np.round(theirs[key][:g], 6).tolist()}, "
-                f"this simulation's {np.round(value[:g], 6).tolist()}, or their spread "
-                "differs; restore into the grid that wrote it"
-            )
         if not same:
             raise CheckpointError(
                 f"checkpoint {path} is of another scene: its {key} is {theirs.get(key)!r}, "

@@ -992,11 +992,6 @@ UNBALANCED_SHARE = 0.5
 UNBALANCED_STRESS_SHARE = 0.1
 
 
-#: A point whose elastic state the law's return at rest moves by more than this
-#: (in b_e, about the strain) starts outside its yield surface.
-OUTSIDE_YIELD = 1e-9
-
-
 def warn_elastic_tensors_started(
     comm: MPI.Comm, points: MaterialPoints, material, started: Mapping[str, str | None]
 ) -> None:
@@ -1034,6 +1029,11 @@ def warn_elastic_tensors_started(
         f"lack the law's ({laws}) elastic tensor: {'; '.join(told)}. Its other internal "
         "variables start at their initial values."
     )
+
+
+#: A point whose elastic state the law's return at rest moves by more than this
+#: (in b_e, about the strain) starts outside its yield surface.
+OUTSIDE_YIELD = 1e-9
 
 
 def warn_initial_stress_outside_yield(comm, points: MaterialPoints, material) -> None:

@@ -76,8 +76,6 @@ def with_runtime_parameters(law, mesh):
     in_forms = getattr(law, "in_forms", None)
     if in_forms is not None:  # several laws (fe_mpm.materials.zones): each its own view
         return in_forms(lambda one: with_runtime_parameters(one, mesh))
-    if not dataclasses.is_dataclass(law) or isinstance(law, type):
-        return law
-    if not is_builtin(law):
+    if not dataclasses.is_dataclass(law) or isinstance(law, type) or not is_builtin(law):
         return law
     return RuntimeParameters(law, mesh)

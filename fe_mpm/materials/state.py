@@ -7,6 +7,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import ufl
 
+from fe_mpm.materials.spectral import embedded_3d
+
 #: The values of :attr:`HistoryField.convected`.
 CONVECTIONS = ("", "left", "left isochoric")
 
@@ -69,11 +71,9 @@ class HistoryField:
         strain. The other fields take their initial values. At F = I and without a
         counterpart this is :meth:`initial_values`, to the bit.
         """
-        n, g = F.shape[0], F.shape[-1]
         if not self.convected:
-            return self.initial_values(n)
-        F3 = np.tile(np.eye(3), (n, 1, 1))
-        F3[:, :g, :g] = F
+            return self.initial_values(F.shape[0])
+        F3 = embedded_3d(F)
         J = np.linalg.det(F3)[:, None, None]
         other = self.counterpart_in(carried or {})
         if other is not None:
