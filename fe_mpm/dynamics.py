@@ -40,6 +40,8 @@ class NewmarkDynamics:
             points' velocity and acceleration
             (:func:`~fe_mpm.transfer.consistent_projection`): 1 is the thesis's
             mass-weighted projection (Eqs. 2.6–2.9).
+        stiffness_damping: Stiffness-proportional Rayleigh coefficient β_R (s), ≥ 0
+            (:func:`~fe_mpm.forms.inertia.stiffness_damping`).
 
     Attributes:
         data: The Newmark fields and constants the forms read.
@@ -58,6 +60,7 @@ class NewmarkDynamics:
         linear_solver: str = "direct",
         petsc_options: dict | None = None,
         projection_passes: int = 1,
+        stiffness_damping: float = 0.0,
     ):
         mesh = fields.W.mesh
         self.projection_passes = projection_passes
@@ -73,6 +76,10 @@ class NewmarkDynamics:
             **{name: dolfinx.fem.Constant(mesh, 0.0) for name in inertia.COEFFICIENTS},
             bossak=dolfinx.fem.Constant(mesh, float(bossak_alpha)),
             damping=dolfinx.fem.Constant(mesh, float(damping)),
+            # β_R = 0 leaves the term out of the forms (no kernels of its own).
+            stiffness_damping=dolfinx.fem.Constant(mesh, float(stiffness_damping))
+            if stiffness_damping > 0.0
+            else None,
         )
         self.grid_mass: np.ndarray | None = None
         #: The keys of the options that PETSc has read in the mass solves so far.
@@ -128,7 +135,7 @@ class NewmarkDynamics:
         bary: np.ndarray,
         preload: Callable[[np.ndarray, np.ndarray], bool] | None = None,
     ) -> np.ndarray:
-        """Point accelerations in equilibrium at the start: ``M a₀ = f_ext − f_int − α_R M v₀``.
+        """Point accelerations in equilibrium at the start: ``M a₀ = f_ext − f_int − C v₀``.
 
         Starting Newmark's rule from a₀ = 0 instead leaves the velocity lagging by
         ``Δt/2`` times the true acceleration for the whole run (a first-order error
@@ -137,8 +144,8 @@ class NewmarkDynamics:
         Args:
             residual_at_rest: Assembles the step's residual (over the whole unknown
                 ``w``) at Δu = 0; called here with the Newmark terms reduced to
-                ``α_R M ṽ`` (no acceleration, and v_{n+1} = ṽ), so that it returns
-                ``f_int − f_ext + α_R M ṽ``.
+                the damping ``C ṽ = (α_R M + β_R K) ṽ`` (no acceleration, and
+                v_{n+1} = ṽ), so that it returns ``f_int − f_ext + C ṽ``.
             mass_matrix: The step's mass form (:class:`~fe_mpm.assembly.StepForm`).
             layout: The step's slot layout, to bind the mass form; ``layout.cell``
                 holds the points' cells (n,).
@@ -155,7 +162,7 @@ class NewmarkDynamics:
         """
         nm = self.data
         # With ã = 0 and every coefficient 0 but ṽ's weight in v_{n+1} (1), the
-        # acceleration terms vanish and the damping term is α_R M ṽ.
+        # acceleration terms vanish and the damping terms are (α_R M + β_R K) ṽ.
         coefficients = [getattr(nm, name) for name in inertia.COEFFICIENTS]
         saved = [c.value.copy() for c in coefficients]
         for name, c in zip(inertia.COEFFICIENTS, coefficients, strict=True):

@@ -75,6 +75,12 @@ def check_ranges(
     """Refuse a number outside its range, naming it and the range."""
     check_range("Simulation", "max_step_cells", max_step_cells, lo=0.0, lo_open=True)
     check_range("Simulation", "ppp_alpha", ppp_alpha, lo=0.0)
+    if isinstance(damping, tuple | list):  # Rayleigh's pair, as other codes take it
+        raise TypeError(
+            "Simulation: damping is the mass-proportional α_R alone (1/s); give the "
+            "stiffness-proportional β_R (s) as stiffness_damping=, e.g. "
+            "Simulation(..., damping=α_R, stiffness_damping=β_R)"
+        )
     check_range("Simulation", "damping", damping, lo=0.0)
     check_int("Simulation", "output_every", output_every, lo=1)  # 2.5 was taken as 2
 
@@ -135,6 +141,20 @@ def check_dynamics(
         raise ValueError("Simulation: bossak_alpha needs dynamic=True")
     if not dynamic and mass != "consistent":
         raise ValueError("Simulation: mass='lumped' needs dynamic=True")
+
+
+def check_stiffness_damping(stiffness_damping: float, dynamic: bool, keeps_shape: bool) -> None:
+    """β_R ≥ 0 (s), only in dynamics and only for a law with a shear modulus."""
+    check_range("Simulation", "stiffness_damping", stiffness_damping, lo=0.0)
+    if not stiffness_damping:
+        return
+    if not dynamic:
+        raise ValueError("Simulation: stiffness_damping needs dynamic=True")
+    if not keeps_shape:
+        raise ValueError(
+            "Simulation: stiffness_damping (β_R K) needs a law with an elastic stiffness; "
+            "a fluid has none (its viscosity damps it): give 0"
+        )
 
 
 def warn_trapezoid_on_walls(dynamic: bool, walls) -> None:

@@ -186,7 +186,16 @@ class Simulation:
             static.
         mass: ``"consistent"`` (default, as the thesis) or ``"lumped"`` (dynamic only).
         damping: Mass-proportional Rayleigh damping α_R ≥ 0 (1/s), dynamic only;
-            default 0 (the thesis uses 1.5 for the granular collapse).
+            default 0 (the thesis uses 1.5 for the granular collapse). A mode of
+            circular frequency ω is damped at the ratio ζ = α_R/(2ω): the slow ones.
+        stiffness_damping: Stiffness-proportional Rayleigh damping β_R ≥ 0 (s),
+            dynamic only, for a law with elastic moduli (not a fluid, whose
+            viscosity damps it); default 0. The force is β_R K v with K the points'
+            linear elastic stiffness (λ, μ of each point's law), not the current
+            tangent (:func:`fe_mpm.forms.inertia.stiffness_damping`): ζ = β_R ω/2, the
+            fast modes. Kratos MPM's ``rayleigh_alpha`` and ``rayleigh_beta`` are
+            ``damping`` and ``stiffness_damping``; for ζ at two frequencies ω₁, ω₂
+            take α_R = 2ζω₁ω₂/(ω₁ + ω₂), β_R = 2ζ/(ω₁ + ω₂).
         bossak_alpha: Bossak's α_B in [−1/3, 0], dynamic only: numerical dissipation of
             the modes the step cannot resolve (a reaction that rings from step to step),
             second-order accurate. 0 (the default, None) is the thesis's trapezoidal
@@ -305,6 +314,7 @@ class Simulation:
         ppp_alpha: float | None = None,
         dynamic: bool = False,
         damping: float = 0.0,
+        stiffness_damping: float = 0.0,
         bossak_alpha: float | None = None,
         projection_passes: int = 1,
         mass: str = "consistent",
@@ -377,6 +387,7 @@ class Simulation:
         alpha_left = bossak_alpha is None  # the trapezoidal rule, not chosen
         bossak_alpha = 0.0 if alpha_left else bossak_alpha
         model_checks.check_dynamics(dynamic, formulation, damping, mass, bossak_alpha)
+        model_checks.check_stiffness_damping(stiffness_damping, dynamic, keeps_shape)
         if alpha_left:
             model_checks.warn_trapezoid_on_walls(dynamic, walls)
         if dynamic:  # before any point migrates; step() checks again (set after this)
@@ -478,7 +489,7 @@ class Simulation:
             "conditions": (dirichlet, tractions, body_force, body_force_scale, reactions),
             "walls": walls,
             "boundary": [*point_dirichlet, *point_tractions],
-            "dynamics": (damping, bossak_alpha, petsc_options, passes),
+            "dynamics": (damping, bossak_alpha, petsc_options, passes, stiffness_damping),
             "ppp_alpha": ppp_alpha,
             "mass": mass,
             "points_leaving": points_leaving,
@@ -642,9 +653,15 @@ class Simulation:
         )
         self.dynamics = None
         if self.dynamic:
-            damping, bossak_alpha, petsc_options, passes = self._given["dynamics"]
+            damping, bossak_alpha, petsc_options, passes, beta_R = self._given["dynamics"]
             self.dynamics = NewmarkDynamics(
-                self.fields, damping, bossak_alpha, self.linear_solver, petsc_options, passes
+                self.fields,
+                damping,
+                bossak_alpha,
+                self.linear_solver,
+                petsc_options,
+                passes,
+                stiffness_damping=beta_R,
             )
         self.conditions = GridConditions(self.fields, *self._given["conditions"], facet_tags)
         self.conditions._warned_share = self._conditions_warned  # warned once per run

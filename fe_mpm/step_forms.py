@@ -27,7 +27,7 @@ from fe_mpm.materials.linearised import MixedLinearisation
 from fe_mpm.materials.mixed_return import MixedReturnResult
 from fe_mpm.materials.protocol import PointwiseLaw, checked_stress
 from fe_mpm.materials.runtime import with_runtime_parameters
-from fe_mpm.materials.zones import MATERIAL, indicator
+from fe_mpm.materials.zones import MATERIAL, indicator, point_lame_moduli
 from fe_mpm.packing import BoundForm, PointExpression
 from fe_mpm.particles import MaterialPoints
 from fe_mpm.quadrature import BOUNDARY_POINTS, OCCUPIED, MaterialPointQuadrature, SlotLayout
@@ -214,8 +214,13 @@ class StepForms:
         if loads is not None:
             self.loads = StepForm(loads, mesh, conditions.traction_facets, rules)
         self.lumping = self.second_moment if lumped else None
+        #: (λ_p, μ_p) of each point's law for stiffness-proportional damping, or None.
+        self.elastic_moduli = None
         if newmark is not None:
             R += inertia.inertia(fields.du, w, q, self.density, newmark, self.lumping)
+            if newmark.stiffness_damping is not None:
+                self.elastic_moduli = q.function((2,), "elastic_moduli")
+                R += inertia.stiffness_damping(fields.du, w, q, self.elastic_moduli, newmark)
             V1 = newmark.a_n.function_space
             a, v = ufl.TrialFunction(V1), ufl.TestFunction(V1)
             self.mass_matrix = StepForm(
@@ -270,6 +275,12 @@ class StepForms:
                 layout.cell, bary, points.volume, points.volume / K, cell_map, tracker.num_cells
             )
             q.pack_cell_field(self.floor.weight, layout, weight)
+        if self.elastic_moduli is not None:
+            q.pack(
+                self.elastic_moduli,
+                layout,
+                point_lame_moduli(self.material, points.history, len(points)),
+            )
         if self.dF_shift is not None:  # until the first iterate's (SharedIncrement)
             q.pack(self.dF_shift, layout, np.zeros((len(points), g, g)))
 

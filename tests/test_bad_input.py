@@ -203,6 +203,18 @@ def test_other_bad_values():
         fe_mpm.Simulation(mesh, points, material, dynamic=True, mass="diagonal")
     with pytest.raises(ValueError, match=r"Simulation: damping must lie in \[0"):
         fe_mpm.Simulation(mesh, points, material, dynamic=True, damping=-1.0)
+    # Rayleigh's pair in one argument, as other codes take it (a helper, 2026-12-07).
+    with pytest.raises(
+        TypeError, match="give the stiffness-proportional β_R .* stiffness_damping="
+    ):
+        fe_mpm.Simulation(mesh, points, material, dynamic=True, damping=(0.5, 1e-3))
+    with pytest.raises(ValueError, match=r"Simulation: stiffness_damping must lie in \[0"):
+        fe_mpm.Simulation(mesh, points, material, dynamic=True, stiffness_damping=-1e-3)
+    with pytest.raises(ValueError, match="stiffness_damping needs dynamic=True"):
+        fe_mpm.Simulation(mesh, points, material, stiffness_damping=1e-3)
+    water = fe_mpm.NewtonianFluid(2e6, 1e-3, shear_scale=1e4)
+    with pytest.raises(ValueError, match="a fluid has none .*: give 0"):
+        fe_mpm.Simulation(mesh, points, water, "up", dynamic=True, stiffness_damping=1e-3)
     for alpha in (-0.5, 0.1, float("nan")):
         with pytest.raises(
             ValueError, match=r"Simulation: bossak_alpha must lie in \[-0.333333, 0\]"

@@ -12,8 +12,9 @@ particles' (Eqs. 2.6–2.9). With the step's displacement increment :math:`\Delt
               - \Big(\frac{1}{2\beta} - 1\Big)\tilde a, \qquad
     v_{n+1} = \tilde v + \Delta t\big((1-\gamma)\,\tilde a + \gamma\, a_{n+1}\big),
 
-and the inertia (plus optional mass-proportional Rayleigh damping α_R) enters
-the residual as the particle sum
+and the inertia (plus optional mass-proportional Rayleigh damping α_R; the
+stiffness-proportional β_R K is :func:`stiffness_damping`) enters the residual as the
+particle sum
 
 .. math::  \sum_p m_p \,\big((1-\alpha_B)\, a_{n+1} + \alpha_B\,\tilde a
            + \alpha_R v_{n+1}\big)(x_p) \cdot w(x_p),
@@ -78,6 +79,8 @@ class NewmarkData:
         c_va: Δt (1 − γ/(2β)) (s), the weight of ã in v_{n+1}.
         bossak: Bossak's α_B (the weight of ã in the inertia), a Constant.
         damping: Mass-proportional Rayleigh coefficient α_R (1/s), a Constant.
+        stiffness_damping: Stiffness-proportional Rayleigh coefficient β_R (s), a
+            Constant, or None where β_R = 0 (the forms then have no such term).
     """
 
     v_n: ufl.Coefficient
@@ -90,6 +93,7 @@ class NewmarkData:
     c_va: ufl.Constant
     bossak: ufl.Constant
     damping: ufl.Constant
+    stiffness_damping: ufl.Constant | None = None
 
     @property
     def gamma(self) -> float:
@@ -165,3 +169,37 @@ def inertia(
     a = (1.0 - nm.bossak) * acceleration(du, nm) + nm.bossak * nm.a_n
     a += nm.damping * velocity(du, nm)
     return mass_product(a, w, mpq, density, lumping)
+
+
+def stiffness_damping(
+    du: ufl.core.expr.Expr,
+    w: ufl.core.expr.Expr,
+    mpq: MaterialPointQuadrature,
+    moduli: ufl.Coefficient,
+    nm: NewmarkData,
+) -> ufl.Form:
+    r"""The stiffness-proportional Rayleigh term ``w·β_R K v_{n+1}`` as a particle sum.
+
+    .. math:: \beta_R \sum_p V_p \big(\lambda_p \operatorname{tr}\varepsilon(v)
+              \operatorname{tr}\varepsilon(w) + 2\mu_p\, \varepsilon(v):\varepsilon(w)\big)(x_p)
+
+    K is the points' linear elastic stiffness on the grid of the step's start
+    (Lamé's λ_p = K_p − ⅔μ_p and μ_p of each point's law), not the current tangent:
+    a plastic or softened point is damped as if it were elastic, and the term stays
+    linear in v, so Newton's tangent gains ``β_R γ/(βΔt) K`` and nothing else. A mode
+    of circular frequency ω of a linear elastic body is damped at the ratio
+    ζ = β_R ω / 2, which grows with ω: the term damps the fast modes that mass
+    damping leaves alone.
+
+    Args:
+        du: The step's displacement increment Δu (P1, m).
+        w: Its test function.
+        mpq: Material-point quadrature of the step.
+        moduli: (λ_p, μ_p) at each point (slot field of shape (2,), Pa).
+        nm: Newmark's data, whose ``stiffness_damping`` is set.
+    """
+    strain_rate = ufl.sym(mpq.grad_at_points(velocity(du, nm)))
+    virtual = ufl.sym(mpq.grad_at_points(w))
+    work = moduli[0] * ufl.tr(strain_rate) * ufl.tr(virtual)
+    work += 2.0 * moduli[1] * ufl.inner(strain_rate, virtual)
+    return mpq.sum(nm.stiffness_damping * work)

@@ -312,6 +312,20 @@ def laws_of(material) -> tuple:
     return tuple(getattr(material, "laws", (material,)))
 
 
+def point_lame_moduli(material, history: dict[str, np.ndarray], n: int) -> np.ndarray:
+    """Lamé's λ = K − ⅔μ and μ (Pa) of each of ``n`` points' law, shape (n, 2).
+
+    ``material`` is one law with ``bulk_modulus`` and ``mu``, or :class:`MaterialZones`
+    (each point its own law's, by the ``"material"`` labels in ``history``).
+    """
+    if isinstance(material, MaterialZones):
+        K, mu = material.point_bulk_moduli(history), material.point_shear_moduli(history)
+    else:
+        K = np.full(n, float(material.bulk_modulus))
+        mu = np.full(n, float(material.mu))
+    return np.column_stack([K - 2.0 * mu / 3.0, mu])
+
+
 def material_zones(laws: Sequence) -> MaterialZones:
     """The zones of ``laws``: :class:`PointwiseZones` if any law's return runs in numpy."""
     laws = tuple(laws)  # checked by the zones it builds
