@@ -339,7 +339,8 @@ class StepForms:
                 q, self.dF_grid, fields.volume_change, w_theta, self.second_moment, self.zones
             )
         if self.interior is not None:
-            R += loads_form.start_pressure_gradient_work(w, q, self.interior, fields.p_start)
+            pushed = self.dF_grid if self.dF_shift is None else self.dF  # as the stress's
+            R += loads_form.start_pressure_by_parts(w, q, self.interior, fields.p_start, pushed)
         return R
 
     def _field_mean_stress(self, dF, fields: GridFields) -> ufl.core.expr.Expr | None:

@@ -44,24 +44,35 @@ def external_work(
     return sum(terms[1:], terms[0]) if terms else None
 
 
-def start_pressure_gradient_work(
+def start_pressure_by_parts(
     w: ufl.core.expr.Expr,
     q: MaterialPointQuadrature,
     chi: ufl.Coefficient,
     p_start: ufl.Coefficient,
+    dF: ufl.core.expr.Expr,
     u_degree: int = 1,
 ) -> ufl.Form:
-    """Σ_p V_p χ w · ∇p̄: the volume part of the starting pressure taken by parts.
+    """Σ_p V_p χ (w·∇p̄ − p̄ (det ΔF ΔF⁻ᵀ − I) : ∇w): the starting pressure by parts.
 
     Added to the residual where the formulation's stress gives up χ p̄
-    (:mod:`fe_mpm.pressure_by_parts`, whose facet terms complete it); p̄ is a load of
-    the step on the grid of its start, not linearised.
+    (:mod:`fe_mpm.pressure_by_parts`). Of p̄'s work −χ p̄ det ΔF ΔF⁻ᵀ : ∇w on the grid
+    of the step's start, the part that does not depend on Δu, −χ p̄ ∇·w, is taken by
+    parts: ``w·∇p̄`` here and the facet terms of :mod:`fe_mpm.pressure_by_parts`. The
+    rest, p̄'s geometric part, is linear in Δu and barely jumps as points cross
+    facets; it stays at the points. Without it (until 2026-12-08) p̄ acted on the
+    geometry of the step's start, a step late, and a dam break gained energy at
+    first order in the step (``tests/test_fluid.py``).
 
     Args:
         w: Displacement test function (of degree ``u_degree``).
         q: Material-point quadrature of the step.
         chi: χ of each point's cell (slot field, 1 or 0).
         p_start: The step's starting pressure p̄ (Pa, P1 on the grid).
+        dF: The increment ΔF that maps ∇w in the formulation's stress (g x g).
         u_degree: Polynomial degree of the displacement.
     """
-    return q.sum(chi * ufl.dot(q.at_points(w, u_degree), ufl.grad(p_start)))
+    g = ufl.shape(dF)[0]
+    geometric = ufl.det(dF) * ufl.inv(dF).T - ufl.Identity(g)
+    work = ufl.dot(q.at_points(w, u_degree), ufl.grad(p_start))
+    work -= q.at_points(p_start) * ufl.inner(geometric, q.grad_at_points(w, u_degree))
+    return q.sum(chi * work)

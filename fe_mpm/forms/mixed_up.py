@@ -50,7 +50,7 @@ import numpy as np
 import ufl
 
 from fe_mpm._dolfinx import dolfinx
-from fe_mpm.forms.loads import external_work, start_pressure_gradient_work
+from fe_mpm.forms.loads import external_work, start_pressure_by_parts
 from fe_mpm.materials import embed_3d
 from fe_mpm.materials.protocol import checked_stress
 from fe_mpm.quadrature import OCCUPIED, MaterialPointQuadrature
@@ -291,9 +291,9 @@ def residual(
         increment: The point's ΔF, if not the grid's at the point (the shared
             increment of a point domain's pieces, :mod:`fe_mpm.domains`).
         by_parts: ``(p̄, χ)``: the step's starting pressure (P1) and each point's
-            cell's χ (slot field, 1 or 0); p̄ is integrated by parts where χ = 1, at
-            the points and on the grid of the step's start
-            (:mod:`fe_mpm.pressure_by_parts`, whose facet terms complete it).
+            cell's χ (slot field, 1 or 0); where χ = 1, p̄'s work on the grid of the
+            step's start is integrated by parts and its geometric part kept at the
+            points (:mod:`fe_mpm.pressure_by_parts`, whose facet terms complete it).
         floor: Without PPP, the :class:`PressureFloor` that keeps the pressure of
             cells with too few points definite, or None.
     """
@@ -307,7 +307,7 @@ def residual(
     stress, volume = point_terms(material, dF, F_n, p_p, state, p_stress)
     R = mpq.sum(ufl.inner(stress, mpq.grad_at_points(w, u_degree)))
     if by_parts is not None:
-        R += start_pressure_gradient_work(w, mpq, chi, p_start, u_degree)
+        R += start_pressure_by_parts(w, mpq, chi, p_start, dF, u_degree)
     R -= mpq.sum(volume * mpq.at_points(q_test))
     if ppp is not None:
         within = _within_cell_product(q_test, p, ppp.centroid)
