@@ -612,6 +612,7 @@ class NewtonSolver:
             residual_norms=list(self.norms),
             force_scale=self.test.reported_scale,
             tolerance=self.test.tolerance_at(self.test.reported_scale),
+            force_residual=self.test.reported_residual,
         )
 
     def destroy(self) -> None:

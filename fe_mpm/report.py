@@ -53,7 +53,7 @@ class StepReport:
             scale 1.962e+04"`` (see :class:`fe_mpm.newton.ForceTest`).
         force_scale: The forces in play at the last iterate, S = max(‖f_ext‖,
             ‖f_int‖, ‖f_M‖), f_M the inertia forces of a dynamic step (N; N/m in 2D).
-        relative_residual: The last ‖R‖ over ``force_scale``.
+        relative_residual: The last ‖R_u‖ (the displacement rows) over ``force_scale``.
         lost_load: Share of each grid ``Traction``'s or ``Pressure``'s load that acts
             on nodes with no material, so it is lost (``"Traction 0"`` -> share in
             [0, 1], named by its place in ``tractions=``), and of each

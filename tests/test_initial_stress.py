@@ -462,3 +462,30 @@ def test_a_slope_given_the_stress_of_level_ground_is_warned_and_a_surface_profil
     for profile in (lambda x: H - 0.5 * x[0], np.full(len(slope), H)):
         with pytest.raises(TypeError, match=r"surface is the one height .* ramp its gravity"):
             fe_mpm.geostatic_stress(slope, profile, G, K0)
+
+
+def test_masses_set_by_hand_are_the_points_own_however_small_the_body():
+    """A layer 10 µm deep whose masses a script set by hand (ρ = 2000 kg/m³) starts
+    from its stress at rest; left at seed's placeholder it is refused. Its points
+    weigh about 1e-8 kg/m, under numpy's default atol of allclose, and the check
+    refused the hand-set masses as the placeholder (a helper's scenes in several unit
+    systems, 2026-12-08)."""
+    size = 1e-5
+    mesh = rectangle_mesh((0, 0), (size, 1.2 * size), (4, 6))
+
+    def simulation(points):
+        return fe_mpm.Simulation(
+            mesh,
+            points,
+            fe_mpm.MohrCoulomb(1e7, 0.3, 1e4, 30.0),
+            "u",
+            dirichlet=[fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0, atol=0.0), component=1)],
+            body_force=(0.0, -9.81),
+            initial_stress=fe_mpm.geostatic_stress(points, size, 9.81, 0.5, density=2000.0),
+        )
+
+    points = fe_mpm.seed(mesh, 3, level_set=lambda x: size - x[1])
+    with pytest.raises(ValueError, match="needs the points' density"):
+        simulation(points)
+    points.mass[:] = 2000.0 * points.volume
+    simulation(points)

@@ -369,3 +369,31 @@ def test_the_round_off_floor_is_the_same_in_any_consistent_units():
     assert min(si) >= 2 and min(ns) >= 2
     assert max(r.relative_residual for r in reports) < 1e-10
     np.testing.assert_allclose(x_ns, x_si, rtol=0, atol=1e-12)  # displacements of 6e-3 m
+
+
+@pytest.mark.parametrize("formulation", ["u-nbva", "up"])
+def test_the_relative_residual_is_the_force_rows_in_any_unit_system(formulation):
+    """``relative_residual`` is ‖R_u‖ over the force scale, as the test that accepts the
+    step takes it. Over every row it added the averaged-volume or pressure rows
+    (volume × strain) to forces, a ratio that depends on the units: a Mohr-Coulomb
+    layer under gravity in mm, kN, GPa and ms (LS-DYNA's units) read 1.99e-9 (u-nbva)
+    and 2.98e-9 (u-p) after a converged step, above snes_rtol = 1e-10, where its
+    ``converged_reason`` said 2.03e-13 and 1.17e-13 (a helper's scenes, 2026-12-08)."""
+    mm = 1e3
+    mesh = rectangle_mesh((0, 0), (6 * mm, 3.6 * mm), (10, 6))
+    points = fe_mpm.seed(mesh, 3, density=1800.0 * 1e-9, level_set=lambda x: 3 * mm - x[1])
+    sim = fe_mpm.Simulation(
+        mesh,
+        points,
+        fe_mpm.MohrCoulomb(20e6 * 1e-9, 0.3, 5e3 * 1e-9, 30.0, 0.0),
+        formulation,
+        dirichlet=[
+            fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0), component=1),
+            fe_mpm.Dirichlet(lambda x: np.isclose(x[0], 0.0) | np.isclose(x[0], 6 * mm), 0),
+        ],
+        body_force=(0.0, -9.81e-3),
+    )
+    report = sim.step(1.0)
+    assert report.relative_residual <= 1e-10
+    quoted = float(report.converged_reason.split("=")[1].split()[0])
+    assert report.relative_residual == pytest.approx(quoted, rel=0.01)
