@@ -780,8 +780,10 @@ class PointDomains:
         return ConvergenceError(
             f"a point domain (its corners {corners[np.flatnonzero(lost)[0]].tolist()}) "
             "reaches past the cells this MPI rank holds "
-            f"({DOMAIN_GHOST_LAYERS} layers of ghost cells): it has stretched over more "
-            "cells than that. Take smaller steps, or run on fewer ranks."
+            f"({DOMAIN_GHOST_LAYERS} layers of ghost cells): in this step it moved, or "
+            "stretched, farther past the rank's own cells than that (a cantilever's tip, "
+            "a cell and a half in one step, left its rank's ghosts undeformed). Take "
+            "smaller steps (run() cuts this one and goes on), or run on fewer ranks."
         )
 
     def _area_in_owned_cells(self, corners: np.ndarray, tracker: Tracker) -> np.ndarray:

@@ -749,9 +749,16 @@ def warn_ppp_against_weight(
 #: penalty buys nothing but that.
 STIFF_PENALTY = 1e7
 
+#: A penalty below this many times E / h is warned about: its gap under a pressure p,
+#: p/β, is then at least p h / E, the squeeze of a whole cell of the body, and the
+#: support is as soft as the body it holds. Measured 2026-12-08 (a
+#: helper's footing, a penalty of 1e-3 E/h as a slip of units by 1e6 gives): q/c_u
+#: 0.149 at s/B = 0.1 against 6.03, 2 Newton iterations a step, nothing said.
+SOFT_PENALTY = 1.0
+
 
 def warn_stiff_penalties(comm, material, supports: Sequence, walls: Sequence, sizes) -> None:
-    """Warn of a PointDirichlet's or RigidWall's penalty far above 10³ E/h; collective.
+    """Warn of a PointDirichlet's or RigidWall's penalty far from 10³ E/h; collective.
 
     ``sizes`` are this rank's cells' longest edges (m, ``Tracker.sizes``). A fluid
     without its ``shear_scale`` sets no E, and nothing is checked.
@@ -774,6 +781,15 @@ def warn_stiff_penalties(comm, material, supports: Sequence, walls: Sequence, si
                 "round-off of so stiff a penalty's forces grows with it and may swallow the "
                 "load, and Newton then accepts a step whose force is off (1.4e11 E/h put a "
                 "platen's force 0.86 % off, 3.5e14 E/h 28 %). Take 1e3 E/h."
+            )
+        elif ratio < SOFT_PENALTY:
+            warn(
+                f"{owner}: penalty = {penalty:.3g} Pa/m is {ratio:.3g} E/h (E = {E:.4g} Pa, "
+                f"h = {h:.3g} m): a support that soft gives way as much as a cell of the body "
+                "it holds, and a footing rides on its springs instead of pressing in (1e-3 "
+                "E/h read a sixtieth of the load a footing carries, every step converged). "
+                "Take about 1e3 E/h; in another unit system give the penalty in its units "
+                "(stress per length)."
             )
 
 

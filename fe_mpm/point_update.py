@@ -91,8 +91,11 @@ def _moved_too_far(
         f"point {far} (x = {points.x[far]}) would move "
         f"{cells_moved[far]:.3g} cell sizes ({np.linalg.norm(new.du[far]):.3g} m) in "
         f"static step {step} (t = {t:g}), more than max_step_cells = "
-        f"{max_step_cells:g}: a grid value blew up (e.g. at a node with "
-        "almost no material). Nothing was updated."
+        f"{max_step_cells:g}. Nothing was updated. Either a grid value blew up (e.g. at "
+        "a node with almost no material), or the step is that large: take more steps "
+        "(run() cuts this one and goes on) or raise max_step_cells, which a large "
+        "deformation in few steps may need (a cantilever bent to 0.55 of its length in "
+        "one step moved its tip 16.6 cells, the answer a finite element solve gives)."
     )
 
 

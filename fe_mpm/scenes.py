@@ -127,13 +127,13 @@ def strip_footing(
     cu: float = 100.0,
     E: float = 1.0e4,
     nu: float = 0.495,
-    h: float = 0.05,
+    h: float | None = None,
     h_far: float | None = None,
     near_width: float | None = None,
     near_depth: float | None = None,
     points_near: int = 12,
     points_far: int = 3,
-    settlement: float = 2.0,
+    settlement: float | None = None,
     smooth: bool = False,
     footing_thickness: float | None = None,
     penalty: float | None = None,
@@ -154,16 +154,17 @@ def strip_footing(
     Args:
         formulation: ``"u"`` or ``"up"``.
         B: Footing width (m).
-        cu: Undrained strength c_u (Pa).
+        cu: Undrained strength c_u (Pa); the default, 100 Pa, is in SI units (with
+            ``E``): give both in another system.
         E: Young's modulus (Pa).
         nu: Poisson's ratio.
-        h: Cell size near the footing (m).
+        h: Cell size near the footing (m); 0.05 B by default.
         h_far: Cell size far away (m); see :func:`fe_mpm.meshes.strip_footing`.
         near_width: Width of the refined, densely seeded zone (m).
         near_depth: Its depth (m).
         points_near: Material points per cell in the refined zone.
         points_far: Material points per cell elsewhere.
-        settlement: Settlement at ``t = 1`` (m).
+        settlement: Settlement at ``t = 1`` (m); 2 B by default.
         smooth: Smooth footing (vertical constraint only) instead of rough.
         footing_thickness: Height of the footing's body points (m); default 2h.
             They hold the upper nodes of the cells its base crosses, which the
@@ -194,7 +195,9 @@ def strip_footing(
     """
     per_cell = check_int("strip_footing", "base_points_per_cell", base_points_per_cell, lo=1)
     # (0 ran a whole analysis of a footing that never moved)
+    settlement = 2.0 * B if settlement is None else settlement
     check_range("strip_footing", "settlement", settlement, lo=0.0, lo_open=True)
+    h = 0.05 * B if h is None else h
     scene = meshes.strip_footing(
         B,
         h=h,

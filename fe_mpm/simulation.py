@@ -237,8 +237,10 @@ class Simulation:
         linear_solver: ``"direct"`` (MUMPS LU, default) or ``"iterative"`` (GMRES and
             algebraic multigrid), see :data:`fe_mpm.newton.LINEAR_SOLVERS`.
         max_step_cells: A static step that moves a point farther than this many sizes
-            of its cell (> 0, default 10) is rejected and cut: a grid value blew up at
-            a nearly unsupported node (:func:`fe_mpm.point_update.checked_update`).
+            of its cell (> 0, default 10) is rejected (``run()`` then cuts it, ``step()``
+            raises): most often a grid value blew up at a nearly unsupported node
+            (:func:`fe_mpm.point_update.checked_update`); raise it for a large
+            deformation taken in a few steps.
         point_domains: True: each point's volume is spread over the cells its
             convected domain covers (:mod:`fe_mpm.domains`; P2 in 2D only), against the
             cell-crossing error; False (default): standard MPM. At set-up the domains

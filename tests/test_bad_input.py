@@ -1319,6 +1319,13 @@ def test_a_penalty_far_above_1e3_E_over_h_and_an_unheld_reaction_are_told():
     wall = [fe_mpm.RigidWall("floor", lambda x: np.isclose(x[1], 0.0), penalty=1e21)]
     with pytest.warns(UserWarning, match=r"RigidWall 'floor': penalty = 1e\+21 Pa/m is"):
         fe_mpm.Simulation(mesh, points, law, walls=wall, dynamic=True)
+    # Too soft, as a slip of units gives (a helper's footing, 2026-12-08), and not at E/h.
+    soft = r"'top': penalty = 1\.41e\+03 Pa/m is 0\.001 E/h .* gives way as much as a cell"
+    with pytest.warns(UserWarning, match=soft):
+        fe_mpm.Simulation(mesh, points, law, dirichlet=held, point_dirichlet=platen(1e-3 * 1e6 / h))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        fe_mpm.Simulation(mesh, points, law, dirichlet=held, point_dirichlet=platen(2e6 / h))
     with pytest.raises(ValueError, match=r"reactions\['line'\]: no Dirichlet condition holds any"):
         fe_mpm.Simulation(
             mesh, points, law, dirichlet=held, reactions={"line": lambda x: np.isclose(x[1], 1.0)}

@@ -422,3 +422,29 @@ def test_a_flat_or_mixed_grid_is_refused_by_seed_and_simulation(build, match):
     points = fe_mpm.MaterialPoints(x=np.array([[0.5, 0.0]]), volume=np.ones(1), mass=np.ones(1))
     with pytest.raises(ValueError, match=match):
         fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1e6, 0.3))
+
+
+@pytest.mark.parametrize("scale", [1e-3, 1.0, 1e3])
+def test_the_footing_and_the_granular_column_tag_their_sides_at_any_size(scale):
+    """A strip footing of B = 0.02 m and a granular column of d = 0.02 had no facet
+    tags: OCC pads its bounding boxes by an absolute 1e-7, which a tolerance of 1e-6
+    of the model's size missed below about 0.1 (a helper's scenes in mm and km,
+    2026-12-08). The sides are now found by their curves' end points. Each side holds
+    as many facets at every size (the grids themselves may differ by a few cells:
+    gmsh meshes with absolute tolerances)."""
+    footing = meshes.strip_footing(B=scale, h=0.1 * scale)
+    sides = (meshes.FOOTING_SYMMETRY, meshes.FOOTING_FAR_SIDE, meshes.FOOTING_BASE)
+    assert [len(footing.facet_tags.find(t)) for t in sides] == [60, 60, 50]
+    column = meshes.granular_column(d_i=0.2 * scale, aspect=2.0, h=0.025 * scale)
+    sides = (meshes.COLLAPSE_WALL, meshes.COLLAPSE_BASE)
+    assert [len(column.facet_tags.find(t)) for t in sides] == [19, 63]
+
+
+def test_the_footings_default_cell_size_scales_with_its_width():
+    """A strip footing of B = 1000 (a user in millimetres) takes the grid of B = 1 m,
+    cells of 0.05 B: the default h was an absolute 0.05, 0.05 mm to that user, and
+    gmsh set out to build about 1e9 triangles without a word (a helper, 2026-12-08).
+    Measured: 27 928 and 28 012 cells (gmsh's absolute tolerances)."""
+    metres = meshes.strip_footing(B=1.0).mesh.topology.index_map(2).size_local
+    millimetres = meshes.strip_footing(B=1000.0).mesh.topology.index_map(2).size_local
+    assert abs(millimetres / metres - 1) < 0.01

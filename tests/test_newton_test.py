@@ -258,7 +258,8 @@ def test_a_static_step_that_moves_a_point_many_cells_is_rejected():
     with pytest.raises(
         fe_mpm.ConvergenceError,
         match=r"would move .* cell sizes .* static step 1 "
-        r".* more than max_step_cells = 0\.5: .* Nothing was updated\.$",
+        r".* more than max_step_cells = 0\.5\. Nothing was updated\. Either a grid value "
+        r"blew up .* or the step is that large: take more steps .* raise max_step_cells",
     ):
         sim.step(1.0)
     assert sim.step_number == 0

@@ -11,8 +11,10 @@ from __future__ import annotations
 
 from mpi4py import MPI
 
+import numpy as np
+
 from fe_mpm.checks import check_range
-from fe_mpm.meshes.gmsh_session import gmsh_session, to_dolfinx
+from fe_mpm.meshes.gmsh_session import curve_ends, gmsh_session, to_dolfinx
 from fe_mpm.references import lube_runout
 
 #: Facet tag of the wall x = 0.
@@ -77,12 +79,12 @@ def granular_column(
                 inside = x < d_i and y < h_i
                 cells[COLLAPSE_COLUMN if inside else COLLAPSE_CHANNEL].append(s)
             sides = {COLLAPSE_WALL: [], COLLAPSE_BASE: []}
-            tol = 1e-6 * length  # OCC bounding boxes carry a small tolerance
+            tol = 1e-9 * length
             for _, c in model.getEntities(1):
-                hi = occ.getBoundingBox(1, c)[3:]
-                if hi[0] < tol:
+                x, y = curve_ends(model, c)[:, :2].T
+                if np.all(np.abs(x) < tol):
                     sides[COLLAPSE_WALL].append(c)
-                elif hi[1] < tol:
+                elif np.all(np.abs(y) < tol):
                     sides[COLLAPSE_BASE].append(c)
             model.addPhysicalGroup(1, sides[COLLAPSE_WALL], COLLAPSE_WALL, name="wall")
             model.addPhysicalGroup(1, sides[COLLAPSE_BASE], COLLAPSE_BASE, name="base")

@@ -18,7 +18,7 @@ import gmsh
 import numpy as np
 
 from fe_mpm.checks import check_int, check_range
-from fe_mpm.meshes.gmsh_session import gmsh_session, to_dolfinx
+from fe_mpm.meshes.gmsh_session import curve_ends, gmsh_session, to_dolfinx
 
 #: Facet tag of the symmetry line x = 0.
 FOOTING_SYMMETRY = 1
@@ -47,7 +47,7 @@ def strip_footing(
     margin: float | None = None,
     near_width: float | None = None,
     near_depth: float | None = None,
-    h: float = 0.05,
+    h: float | None = None,
     h_far: float | None = None,
     edge_size: float | None = None,
     edge_radius: float | None = None,
@@ -65,7 +65,8 @@ def strip_footing(
         near_width: Width of the refined seeding zone (m); 1.5B by default.
         near_depth: Depth of the refined seeding zone (m); 3B by default (the
             footing ends 2B down).
-        h: Cell size in the refined zone and the margin above it (m); 0.05 by default.
+        h: Cell size in the refined zone and the margin above it (m); 0.05 B by default
+            (each default size scales with B, so the grid is the same in any length unit).
         h_far: Cell size far from it (m); ``h`` by default (a uniform grid).
         edge_size: Cell size at the footing's edge (m), ≤ h; None: h. The stresses
             are singular at the edge, and on uniform P1 cells of h = 0.1 B the
@@ -117,6 +118,7 @@ def strip_footing(
         lo_open=True,
         hi_open=True,
     )
+    h = 0.05 * B if h is None else h  # an absolute 0.05 was 0.05 mm to a user in mm: 1e9 cells
     check_range("strip_footing", "h", h, lo=0.0, hi=min(near_width, margin), lo_open=True)
     h_far = check_range("strip_footing", "h_far", h if h_far is None else h_far, lo=h)
     edge = None
@@ -174,17 +176,15 @@ def _tag_regions(model, surfaces: list[int], near_width: float, near_depth: floa
 
 def _tag_sides(model, width: float, depth: float) -> None:
     """Facet tags: the symmetry line x = 0, the far side x = width, the base y = −depth."""
-    occ = model.occ
     sides = {FOOTING_SYMMETRY: [], FOOTING_FAR_SIDE: [], FOOTING_BASE: []}
-    tol = 1e-6 * max(width, depth)  # OCC bounding boxes carry a small tolerance
+    tol = 1e-9 * max(width, depth)
     for _, c in model.getEntities(1):
-        x, y, _ = occ.getCenterOfMass(1, c)
-        lo, hi = occ.getBoundingBox(1, c)[:3], occ.getBoundingBox(1, c)[3:]
-        if hi[0] - lo[0] < tol and abs(x) < tol:
+        x, y = curve_ends(model, c)[:, :2].T
+        if np.all(np.abs(x) < tol):
             sides[FOOTING_SYMMETRY].append(c)
-        elif hi[0] - lo[0] < tol and abs(x - width) < tol:
+        elif np.all(np.abs(x - width) < tol):
             sides[FOOTING_FAR_SIDE].append(c)
-        elif hi[1] - lo[1] < tol and abs(y + depth) < tol:
+        elif np.all(np.abs(y + depth) < tol):
             sides[FOOTING_BASE].append(c)
     names = {FOOTING_SYMMETRY: "symmetry", FOOTING_FAR_SIDE: "far_side", FOOTING_BASE: "base"}
     for tag, curves in sides.items():
