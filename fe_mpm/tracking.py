@@ -261,9 +261,11 @@ class PointTracking:
             if not domains:  # (a point whose domain went may still lie in a cell)
                 first += f" (in none of the {comm.size} MPI ranks' cells)"
         if self.points_leaving == "raise":
+            # At set-up no step has moved them: the advice on steps does not apply.
+            advice = SEEDED_OUTSIDE if where == "set-up" else LEAVING_ADVICE
             parallel.raise_together(
                 comm,
-                PointsOutsideError(f"{first}. {LEAVING_ADVICE}"),
+                PointsOutsideError(f"{first}. {advice}"),
             )
         warn(first + "; dropped.")
         keep = cells >= 0
@@ -298,6 +300,13 @@ LEAVING_ADVICE = (
     "that edge, the body went through its springs: an impact that the steps resolve "
     "in one or two does (a disk dropped on a wall, 2026-12-07), so take steps of a "
     "fifth of the contact or shorter (docs/dynamics.md)."
+)
+
+#: What set-up says of points that no step moved and that lie outside the grid.
+SEEDED_OUTSIDE = (
+    "They were given there: make the grid cover every point (with empty cells where "
+    "the body will go), or move or remove those points (points.keep(mask)) before "
+    "Simulation."
 )
 
 
