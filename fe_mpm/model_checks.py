@@ -787,7 +787,7 @@ def warn_stiff_penalties(comm, material, supports: Sequence, walls: Sequence, si
                 f"{owner}: penalty = {penalty:.3g} Pa/m is {ratio:.3g} E/h (E = {E:.4g} Pa, "
                 f"h = {h:.3g} m): a support that soft gives way as much as a cell of the body "
                 "it holds, and a footing rides on its springs instead of pressing in (1e-3 "
-                "E/h read a sixtieth of the load a footing carries, every step converged). "
+                "E/h read a fortieth of the load a footing carries, every step converged). "
                 "Take about 1e3 E/h; in another unit system give the penalty in its units "
                 "(stress per length)."
             )

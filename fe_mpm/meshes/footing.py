@@ -66,7 +66,8 @@ def strip_footing(
         near_depth: Depth of the refined seeding zone (m); 3B by default (the
             footing ends 2B down).
         h: Cell size in the refined zone and the margin above it (m); 0.05 B by default
-            (each default size scales with B, so the grid is the same in any length unit).
+            (each default size scales with B: the grid does not hang on the length unit, up
+            to gmsh's own absolute tolerances).
         h_far: Cell size far from it (m); ``h`` by default (a uniform grid).
         edge_size: Cell size at the footing's edge (m), ≤ h; None: h. The stresses
             are singular at the edge, and on uniform P1 cells of h = 0.1 B the
