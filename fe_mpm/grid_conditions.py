@@ -141,6 +141,7 @@ class GridConditions:
         # them further than that no longer holds the body's face (MOVED_PAST_CELLS).
         self._cell_beside = np.full(len(dirichlet), np.inf)
         self._travel_warned = np.zeros(len(dirichlet), dtype=bool)
+        self._flat_normals = []  # the normal of each condition's nodes' plane, or None
         self._value_dofs = []  # each condition's entries of its value Function
         for k, spec in enumerate(dirichlet):
             dim, entities = dirichlet_entities(mesh, spec.where, facet_tags, f"Dirichlet {k}")
@@ -156,6 +157,7 @@ class GridConditions:
             )
             self.dirichlet_entities.append((dim, entities))
             self._cell_beside[k] = _smallest_cell_beside(mesh, dim, entities)
+            self._flat_normals.append(_flat_normal(mesh, self.dirichlet_nodes[-1]))
 
         self.tractions = []  # (spec, Constant)
         self.traction_terms = []
@@ -387,7 +389,9 @@ class GridConditions:
         said (2026-12-07). How far: the condition's motion from t = 0 to ``t``, the
         largest component over its own entries (the first version added up each
         try's increment, and a helper's trapdoor, its steps cut three times, was
-        told 0.127 m for 0.030 m).
+        told 0.127 m for 0.030 m). Nodes on one line (a plane in 3D) count only their
+        motion across it: a plate sliding along itself (Couette's moving wall) holds
+        the same face wherever it goes, and was warned of (a helper, 2026-12-08).
         """
         if not self.dirichlet or self._travel_warned.all():
             return
@@ -397,7 +401,7 @@ class GridConditions:
                 continue
             total = value.copy()  # (the step's increment stays in value)
             self._fill(k, total, 0.0, t)
-            here[k] = float(np.abs(total.x.array[self._value_dofs[k].ravel()]).max(initial=0.0))
+            here[k] = self._motion_across(k, total)
         travel = parallel.largest(self.mesh.comm, here)
         for k in np.flatnonzero(
             (travel > MOVED_PAST_CELLS * self._cell_beside) & ~self._travel_warned
@@ -411,6 +415,19 @@ class GridConditions:
                 "A support or a pull that follows the body is a PointDirichlet "
                 "(meshes.facet_points gives its points)."
             )
+
+    def _motion_across(self, k: int, total: dolfinx.fem.Function) -> float:
+        """Condition ``k``'s largest motion ``total`` (m), across its nodes' plane if flat."""
+        dofs = self._value_dofs[k].ravel()
+        values = total.x.array[dofs]
+        normal, component = self._flat_normals[k], self.dirichlet[k][0].component
+        if normal is None:
+            return float(np.abs(values).max(initial=0.0))
+        if component is not None:
+            return float(np.abs(values).max(initial=0.0) * abs(normal[component]))
+        bs = total.function_space.dofmap.bs  # unrolled entries: node = dof // bs
+        across = np.bincount(dofs // bs, weights=values * normal[dofs % bs])
+        return float(np.abs(across).max(initial=0.0))
 
     def _warn_conflicts(self, t_old: float, t_new: float) -> None:
         """Warn once (collective) where two conditions prescribe different increments.
@@ -557,6 +574,27 @@ class GridConditions:
             for name, mask in self._held_masks.items()
         }
         return share.pop(None), share
+
+
+def _flat_normal(mesh: dolfinx.mesh.Mesh, nodes: np.ndarray) -> np.ndarray | None:
+    """The unit normal (g,) of the line (plane in 3D) that ``nodes`` lie on, or None.
+
+    Collective: from the nodes' second moments over every rank. None for fewer than g
+    nodes in all (a pin) or nodes off one line or plane by more than 1e-9 of their
+    spread.
+    """
+    g = mesh.geometry.dim
+    x = mesh.geometry.x[nodes, :g]
+    sums = parallel.total(mesh.comm, np.concatenate([[len(x)], x.sum(axis=0), (x.T @ x).ravel()]))
+    count = sums[0]
+    if count < g:
+        return None
+    mean = sums[1 : g + 1] / count
+    spread = sums[g + 1 :].reshape(g, g) / count - np.outer(mean, mean)
+    variance, axes = np.linalg.eigh(spread)
+    if variance[-1] <= 0.0 or variance[0] > 1e-18 * variance[-1]:
+        return None
+    return axes[:, 0]
 
 
 def _smallest_cell_beside(mesh: dolfinx.mesh.Mesh, dim: int, entities: np.ndarray) -> float:

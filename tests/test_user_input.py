@@ -995,6 +995,42 @@ def test_a_grid_dirichlet_that_moves_its_nodes_past_a_cell_warns_once(formulatio
         assert "PointDirichlet" in said[0]
 
 
+@pytest.mark.parametrize(
+    "slide, warned",
+    [
+        (dict(value=lambda t: (0.5 * t, 0.0)), False),
+        (dict(value=lambda t: 0.5 * t, component=0), False),
+        (dict(value=lambda t: (0.5 * t, -0.35 * t)), True),
+    ],
+)
+def test_a_grid_dirichlet_sliding_along_its_own_line_does_not_warn(slide, warned):
+    """A plate that slides along itself (Couette's moving wall) holds the same face
+    wherever it goes; a helper's Couette flow was told to take a PointDirichlet once
+    its plate had moved a cell (2026-12-08). Nodes on one line count only their motion
+    across it: sheared 0.5 m along its top (cells of 0.2 m), a block is not warned;
+    pressed 0.35 m down as well (more than the 0.28 m of the cells beside), it is."""
+    mesh = rectangle_mesh((0.0, 0.0), (2.0, 1.0), (10, 5))
+    centroids = cell_centroids(mesh)
+    block = np.flatnonzero((centroids[:, 1] < 0.6) & (np.abs(centroids[:, 0] - 1.0) < 0.5))
+    points = fe_mpm.seed(mesh, 3, cells=block)
+    sim = fe_mpm.Simulation(
+        mesh,
+        points,
+        fe_mpm.NeoHookean(1e3, 0.3),
+        dirichlet=[
+            fe_mpm.Dirichlet(lambda x: np.isclose(x[1], 0.0)),
+            fe_mpm.Dirichlet(
+                lambda x: np.isclose(x[1], 0.6) & (np.abs(x[0] - 1.0) < 0.55), **slide
+            ),
+        ],
+    )
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        sim.run(1.0, 5, progress=False)
+    said = [str(w.message) for w in caught if "moved its grid nodes" in str(w.message)]
+    assert len(said) == int(warned), said
+
+
 def test_a_grid_dirichlet_retried_shorter_counts_only_the_tries_kept():
     """A helper's trapdoor, its steps cut three times by Newton, was told that the door
     had moved 0.127 m when it had moved 0.030 m (2026-12-07): each try added its
