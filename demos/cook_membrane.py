@@ -62,9 +62,9 @@ def parse_args(argv=None):
     p.add_argument(
         "--formulation",
         default="u",
-        choices=["u", "up", "up-nostab", "up-p2p1"],
-        help="u: irreducible; up: mixed P1/P1 with PPP; up-nostab: without it; "
-        "up-p2p1: mixed Taylor-Hood",
+        choices=["u", "u-nbva", "up", "up-nostab", "up-p2p1"],
+        help="u: irreducible; u-nbva: irreducible with node-based volumetric averaging; "
+        "up: mixed P1/P1 with PPP; up-nostab: without it; up-p2p1: mixed Taylor-Hood",
     )
     p.add_argument(
         "--ppp-alpha",

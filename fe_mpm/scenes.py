@@ -152,7 +152,7 @@ def strip_footing(
     ``reactions["footing"]``.
 
     Args:
-        formulation: ``"u"`` or ``"up"``.
+        formulation: ``"u"``, ``"u-nbva"`` or ``"up"``.
         B: Footing width (m).
         cu: Undrained strength c_u (Pa); the default, 100 Pa, is in SI units (with
             ``E``): give both in another system.

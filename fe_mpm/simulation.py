@@ -590,6 +590,16 @@ class Simulation:
                 points.F[:] = np.eye(points.gdim)  # undeformed, as start_stressed found them
                 start_stressed(points, material, points.stress.copy(), self.spec.pressure)
         self._set_ghost_penalty()
+        if (
+            self.ghost is None
+            and self.domains is None
+            and self.spec.min_points_per_cell(self.gdim) > 1
+        ):
+            # P2/P1 with too few points per cell is refused here, not at the first step
+            # (docs: "refused at once"; a helper, 2026-12-08); a ghost penalty may tie them.
+            check_points_per_cell(
+                self._track(), self.spec, 0, self.tracker.centroids, None, mesh.comm
+            )
         self.rebalancing = balance.RebalanceRule(model_checks.check_rebalance(rebalance_above))
         if self._rebalance_if_due(imbalance(mesh.comm, len(points))):
             self._track()

@@ -113,13 +113,16 @@ def test_the_laws_keep_their_contract():
 
 
 def test_taylor_hood_needs_enough_points_per_cell():
+    """Refused by Simulation itself, as the docs say of bad input (until 2026-12-08 at
+    the first step); the message names the option that makes one point per cell
+    enough."""
     mesh, points = _scene()  # one point per cell
-    sim = fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1.0, 0.3), formulation="up-p2p1")
-    with pytest.raises(ValueError, match="'up-p2p1' needs at least 3 material points in every"):
-        sim.step(1.0)
-    # The message names the option that makes one point per cell enough.
-    with pytest.raises(ValueError, match=r"or pass point_domains=True \(then one point per"):
-        sim.step(1.0)
+    with pytest.raises(
+        ValueError,
+        match=r"'up-p2p1' needs at least 3 material points in every.* or pass "
+        r"point_domains=True \(then one point per",
+    ):
+        fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1.0, 0.3), formulation="up-p2p1")
 
 
 def test_too_many_boundary_points_in_a_cell_are_named_as_such():
@@ -147,13 +150,9 @@ def test_taylor_hood_needs_four_points_in_a_tetrahedron():
     mesh = fe_mpm.meshes.rectangle_mesh((0.0, 0.0, 0.0), (1.0, 1.0, 1.0), (1, 1, 1))
     four, three = fe_mpm.seed(mesh, 4), fe_mpm.seed(mesh, 4)
     three.keep(np.arange(len(three)) % 4 != 0)
-    for points, fine in ((three, False), (four, True)):
-        sim = fe_mpm.Simulation(mesh, points, fe_mpm.NeoHookean(1.0, 0.3), "up-p2p1")
-        if fine:
-            sim.prepare_step(1.0)
-            continue
-        with pytest.raises(ValueError, match="'up-p2p1' needs at least 4 material points in"):
-            sim.step(1.0)
+    fe_mpm.Simulation(mesh, four, fe_mpm.NeoHookean(1.0, 0.3), "up-p2p1").prepare_step(1.0)
+    with pytest.raises(ValueError, match="'up-p2p1' needs at least 4 material points in"):
+        fe_mpm.Simulation(mesh, three, fe_mpm.NeoHookean(1.0, 0.3), "up-p2p1")
 
 
 def test_empty_mesh():
