@@ -768,7 +768,8 @@ def warn_stiff_penalties(comm, material, supports: Sequence, walls: Sequence, si
     if not given:
         return
     try:
-        E = young_modulus(material)
+        E = young_modulus(material)  # the stiffest law's, for a penalty too stiff
+        softest = min(young_modulus(law) for law in laws_of(material))  # for one too soft
     except (AttributeError, ValueError):  # a fluid without its shear_scale
         return
     h = parallel.largest(comm, float(np.max(sizes, initial=0.0)))
@@ -782,11 +783,15 @@ def warn_stiff_penalties(comm, material, supports: Sequence, walls: Sequence, si
                 "load, and Newton then accepts a step whose force is off (1.4e11 E/h put a "
                 "platen's force 0.86 % off, 3.5e14 E/h 28 %). Take 1e3 E/h."
             )
-        elif ratio < SOFT_PENALTY:
+        elif penalty * h / softest < SOFT_PENALTY:
+            # Against the softest law: clay's 1e3 E/h beside a steel zone was told it
+            # was 0.05 E/h of the steel (a reviewer, 2026-12-08).
+            ratio = penalty * h / softest
             warn(
-                f"{owner}: penalty = {penalty:.3g} Pa/m is {ratio:.3g} E/h (E = {E:.4g} Pa, "
-                f"h = {h:.3g} m): a support that soft gives way as much as a cell of the body "
-                "it holds, and a footing rides on its springs instead of pressing in (1e-3 "
+                f"{owner}: penalty = {penalty:.3g} Pa/m is {ratio:.3g} E/h (E = {softest:.4g} "
+                f"Pa, the softest law's; h = {h:.3g} m): a support that soft gives way as "
+                "much as a cell of the body it holds, and a footing rides on its springs "
+                "instead of pressing in (1e-3 "
                 "E/h read a fortieth of the load a footing carries, every step converged). "
                 "Take about 1e3 E/h; in another unit system give the penalty in its units "
                 "(stress per length)."

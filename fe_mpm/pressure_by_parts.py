@@ -53,8 +53,8 @@ In u-p the rest is :math:`p - \chi\bar p` with p the pressure field
 field: its pressure is the law's at each point's averaged volume, and :math:`\bar p`
 the projection of the points' pressures; its points' Kirchhoff stress gives up
 :math:`\chi\bar p` the same way, :math:`\tau + \chi J \bar p I`
-(:func:`fe_mpm.forms.volume_average.without_start_pressure`), and the geometric part
-it adds back is that of the grid's ΔF, as in u-p.
+(:func:`fe_mpm.forms.volume_average.without_start_pressure`), and what is added back
+carries the same averaged det ΔF̄, pushed by the grid's ΔF as the stress is.
 """
 
 from __future__ import annotations

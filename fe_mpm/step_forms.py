@@ -339,8 +339,11 @@ class StepForms:
                 q, self.dF_grid, fields.volume_change, w_theta, self.second_moment, self.zones
             )
         if self.interior is not None:
-            pushed = self.dF_grid if self.dF_shift is None else self.dF  # as the stress's
-            R += loads_form.start_pressure_by_parts(w, q, self.interior, fields.p_start, pushed)
+            # The stress gave up χ det ΔF̄ p̄ (averaged J), pushed by the grid's ΔF
+            # (pressure by parts is refused with point domains: no shared increment).
+            R += loads_form.start_pressure_by_parts(
+                w, q, self.interior, fields.p_start, self.dF_grid, J=ufl.det(self.dF)
+            )
         return R
 
     def _field_mean_stress(self, dF, fields: GridFields) -> ufl.core.expr.Expr | None:

@@ -1031,6 +1031,31 @@ def test_a_grid_dirichlet_sliding_along_its_own_line_does_not_warn(slide, warned
     assert len(said) == int(warned), said
 
 
+def test_the_travel_warnings_flat_faces_are_found_whatever_their_place():
+    """A face's normal from its nodes' moments about their centroid: taken about the
+    origin, round-off of ε y² hid the lines y = 0.3, 1.1, 1.7, 1.9, 2.9, 8.3 (a
+    reviewer, 2026-12-08), whose sliding plates were then warned. Pins and a line of
+    nodes in 3D have no normal."""
+    from fe_mpm.grid_conditions import _flat_normal
+
+    mesh = rectangle_mesh((0.0, 0.0), (2.0, 10.0), (10, 100))
+    x = mesh.geometry.x
+    for y in (0.3, 1.1, 1.7, 1.9, 2.9, 8.3):
+        line = np.flatnonzero(np.isclose(x[:, 1], y, rtol=0.0, atol=1e-9))
+        assert np.allclose(np.abs(_flat_normal(mesh, line, True)), [0.0, 1.0]), y
+        assert _flat_normal(mesh, line, False) is None
+    tilted = np.flatnonzero(np.isclose(x[:, 1], 5.0 * x[:, 0] + 0.3, atol=1e-9))
+    assert np.allclose(np.abs(_flat_normal(mesh, tilted, True)), np.array([5.0, 1.0]) / 26**0.5)
+    corner = np.flatnonzero(np.isclose(x[:, 0], 0.0) | np.isclose(x[:, 1], 0.0))
+    assert _flat_normal(mesh, corner, True) is None
+    box = rectangle_mesh((0.0, 0.0, 0.0), (1.0, 1.0, 1.0), (2, 2, 2))
+    x = box.geometry.x
+    edge = np.flatnonzero(np.isclose(x[:, 0], 0.0) & np.isclose(x[:, 1], 0.0))
+    assert _flat_normal(box, edge, True) is None
+    side = np.flatnonzero(np.isclose(x[:, 2], 1.0))
+    assert np.allclose(np.abs(_flat_normal(box, side, True)), [0.0, 0.0, 1.0])
+
+
 def test_a_grid_dirichlet_retried_shorter_counts_only_the_tries_kept():
     """A helper's trapdoor, its steps cut three times by Newton, was told that the door
     had moved 0.127 m when it had moved 0.030 m (2026-12-07): each try added its
