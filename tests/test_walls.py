@@ -710,6 +710,26 @@ def test_an_impact_of_a_step_or_two_on_a_wall_is_warned_and_gains_energy():
         watch.look({"floor": force}, 0.0)
     assert not watch.warned
 
+    # A body that slides from one wall to the next (a bowl of one wall per facet, a
+    # helper's scene, 2026-12-08) hands each short contact over: not an impact. One
+    # bouncing on a side wall while resting on the floor is.
+    def forces(**normals):
+        return {
+            name: WallForces(zero, n, zero, np.zeros((0, 2)), np.zeros((0, 2)), zero, zero)
+            for name, n in normals.items()
+        }
+
+    watch = ContactWatch()
+    chain = ["a", "b", "c", "d"]
+    for k in range(6):  # two steps on each, the next one taking over in the second
+        on = {name: float(k // 2 <= i <= (k + 1) // 2) for i, name in enumerate(chain)}
+        watch.look(forces(**on), 0.1 * k)
+    assert not watch.warned
+    watch = ContactWatch()
+    for k, side in enumerate([0.0, 1.0, 1.0, 0.0]):
+        watch.look(forces(floor=1.0, side=side), 0.1 * k)
+    assert watch.warned
+
 
 def test_a_wall_given_the_tag_of_facets_inside_the_grid_is_refused():
     """A helper's incline, a line gmsh's fragment kept inside the grid (2026-12-07): its
