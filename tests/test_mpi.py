@@ -17,6 +17,7 @@ clamp's horizontal force, zero to Newton's tolerance).
 
 import json
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -1056,6 +1057,11 @@ def test_a_p2_cell_left_with_too_few_points_stops_every_rank_with_one_message(tm
     assert serial["error"] == "ConvergenceError" and "needs at least 3" in serial["message"]
     assert all(line["error"] == "ConvergenceError" for line in lines), lines
     assert all("needs at least 3 material points" in x["message"] for x in lines)
+    # Counted over every rank (one rank's count, a half of serial's, until 2026-12-08).
+    count = re.compile(r"but (\d+) cell\(s\) hold fewer")
+    assert {count.search(x["message"]).group(1) for x in lines} == {
+        count.search(serial["message"]).group(1)
+    }
 
 
 @pytest.mark.slow
