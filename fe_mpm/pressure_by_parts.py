@@ -53,8 +53,9 @@ In u-p the rest is :math:`p - \chi\bar p` with p the pressure field
 field: its pressure is the law's at each point's averaged volume, and :math:`\bar p`
 the projection of the points' pressures; its points' Kirchhoff stress gives up
 :math:`\chi\bar p` the same way, :math:`\tau + \chi J \bar p I`
-(:func:`fe_mpm.forms.volume_average.without_start_pressure`), and what is added back
-carries the same averaged det ΔF̄, pushed by the grid's ΔF as the stress is.
+(:func:`fe_mpm.forms.volume_average.without_start_pressure`); the geometric part
+added back takes the grid's det ΔF, not the averaged det ΔF̄ given up: the two agree
+at Δu = 0, and with ΔF̄ a closed vortex gained 13 % of its energy in 0.5 s.
 """
 
 from __future__ import annotations

@@ -293,7 +293,7 @@ def test_a_dam_break_gains_no_energy_from_the_pressure_by_parts(formulation):
     geometry of the step's start: the water ended above its start by +3.8 % (u-p) and
     +3.3 % (u-nbva) of the energy the collapse frees, rising in 48 and 43 of 60 steps
     (h105's dam break on cells of 8.2 mm: +3.0 %, +1.3 %, +0.6 % with steps of 2, 1
-    and 0.5 ms). Measured now: never above the start, −0.78 % and −1.08 % at the end."""
+    and 0.5 ms). Measured now: never above the start, −0.78 % and −0.61 % at the end."""
     rho, g, l0 = 1000.0, 9.81, 0.1
     grid = rectangle_mesh((0.0, 0.0), (0.5, 0.24), (25, 12))
     centroids = cell_centroids(grid)

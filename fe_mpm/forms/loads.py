@@ -51,12 +51,11 @@ def start_pressure_by_parts(
     p_start: ufl.Coefficient,
     dF: ufl.core.expr.Expr,
     u_degree: int = 1,
-    J: ufl.core.expr.Expr | None = None,
 ) -> ufl.Form:
-    """Σ_p V_p χ (w·∇p̄ − p̄ (J ΔF⁻ᵀ − I) : ∇w): the starting pressure by parts.
+    """Σ_p V_p χ (w·∇p̄ − p̄ (det ΔF ΔF⁻ᵀ − I) : ∇w): the starting pressure by parts.
 
     Added to the residual where the formulation's stress gives up χ p̄
-    (:mod:`fe_mpm.pressure_by_parts`). Of p̄'s work −χ p̄ J ΔF⁻ᵀ : ∇w on the grid
+    (:mod:`fe_mpm.pressure_by_parts`). Of p̄'s work −χ p̄ det ΔF ΔF⁻ᵀ : ∇w on the grid
     of the step's start, the part that does not depend on Δu, −χ p̄ ∇·w, is taken by
     parts: ``w·∇p̄`` here and the facet terms of :mod:`fe_mpm.pressure_by_parts`. The
     rest, p̄'s geometric part, is linear in Δu and barely jumps as points cross
@@ -71,13 +70,9 @@ def start_pressure_by_parts(
         p_start: The step's starting pressure p̄ (Pa, P1 on the grid).
         dF: The increment ΔF that maps ∇w in the formulation's stress (g x g).
         u_degree: Polynomial degree of the displacement.
-        J: The volume ratio of the step that the stress gave p̄ up with: det ΔF (the
-            default, u-p), or NB-VA's averaged det ΔF̄, so that what is added back is
-            what was given up.
     """
     g = ufl.shape(dF)[0]
-    J = ufl.det(dF) if J is None else J
-    geometric = J * ufl.inv(dF).T - ufl.Identity(g)
+    geometric = ufl.det(dF) * ufl.inv(dF).T - ufl.Identity(g)
     work = ufl.dot(q.at_points(w, u_degree), ufl.grad(p_start))
     work -= q.at_points(p_start) * ufl.inner(geometric, q.grad_at_points(w, u_degree))
     return q.sum(chi * work)
