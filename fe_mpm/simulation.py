@@ -556,7 +556,7 @@ class Simulation:
             mesh.comm, material, point_dirichlet, walls, self.tracker.sizes
         )
         self._add_time("setup", t0)
-        self._track()  # once now, so a bad initial layout fails at set-up
+        layout = self._track()  # once now, so a bad initial layout fails at set-up
         model_checks.check_distinct_points(self.mesh.comm, points)
         model_checks.warn_overfull_nodes(
             self.mesh, points, self.tracker.barycentric(points.x, points.cell), self.tracker.volumes
@@ -567,7 +567,7 @@ class Simulation:
         self.repartitions = 0
         if self._ghost_layers:  # the grid again, with the ghost cells the domains need
             self.rebalance()
-            self._track()
+            layout = self._track()
         if point_domains:
             most = 0  # points in the fullest cell of any rank, which only P2 asks for
             if self.spec.u_degree == 2:
@@ -597,9 +597,7 @@ class Simulation:
         ):
             # P2/P1 with too few points per cell is refused here, not at the first step
             # (docs: "refused at once"; a helper, 2026-12-08); a ghost penalty may tie them.
-            check_points_per_cell(
-                self._track(), self.spec, 0, self.tracker.centroids, None, mesh.comm
-            )
+            check_points_per_cell(layout, self.spec, 0, self.tracker.centroids, None, mesh.comm)
         self.rebalancing = balance.RebalanceRule(model_checks.check_rebalance(rebalance_above))
         if self._rebalance_if_due(imbalance(mesh.comm, len(points))):
             self._track()
